@@ -1,0 +1,39 @@
+"""wavecontact: longitudinal collisions of elastic rods and their restitution.
+
+Three solvers share one scene model and one entry point:
+
+* ``fem``   -- finite elements (scikit-fem) with explicit time stepping;
+* ``modal`` -- the Hamiltonian of rod modes (Giese & Zippelius 1996, Eq. 7);
+* ``delay`` -- the delay-differential equation of the relative velocity (Eq. 16).
+
+>>> import wavecontact
+>>> result = wavecontact.collide(gamma=0.6, kappa=100)
+>>> round(result.restitution, 6)
+0.646697
+"""
+
+from .api import collide, solve
+from .contact import ContactLaw, Exponential, Hard, Penalty
+from .errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, WavecontactError
+from .result import CollisionResult
+from .scene import Rod, Scene, two_rod_parameters, two_rods
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "collide",
+    "solve",
+    "Rod",
+    "Scene",
+    "two_rods",
+    "two_rod_parameters",
+    "ContactLaw",
+    "Exponential",
+    "Penalty",
+    "Hard",
+    "CollisionResult",
+    "WavecontactError",
+    "InvalidParameterError",
+    "UnsupportedSceneError",
+    "SolverFailure",
+]

@@ -1,0 +1,71 @@
+"""One entry point for a collision, the same for every solver."""
+
+from __future__ import annotations
+
+from .contact import ContactLaw
+from .errors import InvalidParameterError
+from .result import CollisionResult
+from .scene import Scene, two_rods
+from .solvers import get_solver
+from .solvers.base import Stopwatch, check_options
+
+__all__ = ["collide", "solve"]
+
+
+def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
+    """Run one collision of ``scene`` with the named solver.
+
+    Parameters
+    ----------
+    scene : Scene
+        What to simulate.
+    solver : {'delay', 'fem', 'modal'}
+        How to simulate it.
+    **options
+        Solver options; unknown names are refused (see each solver's ``OPTIONS``).
+
+    Returns
+    -------
+    CollisionResult
+        With ``wall_time_s`` measured around the whole solve.
+    """
+    module = get_solver(solver)
+    merged = check_options(solver, module.OPTIONS, options)
+    with Stopwatch() as watch:
+        result = module.solve(scene, **merged)
+    result.wall_time_s = watch.seconds
+    return result
+
+
+def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="exponential", **options) -> CollisionResult:
+    """Collide the paper's two rods (length ratio ``gamma``, softness ``kappa``).
+
+    Parameters
+    ----------
+    gamma : float
+        Length ratio ``l1 / l2`` in (0, 1].
+    kappa : float
+        ``alpha V l / c`` in (0, inf]; ``inf`` is the hard-core limit.
+    solver : {'delay', 'fem', 'modal'}
+        Which solver to use.
+    contact : {'exponential', 'penalty', 'hard'} or ContactLaw
+        Contact law between the facing ends (``kappa = inf`` forces ``hard``).
+    **options
+        Solver options, e.g. ``elements=800`` for ``fem``, ``modes=100`` for
+        ``modal``, ``rtol=1e-11`` for ``delay``.
+
+    Returns
+    -------
+    CollisionResult
+        ``.restitution`` is the coefficient of restitution epsilon.
+
+    Examples
+    --------
+    >>> from wavecontact import collide
+    >>> round(collide(0.6, 100).restitution, 8)
+    0.64669709
+    """
+    if not isinstance(contact, (str, ContactLaw)):
+        raise InvalidParameterError(f"contact must be a name or a ContactLaw, got {contact!r}")
+    scene = two_rods(gamma, kappa, contact=contact)
+    return solve(scene, solver, **options)

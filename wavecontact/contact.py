@@ -1,0 +1,139 @@
+"""Contact laws between facing rod ends.
+
+A contact law maps the end-to-end gap ``r`` (length; negative means overlap)
+to a repulsive force (force units) that pushes the two ends apart.  Laws are
+plain immutable values: solvers read their parameters and evaluate them in
+their own kernels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InvalidParameterError, require_positive
+
+__all__ = ["ContactLaw", "Exponential", "Penalty", "Hard", "contact_from_name"]
+
+
+class ContactLaw:
+    """Base class: a repulsive force of the end-to-end gap."""
+
+    name = "abstract"
+
+    def force(self, gap):
+        """Repulsive force (>= 0) at end-to-end gap ``gap`` (length units)."""
+        raise NotImplementedError
+
+    def potential(self, gap):
+        """Interaction energy at gap ``gap`` (energy units); zero far apart."""
+        raise NotImplementedError
+
+    @property
+    def range(self) -> float:
+        """Distance over which the force decays (length units); 0 for hard contact."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Exponential(ContactLaw):
+    """The paper's potential ``V(r) = B exp(-alpha r)``.
+
+    Parameters
+    ----------
+    alpha : float
+        Inverse range of the potential (1/length), in (0, inf).
+    strength : float
+        Prefactor ``B`` (energy), in (0, inf).  ``B`` only shifts the gap at
+        which the ends feel each other; it does not change the restitution.
+    """
+
+    alpha: float
+    strength: float = 1.0
+    name = "exponential"
+
+    def __post_init__(self):
+        object.__setattr__(self, "alpha", require_positive("alpha", self.alpha))
+        object.__setattr__(self, "strength", require_positive("strength (B)", self.strength))
+
+    def force(self, gap):
+        return self.alpha * self.strength * np.exp(-self.alpha * np.asarray(gap, dtype=float))
+
+    def potential(self, gap):
+        return self.strength * np.exp(-self.alpha * np.asarray(gap, dtype=float))
+
+    @property
+    def range(self) -> float:
+        return 1.0 / self.alpha
+
+
+@dataclass(frozen=True)
+class Penalty(ContactLaw):
+    """Linear spring acting on overlap only: ``F = k max(0, -r)``.
+
+    Parameters
+    ----------
+    stiffness : float or None
+        Spring constant ``k`` (force/length), in (0, inf).  ``None`` lets the
+        solver choose one from its discretization (the FE solver uses
+        ``E A / h`` of the stiffer facing element).
+    """
+
+    stiffness: float | None = None
+    name = "penalty"
+
+    def __post_init__(self):
+        if self.stiffness is not None:
+            object.__setattr__(self, "stiffness", require_positive("stiffness", self.stiffness))
+
+    def force(self, gap):
+        if self.stiffness is None:
+            raise InvalidParameterError("penalty stiffness is not set (None means: chosen by the solver)")
+        return self.stiffness * np.maximum(0.0, -np.asarray(gap, dtype=float))
+
+    def potential(self, gap):
+        if self.stiffness is None:
+            raise InvalidParameterError("penalty stiffness is not set (None means: chosen by the solver)")
+        return 0.5 * self.stiffness * np.maximum(0.0, -np.asarray(gap, dtype=float)) ** 2
+
+    @property
+    def range(self) -> float:
+        return 0.0
+
+
+@dataclass(frozen=True)
+class Hard(ContactLaw):
+    """Unilateral constraint: no overlap, no energy lost at the contact itself.
+
+    The limit ``alpha -> inf`` of :class:`Exponential` (``kappa = inf``).
+    """
+
+    name = "hard"
+
+    def force(self, gap):
+        raise InvalidParameterError("hard contact has no force law; it is a constraint")
+
+    def potential(self, gap):
+        return np.where(np.asarray(gap, dtype=float) < 0.0, math.inf, 0.0)
+
+    @property
+    def range(self) -> float:
+        return 0.0
+
+
+def contact_from_name(name: str, alpha: float, strength: float = 1.0) -> ContactLaw:
+    """Build a contact law from its name (``exponential``, ``penalty``, ``hard``).
+
+    ``alpha = inf`` always gives :class:`Hard`.
+    """
+    if name not in ("exponential", "penalty", "hard"):
+        raise InvalidParameterError(
+            f"contact must be one of 'exponential', 'penalty', 'hard', got {name!r}"
+        )
+    if name == "hard" or math.isinf(alpha):
+        return Hard()
+    if name == "penalty":
+        return Penalty()
+    return Exponential(alpha, strength)

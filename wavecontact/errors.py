@@ -1,0 +1,58 @@
+"""Exceptions raised by wavecontact.
+
+Every refusal names the offending field and the range it must lie in, so a
+user can fix the call without reading the source.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "WavecontactError",
+    "InvalidParameterError",
+    "UnsupportedSceneError",
+    "SolverFailure",
+    "require_positive",
+    "require_finite",
+]
+
+
+class WavecontactError(Exception):
+    """Base class of all errors raised on purpose by wavecontact."""
+
+
+class InvalidParameterError(WavecontactError, ValueError):
+    """A parameter is outside its allowed range (the message says which)."""
+
+
+class UnsupportedSceneError(WavecontactError, ValueError):
+    """The scene is valid but the chosen solver cannot model it."""
+
+
+class SolverFailure(WavecontactError, RuntimeError):
+    """A solver detected that its result would be wrong (energy drift,
+    unresolved contact, non-finite state) and refuses to return it."""
+
+
+def require_finite(name: str, value) -> float:
+    """Return ``value`` as a float, refusing NaN, infinities and non-numbers."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise InvalidParameterError(f"{name} must be finite, got {number!r}")
+    return number
+
+
+def require_positive(name: str, value, *, allow_inf: bool = False) -> float:
+    """Return ``value`` as a float if it is > 0 (and finite unless ``allow_inf``)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a positive number, got {value!r}") from None
+    if math.isnan(number) or number <= 0.0 or (math.isinf(number) and not allow_inf):
+        allowed = "(0, inf]" if allow_inf else "(0, inf) and finite"
+        raise InvalidParameterError(f"{name} must lie in {allowed}, got {number!r}")
+    return number

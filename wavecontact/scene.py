@@ -1,0 +1,311 @@
+"""What is simulated: rods, their placement and motion, and the contact law.
+
+Nothing here knows about a solver.  Units are whatever the user chooses, as
+long as they are consistent; :func:`two_rods` builds the paper's setting in
+the dimensionless units of MODEL.md section 2 (``rho = c = A = 1``, effective
+length ``l = 1``, approach speed ``V = 1``, hence ``alpha = kappa``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+
+from .contact import ContactLaw, Exponential, Hard, contact_from_name
+from .errors import InvalidParameterError, require_finite, require_positive
+
+__all__ = ["Rod", "Scene", "two_rods", "TwoRodParameters", "two_rod_parameters"]
+
+FieldFunction = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Rod:
+    """A uniform, linearly elastic rod with stress-free ends.
+
+    Parameters
+    ----------
+    length : float
+        Length ``l`` (length units), in (0, inf).
+    density : float
+        Mass density ``rho`` (mass/length^3), in (0, inf).
+    youngs_modulus : float
+        Young's modulus ``E`` (force/length^2), in (0, inf).
+    area : float
+        Cross-section ``A`` (length^2), in (0, inf).
+    """
+
+    length: float
+    density: float = 1.0
+    youngs_modulus: float = 1.0
+    area: float = 1.0
+
+    def __post_init__(self):
+        for name in ("length", "density", "youngs_modulus", "area"):
+            object.__setattr__(self, name, require_positive(f"rod {name}", getattr(self, name)))
+
+    @property
+    def wave_speed(self) -> float:
+        """Bar wave speed ``c = sqrt(E / rho)`` (length/time)."""
+        return math.sqrt(self.youngs_modulus / self.density)
+
+    @property
+    def impedance(self) -> float:
+        """Mechanical impedance ``Z = rho c A`` (mass/time)."""
+        return self.density * self.wave_speed * self.area
+
+    @property
+    def mass(self) -> float:
+        """Total mass ``rho A l`` (mass)."""
+        return self.density * self.area * self.length
+
+    @property
+    def round_trip_time(self) -> float:
+        """Time ``2 l / c`` for a wave to run to the far end and back (time)."""
+        return 2.0 * self.length / self.wave_speed
+
+    def same_material(self, other: "Rod", rtol: float = 1e-12) -> bool:
+        """True if both rods share density, modulus and cross-section."""
+        return all(
+            math.isclose(getattr(self, n), getattr(other, n), rel_tol=rtol)
+            for n in ("density", "youngs_modulus", "area")
+        )
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Rods on a line (left to right) or on a ring, with a contact law.
+
+    Parameters
+    ----------
+    rods : sequence of Rod
+        The rods in order along the line (or around the ring).
+    velocities : sequence of float
+        Rigid-body velocity of each rod (length/time).
+    contact : ContactLaw
+        Law acting between every pair of facing ends.
+    gaps : sequence of float or None
+        End-to-end gaps (length) between rod ``i`` and ``i + 1`` (on a ring
+        also between the last and the first).  ``None`` lets the solver place
+        the rods just out of range of the contact force.
+    ring_circumference : float or None
+        Circumference ``L`` of the ring (length); ``None`` for a line.
+    initial_displacement, initial_velocity : sequence of callables or None
+        Optional fields ``u_i(s)`` (length) and ``du_i/dt(s)`` (length/time)
+        of the rod coordinate ``s`` in ``[0, l_i]``, added to the rigid motion.
+    """
+
+    rods: tuple
+    velocities: tuple
+    contact: ContactLaw
+    gaps: Optional[tuple] = None
+    ring_circumference: Optional[float] = None
+    initial_displacement: Optional[tuple] = None
+    initial_velocity: Optional[tuple] = None
+    metadata: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        rods = tuple(self.rods)
+        if len(rods) < 2:
+            raise InvalidParameterError(f"a scene needs at least 2 rods, got {len(rods)}")
+        if not all(isinstance(r, Rod) for r in rods):
+            raise InvalidParameterError("rods must be wavecontact.Rod instances")
+        object.__setattr__(self, "rods", rods)
+        velocities = tuple(self.velocities)
+        if len(velocities) != len(rods):
+            raise InvalidParameterError(
+                f"velocities must have one entry per rod ({len(rods)}), got {len(velocities)}"
+            )
+        object.__setattr__(
+            self, "velocities", tuple(require_finite(f"velocities[{i}]", v) for i, v in enumerate(velocities))
+        )
+        if not isinstance(self.contact, ContactLaw):
+            raise InvalidParameterError("contact must be a wavecontact contact law (Exponential, Penalty, Hard)")
+        n_pairs = len(rods) if self.ring_circumference is not None else len(rods) - 1
+        if self.ring_circumference is not None:
+            circumference = require_positive("ring_circumference", self.ring_circumference)
+            total = sum(r.length for r in rods)
+            if circumference <= total:
+                raise InvalidParameterError(
+                    f"ring_circumference must exceed the total rod length {total:g}, got {circumference:g}"
+                )
+            object.__setattr__(self, "ring_circumference", circumference)
+        if self.gaps is not None:
+            gaps = tuple(require_finite(f"gaps[{i}]", g) for i, g in enumerate(self.gaps))
+            if len(gaps) != n_pairs:
+                raise InvalidParameterError(f"gaps must have {n_pairs} entries, got {len(gaps)}")
+            for i, g in enumerate(gaps):
+                if g < 0.0:
+                    raise InvalidParameterError(
+                        f"gaps[{i}] must be >= 0 (rods may not overlap at the start), got {g:g}"
+                    )
+            if self.ring_circumference is not None:
+                free = self.ring_circumference - sum(r.length for r in rods)
+                if not math.isclose(sum(gaps), free, rel_tol=1e-9, abs_tol=1e-12):
+                    raise InvalidParameterError(
+                        f"gaps on a ring must add up to L - sum(l_i) = {free:g}, got {sum(gaps):g}"
+                    )
+            object.__setattr__(self, "gaps", gaps)
+        for name in ("initial_displacement", "initial_velocity"):
+            fields = getattr(self, name)
+            if fields is not None:
+                fields = tuple(fields)
+                if len(fields) != len(rods) or not all(f is None or callable(f) for f in fields):
+                    raise InvalidParameterError(
+                        f"{name} must hold one callable (or None) per rod ({len(rods)})"
+                    )
+                object.__setattr__(self, name, fields)
+
+    @property
+    def is_ring(self) -> bool:
+        return self.ring_circumference is not None
+
+    @property
+    def is_cold(self) -> bool:
+        """True when no rod carries an initial internal field."""
+        fields = (self.initial_displacement or ()) + (self.initial_velocity or ())
+        return all(f is None for f in fields)
+
+    @property
+    def total_mass(self) -> float:
+        return sum(r.mass for r in self.rods)
+
+    def momentum(self) -> float:
+        """Total rigid-body momentum (mass * length/time)."""
+        return sum(r.mass * v for r, v in zip(self.rods, self.velocities))
+
+    def kinetic_energy(self) -> float:
+        """Rigid-body kinetic energy (energy)."""
+        return sum(0.5 * r.mass * v * v for r, v in zip(self.rods, self.velocities))
+
+
+@dataclass(frozen=True)
+class TwoRodParameters:
+    """The paper's dimensionless numbers of a two-rod collision (MODEL.md 2)."""
+
+    gamma: float  # l1 / l2 in (0, 1]
+    kappa: float  # alpha V l / c in (0, inf]
+    effective_length: float  # l = 2 l1 l2 / (l1 + l2)
+    approach_speed: float  # V
+    wave_speed: float  # c
+
+    @property
+    def round_trip_times(self) -> tuple:
+        """Dimensionless round-trip times ``(Gamma_1, Gamma_2) = (1 + gamma, 1 + 1/gamma)``."""
+        return (1.0 + self.gamma, 1.0 + 1.0 / self.gamma)
+
+    @property
+    def time_unit(self) -> float:
+        """``l / c``: the unit of the dimensionless time tau (time)."""
+        return self.effective_length / self.wave_speed
+
+
+def validate_gamma_kappa(gamma, kappa) -> tuple:
+    """Check the paper's two numbers and return them as floats.
+
+    ``gamma`` must lie in (0, 1]; ``kappa`` in (0, inf] (``inf``: hard core).
+    """
+    try:
+        g = float(gamma)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"gamma must be a number in (0, 1], got {gamma!r}") from None
+    if not (0.0 < g <= 1.0):
+        raise InvalidParameterError(f"gamma must lie in (0, 1] (gamma = l1/l2, l1 <= l2), got {g!r}")
+    k = require_positive("kappa", kappa, allow_inf=True)
+    return g, k
+
+
+def two_rods(
+    gamma: float,
+    kappa: float,
+    *,
+    contact: str | ContactLaw = "exponential",
+    gap: float | None = None,
+    initial_displacement: Sequence | None = None,
+    initial_velocity: Sequence | None = None,
+) -> Scene:
+    """The paper's head-on collision of two rods of one material, dimensionless.
+
+    Units (MODEL.md section 2): ``rho = c = A = 1``, effective length
+    ``l = 2 l1 l2 / (l1 + l2) = 1`` and approach speed ``V = 1``; so
+    ``l1 = (1 + gamma) / 2``, ``l2 = (1 + gamma) / (2 gamma)``, the reduced
+    mass is ``mu = 1/2`` and ``alpha = kappa``.  The short rod is on the
+    left.  Velocities are in the centre-of-mass frame (zero momentum), the
+    relative velocity ``v2 - v1`` is ``-V``.
+
+    Parameters
+    ----------
+    gamma : float
+        Length ratio ``l1 / l2`` in (0, 1].
+    kappa : float
+        ``alpha V l / c`` in (0, inf]; ``inf`` selects hard contact.
+    contact : {'exponential', 'penalty', 'hard'} or ContactLaw
+        The contact law.  The exponential law gets ``B = mu c^2 / (alpha l)^2``,
+        the value for which the delay equation (Eq. 16) holds without a shift.
+    gap : float or None
+        Initial end-to-end gap (length); ``None`` lets the solver choose.
+    initial_displacement, initial_velocity : sequences of two callables or None
+        Optional internal fields, see :class:`Scene`.
+
+    Returns
+    -------
+    Scene
+        With ``metadata['two_rods']`` holding the :class:`TwoRodParameters`.
+    """
+    g, k = validate_gamma_kappa(gamma, kappa)
+    l1 = 0.5 * (1.0 + g)
+    l2 = 0.5 * (1.0 + g) / g
+    rods = (Rod(l1), Rod(l2))
+    reduced_mass = 0.5
+    if isinstance(contact, ContactLaw):
+        law = contact
+        if isinstance(law, Exponential) and not math.isclose(law.alpha, k) and math.isfinite(k):
+            raise InvalidParameterError(
+                f"contact alpha ({law.alpha:g}) must equal kappa ({k:g}) in the units of two_rods"
+            )
+    else:
+        law = contact_from_name(contact, k, reduced_mass / (k * k) if math.isfinite(k) else 1.0)
+    if isinstance(law, Hard) and math.isfinite(k) and contact == "hard":
+        k = math.inf
+    m1, m2 = rods[0].mass, rods[1].mass
+    velocities = (m2 / (m1 + m2), -m1 / (m1 + m2))
+    params = TwoRodParameters(gamma=g, kappa=k, effective_length=1.0, approach_speed=1.0, wave_speed=1.0)
+    return Scene(
+        rods=rods,
+        velocities=velocities,
+        contact=law,
+        gaps=None if gap is None else (gap,),
+        initial_displacement=initial_displacement,
+        initial_velocity=initial_velocity,
+        metadata={"two_rods": params},
+    )
+
+
+def two_rod_parameters(scene: Scene) -> TwoRodParameters:
+    """Recover ``(gamma, kappa, ...)`` of a two-rod scene on a line.
+
+    Works for scenes built by :func:`two_rods` and for any line scene of two
+    rods of one material; the contact law fixes ``kappa`` (``inf`` for hard
+    and penalty contact, which have no range).
+    """
+    if "two_rods" in scene.metadata:
+        return scene.metadata["two_rods"]
+    if len(scene.rods) != 2 or scene.is_ring:
+        raise InvalidParameterError("two_rod_parameters needs two rods on a line")
+    r1, r2 = scene.rods
+    if not r1.same_material(r2):
+        raise InvalidParameterError("two_rod_parameters needs rods of one material and section")
+    l1, l2 = r1.length, r2.length
+    gamma = min(l1, l2) / max(l1, l2)
+    ell = 2.0 * l1 * l2 / (l1 + l2)
+    speed = -(scene.velocities[1] - scene.velocities[0])
+    c = r1.wave_speed
+    if isinstance(scene.contact, Exponential):
+        kappa = scene.contact.alpha * speed * ell / c
+    else:
+        kappa = math.inf
+    return TwoRodParameters(gamma=gamma, kappa=kappa, effective_length=ell, approach_speed=speed, wave_speed=c)
+
