@@ -1,0 +1,52 @@
+"""Command-line interface: ``wavecontact <command> ...``.
+
+Each command lives in its own module exposing ``add_parser(subparsers)`` and
+``run(args) -> int``.  Invalid input ends with a one-line message on stderr
+and a non-zero exit status, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..errors import WavecontactError
+
+COMMANDS = ("collide", "converge", "ring", "compare")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit status 2, as argparse does
+        self.exit(2, f"wavecontact: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="wavecontact", description="Collisions of elastic rods and their restitution.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+            continue  # command not shipped yet
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.run(args) or 0)
+    except (WavecontactError, ValueError, OSError) as exc:
+        print(f"wavecontact: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("wavecontact: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
