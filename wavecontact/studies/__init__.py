@@ -1,0 +1,1 @@
+"""Studies built on the solver interface: convergence, ensembles, ring runs."""
