@@ -1,0 +1,220 @@
+"""Fields for ParaView: write VTU+PVD / XDMF series and read them back with meshio.
+
+The fields come from the exact d'Alembert solution of the hard-core impact of
+two rods of one material (wave theory of impact), sampled on P1 or P2 nodes,
+so these tests do not depend on the finite-element solver.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+
+from wavecontact.errors import InvalidParameterError
+from wavecontact.io.fields import (
+    FIELD_NAMES,
+    MissingFieldsError,
+    line_segments,
+    read_fields,
+    sampled_fields,
+    write_fields,
+)
+from wavecontact.result import CollisionResult
+
+
+def _pulse(tau, duration):
+    """Stress carried by the impact wave: -Z V / 2 = -1/2 for 0 < tau < duration."""
+    return np.where((tau > 0.0) & (tau < duration), -0.5, 0.0)
+
+
+def _rod_waves(r, t, length, duration):
+    """Free-free image sums of the pulse entering a rod at r = 0 (r: distance from the contact end).
+
+    Returns (stress, outgoing + returning pulse sum) for the velocity.
+    """
+    stress = np.zeros(np.broadcast(r, t).shape)
+    moving = np.zeros_like(stress)
+    for k in range(int(np.max(t) / (2 * length)) + 2):
+        away = _pulse(t - r - 2 * k * length, duration)
+        back = _pulse(t + r - 2 * (k + 1) * length, duration)
+        stress += away - back
+        moving += away + back
+    return stress, moving
+
+
+def _nodes(length, elements, order, left):
+    """Node coordinates and scikit-fem-like cells (vertices first, then interior nodes)."""
+    vertices = np.linspace(left, left + length, elements + 1)
+    if order == 1:
+        return vertices, np.stack([np.arange(elements), np.arange(1, elements + 1)], axis=1)
+    interior = [vertices[:-1] + (vertices[1:] - vertices[:-1]) * j / order for j in range(1, order)]
+    x = np.concatenate([vertices, *interior])
+    cells = [np.arange(elements), np.arange(1, elements + 1)]
+    cells += [elements + 1 + j * elements + np.arange(elements) for j in range(order - 1)]
+    return x, np.stack(cells, axis=1)
+
+
+def hard_impact_result(gamma=0.6, elements=24, order=1, samples=60, t_end=None):
+    """A CollisionResult with the exact fields of the hard-core impact (contact at t = 0).
+
+    Units of MODEL.md section 2: rho = c = A = 1, V = 1, rod 1 on [-l1, 0], rod 2 on [0, l2].
+    """
+    l1, l2 = 0.5 * (1 + gamma), 0.5 * (1 + gamma) / gamma
+    v1, v2 = 1 / (1 + gamma), -gamma / (1 + gamma)
+    duration = 2 * l1
+    t_end = 2 * l2 + 0.5 if t_end is None else t_end
+    time = np.linspace(-0.3, t_end, samples)
+    rods = []
+    for length, left, v0, sign, n_el in ((l1, -l1, v1, 1.0, elements), (l2, 0.0, v2, -1.0, round(elements / gamma))):
+        x, cells = _nodes(length, n_el, order, left)
+        r = np.abs(x)[None, :]
+        stress, moving = _rod_waves(r, time[:, None], length, duration)
+        velocity = v0 + sign * moving
+        displacement = np.concatenate(
+            [np.zeros((1, x.size)), np.cumsum(0.5 * (velocity[1:] + velocity[:-1]) * np.diff(time)[:, None], axis=0)]
+        )
+        rods.append({"x": x, "displacement": displacement, "velocity": velocity, "stress": stress, "cells": cells})
+    fields = {"time": time, "rods": rods}
+    relative = np.where(time < 0, -1.0, np.where(time < duration, -1.0 + (1 + gamma) * time / duration, gamma))
+    return CollisionResult(
+        restitution=gamma,
+        solver="analytic",
+        wall_time_s=0.0,
+        time=time,
+        relative_velocity=relative,
+        gamma=gamma,
+        kappa=math.inf,
+        extra={"fields": fields},
+    )
+
+
+def test_synthetic_fields_are_the_wave_theory_of_impact():
+    # The generator itself against Saint-Venant: plateau -ZV/2 at the contact for 2 l1, then
+    # rod 1 free of stress; momentum of the rods unchanged; final relative velocity gamma.
+    gamma = 0.6
+    result = hard_impact_result(gamma, elements=30, samples=400)
+    f = result.extra["fields"]
+    t = f["time"]
+    rod1, rod2 = f["rods"]
+    contact1 = np.argmax(rod1["x"])
+    during = (t > 0.01) & (t < 1 + gamma - 0.01)
+    assert np.all(rod1["stress"][during, contact1] == -0.5)
+    after = t > 1 + gamma + 0.01
+    assert np.all(rod1["stress"][after] == 0.0)
+    mean_v1 = rod1["velocity"][after].mean(axis=1)
+    assert np.allclose(mean_v1, -gamma / (1 + gamma))
+    # rod 2 holds the pulse; its mean velocity follows from momentum (P1 nodes, trapezoid weights)
+    l1, l2 = 0.5 * (1 + gamma), 0.5 * (1 + gamma) / gamma
+    w2 = np.full(rod2["x"].size, rod2["x"][1] - rod2["x"][0])
+    w2[[0, -1]] *= 0.5
+    momentum2 = rod2["velocity"][-1] @ w2
+    assert momentum2 == pytest.approx(-l1 * (-gamma / (1 + gamma)), abs=2e-2)
+    assert momentum2 / l2 + gamma / (1 + gamma) == pytest.approx(gamma, abs=2e-2)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_vtu_series_round_trips_values_and_times(tmp_path, order):
+    result = hard_impact_result(elements=10, order=order, samples=25)
+    written = write_fields(result, tmp_path / "out")
+    assert written.format == "vtu"
+    assert written.index == tmp_path / "out" / "fields.pvd"
+    assert all(p.exists() for p in written.files)
+    # the PVD index lists every sample with its exact time
+    datasets = list(ET.parse(written.index).getroot().iter("DataSet"))
+    times = np.array([float(d.attrib["timestep"]) for d in datasets])
+    expected = result.extra["fields"]
+    np.testing.assert_array_equal(times, expected["time"])
+    # one file read independently with meshio: 3-column points, two-node line cells, exact values
+    mesh = meshio.read(written.index.parent / datasets[7].attrib["file"])
+    assert mesh.points.shape[1] == 3 and np.all(mesh.points[:, 1:] == 0)
+    assert [c.type for c in mesh.cells] == ["line"]
+    stress = np.concatenate([rod["stress"][7] for rod in expected["rods"]])
+    np.testing.assert_array_equal(mesh.point_data["stress"], stress)
+    np.testing.assert_array_equal(mesh.point_data["displacement_vector"][:, 0],
+                                  np.concatenate([rod["displacement"][7] for rod in expected["rods"]]))
+    # the whole series back through read_fields
+    back = read_fields(tmp_path / "out")
+    np.testing.assert_array_equal(back["time"], expected["time"])
+    for rod, rod_back in zip(expected["rods"], back["rods"]):
+        for name in ("x", *FIELD_NAMES):
+            np.testing.assert_array_equal(rod_back[name], rod[name])
+        assert rod_back["segments"].shape == (rod["cells"].shape[0] * order, 2)
+
+
+def test_xdmf_series_reads_back_with_meshio(tmp_path):
+    result = hard_impact_result(elements=8, order=2, samples=12)
+    written = write_fields(result, tmp_path, format="xdmf")
+    assert written.format == "xdmf" and written.note == ""
+    assert written.index.suffix == ".xdmf"
+    expected = result.extra["fields"]
+    x = np.concatenate([rod["x"] for rod in expected["rods"]])
+    with meshio.xdmf.TimeSeriesReader(written.index) as reader:
+        points, cells = reader.read_points_cells()
+        np.testing.assert_array_equal(points[:, 0], x)
+        assert [c.type for c in cells] == ["line"]
+        assert reader.num_steps == expected["time"].size
+        for k in (0, 5, 11):
+            t, point_data, _ = reader.read_data(k)
+            assert t == expected["time"][k]
+            for name in FIELD_NAMES:
+                np.testing.assert_array_equal(point_data[name].ravel(),
+                                              np.concatenate([rod[name][k] for rod in expected["rods"]]))
+
+
+def test_xdmf_that_does_not_read_back_falls_back_to_vtu(tmp_path, monkeypatch):
+    import wavecontact.io.fields as fields_module
+
+    def broken(fields, index):
+        raise ValueError("stress differs")
+
+    monkeypatch.setattr(fields_module, "_check_read_back", broken)
+    with pytest.warns(UserWarning, match="VTU"):
+        written = write_fields(hard_impact_result(elements=6, samples=5), tmp_path, format="xdmf")
+    assert written.format == "vtu" and "stress differs" in written.note
+    assert not (tmp_path / "fields.xdmf").exists()
+    assert read_fields(written.index)["time"].size == 5
+
+
+@pytest.mark.skipif(importlib.util.find_spec("h5py") is not None, reason="checks the inline-XML path")
+def test_xdmf_without_h5py_keeps_data_inline(tmp_path):
+    written = write_fields(hard_impact_result(elements=4, samples=3), tmp_path, format="xdmf")
+    assert written.files == (written.index,)
+    assert 'Format="XML"' in written.index.read_text()
+
+
+def test_result_without_fields_is_refused_with_a_hint(tmp_path):
+    result = CollisionResult(restitution=0.6, solver="delay", wall_time_s=0.0,
+                             time=np.zeros(2), relative_velocity=np.zeros(2))
+    with pytest.raises(MissingFieldsError, match="record_fields=True"):
+        write_fields(result, tmp_path)
+    assert not any(tmp_path.iterdir())
+
+
+def test_inconsistent_fields_are_refused(tmp_path):
+    result = hard_impact_result(elements=4, samples=6)
+    rod = result.extra["fields"]["rods"][1]
+    rod["stress"] = rod["stress"][:, :-1]
+    with pytest.raises(InvalidParameterError, match=r"rods'\]\[1\]\['stress'\].*shape"):
+        write_fields(result, tmp_path)
+    good = hard_impact_result(elements=4, samples=6).extra["fields"]
+    good["rods"][0]["cells"] = good["rods"][0]["cells"] + 100
+    with pytest.raises(InvalidParameterError, match="outside"):
+        sampled_fields(good)
+    good = hard_impact_result(elements=4, samples=6).extra["fields"]
+    good["rods"][0]["velocity"][2, 1] = np.nan
+    with pytest.raises(InvalidParameterError, match="non-finite"):
+        sampled_fields(good)
+    with pytest.raises(InvalidParameterError, match="format"):
+        write_fields(hard_impact_result(elements=4, samples=6), tmp_path, format="vtk")
+
+
+def test_elements_of_any_order_become_sorted_two_node_segments():
+    x = np.array([0.0, 1.0, 2.0, 0.5, 1.5])
+    cells = np.array([[0, 1, 3], [2, 1, 4]])  # node order inside a cell is arbitrary
+    segments = line_segments(x, cells)
+    np.testing.assert_array_equal(segments, [[0, 3], [3, 1], [1, 4], [4, 2]])
