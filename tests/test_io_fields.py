@@ -32,14 +32,26 @@ def _pulse(tau, duration):
     return np.where((tau > 0.0) & (tau < duration), -0.5, 0.0)
 
 
-def _rod_waves(r, t, length, duration):
+def _pulse_integral(tau, duration):
+    """Integral of the pulse from -inf to tau."""
+    return -0.5 * np.clip(tau, 0.0, duration)
+
+
+def _rod_waves(r, t, length, duration, integral=False):
     """Free-free image sums of the pulse entering a rod at r = 0 (r: distance from the contact end).
 
-    Returns (stress, outgoing + returning pulse sum) for the velocity.
+    Returns (stress, outgoing + returning pulse sum) for the velocity; with ``integral`` the
+    second item is the time integral of that sum from t = 0 (for the displacement).
     """
     stress = np.zeros(np.broadcast(r, t).shape)
     moving = np.zeros_like(stress)
     for k in range(int(np.max(t) / (2 * length)) + 2):
+        if integral:
+            a, b = r + 2 * k * length, -r + 2 * (k + 1) * length
+            away = _pulse_integral(t - a, duration) - _pulse_integral(-a, duration)
+            back = _pulse_integral(t - b, duration) - _pulse_integral(-b, duration)
+            moving += away + back
+            continue
         away = _pulse(t - r - 2 * k * length, duration)
         back = _pulse(t + r - 2 * (k + 1) * length, duration)
         stress += away - back
@@ -75,9 +87,9 @@ def hard_impact_result(gamma=0.6, elements=24, order=1, samples=60, t_end=None):
         r = np.abs(x)[None, :]
         stress, moving = _rod_waves(r, time[:, None], length, duration)
         velocity = v0 + sign * moving
-        displacement = np.concatenate(
-            [np.zeros((1, x.size)), np.cumsum(0.5 * (velocity[1:] + velocity[:-1]) * np.diff(time)[:, None], axis=0)]
-        )
+        # u = 0 at the moment of contact; the time integral of the pulses is exact
+        _, swept = _rod_waves(r, time[:, None], length, duration, integral=True)
+        displacement = v0 * time[:, None] + sign * swept
         rods.append({"x": x, "displacement": displacement, "velocity": velocity, "stress": stress, "cells": cells})
     fields = {"time": time, "rods": rods}
     relative = np.where(time < 0, -1.0, np.where(time < duration, -1.0 + (1 + gamma) * time / duration, gamma))

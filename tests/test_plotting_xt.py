@@ -1,0 +1,59 @@
+"""The x-t diagram: writes a real image of the sampled stress and refuses results without fields."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_io_fields import hard_impact_result  # exact fields of the hard-core impact
+
+from wavecontact.errors import InvalidParameterError
+from wavecontact.io.fields import MissingFieldsError
+from wavecontact.plotting.xt import plot_xt_diagram, xt_figure
+from wavecontact.result import CollisionResult
+
+
+def _png_size(path):
+    header = path.read_bytes()[:24]
+    assert header[:8] == b"\x89PNG\r\n\x1a\n"
+    return int.from_bytes(header[16:20], "big"), int.from_bytes(header[20:24], "big")
+
+
+@pytest.mark.parametrize("coordinates", ["reference", "deformed"])
+def test_xt_diagram_writes_a_png(tmp_path, coordinates):
+    result = hard_impact_result(0.6, elements=30, samples=120)
+    result.contact_start, result.contact_duration = 0.0, 1.6
+    path = plot_xt_diagram(result, tmp_path / "xt.png", coordinates=coordinates)
+    assert path.stat().st_size > 20_000
+    width, height = _png_size(path)
+    assert width > 800 and height > 600
+
+
+def test_xt_diagram_colours_the_stress_symmetrically_about_zero():
+    result = hard_impact_result(0.6, elements=20, samples=50)
+    fig = xt_figure(result)
+    ax = fig.axes[0]
+    meshes = ax.collections
+    assert len(meshes) == 2  # one colour field per rod
+    norm = meshes[0].norm
+    assert norm.vmin == -norm.vmax == -0.5  # the impact plateau -Z V / 2 is the extreme value
+    assert "0.6" in ax.get_title() and r"\infty" in ax.get_title()
+    # both rods on one axis at their positions: rod 1 left of the contact, rod 2 right of it
+    x_min, x_max = ax.get_xlim()
+    assert x_min <= -0.8 + 1e-9 and x_max >= 4 / 3 - 1e-9
+
+
+def test_xt_diagram_thins_large_fields_but_keeps_ends():
+    result = hard_impact_result(0.6, elements=200, samples=300)
+    fig = xt_figure(result, max_nodes=50, max_times=40)
+    coords = fig.axes[0].collections[0].get_coordinates()
+    assert coords.shape[:2] == (40, 50)
+
+
+def test_results_without_fields_are_refused(tmp_path):
+    result = CollisionResult(restitution=0.75, solver="delay", wall_time_s=0.0,
+                             time=np.linspace(0, 1, 3), relative_velocity=np.zeros(3))
+    with pytest.raises(MissingFieldsError, match="record_fields=True"):
+        plot_xt_diagram(result, tmp_path / "xt.png")
+    assert not (tmp_path / "xt.png").exists()
+    with pytest.raises(InvalidParameterError, match="field"):
+        xt_figure(hard_impact_result(elements=4, samples=5), field="strain")

@@ -1,0 +1,168 @@
+"""The x-t diagram of stress in both rods: the classic picture of the wave theory of impact.
+
+Position along the line runs horizontally, time upwards; the colour is the
+stress, on a diverging scale centred at zero (compression blue, tension red).
+Fronts of the stress waves are straight lines of slope ``1/c``; in the
+paper's setting the compression pulse fills the short rod for one round trip
+``2 l1 / c`` and then leaves it stress-free while it keeps running in the
+long rod.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+
+__all__ = ["plot_xt_diagram", "xt_figure"]
+
+COORDINATES = ("reference", "deformed")
+
+
+def xt_figure(
+    result,
+    *,
+    field: str = "stress",
+    coordinates: str = "reference",
+    cmap: str = "RdBu_r",
+    max_nodes: int = 800,
+    max_times: int = 800,
+):
+    """Draw the x-t diagram of ``result`` and return the matplotlib Figure.
+
+    Parameters
+    ----------
+    result : CollisionResult
+        A fem result run with ``record_fields=True`` (``--fields`` or ``--xt-plot``).
+    field : {'stress', 'velocity', 'displacement'}
+        Which sampled field to colour (stress in units of ``rho c V`` in the
+        paper's setting, where the impact plateau is ``-1/2``).
+    coordinates : {'reference', 'deformed'}
+        ``'reference'``: each node at its coordinate in the undeformed rods
+        (Lagrangian, the textbook picture); ``'deformed'``: at ``x + u(t)``,
+        so the approach, the contact and the separation are visible too.
+    cmap : str
+        A diverging matplotlib colour map; the scale is symmetric about 0.
+    max_nodes, max_times : int
+        At most this many nodes per rod and samples in time are drawn
+        (evenly thinned; the files keep everything).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
+
+    from ..io.fields import FIELD_NAMES, sampled_fields
+
+    if field not in FIELD_NAMES:
+        raise InvalidParameterError(f"field must be one of {', '.join(FIELD_NAMES)}, got {field!r}")
+    if coordinates not in COORDINATES:
+        raise InvalidParameterError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
+    fields = sampled_fields(result)
+    time = fields["time"]
+    rows = _thin(time.size, max_times)
+
+    limit = max(float(np.max(np.abs(rod[field]))) for rod in fields["rods"]) or 1.0
+    norm = Normalize(vmin=-limit, vmax=limit)
+
+    fig = Figure(figsize=(7.5, 5.6), dpi=150, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_facecolor("0.82")  # outside the rods: grey, so a stress-free rod (near white) stands out
+    mesh = None
+    for number, rod in enumerate(fields["rods"], start=1):
+        order = np.argsort(rod["x"], kind="stable")
+        cols = order[_thin(order.size, max_nodes)]
+        x = rod["x"][cols][None, :]
+        if coordinates == "deformed":
+            x = x + rod["displacement"][np.ix_(rows, cols)]
+        else:
+            x = np.broadcast_to(x, (rows.size, cols.size))
+        t = np.broadcast_to(time[rows][:, None], x.shape)
+        mesh = ax.pcolormesh(x, t, rod[field][np.ix_(rows, cols)], cmap=cmap, norm=norm,
+                             shading="gouraud", rasterized=True)
+        for end in (0, -1):  # outline of the rod's ends
+            ax.plot(x[:, end], t[:, end], color="0.25", lw=0.6)
+        ax.annotate(f"rod {number}", xy=(float(np.mean(x[0])), time[rows][0]), xytext=(0, 3),
+                    textcoords="offset points", ha="center", va="bottom", fontsize=8, color="0.25")
+
+    start, duration = getattr(result, "contact_start", None), getattr(result, "contact_duration", None)
+    if start is not None and duration is not None and np.isfinite(start) and np.isfinite(duration):
+        for when, label in ((start, "contact begins"), (start + duration, "contact ends")):
+            ax.axhline(when, color="0.35", lw=0.7, ls="--")
+            ax.annotate(label, xy=(1.0, when), xycoords=("axes fraction", "data"), xytext=(-3, 2),
+                        textcoords="offset points", ha="right", va="bottom", fontsize=7, color="0.35")
+
+    dimensionless = getattr(result, "gamma", None) is not None
+    ax.set_xlabel("position x" + (" (units of l)" if dimensionless else "")
+                  + ("  [reference]" if coordinates == "reference" else "  [deformed: x + u]"))
+    ax.set_ylabel("time" + (r" $\tau = t\,c/l$" if dimensionless else ""))
+    ax.set_ylim(time[rows][0], time[rows][-1])
+    units = {"stress": r"$\rho c V$", "velocity": "V", "displacement": "l"}
+    label = {"stress": "stress (compression < 0)", "velocity": "velocity", "displacement": "displacement"}[field]
+    if dimensionless:
+        label += f" [{units[field]}]"
+    fig.colorbar(mesh, ax=ax, label=label, shrink=0.9)
+    ax.set_title(_title(result, field))
+    return fig
+
+
+def plot_xt_diagram(result, path, **options) -> Path:
+    """Write the x-t diagram of stress in both rods to an image file.
+
+    Parameters
+    ----------
+    result : CollisionResult
+        A fem result run with ``record_fields=True``.
+    path : str or Path
+        Output file; the suffix picks the format (``.png``, ``.pdf``, ``.svg``).
+    **options
+        Passed to :func:`xt_figure` (``field``, ``coordinates``, ``cmap`` ...).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    MissingFieldsError
+        If the result carries no sampled fields.
+    """
+    fig = xt_figure(result, **options)
+    path = Path(path)
+    if path.parent and not path.parent.exists():
+        raise InvalidParameterError(f"directory of the plot does not exist: {path.parent}")
+    fig.savefig(path)
+    return path
+
+
+def _thin(size: int, at_most: int) -> np.ndarray:
+    """Indices of at most ``at_most`` evenly spread items, first and last kept."""
+    if at_most < 2:
+        raise InvalidParameterError(f"max_nodes and max_times must be >= 2, got {at_most}")
+    if size <= at_most:
+        return np.arange(size)
+    return np.unique(np.linspace(0, size - 1, at_most).round().astype(int))
+
+
+def _title(result, field: str) -> str:
+    parts = []
+    gamma = getattr(result, "gamma", None)
+    kappa = getattr(result, "kappa", None)
+    if gamma is not None:
+        parts.append(rf"$\gamma$ = {gamma:g}")
+    if kappa is not None:
+        parts.append(r"$\kappa$ = " + (r"$\infty$" if math.isinf(kappa) else f"{kappa:g}"))
+    restitution = getattr(result, "restitution", None)
+    if restitution is not None and math.isfinite(restitution):
+        parts.append(rf"$\epsilon$ = {restitution:.6g}")
+    solver = getattr(result, "solver", None)
+    head = f"x-t diagram of {field}" + (f" ({solver})" if solver else "")
+    return head + ("\n" + ", ".join(parts) if parts else "")
