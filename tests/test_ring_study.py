@@ -1,0 +1,434 @@
+"""The many-collision ring study: statistics, checkpoint/resume, CLI, and the physics of Sec. III."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from scipy import special, stats
+
+from wavecontact.cli import main as cli_main
+from wavecontact.errors import InvalidParameterError
+from wavecontact.studies import ring as ring_study
+from wavecontact.studies.ring import (
+    RingRun,
+    equilibrium_spectral_entropy,
+    equilibrium_translational_energy,
+    ks_exponential,
+    relative_modal_energies,
+    relaxation_collisions,
+    restitution_correlation,
+    run_ring,
+    settling_index,
+    spectral_entropy,
+)
+
+try:
+    from wavecontact.modal.ring import RingSimulation  # noqa: F401
+
+    HAVE_RING_SIMULATION = True
+except ImportError:
+    HAVE_RING_SIMULATION = False
+
+needs_ring_simulation = pytest.mark.skipif(
+    not HAVE_RING_SIMULATION, reason="wavecontact.modal.ring.RingSimulation not available"
+)
+
+
+class ExchangeToyRing:
+    """A stand-in for RingSimulation with an exactly known stationary law.
+
+    The state is the translational energy and the 2N modal energies.  A
+    "collision" first splits the pooled energy of the translation and a
+    random mode by a uniform fraction, then does the same for ``2N`` random
+    pairs of energies.  Every such move leaves the uniform law on the simplex
+    ``sum = E_total`` invariant (a Dirichlet(1, ..., 1) conditioned on the sum
+    of two entries splits that sum uniformly), so in the stationary state
+    ``E_tr / E_total ~ Beta(1, 2N)``, mean ``E_total / (2N + 1)`` (Eq. 8), and
+    ``w`` is uniform on the simplex of the 2N modes.
+    """
+
+    def __init__(self, gamma, kappa, modes, static_correction=True, circumference=None, seed=None):
+        self.gamma, self.kappa, self.modes = gamma, kappa, modes
+        self.reduced_mass = 0.5
+        self.total_energy = 0.25
+        self.rng = np.random.default_rng(12345 if seed is None else seed)
+        self.energies = np.zeros(2 * modes + 1)
+        self.energies[0] = self.total_energy
+        self.time = 0.0
+        self.count = 0
+
+    def _split(self, a, b):
+        pooled = self.energies[a] + self.energies[b]
+        self.energies[a] = self.rng.random() * pooled
+        self.energies[b] = pooled - self.energies[a]
+
+    def next_collision(self):
+        before = self.energies[0]
+        self.time += 1.0 / math.sqrt(2.0 * before / self.reduced_mass)
+        size = self.energies.size
+        self._split(0, int(self.rng.integers(1, size)))
+        for _ in range(size - 1):
+            a, b = self.rng.choice(size, 2, replace=False)
+            self._split(int(a), int(b))
+        after = self.energies[0]
+        self.count += 1
+        return {
+            "collision": self.count,
+            "time": self.time,
+            "pair": "near" if self.count % 2 else "far",
+            "E_tr_before": before,
+            "E_tr_after": after,
+            "restitution": math.sqrt(after / before),
+            "modal_energies": self.energies[1:].reshape(2, self.modes).copy(),
+            "E_bath": float(self.energies[1:].sum()),
+            "E_total": float(self.energies.sum()),
+        }
+
+    def get_state(self):
+        return {
+            "energies": self.energies.copy(),
+            "rng": self.rng.bit_generator.state,
+            "time": self.time,
+            "count": self.count,
+        }
+
+    def set_state(self, state):
+        self.energies = np.array(state["energies"], copy=True)
+        self.rng.bit_generator.state = state["rng"]
+        self.time = state["time"]
+        self.count = state["count"]
+
+
+# ----------------------------------------------------------------------------
+# Statistics on inputs with known answers
+# ----------------------------------------------------------------------------
+
+
+def test_equilibrium_formulas():
+    assert equilibrium_translational_energy(75) == pytest.approx(0.5 / (2 * 151))
+    assert equilibrium_translational_energy(10, reduced_mass=2.0, speed=3.0) == pytest.approx(18.0 / 42.0)
+    assert equilibrium_spectral_entropy(75) == pytest.approx(0.423 / math.log(150))
+    # 0.423 is 1 - Euler's constant, the mean of x ln x for exponential x of mean 1.
+    assert ring_study.ENTROPY_CONSTANT == pytest.approx(0.423, abs=5e-4)
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(InvalidParameterError):
+            equilibrium_translational_energy(bad)
+
+
+def test_spectral_entropy_limits():
+    n = 7
+    uniform = np.full((2, n), 1.0 / (2 * n))
+    assert spectral_entropy(uniform) == pytest.approx(0.0, abs=1e-14)
+    single = np.zeros((2, n))
+    single[1, 3] = 1.0
+    assert spectral_entropy(single) == pytest.approx(1.0)
+    # two equal modes: h = ln 2
+    pair = np.zeros((2, n))
+    pair[0, 0] = pair[1, 0] = 0.5
+    assert spectral_entropy(pair) == pytest.approx(1.0 - math.log(2) / math.log(2 * n))
+    # cold bath: w undefined, eta = 1 as in the paper (h = 0 at t = 0)
+    w = relative_modal_energies(np.zeros((3, 2, n)))
+    assert np.all(w == 0.0)
+    np.testing.assert_allclose(spectral_entropy(w), 1.0)
+    with pytest.raises(InvalidParameterError):
+        relative_modal_energies(np.array([[1.0, -1.0], [0.0, 1.0]]))
+
+
+def test_spectral_entropy_of_boltzmann_modes_matches_eq11():
+    """Modal energies i.i.d. exponential: E[h] = H_M - 1 exactly (uniform Dirichlet), and Eq. 11 for large M."""
+    rng = np.random.default_rng(3)
+    n = 75
+    energies = rng.exponential(size=(20000, 2, n))
+    eta = spectral_entropy(relative_modal_energies(energies))
+    m = 2 * n
+    exact = 1.0 - (special.digamma(m + 1) - special.digamma(2)) / math.log(m)
+    standard_error = np.std(eta) / math.sqrt(eta.size)
+    assert abs(np.mean(eta) - exact) < 4 * standard_error
+    assert exact == pytest.approx(equilibrium_spectral_entropy(n), rel=0.01)
+
+
+def test_correlation_of_iid_data_is_small_and_of_ar1_is_phi():
+    rng = np.random.default_rng(11)
+    n = 20000
+    iid = rng.normal(0.6, 0.1, size=n)
+    corr = restitution_correlation(iid, max_lag=5)
+    assert corr[0] == pytest.approx(0.01, rel=0.05)
+    assert np.all(np.abs(corr[1:] / corr[0]) < 4 / math.sqrt(n))
+    # an AR(1) series with coefficient phi has C(k)/C(0) = phi^k
+    phi = 0.7
+    x = np.empty(n)
+    x[0] = 0.0
+    noise = rng.normal(size=n)
+    for j in range(1, n):
+        x[j] = phi * x[j - 1] + noise[j]
+    corr = restitution_correlation(x, max_lag=3, start=100)
+    np.testing.assert_allclose(corr[1:] / corr[0], phi ** np.arange(1, 4), atol=0.03)
+    with pytest.raises(InvalidParameterError):
+        restitution_correlation(iid[:5], max_lag=4)
+
+
+def test_ks_accepts_exponential_and_rejects_uniform():
+    rng = np.random.default_rng(5)
+    mean = 0.002
+    assert ks_exponential(rng.exponential(mean, size=2000), mean).pvalue > 0.01
+    assert ks_exponential(rng.uniform(0, 2 * mean, size=2000), mean).pvalue < 1e-6
+    # the right law with the wrong mean (10 % off) is rejected too
+    assert ks_exponential(rng.exponential(1.1 * mean, size=5000), mean).pvalue < 1e-3
+
+
+def test_relaxation_and_settling():
+    rng = np.random.default_rng(8)
+    level = 0.01
+    decay = 0.25 * np.exp(-np.arange(60) / 6.0) + level
+    series = np.concatenate([decay, rng.exponential(level, size=2000)])
+    j = relaxation_collisions(series, level, window=20)
+    # the excess 0.25 exp(-j/6) falls below 10x the band (2 level / sqrt(20)) at j = 10.3 and below
+    # the band itself at j = 24; a forward window mean enters the band in between
+    assert j is not None and 10 <= j <= 25
+    assert relaxation_collisions(np.full(100, 10 * level), level) is None
+    assert settling_index([5, 4, 3, 2, 1, 1, 1], 1.0, 0.01, 2) == 4
+
+
+# ----------------------------------------------------------------------------
+# Running, checkpoints and resume (stand-in simulation)
+# ----------------------------------------------------------------------------
+
+
+def _toy_run(tmp_path=None, collisions=300, modes=6, **kwargs):
+    return run_ring(0.6173, 4000, modes, collisions, out_dir=tmp_path, progress=False,
+                    simulation_factory=ExchangeToyRing, **kwargs)
+
+
+def _assert_same_run(a: RingRun, b: RingRun):
+    for name in RingRun._ARRAYS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+
+
+def test_toy_run_reaches_its_known_stationary_law():
+    """The study, on a system whose answer is known, finds Eq. 8, Eq. 9 and Eq. 11."""
+    modes = 10
+    run = _toy_run(collisions=3000, modes=modes)
+    assert run.n_collisions == 3000
+    assert run.modal_energies.shape == (3000, 2, modes)
+    np.testing.assert_allclose(run.total_energy, 0.25, rtol=1e-12)
+    s = run.statistics()
+    e_eq = equilibrium_translational_energy(modes)
+    assert s.relaxation_collisions is not None and s.relaxation_collisions < 30
+    assert abs(s.mean_translational_energy - e_eq) < 4 * s.translational_energy_standard_error
+    # the exact law is Beta(1, 2N) * E_total; at N = 10 the exponential Eq. 9 is close to it
+    exact = stats.kstest(run.translational_energy[s.transient:] / 0.25, "beta", args=(1, 2 * modes))
+    assert exact.pvalue > 1e-3
+    assert s.ks_pvalue > 1e-3
+    exact_eta = 1.0 - (special.digamma(2 * modes + 1) - special.digamma(2)) / math.log(2 * modes)
+    assert s.mean_spectral_entropy == pytest.approx(exact_eta, abs=0.01)
+    assert abs(s.restitution_correlation_coefficient_lag1) < 0.15
+    assert s.entropy_settling_collisions is not None and s.entropy_settling_collisions <= 10
+    assert s.energy_drift < 1e-12
+
+
+def test_interrupted_run_resumes_to_the_same_result(tmp_path):
+    reference = _toy_run(tmp_path / "straight", collisions=120, checkpoint_every=25)
+
+    def interrupt(index, record):
+        if index == 61:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _toy_run(tmp_path / "broken", collisions=120, checkpoint_every=25, callback=interrupt)
+    assert (tmp_path / "broken" / ring_study.CHECKPOINT_NAME).exists()
+    assert not list((tmp_path / "broken").glob(".*.tmp")), "a temporary checkpoint file was left behind"
+    messages = []
+    resumed = _toy_run(tmp_path / "broken", collisions=120, checkpoint_every=25, log=messages.append)
+    assert resumed.resumed_from == 50
+    assert "collision 50" in messages[0]
+    _assert_same_run(reference, resumed)
+    # the written data agree as well
+    _assert_same_run(RingRun.load_npz(tmp_path / "straight" / "ring.npz"),
+                     RingRun.load_npz(tmp_path / "broken" / "ring.npz"))
+    assert (tmp_path / "straight" / "ring.csv").read_text() == (tmp_path / "broken" / "ring.csv").read_text()
+
+
+def test_finished_run_can_be_extended(tmp_path):
+    reference = _toy_run(collisions=150)
+    _toy_run(tmp_path, collisions=90, checkpoint_every=40)
+    extended = _toy_run(tmp_path, collisions=150, checkpoint_every=40)
+    assert extended.resumed_from == 90
+    _assert_same_run(reference, extended)
+
+
+def test_checkpoint_of_another_run_is_refused(tmp_path):
+    _toy_run(tmp_path, collisions=20, modes=4)
+    with pytest.raises(InvalidParameterError, match="modes"):
+        _toy_run(tmp_path, collisions=20, modes=5)
+    (tmp_path / ring_study.CHECKPOINT_NAME).write_bytes(b"not a checkpoint")
+    with pytest.raises(InvalidParameterError, match="checkpoint"):
+        _toy_run(tmp_path, collisions=20, modes=4)
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"gamma": 0.0}, "gamma"),
+        ({"gamma": 1.5}, "gamma"),
+        ({"kappa": -1.0}, "kappa"),
+        ({"kappa": float("nan")}, "kappa"),
+        ({"modes": 0}, "modes"),
+        ({"collisions": 0}, "collisions"),
+        ({"checkpoint_every": 0}, "checkpoint_every"),
+    ],
+)
+def test_run_ring_refuses_bad_parameters(kwargs, field):
+    args = {"gamma": 0.6, "kappa": 100.0, "modes": 4, "collisions": 10, "checkpoint_every": 5}
+    args.update(kwargs)
+    with pytest.raises(InvalidParameterError, match=field):
+        run_ring(progress=False, simulation_factory=ExchangeToyRing, **args)
+
+
+def test_npz_round_trip(tmp_path):
+    run = _toy_run(collisions=40, modes=3)
+    path = run.save_npz(tmp_path / "x.npz")
+    back = RingRun.load_npz(path)
+    _assert_same_run(run, back)
+    assert back.gamma == run.gamma and back.modes == run.modes and back.static_correction
+
+
+def test_figures_are_written(tmp_path):
+    from wavecontact.plotting.ring import plot_ring_figures, plot_spectral_entropy
+
+    run = _toy_run(collisions=200, modes=5)
+    paths = plot_ring_figures(run, tmp_path)
+    for path in paths:
+        assert path.stat().st_size > 10_000
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    other = _toy_run(collisions=100, modes=12)
+    assert plot_spectral_entropy([run, other], tmp_path / "both.png").exists()
+
+
+# ----------------------------------------------------------------------------
+# Command line
+# ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--gamma", "0", "--kappa", "100", "--modes", "4", "--collisions", "10"],
+        ["--gamma", "0.6", "--kappa", "-1", "--modes", "4", "--collisions", "10"],
+        ["--gamma", "0.6", "--kappa", "100", "--modes", "0", "--collisions", "10"],
+        ["--gamma", "0.6", "--kappa", "100", "--modes", "4", "--collisions", "x"],
+        ["--gamma", "0.6", "--kappa", "100", "--modes", "4", "--collisions", "10", "--checkpoint-every", "0"],
+        ["--gamma", "0.6", "--kappa", "100", "--modes", "4", "--collisions", "2"],
+    ],
+)
+def test_cli_refuses_bad_arguments(argv, tmp_path, capsys):
+    with pytest.raises(SystemExit) as info:
+        code = cli_main(["ring", *argv, "--out", str(tmp_path / "out"), "--no-progress"])
+        raise SystemExit(code)
+    assert info.value.code != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_cli_end_to_end_with_stand_in(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(ring_study, "_load_ring_simulation", lambda: ExchangeToyRing)
+    out = tmp_path / "ring"
+    argv = ["ring", "--gamma", "0.6173", "--kappa", "4000", "--modes", "5", "--collisions", "100",
+            "--out", str(out), "--checkpoint-every", "30", "--no-progress"]
+    assert cli_main(argv) == 0
+    first = capsys.readouterr()
+    assert "Eq. 8" in first.out and "resuming" not in first.err
+    for name in ("ring.npz", "ring.csv", "summary.json", "modal_spectrum.csv", "checkpoint.pkl",
+                 "fig1_translational_energy.png", "fig2_spectral_entropy.png", "fig3_restitution_correlation.png"):
+        assert (out / name).stat().st_size > 0, name
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["collisions"] == 100 and summary["modes"] == 5
+    assert summary["equilibrium_translational_energy"] == pytest.approx(0.5 / 22)
+    assert len((out / "ring.csv").read_text().splitlines()) == 101
+    # running again resumes from the final checkpoint and says so
+    assert cli_main(argv) == 0
+    assert "resuming from checkpoint" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------
+# The real ring simulation (issue 4, item 4-5)
+# ----------------------------------------------------------------------------
+
+
+@needs_ring_simulation
+def test_real_ring_resume_is_bit_for_bit(tmp_path):
+    straight = run_ring(0.6173, 200.0, 8, 40, out_dir=tmp_path / "a", checkpoint_every=15, progress=False)
+
+    def interrupt(index, record):
+        if index == 20:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_ring(0.6173, 200.0, 8, 40, out_dir=tmp_path / "b", checkpoint_every=15, progress=False,
+                 callback=interrupt)
+    resumed = run_ring(0.6173, 200.0, 8, 40, out_dir=tmp_path / "b", checkpoint_every=15, progress=False)
+    assert resumed.resumed_from == 15
+    _assert_same_run(straight, resumed)
+
+
+@needs_ring_simulation
+def test_cli_killed_subprocess_resumes_to_the_same_result(tmp_path):
+    """Kill the real CLI after its first checkpoint, rerun it, compare with an uninterrupted run."""
+    base = [sys.executable, "-m", "wavecontact", "ring", "--gamma", "0.6173", "--kappa", "200",
+            "--modes", "8", "--collisions", "60", "--checkpoint-every", "10", "--no-progress"]
+    env = dict(os.environ)
+    straight = subprocess.run([*base, "--out", str(tmp_path / "a")], check=False, capture_output=True, text=True,
+                              env=env, timeout=300)
+    assert straight.returncode == 0, straight.stderr
+    killed_dir = tmp_path / "b"
+    proc = subprocess.Popen([*base, "--out", str(killed_dir)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, env=env)
+    deadline = time.monotonic() + 240
+    checkpoint = killed_dir / ring_study.CHECKPOINT_NAME
+    while not checkpoint.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    proc.kill()
+    proc.wait()
+    if (killed_dir / "ring.npz").exists():
+        pytest.skip("the run finished before it could be killed")
+    assert checkpoint.exists()
+    again = subprocess.run([*base, "--out", str(killed_dir)], check=False, capture_output=True, text=True,
+                           env=env, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert "resuming from checkpoint" in again.stderr
+    _assert_same_run(RingRun.load_npz(tmp_path / "a" / "ring.npz"), RingRun.load_npz(killed_dir / "ring.npz"))
+
+
+def _physics_checks(run: RingRun, relax_max: int, eta_tolerance: float, corr_max: float):
+    s = run.statistics()
+    e_eq = equilibrium_translational_energy(run.modes)
+    assert s.energy_drift < 1e-6
+    assert s.relaxation_collisions is not None and s.relaxation_collisions <= relax_max
+    assert abs(s.mean_translational_energy / e_eq - 1.0) < max(0.15, 4 * s.translational_energy_standard_error / e_eq)
+    assert s.ks_pvalue > 1e-3
+    assert abs(s.mean_spectral_entropy - equilibrium_spectral_entropy(run.modes)) < eta_tolerance
+    assert abs(s.restitution_correlation_coefficient_lag1) < corr_max
+    return s
+
+
+@needs_ring_simulation
+def test_real_ring_relaxes_to_equipartition():
+    """Sec. III at a small size: Eq. 8 mean, Eq. 9 law (KS), Eq. 11 entropy, weak C_eps(1)."""
+    run = run_ring(0.6173, 4000.0, 12, 600, progress=False)
+    _physics_checks(run, relax_max=150, eta_tolerance=0.04, corr_max=0.2)
+
+
+@pytest.mark.slow
+@needs_ring_simulation
+def test_real_ring_paper_size():
+    """The paper's run: gamma = 0.6173, kappa = 4000, N = 75, 4500 collisions."""
+    run = run_ring(0.6173, 4000.0, 75, 4500, progress=False)
+    s = _physics_checks(run, relax_max=120, eta_tolerance=0.02, corr_max=0.1)
+    assert s.entropy_settling_collisions is not None and s.entropy_settling_collisions <= 15
