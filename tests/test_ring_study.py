@@ -17,6 +17,7 @@ from wavecontact.errors import InvalidParameterError
 from wavecontact.studies import ring as ring_study
 from wavecontact.studies.ring import (
     RingRun,
+    decorrelation_stride,
     equilibrium_spectral_entropy,
     equilibrium_translational_energy,
     ks_exponential,
@@ -169,6 +170,9 @@ def test_correlation_of_iid_data_is_small_and_of_ar1_is_phi():
         x[j] = phi * x[j - 1] + noise[j]
     corr = restitution_correlation(x, max_lag=3, start=100)
     np.testing.assert_allclose(corr[1:] / corr[0], phi ** np.arange(1, 4), atol=0.03)
+    # 0.7^6 = 0.118 > 0.1 > 0.7^7 = 0.082: thinning by 6-8 makes the samples nearly independent
+    assert 6 <= decorrelation_stride(x, threshold=0.1) <= 8
+    assert decorrelation_stride(iid) == 1
     with pytest.raises(InvalidParameterError):
         restitution_correlation(iid[:5], max_lag=4)
 

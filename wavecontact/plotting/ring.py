@@ -153,6 +153,9 @@ def plot_restitution_correlation(run: RingRun, path, statistics: RingStatistics 
     ax.vlines(lags, 0.0, corr, color="C0", lw=1.5)
     ax.plot(lags, corr, "o", color="C0", ms=4.5, label=r"$C_\epsilon(k)$, Eq. 13")
     ax.set_xlim(-0.5, lags[-1] + 0.5)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("lag k (collisions)")
     ax.set_ylabel(r"$C_\epsilon(k)$")
     ax.set_title(f"{_title(run)}\nstationary collisions {stats.transient + 1}-{run.n_collisions}, "

@@ -46,6 +46,7 @@ __all__ = [
     "DATA_NPZ_NAME",
     "RingRun",
     "RingStatistics",
+    "decorrelation_stride",
     "default_transient",
     "equilibrium_spectral_entropy",
     "equilibrium_translational_energy",
@@ -282,6 +283,29 @@ def ks_exponential(samples, mean: float):
     return stats.kstest(values, "expon", args=(0.0, scale))
 
 
+def decorrelation_stride(series, threshold: float = 0.1, max_stride: int = 50) -> int:
+    """Smallest lag ``k >= 1`` at which the autocorrelation of ``series`` has fallen below ``threshold``.
+
+    The KS p-value assumes independent samples; taking every ``k``-th value
+    of a correlated series brings it closer to that.  The threshold is
+    raised to ``3 / sqrt(n)`` when the series is too short to resolve it.
+    Returns ``max_stride`` if the correlation never drops that far.
+    """
+    values = np.asarray(series, dtype=float)
+    n = values.size
+    if n < 4:
+        return 1
+    level = max(float(threshold), 3.0 / math.sqrt(n))
+    dev = values - values.mean()
+    variance = float(np.dot(dev, dev)) / n
+    if variance == 0.0:
+        return 1
+    for k in range(1, min(int(max_stride), n - 2) + 1):
+        if abs(float(np.dot(dev[: n - k], dev[k:])) / (n - k) / variance) < level:
+            return k
+    return int(max_stride)
+
+
 def default_transient(collisions: int, relaxation: int | None) -> int:
     """Collisions to discard before the stationary averages.
 
@@ -306,6 +330,16 @@ class RingStatistics:
 
     Energies in the units of ``two_rods`` (initial ``E_tr = mu V^2/2 = 1/4``).
     ``transient`` collisions are discarded before every stationary average.
+    Successive values of ``E_tr`` are correlated (``E_tr`` after one
+    collision is ``E_tr`` before the next), so the Kolmogorov-Smirnov test of
+    Eq. 9 uses every ``ks_stride``-th stationary value
+    (:func:`decorrelation_stride`); ``ks_pvalue_all_samples`` is the same
+    test on all of them, valid only if they were independent.  The standard
+    error of the mean ``E_tr`` is likewise that of the thinned samples.
+    Collision counts: ``relaxation_collisions`` from
+    :func:`relaxation_collisions`; ``entropy_settling_collisions`` is the
+    first collision after which ``eta`` lies within two stationary standard
+    deviations of its stationary mean.
     """
 
     modes: int
@@ -315,8 +349,12 @@ class RingStatistics:
     mean_translational_energy: float
     translational_energy_standard_error: float
     relaxation_collisions: int | None
+    translational_energy_autocorrelation_lag1: float
+    ks_stride: int
+    ks_samples: int
     ks_statistic: float
     ks_pvalue: float
+    ks_pvalue_all_samples: float
     equilibrium_spectral_entropy: float
     mean_spectral_entropy: float
     entropy_settling_collisions: int | None
@@ -445,7 +483,11 @@ class RingRun:
             raise InvalidParameterError(f"transient must be an integer in [0, {m - 3}], got {transient!r}")
         transient = int(transient)
         stationary_energy = self.translational_energy[transient:]
-        ks = ks_exponential(stationary_energy, e_eq)
+        stride = decorrelation_stride(stationary_energy)
+        ks = ks_exponential(stationary_energy[::stride], e_eq)
+        ks_all = ks_exponential(stationary_energy, e_eq)
+        energy_dev = stationary_energy - stationary_energy.mean()
+        energy_rho1 = float(np.dot(energy_dev[:-1], energy_dev[1:]) / np.dot(energy_dev, energy_dev))
         eta = self.spectral_entropy()
         eta_stationary = eta[transient:]
         eta_tolerance = 2.0 * float(np.std(eta_stationary)) + 1e-15
@@ -463,10 +505,16 @@ class RingRun:
             transient=transient,
             equilibrium_translational_energy=e_eq,
             mean_translational_energy=float(np.mean(stationary_energy)),
-            translational_energy_standard_error=float(np.std(stationary_energy, ddof=1) / math.sqrt(stationary_energy.size)),
+            translational_energy_standard_error=float(
+                np.std(stationary_energy, ddof=1) * math.sqrt(stride / stationary_energy.size)
+            ),
             relaxation_collisions=relax,
+            translational_energy_autocorrelation_lag1=energy_rho1,
+            ks_stride=stride,
+            ks_samples=int(stationary_energy[::stride].size),
             ks_statistic=float(ks.statistic),
             ks_pvalue=float(ks.pvalue),
+            ks_pvalue_all_samples=float(ks_all.pvalue),
             equilibrium_spectral_entropy=equilibrium_spectral_entropy(self.modes),
             mean_spectral_entropy=float(np.mean(eta_stationary)),
             entropy_settling_collisions=eta_settle,
