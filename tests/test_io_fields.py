@@ -82,7 +82,10 @@ def hard_impact_result(gamma=0.6, elements=24, order=1, samples=60, t_end=None):
     t_end = 2 * l2 + 0.5 if t_end is None else t_end
     time = np.linspace(-0.3, t_end, samples)
     rods = []
-    for length, left, v0, sign, n_el in ((l1, -l1, v1, 1.0, elements), (l2, 0.0, v2, -1.0, round(elements / gamma))):
+    for length, left, v0, sign, n_el in (
+        (l1, -l1, v1, 1.0, elements),
+        (l2, 0.0, v2, -1.0, round(elements / gamma)),
+    ):
         x, cells = _nodes(length, n_el, order, left)
         r = np.abs(x)[None, :]
         stress, moving = _rod_waves(r, time[:, None], length, duration)
@@ -90,9 +93,13 @@ def hard_impact_result(gamma=0.6, elements=24, order=1, samples=60, t_end=None):
         # u = 0 at the moment of contact; the time integral of the pulses is exact
         _, swept = _rod_waves(r, time[:, None], length, duration, integral=True)
         displacement = v0 * time[:, None] + sign * swept
-        rods.append({"x": x, "displacement": displacement, "velocity": velocity, "stress": stress, "cells": cells})
+        rods.append(
+            {"x": x, "displacement": displacement, "velocity": velocity, "stress": stress, "cells": cells}
+        )
     fields = {"time": time, "rods": rods}
-    relative = np.where(time < 0, -1.0, np.where(time < duration, -1.0 + (1 + gamma) * time / duration, gamma))
+    relative = np.where(
+        time < 0, -1.0, np.where(time < duration, -1.0 + (1 + gamma) * time / duration, gamma)
+    )
     return CollisionResult(
         restitution=gamma,
         solver="analytic",
@@ -147,8 +154,10 @@ def test_vtu_series_round_trips_values_and_times(tmp_path, order):
     assert [c.type for c in mesh.cells] == ["line"]
     stress = np.concatenate([rod["stress"][7] for rod in expected["rods"]])
     np.testing.assert_array_equal(mesh.point_data["stress"], stress)
-    np.testing.assert_array_equal(mesh.point_data["displacement_vector"][:, 0],
-                                  np.concatenate([rod["displacement"][7] for rod in expected["rods"]]))
+    np.testing.assert_array_equal(
+        mesh.point_data["displacement_vector"][:, 0],
+        np.concatenate([rod["displacement"][7] for rod in expected["rods"]]),
+    )
     # the whole series back through read_fields
     back = read_fields(tmp_path / "out")
     np.testing.assert_array_equal(back["time"], expected["time"])
@@ -174,8 +183,9 @@ def test_xdmf_series_reads_back_with_meshio(tmp_path):
             t, point_data, _ = reader.read_data(k)
             assert t == expected["time"][k]
             for name in FIELD_NAMES:
-                np.testing.assert_array_equal(point_data[name].ravel(),
-                                              np.concatenate([rod[name][k] for rod in expected["rods"]]))
+                np.testing.assert_array_equal(
+                    point_data[name].ravel(), np.concatenate([rod[name][k] for rod in expected["rods"]])
+                )
 
 
 def test_xdmf_that_does_not_read_back_falls_back_to_vtu(tmp_path, monkeypatch):
@@ -200,8 +210,9 @@ def test_xdmf_without_h5py_keeps_data_inline(tmp_path):
 
 
 def test_result_without_fields_is_refused_with_a_hint(tmp_path):
-    result = CollisionResult(restitution=0.6, solver="delay", wall_time_s=0.0,
-                             time=np.zeros(2), relative_velocity=np.zeros(2))
+    result = CollisionResult(
+        restitution=0.6, solver="delay", wall_time_s=0.0, time=np.zeros(2), relative_velocity=np.zeros(2)
+    )
     with pytest.raises(MissingFieldsError, match="record_fields=True"):
         write_fields(result, tmp_path)
     assert not any(tmp_path.iterdir())

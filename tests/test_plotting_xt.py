@@ -50,8 +50,13 @@ def test_xt_diagram_thins_large_fields_but_keeps_ends():
 
 
 def test_results_without_fields_are_refused(tmp_path):
-    result = CollisionResult(restitution=0.75, solver="delay", wall_time_s=0.0,
-                             time=np.linspace(0, 1, 3), relative_velocity=np.zeros(3))
+    result = CollisionResult(
+        restitution=0.75,
+        solver="delay",
+        wall_time_s=0.0,
+        time=np.linspace(0, 1, 3),
+        relative_velocity=np.zeros(3),
+    )
     with pytest.raises(MissingFieldsError, match="record_fields=True"):
         plot_xt_diagram(result, tmp_path / "xt.png")
     assert not (tmp_path / "xt.png").exists()

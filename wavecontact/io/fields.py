@@ -142,15 +142,22 @@ def _validated_rod(index: int, rod: dict, n_times: int) -> dict:
         values = np.asarray(rod[name], dtype=float)
         if values.shape != (n_times, x.size):
             raise InvalidParameterError(
-                f"{where}['{name}'] must have shape (n_times, n_nodes) = ({n_times}, {x.size}), got {values.shape}"
+                f"{where}['{name}'] must have shape (n_times, n_nodes) = ({n_times}, {x.size}), "
+                f"got {values.shape}"
             )
         if not np.all(np.isfinite(values)):
             raise InvalidParameterError(f"{where}['{name}'] holds non-finite values")
         out[name] = values
     cells = np.asarray(rod["cells"])
-    if cells.ndim != 2 or cells.shape[0] == 0 or cells.shape[1] < 2 or not np.issubdtype(cells.dtype, np.integer):
+    if (
+        cells.ndim != 2
+        or cells.shape[0] == 0
+        or cells.shape[1] < 2
+        or not np.issubdtype(cells.dtype, np.integer)
+    ):
         raise InvalidParameterError(
-            f"{where}['cells'] must be an integer array (n_elements, order + 1), got {cells.shape} {cells.dtype}"
+            f"{where}['cells'] must be an integer array (n_elements, order + 1), "
+            f"got {cells.shape} {cells.dtype}"
         )
     if cells.min() < 0 or cells.max() >= x.size:
         raise InvalidParameterError(f"{where}['cells'] refers to nodes outside 0..{x.size - 1}")
@@ -246,7 +253,9 @@ def write_fields(result, directory, format: str = "vtu", *, prefix: str = "field
         except Exception as exc:  # noqa: BLE001 - any write or read-back failure: use the robust format
             for name in (f"{prefix}.xdmf", f"{prefix}.h5"):
                 (directory / name).unlink(missing_ok=True)
-            note = f"XDMF series did not read back correctly ({exc}); wrote VTU files with a PVD index instead"
+            note = (
+                f"XDMF series did not read back correctly ({exc}); wrote VTU files with a PVD index instead"
+            )
             warnings.warn(note, UserWarning, stacklevel=2)
             written = _write_vtu_series(fields, directory, prefix)
             return FieldFiles(written.format, written.index, written.files, written.times, note)

@@ -63,7 +63,9 @@ def xt_figure(
     if field not in FIELD_NAMES:
         raise InvalidParameterError(f"field must be one of {', '.join(FIELD_NAMES)}, got {field!r}")
     if coordinates not in COORDINATES:
-        raise InvalidParameterError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
+        raise InvalidParameterError(
+            f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}"
+        )
     fields = sampled_fields(result)
     time = fields["time"]
     rows = _thin(time.size, max_times)
@@ -85,27 +87,50 @@ def xt_figure(
         else:
             x = np.broadcast_to(x, (rows.size, cols.size))
         t = np.broadcast_to(time[rows][:, None], x.shape)
-        mesh = ax.pcolormesh(x, t, rod[field][np.ix_(rows, cols)], cmap=cmap, norm=norm,
-                             shading="gouraud", rasterized=True)
+        mesh = ax.pcolormesh(
+            x, t, rod[field][np.ix_(rows, cols)], cmap=cmap, norm=norm, shading="gouraud", rasterized=True
+        )
         for end in (0, -1):  # outline of the rod's ends
             ax.plot(x[:, end], t[:, end], color="0.25", lw=0.6)
-        ax.annotate(f"rod {number}", xy=(float(np.mean(x[0])), time[rows][0]), xytext=(0, 3),
-                    textcoords="offset points", ha="center", va="bottom", fontsize=8, color="0.25")
+        ax.annotate(
+            f"rod {number}",
+            xy=(float(np.mean(x[0])), time[rows][0]),
+            xytext=(0, 3),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=8,
+            color="0.25",
+        )
 
     start, duration = getattr(result, "contact_start", None), getattr(result, "contact_duration", None)
     if start is not None and duration is not None and np.isfinite(start) and np.isfinite(duration):
         for when, label in ((start, "contact begins"), (start + duration, "contact ends")):
             ax.axhline(when, color="0.35", lw=0.7, ls="--")
-            ax.annotate(label, xy=(1.0, when), xycoords=("axes fraction", "data"), xytext=(-3, 2),
-                        textcoords="offset points", ha="right", va="bottom", fontsize=7, color="0.35")
+            ax.annotate(
+                label,
+                xy=(1.0, when),
+                xycoords=("axes fraction", "data"),
+                xytext=(-3, 2),
+                textcoords="offset points",
+                ha="right",
+                va="bottom",
+                fontsize=7,
+                color="0.35",
+            )
 
     dimensionless = getattr(result, "gamma", None) is not None
-    ax.set_xlabel("position x" + (" (units of l)" if dimensionless else "")
-                  + ("  [reference]" if coordinates == "reference" else "  [deformed: x + u]"))
+    ax.set_xlabel(
+        "position x"
+        + (" (units of l)" if dimensionless else "")
+        + ("  [reference]" if coordinates == "reference" else "  [deformed: x + u]")
+    )
     ax.set_ylabel("time" + (r" $\tau = t\,c/l$" if dimensionless else ""))
     ax.set_ylim(time[rows][0], time[rows][-1])
     units = {"stress": r"$\rho c V$", "velocity": "V", "displacement": "l"}
-    label = {"stress": "stress (compression < 0)", "velocity": "velocity", "displacement": "displacement"}[field]
+    label = {"stress": "stress (compression < 0)", "velocity": "velocity", "displacement": "displacement"}[
+        field
+    ]
     if dimensionless:
         label += f" [{units[field]}]"
     fig.colorbar(mesh, ax=ax, label=label, shrink=0.9)

@@ -1,0 +1,108 @@
+"""Figure of a mesh-convergence study: error against elements and against wall time."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+
+__all__ = ["convergence_figure", "plot_convergence"]
+
+
+def convergence_figure(table):
+    """Two log-log panels of a :class:`~wavecontact.studies.convergence.ConvergenceTable`.
+
+    Left: error of epsilon against elements on the shorter rod, one line per
+    discretization, with guide lines of slope -1 and -2 (orders 1 and 2).
+    Right: error against wall time; guide lines of slope -1/2 and -1, which
+    is what orders 1 and 2 give when the cost grows like ``N**2`` (an explicit
+    scheme in 1D: N elements times a number of steps proportional to N).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    series = []
+    for fit in table.fits:
+        rows = [r for r in table.rows_for(fit.order, fit.mass) if r.error is not None and r.error > 0]
+        if rows:
+            series.append((fit, rows))
+    if not series:
+        raise InvalidParameterError("nothing to plot: no run of the study has a positive error")
+
+    fig = Figure(figsize=(10, 4.4), dpi=150, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax_n, ax_t = fig.subplots(1, 2)
+    markers = "osD^v<>p"
+    for k, (fit, rows) in enumerate(series):
+        label = fit.label + (f" (p = {fit.observed_order:.2f})" if fit.observed_order is not None else "")
+        style = {"marker": markers[k % len(markers)], "ms": 4, "lw": 1.2, "label": label}
+        ax_n.loglog([r.elements for r in rows], [r.error for r in rows], **style)
+        timed = [r for r in rows if r.wall_time_s and r.wall_time_s > 0]
+        if timed:
+            ax_t.loglog([r.wall_time_s for r in timed], [r.error for r in timed], **style)
+
+    all_rows = [r for _, rows in series for r in rows]
+    _guides(ax_n, [r.elements for r in all_rows], [r.error for r in all_rows], (1, 2), "N")
+    timed = [r for r in all_rows if r.wall_time_s and r.wall_time_s > 0]
+    if timed:
+        _guides(ax_t, [r.wall_time_s for r in timed], [r.error for r in timed], (0.5, 1), "t")
+
+    from matplotlib.ticker import NullFormatter
+
+    meshes = sorted({r.elements for r in all_rows})
+    ax_n.set_xticks(meshes, [str(n) for n in meshes])
+    ax_n.xaxis.set_minor_formatter(NullFormatter())
+    ax_n.set_xlabel("elements on the shorter rod N")
+    ax_n.set_ylabel(r"error $|\epsilon - \epsilon_\mathrm{ref}|$")
+    ax_t.set_xlabel("wall time per collision [s]")
+    for ax in (ax_n, ax_t):
+        ax.grid(True, which="major", alpha=0.3)
+        ax.grid(True, which="minor", alpha=0.1)
+    ax_n.legend(fontsize=8, loc="lower left")
+    kappa = r"$\infty$" if math.isinf(table.kappa) else f"{table.kappa:g}"
+    fig.suptitle(
+        rf"mesh convergence of $\epsilon$: $\gamma$ = {table.gamma:g}, $\kappa$ = {kappa}, "
+        f"{table.contact} contact, reference {table.reference:.10g} ({table.reference_source})",
+        fontsize=9,
+    )
+    return fig
+
+
+def plot_convergence(table, path) -> Path:
+    """Write :func:`convergence_figure` to ``path`` (format from the suffix) and return it."""
+    path = Path(path)
+    if not path.parent.exists():
+        raise InvalidParameterError(f"directory of the plot does not exist: {path.parent}")
+    convergence_figure(table).savefig(path)
+    return path
+
+
+def _guides(ax, xs, ys, slopes, symbol):
+    """Dashed reference lines of the given (negative) slopes through the data's upper left."""
+    xs, ys = np.asarray(xs, float), np.asarray(ys, float)
+    x0, x1 = xs.min(), xs.max()
+    if x1 <= x0:
+        return
+    anchor = ys[xs == x0].max()
+    for slope in slopes:
+        x = np.array([x0, x1])
+        y = anchor * 1.6 * (x / x0) ** (-slope)
+        exponent = f"{slope:g}" if slope != 0.5 else "1/2"
+        ax.loglog(x, y, ls="--", lw=0.8, color="0.45")
+        ax.annotate(
+            f"${symbol}^{{-{exponent}}}$",
+            xy=(x[1], y[1]),
+            xytext=(-2, 4),
+            textcoords="offset points",
+            fontsize=8,
+            color="0.35",
+            ha="right",
+            va="bottom",
+        )
