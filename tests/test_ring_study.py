@@ -356,9 +356,16 @@ def test_cli_end_to_end_with_stand_in(tmp_path, capsys, monkeypatch):
     assert summary["collisions"] == 100 and summary["modes"] == 5
     assert summary["equilibrium_translational_energy"] == pytest.approx(0.5 / 22)
     assert len((out / "ring.csv").read_text().splitlines()) == 101
-    # running again resumes from the final checkpoint and says so
+    # running again resumes from the final checkpoint and says so; asking for more extends the run,
+    # with a progress bar on stderr this time
     assert cli_main(argv) == 0
     assert "resuming from checkpoint" in capsys.readouterr().err
+    longer = [a for a in argv if a != "--no-progress"]
+    longer[longer.index("--collisions") + 1] = "120"
+    assert cli_main(longer) == 0
+    err = capsys.readouterr().err
+    assert "collision 100" in err and "120/120" in err
+    assert len((out / "ring.csv").read_text().splitlines()) == 121
 
 
 # ----------------------------------------------------------------------------
