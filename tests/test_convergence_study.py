@@ -299,3 +299,11 @@ def test_cli_refuses_bad_arguments_in_one_line(stand_in_api, capsys, argv):
 
 
 FEM_AVAILABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
+
+
+def test_default_reference_is_the_delay_solver_and_matches_model_md():
+    # the study's errors go down to ~1e-8, so its reference must be better than that
+    value, source = reference_restitution(0.6, 20)
+    assert source == "delay solver"
+    assert value == pytest.approx(EXACT_06_20, abs=1e-7)
+    assert reference_restitution(0.6, math.inf)[0] == 0.6
