@@ -1,0 +1,1 @@
+"""The delay-differential equation of the relative velocity (Eq. 16) and its hard-core limit."""

@@ -1,0 +1,396 @@
+"""Numerical kernel for the delay equation (Eq. 16), method of steps.
+
+The equation ``W' = exp(g(tau) - W)`` with
+
+    g(tau) = kappa tau - a0 - S(tau) + Q(tau),
+    S(tau) = sum_{i=1,2} sum_{n>=1} W(tau - n Gamma_i)
+
+has the property ``(e^W)' = e^g``, and ``g`` only involves *delayed* values
+of ``W``.  As long as a step is shorter than the smallest delay ``Gamma_1``,
+``g`` is a known function on the step and
+
+    e^{W(t + h)} = e^{W(t)} + integral_t^{t+h} e^{g(s)} ds
+
+is a plain quadrature: there is nothing implicit and nothing stiff.  The
+integrand grows like ``e^{kappa s}`` during contact, so the quadrature is done
+on ``e^{g(s)} = e^{g(t) + a s + r(s)}`` with the secant slope ``a`` taken out
+exactly (a change of variable that makes ``e^{a s}`` uniform) and only the
+smooth remainder ``e^{r}`` integrated by a Gauss-Kronrod (3, 7) pair.  All of
+it is done with logarithms, so nothing overflows although ``g`` and ``W``
+reach ``kappa`` times a few (millions for ``kappa = 1e6``).
+
+The history of ``W`` is stored at the step ends together with ``W'`` and
+``W''`` (both known in closed form from ``g``), which defines a quintic
+Hermite interpolant used for the delayed values.  The step size is
+controlled by the Kronrod error estimate and by the distance between the
+quintic and the quartic Hermite interpolant of the same step (an estimate of
+the interpolation error that later delayed evaluations will see), and a step
+is never longer than two stored steps around any delayed time it depends on,
+so the sharp features of ``W`` are resolved again wherever they come back
+through the memory terms.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import kernel
+
+# Gauss-Kronrod (3, 7) on [0, 1]: Kronrod nodes; the Gauss nodes are 1, 3, 5.
+_KRONROD_X = np.array(
+    [
+        0.960491268708020283423507092629,
+        0.774596669241483377035853079956,
+        0.434243749346802558002071502844,
+        0.0,
+        -0.434243749346802558002071502844,
+        -0.774596669241483377035853079956,
+        -0.960491268708020283423507092629,
+    ]
+)
+KRONROD_NODES = 0.5 * (1.0 + _KRONROD_X)
+KRONROD_WEIGHTS = 0.5 * np.array(
+    [
+        0.104656226026467265193823857192,
+        0.268488089868333440728569280667,
+        0.401397414775962222905051818618,
+        0.450916538658474142345110087045,
+        0.401397414775962222905051818618,
+        0.268488089868333440728569280667,
+        0.104656226026467265193823857192,
+    ]
+)
+GAUSS_WEIGHTS = 0.5 * np.array([0.0, 5.0 / 9.0, 0.0, 8.0 / 9.0, 0.0, 5.0 / 9.0, 0.0])
+
+STATUS_OK = 0
+STATUS_MAX_STEPS = 1
+STATUS_NONFINITE = 2
+STATUS_STEP_UNDERFLOW = 3
+STATUS_TIME_LIMIT = 4
+
+# max |H5 - H4| / (h^2 |c1_pred - c1|) on [0, 1]: the quintic basis x^3 (1-x)^2 / 2 at x = 3/5.
+_QUARTIC_GAP = 0.01728
+# below this |a h| the exponential change of variable is the identity to round-off
+_LINEAR_THRESHOLD = 1e-9
+
+
+@kernel
+def hermite5(t, w, d1, d2, last, s):
+    """Value and derivative at ``s`` of the quintic Hermite interpolant of the
+    history ``(t, w, d1, d2)[:last + 1]``; zero for ``s <= t[0]``."""
+    if s <= t[0]:
+        return 0.0, 0.0
+    lo = 0
+    hi = last
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if t[mid] <= s:
+            lo = mid
+        else:
+            hi = mid
+    h = t[lo + 1] - t[lo]
+    x = (s - t[lo]) / h
+    if x > 1.0:
+        x = 1.0
+    x2 = x * x
+    x3 = x2 * x
+    x4 = x3 * x
+    x5 = x4 * x
+    y0 = w[lo]
+    dy = w[lo + 1] - y0
+    a0 = h * d1[lo]
+    a1 = h * d1[lo + 1]
+    b0 = h * h * d2[lo]
+    b1 = h * h * d2[lo + 1]
+    h3 = 10.0 * x3 - 15.0 * x4 + 6.0 * x5
+    h1 = x - 6.0 * x3 + 8.0 * x4 - 3.0 * x5
+    h2 = 0.5 * x2 - 1.5 * x3 + 1.5 * x4 - 0.5 * x5
+    h4 = -4.0 * x3 + 7.0 * x4 - 3.0 * x5
+    h5 = 0.5 * x3 - x4 + 0.5 * x5
+    value = y0 + dy * h3 + a0 * h1 + b0 * h2 + a1 * h4 + b1 * h5
+    dh3 = 30.0 * x2 - 60.0 * x3 + 30.0 * x4
+    dh1 = 1.0 - 18.0 * x2 + 32.0 * x3 - 15.0 * x4
+    dh2 = x - 4.5 * x2 + 6.0 * x3 - 2.5 * x4
+    dh4 = -12.0 * x2 + 28.0 * x3 - 15.0 * x4
+    dh5 = 1.5 * x2 - 4.0 * x3 + 2.5 * x4
+    slope = (dy * dh3 + a0 * dh1 + b0 * dh2 + a1 * dh4 + b1 * dh5) / h
+    return value, slope
+
+
+@kernel
+def noise_value(s, freq, cos_amp, sin_amp):
+    """``Q(s)`` and ``Q'(s)`` of a Fourier-series noise (Eq. 17)."""
+    q = 0.0
+    dq = 0.0
+    for j in range(freq.shape[0]):
+        c = math.cos(freq[j] * s)
+        sn = math.sin(freq[j] * s)
+        q += cos_amp[j] * c + sin_amp[j] * sn
+        dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
+    return q, dq
+
+
+@kernel
+def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope):
+    """``S(s) = sum_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
+
+    Delayed times before ``t_significant`` (where ``W`` is still below
+    round-off) are skipped.
+    """
+    total = 0.0
+    slope = 0.0
+    for i in range(delays.shape[0]):
+        gamma_i = delays[i]
+        n = 1
+        while True:
+            u = s - n * gamma_i
+            if u <= t_significant:
+                break
+            value, derivative = hermite5(t, w, d1, d2, last, u)
+            total += value
+            if want_slope:
+                slope += derivative
+            n += 1
+    return total, slope
+
+
+@kernel
+def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, want_slope):
+    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope)
+    q, dq = noise_value(s, freq, cos_amp, sin_amp)
+    return kappa * s - a0 - memory + q, kappa - memory_slope + dq
+
+
+@kernel
+def _logaddexp(x, y):
+    if x == -math.inf:
+        return y
+    if y == -math.inf:
+        return x
+    if x > y:
+        return x + math.log1p(math.exp(y - x))
+    return y + math.log1p(math.exp(x - y))
+
+
+@kernel
+def integrate_delay_equation(
+    kappa,
+    a0,
+    delays,
+    rtol,
+    freq,
+    cos_amp,
+    sin_amp,
+    t_end_min,
+    t_limit,
+    settle_time,
+    max_steps,
+    nodes,
+    weights_k,
+    weights_g,
+):
+    """Integrate Eq. 16 from ``tau = 0`` until ``W`` has settled.
+
+    Parameters
+    ----------
+    kappa, a0 : float
+        ``alpha V l / c`` and the scaled initial gap ``alpha R0``.
+    delays : ndarray
+        ``(Gamma_1, Gamma_2)``, the round-trip times of the two rods.
+    rtol : float
+        Target absolute accuracy of ``W / kappa`` (hence of epsilon).
+    freq, cos_amp, sin_amp : ndarray
+        Fourier series of the noise ``Q`` (empty for a cold bath).
+    t_end_min : float
+        Never stop before this time.
+    t_limit : float
+        Give up (status 4) past this time.
+    settle_time : float
+        Stop once ``W'`` has stayed negligible for this long.
+    max_steps : int
+        Give up (status 1) after this many accepted steps.
+    nodes, weights_k, weights_g : ndarray
+        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and Gauss weights).
+
+    Returns
+    -------
+    t, w, d1, d2 : ndarray
+        The accepted grid and ``W, W', W''`` on it.
+    status : int
+        0 on success.
+    error_estimate : float
+        Sum of the local error estimates of ``W / kappa`` plus the neglected tail.
+    rejected, evaluations : int
+        Rejected steps and evaluations of the exponent ``g``.
+    """
+    capacity = 1024
+    t = np.empty(capacity)
+    w = np.empty(capacity)
+    d1 = np.empty(capacity)
+    d2 = np.empty(capacity)
+    scale = max(kappa, 1e-300)
+    tol = rtol * scale * 0.05
+    negligible = math.log(max(rtol * 1e-4 * min(scale, 1.0) * scale, 1e-300))
+    significant = math.log(1e-18 * scale) if scale > 0 else -700.0
+    gamma_min = delays[0]
+    for i in range(delays.shape[0]):
+        gamma_min = min(gamma_min, delays[i])
+    h_max = 0.5 * gamma_min
+
+    t[0] = 0.0
+    w[0] = 0.0
+    g_now, gp_now = _exponent(
+        0.0, kappa, a0, t, w, d1, d2, 0, delays, math.inf, freq, cos_amp, sin_amp, True
+    )
+    d1[0] = math.exp(g_now)
+    d2[0] = d1[0] * (gp_now - d1[0])
+    last = 0
+    h = min(h_max, 1.0 / scale)
+    t_significant = math.inf
+    t_active = -math.inf
+    error_sum = 0.0
+    rejected = 0
+    evaluations = 1
+    status = STATUS_OK
+    gx = np.empty(nodes.shape[0])
+    exponent_rate = kappa
+    for j in range(freq.shape[0]):
+        exponent_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+
+    while True:
+        t0 = t[last]
+        if last + 1 >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if t0 > t_limit:
+            status = STATUS_TIME_LIMIT
+            break
+        # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
+        h_free = (negligible - (g_now - w[last])) / exponent_rate
+        h_wanted = h
+        # do not stride over more than two stored steps around any delayed time
+        if t_significant < math.inf and h_free < h:
+            for i in range(delays.shape[0]):
+                n = 1
+                while True:
+                    u = t0 - n * delays[i]
+                    if u <= t_significant - h_max:
+                        break
+                    if u >= 0.0:
+                        lo = 0
+                        hi = last
+                        while hi - lo > 1:
+                            mid = (lo + hi) >> 1
+                            if t[mid] <= u:
+                                lo = mid
+                            else:
+                                hi = mid
+                        j = min(lo + 2, last)
+                        reach = t[j] - u
+                        if reach > 0.0 and j > lo:
+                            h = min(h, reach)
+                    n += 1
+        if h_free > h:
+            h = min(h_wanted, h_free)
+        h = min(h, h_max)
+        if h < 1e-14 * max(1.0, abs(t0)):
+            status = STATUS_STEP_UNDERFLOW
+            break
+
+        t1 = t0 + h
+        g1, gp1 = _exponent(
+            t1, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, True
+        )
+        a = (g1 - g_now) / h
+        # nodes of the transformed rule: e^{a s} ds becomes uniform
+        z = a * h
+        if z > _LINEAR_THRESHOLD:
+            log_base = g1 + math.log(-math.expm1(-z) / a)
+        elif z < -_LINEAR_THRESHOLD:
+            log_base = g_now + math.log(-math.expm1(z) / (-a))
+        else:
+            log_base = g_now + math.log(h)
+        r_max = -math.inf
+        for j in range(nodes.shape[0]):
+            x = nodes[j]
+            if z > _LINEAR_THRESHOLD:
+                s = h + math.log1p((1.0 - x) * math.expm1(-z)) / a
+            elif z < -_LINEAR_THRESHOLD:
+                s = math.log1p(x * math.expm1(z)) / a
+            else:
+                s = h * x
+            gs, _unused = _exponent(
+                t0 + s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, False
+            )
+            if z > _LINEAR_THRESHOLD:
+                gx[j] = gs - g1 - a * (s - h)
+            elif z < -_LINEAR_THRESHOLD:
+                gx[j] = gs - g_now - a * s
+            else:
+                gx[j] = gs - g_now
+            r_max = max(r_max, gx[j])
+        evaluations += 1 + nodes.shape[0]
+        sum_k = 0.0
+        sum_g = 0.0
+        for j in range(nodes.shape[0]):
+            e = math.exp(gx[j] - r_max)
+            sum_k += weights_k[j] * e
+            sum_g += weights_g[j] * e
+        log_integral = log_base + r_max + math.log(sum_k)
+        w1 = _logaddexp(w[last], log_integral)
+        if not math.isfinite(w1) or not math.isfinite(g1):
+            status = STATUS_NONFINITE
+            break
+        increment_share = math.exp(log_integral - w1)
+        error_quadrature = increment_share * abs(1.0 - sum_g / sum_k)
+        slope1 = math.exp(g1 - w1)
+        curvature1 = slope1 * (gp1 - slope1)
+        top = 12.0 * (w[last] - w1) + 6.0 * h * (d1[last] + slope1) + h * h * (d2[last] - curvature1)
+        error_interpolation = _QUARTIC_GAP * abs(top)
+        error = error_quadrature + error_interpolation
+        if error > tol and h > 1e-14 * max(1.0, abs(t0)):
+            rejected += 1
+            h *= max(0.1, 0.8 * (tol / error) ** 0.2)
+            continue
+
+        # accept
+        if last + 1 >= capacity:
+            capacity *= 2
+            t_new = np.empty(capacity)
+            w_new = np.empty(capacity)
+            d1_new = np.empty(capacity)
+            d2_new = np.empty(capacity)
+            t_new[: last + 1] = t[: last + 1]
+            w_new[: last + 1] = w[: last + 1]
+            d1_new[: last + 1] = d1[: last + 1]
+            d2_new[: last + 1] = d2[: last + 1]
+            t, w, d1, d2 = t_new, w_new, d1_new, d2_new
+        last += 1
+        t[last] = t1
+        w[last] = w1
+        d1[last] = slope1
+        d2[last] = curvature1
+        g_now = g1
+        error_sum += error
+        if t_significant == math.inf and (g1 - w1) > significant:
+            t_significant = t0
+        if (g1 - w1) > negligible:
+            t_active = t1
+        factor = 4.0 if error == 0.0 else min(4.0, 0.8 * (tol / error) ** 0.2)
+        h *= max(0.2, factor)
+        if t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time:
+            break
+
+    tail = d1[last] * settle_time
+    return (
+        t[: last + 1].copy(),
+        w[: last + 1].copy(),
+        d1[: last + 1].copy(),
+        d2[: last + 1].copy(),
+        status,
+        (error_sum + tail) / scale,
+        rejected,
+        evaluations,
+    )
