@@ -170,13 +170,17 @@ def solve(scene: Scene, *, rtol, initial_gap, end_time, noise, max_steps) -> Col
 
 
 def _solve_hard(gamma: float) -> CollisionResult:
-    knots_t, knots_w = hard_core_history((1.0 + gamma, 1.0 + 1.0 / gamma))
+    delays = (1.0 + gamma, 1.0 + 1.0 / gamma)
+    knots_t, knots_w = hard_core_history(delays)
     restitution = float(knots_w[-1] - 1.0)
     slopes = np.diff(knots_w) / np.diff(knots_t)
     rising = np.flatnonzero(slopes > 0.5)
     start = float(knots_t[rising[0]])
     duration = float(knots_t[rising[-1] + 1] - start)
-    force = np.concatenate([0.5 * slopes, [0.0]])  # piecewise constant on [knot_j, knot_j+1)
+    # show the flat parts before and after the contact as well
+    knots_t = np.concatenate([[knots_t[0] - 1.0], knots_t, [knots_t[-1] + sum(delays)]])
+    knots_w = np.concatenate([[0.0], knots_w, [knots_w[-1]]])
+    force = np.concatenate([[0.0], 0.5 * slopes, [0.0, 0.0]])  # constant on [knot_j, knot_j+1)
     return CollisionResult(
         restitution=restitution,
         solver=NAME,

@@ -1,0 +1,91 @@
+"""The scene model: the paper's two-rod builder and refusal of bad input."""
+
+import math
+
+import pytest
+
+from wavecontact import Exponential, Hard, Penalty, Rod, Scene, two_rod_parameters, two_rods
+from wavecontact.errors import InvalidParameterError
+
+
+@pytest.mark.parametrize("gamma", [0.1, 0.6, 1.0])
+def test_two_rods_units(gamma):
+    scene = two_rods(gamma, 50.0)
+    short, long_ = scene.rods
+    assert short.length / long_.length == pytest.approx(gamma)
+    effective = 2 * short.length * long_.length / (short.length + long_.length)
+    assert effective == pytest.approx(1.0)
+    reduced_mass = short.mass * long_.mass / (short.mass + long_.mass)
+    assert reduced_mass == pytest.approx(0.5)
+    assert scene.momentum() == pytest.approx(0.0, abs=1e-15)
+    assert scene.velocities[1] - scene.velocities[0] == pytest.approx(-1.0)
+    assert scene.contact.alpha == 50.0
+    # B = mu c^2 / (alpha l)^2 makes the delay equation hold without a shift
+    assert scene.contact.strength == pytest.approx(0.5 / 50.0**2)
+    params = two_rod_parameters(scene)
+    assert params.round_trip_times == pytest.approx((1 + gamma, 1 + 1 / gamma))
+
+
+def test_infinite_kappa_is_hard_contact():
+    assert isinstance(two_rods(0.6, math.inf).contact, Hard)
+    assert isinstance(two_rods(0.6, 10.0, contact="hard").contact, Hard)
+    assert isinstance(two_rods(0.6, 10.0, contact="penalty").contact, Penalty)
+
+
+def test_two_rod_parameters_of_a_general_scene():
+    scene = Scene(rods=(Rod(0.8), Rod(4 / 3)), velocities=(0.5, -0.5), contact=Exponential(100.0))
+    params = two_rod_parameters(scene)
+    assert params.gamma == pytest.approx(0.6)
+    assert params.kappa == pytest.approx(100.0)
+
+
+@pytest.mark.parametrize("field", ["length", "density", "youngs_modulus", "area"])
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), "abc"])
+def test_rod_refuses_bad_properties(field, value):
+    with pytest.raises(InvalidParameterError, match=field):
+        Rod(**{"length": 1.0, field: value})
+
+
+@pytest.mark.parametrize("value", [0.0, -2.0, float("nan"), float("inf")])
+def test_contact_laws_refuse_bad_parameters(value):
+    with pytest.raises(InvalidParameterError, match="alpha"):
+        Exponential(value)
+    with pytest.raises(InvalidParameterError, match="stiffness"):
+        Penalty(value)
+
+
+@pytest.mark.parametrize("velocity", [float("nan"), float("inf"), -float("inf")])
+def test_scene_refuses_non_finite_velocities(velocity):
+    with pytest.raises(InvalidParameterError, match="velocities"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(velocity, 0.0), contact=Hard())
+
+
+def test_scene_refuses_overlap_and_short_rings():
+    with pytest.raises(InvalidParameterError, match="overlap"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), gaps=(-0.1,))
+    with pytest.raises(InvalidParameterError, match="ring_circumference"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), ring_circumference=1.5)
+    with pytest.raises(InvalidParameterError, match="add up"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), ring_circumference=4.0, gaps=(1.0, 0.5))
+    ring = Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), ring_circumference=4.0, gaps=(1.0, 1.0))
+    assert ring.is_ring
+
+
+def test_scene_refuses_wrong_counts_and_fields():
+    with pytest.raises(InvalidParameterError, match="at least 2"):
+        Scene(rods=(Rod(1.0),), velocities=(1.0,), contact=Hard())
+    with pytest.raises(InvalidParameterError, match="one entry per rod"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0,), contact=Hard())
+    with pytest.raises(InvalidParameterError, match="initial_velocity"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), initial_velocity=(1.0, None))
+    with pytest.raises(InvalidParameterError, match="contact"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0), contact="hard")
+
+
+def test_two_rods_refuses_mismatched_contact_and_bad_gamma():
+    with pytest.raises(InvalidParameterError, match="kappa"):
+        two_rods(0.6, 10.0, contact=Exponential(20.0))
+    with pytest.raises(InvalidParameterError, match="contact must be one of"):
+        two_rods(0.6, 10.0, contact="sticky")
+    with pytest.raises(InvalidParameterError, match="gamma"):
+        two_rods(1.2, 10.0)

@@ -1,0 +1,207 @@
+"""Closed-form results: the wave theory of impact and the paper's formulas.
+
+Unless said otherwise, quantities are dimensionless in the units of
+:func:`wavecontact.two_rods`: time ``tau = t c / l``, velocities in units of
+the approach speed ``V``, energies in units of the initial translational
+energy ``E_tr = mu V^2 / 2``, ``Gamma_1 = 1 + gamma``, ``Gamma_2 = 1 + 1/gamma``.
+Equation numbers refer to Giese & Zippelius, Phys. Rev. E 54, 4828 (1996).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .scene import validate_gamma_kappa
+
+__all__ = [
+    "round_trip_times",
+    "hard_core_restitution",
+    "hard_core_contact_duration",
+    "force_plateau",
+    "two_material_impact",
+    "hard_core_relative_velocity",
+    "hard_core_modal_energies",
+    "asymptotic_velocity_increase",
+    "asymptotic_restitution",
+    "noise_covariance",
+    "equilibrium_translational_energy",
+    "boltzmann_density",
+    "equilibrium_spectral_entropy",
+]
+
+
+def round_trip_times(gamma: float) -> tuple:
+    """``(Gamma_1, Gamma_2) = (1 + gamma, 1 + 1/gamma)``: round trips of a wave
+    on the short and the long rod, in units of ``l / c``."""
+    g, _ = validate_gamma_kappa(gamma, 1.0)
+    return 1.0 + g, 1.0 + 1.0 / g
+
+
+def hard_core_restitution(gamma: float) -> float:
+    """``epsilon = min(gamma, 1/gamma)`` of the cold hard-core collision."""
+    if not (math.isfinite(gamma) and gamma > 0):
+        raise ValueError(f"gamma must be positive and finite, got {gamma!r}")
+    return min(gamma, 1.0 / gamma)
+
+
+def hard_core_contact_duration(length_short: float, wave_speed: float = 1.0) -> float:
+    """Contact time ``2 l1 / c`` of the hard-core impact (time units): the
+    round trip of the stress wave on the shorter rod."""
+    return 2.0 * length_short / wave_speed
+
+
+def force_plateau(impedance: float, approach_speed: float) -> float:
+    """Contact force ``Z V / 2`` during a hard impact of equal impedances (force units)."""
+    return 0.5 * impedance * approach_speed
+
+
+def two_material_impact(rod_left, rod_right, approach_speed: float) -> dict:
+    """Wave theory of the hard impact of two rods of different materials.
+
+    At first contact the interface takes the velocity that balances the two
+    stress waves it launches: with impedances ``Z1, Z2`` the force is
+    ``F = Z1 Z2 V / (Z1 + Z2)``.  The wave in the rod with the shorter round
+    trip ``T = 2 l / c`` comes back from its free end as a tension wave; at the
+    interface it leaves a force ``F (Z_fast - Z_slow) / (Z_fast + Z_slow)``,
+    so the ends separate at ``T`` exactly when ``Z_fast <= Z_slow``.  Only that
+    single-plateau case is treated here (otherwise the force steps down and
+    the FE solver is the tool).
+
+    Returns
+    -------
+    dict
+        ``force`` (force), ``duration`` (time), ``impulse`` (momentum) and
+        ``restitution``: relative centre-of-mass velocity after the impulse
+        over the one before, ``(J (1/m1 + 1/m2) - V) / V``.
+    """
+    z1, z2 = rod_left.impedance, rod_right.impedance
+    fast, slow = sorted((rod_left, rod_right), key=lambda rod: rod.round_trip_time)
+    if fast.impedance > slow.impedance * (1.0 + 1e-12):
+        raise ValueError(
+            "the rod with the shorter round trip has the larger impedance: the contact does not end "
+            "after one plateau; use the FE solver"
+        )
+    force = z1 * z2 * approach_speed / (z1 + z2)
+    duration = fast.round_trip_time
+    impulse = force * duration
+    after = impulse * (1.0 / rod_left.mass + 1.0 / rod_right.mass) - approach_speed
+    return {"force": force, "duration": duration, "impulse": impulse, "restitution": after / approach_speed}
+
+
+def hard_core_relative_velocity(tau, gamma: float, tau_contact: float = 0.0):
+    """Eq. 24: relative velocity ``v2 - v1`` (units of V) of the hard impact.
+
+    ``-1`` before contact (``tau_contact``), rising linearly with slope 1 for
+    ``Gamma_1``, then ``+gamma`` for ``0 < gamma <= 1``.
+    """
+    g1, _ = round_trip_times(gamma)
+    tau = np.asarray(tau, dtype=float)
+    return -1.0 + np.clip(tau - tau_contact, 0.0, g1)
+
+
+def hard_core_modal_energies(gamma: float, modes: int) -> np.ndarray:
+    """Eq. 25: energy of each mode after the hard impact, in units of ``E_tr``.
+
+    Returns an array ``(2, modes)``; row 0 (short rod) is zero, row 1 sums
+    to ``1 - gamma^2`` as ``modes -> inf``.
+    """
+    if int(modes) != modes or modes < 1:
+        raise ValueError(f"modes must be a positive integer, got {modes!r}")
+    g1, g2 = round_trip_times(gamma)
+    nu = np.arange(1, int(modes) + 1, dtype=float)
+    out = np.empty((2, nu.size))
+    for row, gi in enumerate((g1, g2)):
+        out[row] = 2.0 * gi / (math.pi**2 * nu**2) * np.sin(nu * math.pi * g1 / gi) ** 2
+    out[0] = np.where(np.abs(out[0]) < 1e-15, 0.0, out[0])
+    return out
+
+
+def _softplus(x):
+    return np.logaddexp(0.0, x)
+
+
+def asymptotic_velocity_increase(tau, gamma: float, kappa: float, tau_free: float = 0.0):
+    """Eq. 21 (``gamma = 1``) and Eq. 22 (``0.5 <= gamma < 1``): ``W(tau)`` for
+    large ``kappa``, up to exponentially small terms.
+
+    For ``gamma < 0.5`` ``Gamma_2`` is replaced by ``2 Gamma_1`` (App. B).
+    Evaluated with logarithms throughout, so it does not overflow.
+    """
+    g, k = validate_gamma_kappa(gamma, kappa)
+    if math.isinf(k):
+        raise ValueError("the asymptotic W(tau) needs a finite kappa")
+    tau = np.asarray(tau, dtype=float)
+    x = k * (tau - tau_free)
+    if g == 1.0:
+        return np.logaddexp(0.0, x - np.logaddexp(math.log(k), x - 2.0 * k))
+    g1, g2 = round_trip_times(g)
+    if g < 0.5:
+        g2 = 2.0 * g1
+    x1 = x - k * g1 - math.log(k)
+    x2 = x - k * g2 - math.log(k)
+    # log of L = softplus(x1) - softplus(x2) > 0, accurate when both are tiny
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        tiny = x1 < -30.0
+        log_l_tiny = x1 + np.log(-np.expm1(x2 - x1))
+        log_l_big = np.log(_softplus(x1) - _softplus(x2))
+        log_l = np.where(tiny, log_l_tiny, log_l_big)
+    return np.logaddexp(0.0, k * g1 + log_l)
+
+
+def asymptotic_restitution(gamma: float, kappa: float) -> float:
+    """Eq. 23: ``epsilon ~ gamma + ln(kappa (Gamma_2 - Gamma_1)) / kappa`` for
+    ``0.5 <= gamma < 1`` (1 for ``gamma = 1``; ``Gamma_2 -> 2 Gamma_1`` for
+    ``gamma < 0.5``, App. B)."""
+    g, k = validate_gamma_kappa(gamma, kappa)
+    if g == 1.0:
+        return 1.0
+    if math.isinf(k):
+        return g
+    g1, g2 = round_trip_times(g)
+    if g < 0.5:
+        g2 = 2.0 * g1
+    return g + math.log(k * (g2 - g1)) / k
+
+
+def noise_covariance(tau, gamma: float, kappa: float, bath_temperature: float, translational_energy: float = 0.25):
+    """Eq. 19: covariance ``C_Q(tau) = <Q(t) Q(t + tau)>`` of the thermal noise.
+
+    Parameters
+    ----------
+    tau : array_like
+        Lag (dimensionless time); the covariance is even in ``tau``.
+    gamma, kappa : float
+        Length ratio and softness.
+    bath_temperature : float
+        ``T_B`` (energy units, Boltzmann constant 1).
+    translational_energy : float
+        ``E_tr = mu V^2 / 2`` (1/4 in the units of :func:`two_rods`).
+    """
+    g, k = validate_gamma_kappa(gamma, kappa)
+    sigma2 = k * k * bath_temperature / (2.0 * translational_energy)
+    g1, g2 = round_trip_times(g)
+    tau = np.abs(np.asarray(tau, dtype=float))
+    total = -g1 * g2 / 24.0
+    for gi in (g1, g2):
+        phase = np.mod(tau, gi)  # tau - Gamma_i * sum_n theta(tau - n Gamma_i)
+        total = total + (phase - 0.5 * gi) ** 2 / (2.0 * gi)
+    return sigma2 * total
+
+
+def equilibrium_translational_energy(modes: int, reduced_mass: float = 0.5, approach_speed: float = 1.0) -> float:
+    """Eq. 8: mean translational energy ``mu V^2 / (2 (2 N_mod + 1))`` after
+    equipartition over ``2 N_mod`` modes and the relative motion."""
+    return reduced_mass * approach_speed**2 / (2.0 * (2 * modes + 1))
+
+
+def boltzmann_density(energy, mean_energy: float):
+    """Eq. 9: ``p(E_tr) = exp(-E_tr / <E_tr>) / <E_tr>``."""
+    energy = np.asarray(energy, dtype=float)
+    return np.where(energy >= 0, np.exp(-energy / mean_energy) / mean_energy, 0.0)
+
+
+def equilibrium_spectral_entropy(modes: int) -> float:
+    """Eq. 11: mean normalized spectral entropy ``0.423 / ln(2 N_mod)`` at equipartition."""
+    return 0.423 / math.log(2 * modes)
