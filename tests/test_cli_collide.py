@@ -13,7 +13,7 @@ MODEL_KAPPA_100 = 0.646697087
 
 def run_cli(*args):
     return subprocess.run(
-        [sys.executable, "-m", "wavecontact", *args], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "wavecontact", *args], check=False, capture_output=True, text=True, timeout=300
     )
 
 

@@ -1,5 +1,6 @@
 """The delay-equation solver against MODEL.md, exact limits and an independent integrator."""
 
+import itertools
 import math
 
 import numpy as np
@@ -45,7 +46,7 @@ def _method_of_steps_radau(gamma, kappa, a0=40.0, rtol=1e-11):
     t, w, end = 0.0, 0.0, a0 / kappa + 12.0
     while t < end:
         stop = min(t + window, end)
-        rhs = lambda s, y: [math.exp(min(kappa * s - a0 - y[0] - memory(s), 700.0))]  # noqa: E731
+        rhs = lambda s, y: [math.exp(min(kappa * s - a0 - y[0] - memory(s), 700.0))]
         sol = solve_ivp(rhs, (t, stop), [w], method="Radau", rtol=rtol, atol=1e-12, dense_output=True)
         pieces.append((t, stop, sol))
         t, w = stop, sol.y[0, -1]
@@ -87,7 +88,7 @@ def test_equal_lengths_are_elastic(kappa):
 def test_soft_contact_tends_to_elastic():
     deficits = [1.0 - wavecontact.collide(0.3, kappa).restitution for kappa in (3.0, 1.0, 0.3, 0.1)]
     assert all(d > 0 for d in deficits[:2])
-    assert all(a > b for a, b in zip(deficits, deficits[1:])) or deficits[-1] < 1e-9
+    assert all(a > b for a, b in itertools.pairwise(deficits)) or deficits[-1] < 1e-9
     assert abs(deficits[-1]) < 1e-8
 
 
@@ -147,7 +148,7 @@ def test_hard_core_short_rods_also_give_gamma(gamma):
 def test_finite_kappa_approaches_the_hard_core():
     gaps = [wavecontact.collide(0.6, k).restitution - 0.6 for k in (1e2, 1e3, 1e4, 1e5, 1e6)]
     assert all(g > 0 for g in gaps)
-    assert all(a > b for a, b in zip(gaps, gaps[1:]))
+    assert all(a > b for a, b in itertools.pairwise(gaps))
     assert gaps[-1] < 2e-5
 
 

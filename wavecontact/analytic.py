@@ -16,19 +16,19 @@ import numpy as np
 from .scene import validate_gamma_kappa
 
 __all__ = [
-    "round_trip_times",
-    "hard_core_restitution",
-    "hard_core_contact_duration",
-    "force_plateau",
-    "two_material_impact",
-    "hard_core_relative_velocity",
-    "hard_core_modal_energies",
-    "asymptotic_velocity_increase",
     "asymptotic_restitution",
-    "noise_covariance",
-    "equilibrium_translational_energy",
+    "asymptotic_velocity_increase",
     "boltzmann_density",
     "equilibrium_spectral_entropy",
+    "equilibrium_translational_energy",
+    "force_plateau",
+    "hard_core_contact_duration",
+    "hard_core_modal_energies",
+    "hard_core_relative_velocity",
+    "hard_core_restitution",
+    "noise_covariance",
+    "round_trip_times",
+    "two_material_impact",
 ]
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from .errors import InvalidParameterError, require_positive
 
-__all__ = ["ContactLaw", "Exponential", "Penalty", "Hard", "contact_from_name"]
+__all__ = ["ContactLaw", "Exponential", "Hard", "Penalty", "contact_from_name"]
 
 
 class ContactLaw:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
-from typing import Optional
 
 import numpy as np
 
@@ -55,12 +54,12 @@ class CollisionResult:
     wall_time_s: float
     time: np.ndarray
     relative_velocity: np.ndarray
-    gamma: Optional[float] = None
-    kappa: Optional[float] = None
-    contact_force: Optional[np.ndarray] = None
-    contact_start: Optional[float] = None
-    contact_duration: Optional[float] = None
-    error_estimate: Optional[float] = None
+    gamma: float | None = None
+    kappa: float | None = None
+    contact_force: np.ndarray | None = None
+    contact_start: float | None = None
+    contact_duration: float | None = None
+    error_estimate: float | None = None
     work: dict = field(default_factory=dict)
     diagnostics: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)

@@ -9,15 +9,15 @@ length ``l = 1``, approach speed ``V = 1``, hence ``alpha = kappa``).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Optional, Sequence
 
 import numpy as np
 
 from .contact import ContactLaw, Exponential, Hard, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_positive
 
-__all__ = ["Rod", "Scene", "two_rods", "TwoRodParameters", "two_rod_parameters"]
+__all__ = ["Rod", "Scene", "TwoRodParameters", "two_rod_parameters", "two_rods"]
 
 FieldFunction = Callable[[np.ndarray], np.ndarray]
 
@@ -67,7 +67,7 @@ class Rod:
         """Time ``2 l / c`` for a wave to run to the far end and back (time)."""
         return 2.0 * self.length / self.wave_speed
 
-    def same_material(self, other: "Rod", rtol: float = 1e-12) -> bool:
+    def same_material(self, other: Rod, rtol: float = 1e-12) -> bool:
         """True if both rods share density, modulus and cross-section."""
         return all(
             math.isclose(getattr(self, n), getattr(other, n), rel_tol=rtol)
@@ -101,10 +101,10 @@ class Scene:
     rods: tuple
     velocities: tuple
     contact: ContactLaw
-    gaps: Optional[tuple] = None
-    ring_circumference: Optional[float] = None
-    initial_displacement: Optional[tuple] = None
-    initial_velocity: Optional[tuple] = None
+    gaps: tuple | None = None
+    ring_circumference: float | None = None
+    initial_displacement: tuple | None = None
+    initial_velocity: tuple | None = None
     metadata: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 
 from .common import gamma_value, kappa_value, positive_int

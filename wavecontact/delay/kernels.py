@@ -92,8 +92,7 @@ def hermite5(t, w, d1, d2, last, s):
             hi = mid
     h = t[lo + 1] - t[lo]
     x = (s - t[lo]) / h
-    if x > 1.0:
-        x = 1.0
+    x = min(x, 1.0)
     x2 = x * x
     x3 = x2 * x
     x4 = x3 * x

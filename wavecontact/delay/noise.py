@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["FourierNoise", "COLD"]
+__all__ = ["COLD", "FourierNoise"]
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..analytic import asymptotic_velocity_increase, hard_core_relative_velocity, round_trip_times
 
-__all__ = ["velocity_history_figure", "plot_velocity_history"]
+__all__ = ["plot_velocity_history", "velocity_history_figure"]
 
 
 def _free_flight_time(result) -> float:
