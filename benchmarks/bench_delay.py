@@ -51,7 +51,7 @@ def cheapest_delay(gamma, kappa, repeats):
         result = wavecontact.collide(gamma, kappa, rtol=rtol)
         error = abs(result.restitution - exact)
         if error <= TARGET:
-            seconds = median_time(lambda: wavecontact.collide(gamma, kappa, rtol=rtol), repeats)
+            seconds = median_time(lambda rtol=rtol: wavecontact.collide(gamma, kappa, rtol=rtol), repeats)
             return rtol, error, result.work["steps"], seconds
     return None
 
@@ -79,7 +79,7 @@ def table_kappa_cost(repeats):
     base = None
     for kappa in (100.0, 1e3, 1e4, 1e5, 1e6):
         steps = solve_delay_equation(0.6, kappa, rtol=1e-8)[4]["steps"]
-        seconds = median_time(lambda: solve_delay_equation(0.6, kappa, rtol=1e-8), repeats)
+        seconds = median_time(lambda kappa=kappa: solve_delay_equation(0.6, kappa, rtol=1e-8), repeats)
         base = base or seconds
         print(f"| {kappa:g} | {steps} | {1e3 * seconds:.3f} | {seconds / base:.2f} |")
 
