@@ -1,0 +1,411 @@
+"""Set up, run and summarize one finite-element collision of two rods on a line.
+
+Layout on the line: rod 1 (left) ends at ``x = -gap/2``, rod 2 (right) starts
+at ``x = +gap/2``; node coordinates ``x`` in the fields are these reference
+positions, displacements ``u`` (rigid translation included) are added to them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact import Exponential, Hard, Penalty
+from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..scene import Scene
+from . import kernels
+from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
+from .discretization import RodDiscretization, discretize_rod, matched_nodes
+from .stability import check_time_step, stable_step
+
+__all__ = ["FemSetup", "build_setup", "run_collision", "POTENTIAL_TOLERANCE"]
+
+# Contact energy, relative to the energy of the relative motion, below which the
+# force counts as absent: the start gap and the end of the run are placed there.
+POTENTIAL_TOLERANCE = 1e-16
+_CHUNK = 1 << 15
+_HARD_SCHEMES = {"plastic": LAW_HARD_PLASTIC, "elastic": LAW_HARD_ELASTIC}
+
+
+@dataclass
+class FemSetup:
+    """Everything the time loop needs, built once per solve."""
+
+    rods: tuple  # (RodDiscretization, RodDiscretization)
+    dt: float
+    stable_step: float
+    law: int
+    alpha: float
+    strength: float
+    stiffness: float
+    gap: float
+    r_stop: float
+    u0: tuple
+    v0: tuple
+    matched: bool
+    characteristic: bool
+
+
+def _law_parameters(scene: Scene, rods, hard_scheme: str):
+    law = scene.contact
+    if isinstance(law, Exponential):
+        return LAW_EXPONENTIAL, law.alpha, law.strength, 0.0
+    if isinstance(law, Penalty):
+        if law.stiffness is not None:
+            k = law.stiffness
+        else:  # E A / h of the stiffer facing element
+            left, right = rods
+            h1 = left.x[-1] - left.x[left.cells[-1, 0]]
+            h2 = right.x[right.cells[0, 1]] - right.x[0]
+            k = max(
+                left.rod.youngs_modulus * left.rod.area / h1, right.rod.youngs_modulus * right.rod.area / h2
+            )
+        return LAW_PENALTY, 0.0, 0.0, float(k)
+    if isinstance(law, Hard):
+        if hard_scheme not in _HARD_SCHEMES:
+            raise InvalidParameterError(
+                f"hard_scheme must be one of {tuple(_HARD_SCHEMES)}, got {hard_scheme!r}"
+            )
+        return _HARD_SCHEMES[hard_scheme], 0.0, 0.0, 0.0
+    raise UnsupportedSceneError(f"the fem solver does not know the contact law {type(law).__name__}")
+
+
+def _check_elements(elements) -> int:
+    if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)):
+        raise InvalidParameterError(f"elements must be an integer >= 1, got {elements!r}")
+    if not 1 <= elements <= 10**6:
+        raise InvalidParameterError(f"elements must lie in [1, 1e6], got {elements}")
+    return int(elements)
+
+
+def build_setup(
+    scene: Scene,
+    elements: int = 800,
+    order: int = 1,
+    mass: str = "lumped",
+    nodes=None,
+    dt=None,
+    courant=None,
+    hard_scheme: str = "plastic",
+    scheme: str = "auto",
+) -> FemSetup:
+    """Discretize the scene's two rods and choose the step, the gap and the stop gap.
+
+    Parameters
+    ----------
+    scene : Scene
+        Two rods on a line (rod 0 left, rod 1 right).
+    elements : int
+        Elements on the shorter rod; the other rod gets elements of the same
+        wave travel time ``h / c``; the piece shorter than one element left
+        at its far end is carried as a point mass on the far end node.
+    order : {1, 2}
+        Lagrange order.
+    mass : {'lumped', 'consistent'}
+    nodes : pair of arrays or None
+        Element end points of each rod (rod coordinate, 0 to its length);
+        overrides ``elements``.
+    dt : float or None
+        Time step; ``None`` = the default below.  Refused above the stable step.
+    courant : float or None
+        Fraction of the stable step used when ``dt`` is None.  Default: 1 for
+        P1 lumped on matched meshes (the step equals the element travel time,
+        where central differences are exact), 0.95 otherwise.
+    hard_scheme : {'plastic', 'elastic'}
+        End-node impact rule for hard contact (see docs/fem.md).
+    """
+    if scene.is_ring or len(scene.rods) != 2:
+        raise UnsupportedSceneError("the fem solver handles two rods on a line")
+    if order not in (1, 2) or isinstance(order, bool):
+        raise InvalidParameterError(f"order must be 1 or 2, got {order!r}")
+    if mass not in ("lumped", "consistent"):
+        raise InvalidParameterError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
+    left, right = scene.rods
+    if nodes is None:
+        elements = _check_elements(elements)
+        shorter = left if left.length <= right.length else right
+        travel = shorter.length / elements / shorter.wave_speed
+        vertices = (
+            matched_nodes(left.length, travel * left.wave_speed, from_left=False),
+            matched_nodes(right.length, travel * right.wave_speed, from_left=True),
+        )
+        matched = True
+    else:
+        if len(nodes) != 2:
+            raise InvalidParameterError("nodes must be a pair (rod 1 vertices, rod 2 vertices)")
+        vertices = tuple(nodes)
+        matched = False
+        travel = None
+    remainder = ("left", "right") if matched else (None, None)
+    rods = (
+        discretize_rod(left, vertices[0], order, mass, remainder[0]),
+        discretize_rod(right, vertices[1], order, mass, remainder[1]),
+    )
+    limit = stable_step(rods)
+    if dt is None:
+        if courant is None:
+            exact = matched and order == 1 and mass == "lumped"
+            step = travel if exact and travel <= limit * (1 + 1e-9) else 0.95 * limit
+        else:
+            if not (isinstance(courant, (int, float)) and 0.0 < courant <= 1.0):
+                raise InvalidParameterError(f"courant must lie in (0, 1], got {courant!r}")
+            step = courant * limit
+    else:
+        step = check_time_step(dt, limit)
+    law, alpha, strength, stiffness = _law_parameters(scene, rods, hard_scheme)
+    characteristic = _is_exact_lattice(rods, step) and scheme in ("auto", "characteristic")
+    if scheme == "characteristic" and not characteristic:
+        raise InvalidParameterError(
+            "scheme='characteristic' needs order=1, mass='lumped' and dt equal to the travel time h/c "
+            "of the elements at both facing ends (the default matched mesh with dt=None)"
+        )
+    if scheme not in ("auto", "characteristic", "splitting"):
+        raise InvalidParameterError(f"scheme must be 'auto', 'characteristic' or 'splitting', got {scheme!r}")
+
+    u0, v0 = [], []
+    for index, (disc, speed) in enumerate(zip(rods, scene.velocities)):
+        u = np.zeros(disc.n_nodes)
+        v = np.full(disc.n_nodes, float(speed))
+        for values, fields in ((u, scene.initial_displacement), (v, scene.initial_velocity)):
+            if fields is not None and fields[index] is not None:
+                added = np.asarray(fields[index](disc.x.copy()), dtype=float)
+                if added.shape != disc.x.shape or not np.all(np.isfinite(added)):
+                    raise InvalidParameterError(
+                        f"initial field of rod {index} must return finite values of shape {disc.x.shape}"
+                    )
+                values += added
+        u0.append(u)
+        v0.append(v)
+
+    masses = [d.rod.mass for d in rods]
+    reduced = masses[0] * masses[1] / (masses[0] + masses[1])
+    momenta = [float(d.lumped_mass @ v) for d, v in zip(rods, v0)]
+    approach = momenta[0] / masses[0] - momenta[1] / masses[1]
+    relative_energy = 0.5 * reduced * approach**2
+    internal = sum(float(np.sum(d.energy(u, v))) for d, u, v in zip(rods, u0, v0)) - sum(
+        p * p / (2 * m) for p, m in zip(momenta, masses)
+    )
+    energy_scale = relative_energy + internal
+    if law == LAW_EXPONENTIAL:
+        if energy_scale <= 0.0:
+            raise InvalidParameterError("the rods carry no energy of relative or internal motion")
+        r_stop = math.log(strength / (POTENTIAL_TOLERANCE * energy_scale)) / alpha
+    else:
+        r_stop = 0.0
+    if scene.gaps is not None:
+        gap = float(scene.gaps[0])
+    else:
+        gap = max(r_stop, 0.0)
+    if approach <= 0.0:
+        raise InvalidParameterError(
+            "the rods do not approach each other (v_left - v_right must be > 0 for a collision)"
+        )
+    return FemSetup(
+        rods=rods, dt=step, stable_step=limit, law=law, alpha=alpha, strength=strength, stiffness=stiffness,
+        gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, characteristic=characteristic,
+    )
+
+
+def _is_exact_lattice(rods, dt: float) -> bool:
+    """P1 lumped with the facing end elements (and their neighbours) crossed by a wave in exactly dt."""
+    left, right = rods
+    if left.order != 1 or left.mass_kind != "lumped":
+        return False
+    for disc, ends in ((left, (-1, -2, -3)), (right, (0, 1, 2))):
+        if disc.n_nodes < 3:
+            return False
+        x = disc.x
+        sizes = (abs(x[ends[1]] - x[ends[0]]), abs(x[ends[2]] - x[ends[1]]))
+        travel = disc.rod.length / disc.rod.wave_speed  # scale for the comparison
+        for size in sizes:
+            if abs(size / disc.rod.wave_speed - dt) > 1e-12 * travel:
+                return False
+    return True
+
+
+def _mass_bands(disc: RodDiscretization) -> np.ndarray:
+    bands = np.zeros_like(disc.stiffness_bands)
+    if disc.mass_kind == "lumped":
+        bands[0] = disc.lumped_mass
+    else:
+        for d in range(bands.shape[0]):
+            bands[d, : disc.n_nodes - d] = disc.mass_matrix.diagonal(d)
+    return bands
+
+
+class _Run:
+    """Mutable state of one time integration (used for the main run and the field replay)."""
+
+    def __init__(self, setup: FemSetup, energy_tolerance: float):
+        self.setup = setup
+        left, right = setup.rods
+        self.u = [u.copy() for u in setup.u0]
+        self.v = [v.copy() for v in setup.v0]
+        self.lumped = left.mass_kind == "lumped"
+        self.inverse_mass = [1.0 / d.lumped_mass for d in setup.rods]
+        self.cholesky = [
+            d.mass_cholesky if d.mass_cholesky is not None else np.zeros((1, 1)) for d in setup.rods
+        ]
+        self.mass_bands = [_mass_bands(d) for d in setup.rods]
+        column1 = left.inverse_mass_column(left.n_nodes - 1)
+        column2 = right.inverse_mass_column(0)
+        start = int(np.flatnonzero(column1)[0])
+        stop = int(np.flatnonzero(column2)[-1]) + 1
+        self.column1 = np.ascontiguousarray(column1[start:])
+        self.column2 = np.ascontiguousarray(column2[:stop])
+        self.m_inv = column1[-1] + column2[0]
+        self.a = []
+        for d, u, inv, chol in zip(setup.rods, self.u, self.inverse_mass, self.cholesky):
+            a = np.zeros(d.n_nodes)
+            kernels.elastic_acceleration(u, d.stiffness_bands, inv, chol, self.lumped, a)
+            self.a.append(a)
+        masses = [float(d.lumped_mass.sum()) for d in setup.rods]
+        self.masses = masses
+        momenta = [float(d.lumped_mass @ v) for d, v in zip(setup.rods, self.v)]
+        energy = 0.0
+        for d, u, v, a, mb in zip(setup.rods, self.u, self.v, self.a, self.mass_bands):
+            kinetic, strain, correction = kernels.rod_energies(u, v, a, d.stiffness_bands, mb, setup.dt)
+            energy += kinetic + strain - correction
+        from .contact_flows import contact_potential
+
+        energy += contact_potential(setup.law, setup.gap, setup.alpha, setup.strength, setup.stiffness)
+        total_mass = sum(masses)
+        scale = energy - sum(momenta) ** 2 / (2 * total_mass)
+        self.state = np.zeros(kernels.STATE_SIZE)
+        self.state[kernels.S_MOMENTUM1] = momenta[0]
+        self.state[kernels.S_MOMENTUM2] = momenta[1]
+        self.state[kernels.S_ENERGY0] = energy
+        self.state[kernels.S_ENERGY_SCALE] = scale
+        self.state[kernels.S_LAST_IN_RANGE] = 0.0
+        # end positions one step before the start (central differences run backwards)
+        dt = setup.dt
+        self.state[kernels.S_PREVIOUS_END1] = self.u[0][-1] - dt * self.v[0][-1] + 0.5 * dt * dt * self.a[0][-1]
+        self.state[kernels.S_PREVIOUS_END2] = self.u[1][0] - dt * self.v[1][0] + 0.5 * dt * dt * self.a[1][0]
+        self.energy0 = energy
+        self.energy_scale = scale
+        self.momentum0 = sum(momenta)
+        self.approach = momenta[0] / masses[0] - momenta[1] / masses[1]
+        reduced = masses[0] * masses[1] / total_mass
+        self.momentum_scale = reduced * self.approach
+        self.period = 1.05 * max(2 * d.rod.length / d.rod.wave_speed for d in setup.rods)
+        shortest = min(2 * d.rod.length / d.rod.wave_speed for d in setup.rods)
+        self.check_every = max(1, int(0.01 * shortest / setup.dt))
+        self.bound = [1.5 * math.sqrt(2 * d.rod.length / (3 * d.rod.youngs_modulus * d.rod.area)) for d in setup.rods]
+        self.energy_tolerance = energy_tolerance
+
+    def advance(self, max_steps: int):
+        s = self.setup
+        left, right = s.rods
+        hist = [np.empty(max_steps) for _ in range(4)]
+        n_energy = max_steps // self.check_every + 1
+        energies = [np.empty(n_energy) for _ in range(6)]
+        status, done, samples = kernels.advance(
+            self.u[0], self.v[0], self.a[0], self.u[1], self.v[1], self.a[1],
+            left.stiffness_bands, right.stiffness_bands, self.inverse_mass[0], self.inverse_mass[1],
+            self.cholesky[0], self.cholesky[1], self.lumped,
+            self.mass_bands[0], self.mass_bands[1], left.lumped_mass, right.lumped_mass,
+            self.column1, self.column2, self.m_inv, s.characteristic,
+            s.gap, s.law, s.alpha, s.strength, s.stiffness,
+            s.dt, max_steps, s.r_stop, self.period, self.check_every, self.bound[0], self.bound[1],
+            self.energy_tolerance, self.state,
+            hist[0], hist[1], hist[2], hist[3], *energies,
+        )
+        return status, [h[:done] for h in hist], [e[:samples] for e in energies]
+
+    def stresses(self):
+        return [d.stress_recovery @ u for d, u in zip(self.setup.rods, self.u)]
+
+
+def _failure_message(run: _Run, setup: FemSetup) -> str:
+    time = run.state[kernels.S_TIME]
+    energy = run.state[kernels.S_FAILED_ENERGY]
+    drift = abs(energy - run.energy0) / run.energy_scale if math.isfinite(energy) else math.inf
+    return (
+        f"energy balance violated at t = {time:.6g}: relative energy error {drift:.3g} exceeds "
+        f"{run.energy_tolerance:g}; refine the mesh (more elements), lower dt, or use "
+        f"order=1, mass='lumped' with contact='hard' for very stiff contact"
+    )
+
+
+def run_collision(setup: FemSetup, energy_tolerance: float = 0.05, max_time=None, record_fields=False,
+                  field_samples: int = 300) -> dict:
+    """Integrate until the rods have separated; return histories and diagnostics."""
+    run = _Run(setup, energy_tolerance)
+    if max_time is None:
+        max_time = setup.gap / run.approach + 50.0 * run.period
+    max_steps = int(math.ceil(max_time / setup.dt))
+    pieces_hist, pieces_energy = [], []
+    status = kernels.STATUS_RUNNING
+    while status == kernels.STATUS_RUNNING:
+        if run.state[kernels.S_STEPS] >= max_steps:
+            raise SolverFailure(
+                f"the rods did not separate within t = {max_time:.4g}; the contact may keep "
+                f"re-engaging (check the scene's velocities) or the run needs max_time"
+            )
+        status, hist, energies = run.advance(_CHUNK)
+        pieces_hist.append(hist)
+        pieces_energy.append(energies)
+    if status == kernels.STATUS_FAILED:
+        raise SolverFailure(_failure_message(run, setup))
+    hist = [np.concatenate([p[i] for p in pieces_hist]) for i in range(4)]
+    energies = [np.concatenate([p[i] for p in pieces_energy]) for i in range(6)]
+    out = {
+        "run": run,
+        "time": hist[0],
+        "contact_force": hist[1],
+        "relative_velocity": hist[2],
+        "gap": hist[3],
+        "energy_time": energies[0],
+        "kinetic": energies[1],
+        "strain": energies[2],
+        "contact": energies[3],
+        "internal": (energies[4], energies[5]),
+        "steps": int(run.state[kernels.S_STEPS]),
+    }
+    if record_fields:
+        out["fields"] = _replay_fields(setup, energy_tolerance, hist[0], hist[1], field_samples)
+    return out
+
+
+def _replay_fields(setup: FemSetup, energy_tolerance, times, force, samples: int) -> dict:
+    """Run again from the start and sample u, v and stress over the collision window."""
+    active = np.flatnonzero(force > 1e-3 * max(force.max(), 1e-300))
+    if active.size == 0:
+        first, last = 0, times.size - 1
+    else:
+        first, last = active[0], active[-1]
+    span = max(last - first, 1)
+    begin = max(0, first - span // 10)
+    end = min(times.size - 1, last + span // 4)
+    steps = np.unique(np.linspace(begin, end, samples).round().astype(int))
+    run = _Run(setup, energy_tolerance)
+    sample_times = []
+    records = [{"displacement": [], "velocity": [], "stress": []} for _ in range(2)]
+    done = -1  # index of the last completed step (history index)
+    for target in steps:
+        if target > done:
+            status, _, _ = run.advance(int(target - done))
+            done = target
+            if status == kernels.STATUS_FAILED:
+                raise SolverFailure(_failure_message(run, setup))
+        sample_times.append(run.state[kernels.S_TIME])
+        for record, u, v, stress in zip(records, run.u, run.v, run.stresses()):
+            record["displacement"].append(u.copy())
+            record["velocity"].append(v.copy())
+            record["stress"].append(stress)
+    left, right = setup.rods
+    offsets = (-0.5 * setup.gap - left.rod.length, 0.5 * setup.gap)
+    rods = []
+    for disc, record, offset in zip(setup.rods, records, offsets):
+        rods.append(
+            {
+                "x": disc.x + offset,
+                "displacement": np.array(record["displacement"]),
+                "velocity": np.array(record["velocity"]),
+                "stress": np.array(record["stress"]),
+                "cells": disc.cells.copy(),
+            }
+        )
+    return {"time": np.array(sample_times), "rods": rods}
