@@ -1,0 +1,59 @@
+"""Regression guard for the cross-solver comparison: agreement and the ordering of errors (not times)."""
+
+import json
+import math
+
+import pytest
+
+from wavecontact.cli import main
+from wavecontact.studies.compare import Method, compare_solvers
+
+SMALL = [
+    Method("delay", {"rtol": 1e-4}),
+    Method("delay", {"rtol": 1e-9}),
+    Method("fem", {"elements": 50, "order": 1, "mass": "lumped"}, work_unit="element_steps"),
+    Method("fem", {"elements": 200, "order": 1, "mass": "lumped"}, work_unit="element_steps"),
+    Method("modal", {"modes": 20, "static_correction": True}),
+    Method("modal", {"modes": 80, "static_correction": True}),
+    Method("modal", {"modes": 80, "static_correction": False}),
+]
+
+
+@pytest.fixture(scope="module")
+def table():
+    return compare_solvers(0.6, 20.0, SMALL, progress=False)
+
+
+def test_reference_is_the_independent_value(table):
+    # checked against an independent Radau method of steps in test_delay_solver.py
+    assert table.reference == pytest.approx(0.7530132413, abs=1e-9)
+
+
+def test_every_solver_agrees_with_the_reference(table):
+    assert all(row.ok for row in table.rows), [row.status for row in table.rows]
+    by_label = {(row.solver, row.resolution): row for row in table.rows}
+    assert by_label[("delay", "rtol=1e-09")].error < 1e-10
+    assert by_label[("fem", "elements=200, order=1, mass=lumped")].error < 1e-4
+    assert by_label[("modal", "modes=80, static_correction=True")].error < 1e-4
+
+
+def test_errors_shrink_with_resolution(table):
+    rows = table.rows
+    assert rows[1].error < rows[0].error  # delay: tighter tolerance
+    assert rows[3].error < rows[2].error  # fem: finer mesh
+    assert rows[5].error < rows[4].error  # modal: more modes
+    assert rows[5].error < rows[6].error  # the static correction helps at equal N
+
+
+def test_failures_are_rows_with_a_message():
+    table = compare_solvers(0.6, 20.0, [Method("delay", {"rtol": 5.0})], progress=False)
+    (row,) = table.rows
+    assert not row.ok and "rtol" in row.status and row.restitution is None
+
+
+def test_cli_json(capsys):
+    assert main(["compare", "--gamma", "0.6", "--kappa", "inf", "--json", "--no-progress"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["kappa"] == "inf" and record["reference"] == pytest.approx(0.6, abs=1e-12)
+    finite = [r for r in record["rows"] if r["status"] == "ok"]
+    assert finite and all(math.isfinite(r["restitution"]) for r in finite)
