@@ -236,7 +236,7 @@ def integrate_delay_equation(
     gamma_min = delays[0]
     for i in range(delays.shape[0]):
         gamma_min = min(gamma_min, delays[i])
-    h_max = 0.5 * gamma_min
+    h_max = 0.95 * gamma_min
 
     t[0] = 0.0
     w[0] = 0.0
