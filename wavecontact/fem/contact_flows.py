@@ -25,15 +25,15 @@ from .._jit import kernel
 
 __all__ = [
     "LAW_EXPONENTIAL",
-    "LAW_PENALTY",
     "LAW_HARD_ELASTIC",
     "LAW_HARD_PLASTIC",
-    "exponential_flow",
-    "penalty_flow",
-    "hard_elastic_flow",
-    "hard_plastic_update",
+    "LAW_PENALTY",
     "contact_flow",
     "contact_potential",
+    "exponential_flow",
+    "hard_elastic_flow",
+    "hard_plastic_update",
+    "penalty_flow",
 ]
 
 LAW_EXPONENTIAL = 0

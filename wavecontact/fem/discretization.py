@@ -31,10 +31,10 @@ __all__ = [
     "ELEMENT_ORDERS",
     "MASS_KINDS",
     "RodDiscretization",
-    "discretize_rod",
-    "uniform_nodes",
-    "matched_nodes",
     "check_nodes",
+    "discretize_rod",
+    "matched_nodes",
+    "uniform_nodes",
 ]
 
 ELEMENT_ORDERS = (1, 2)

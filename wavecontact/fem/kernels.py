@@ -15,13 +15,17 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._jit import kernel
 from .contact_flows import contact_flow, contact_potential, interface_gap
 
-__all__ = ["elastic_acceleration", "advance", "rod_energies", "STATUS_RUNNING", "STATUS_SEPARATED",
-           "STATUS_FAILED"]
+__all__ = [
+    "STATUS_FAILED",
+    "STATUS_RUNNING",
+    "STATUS_SEPARATED",
+    "advance",
+    "elastic_acceleration",
+    "rod_energies",
+]
 
 STATUS_RUNNING = 0
 STATUS_SEPARATED = 1
@@ -39,7 +43,8 @@ S_FAILED_ENERGY = 7
 S_ENERGY_SCALE = 8
 S_PREVIOUS_END1 = 9
 S_PREVIOUS_END2 = 10
-STATE_SIZE = 11
+S_INCOMING = 11
+STATE_SIZE = 12
 
 
 @kernel(fastmath=False)
@@ -195,18 +200,21 @@ def advance(
     for step in range(max_steps):
         # 1. half kick + drift, remembering the end-node gap and rate before the drift
         if characteristic:
-            # incoming characteristics over [t - dt, t + dt] and the gap at t - dt
+            # Incoming characteristics: the lattice gives their mean rate over [t - dt, t + dt];
+            # the rate over [t, t + dt] follows by subtracting the one over [t - dt, t].
             end1 = state[S_PREVIOUS_END1]
             end2 = state[S_PREVIOUS_END2]
-            incoming = ((u2[1] - end2) - (u1[last - 1] - end1)) / dt
-            r_before = offset + end2 - end1
+            mean_rate = ((u2[1] - end2) - (u1[last - 1] - end1)) / dt
+            incoming = 2.0 * mean_rate - state[S_INCOMING]
+            state[S_INCOMING] = incoming
+            r_now = offset + u2[0] - u1[last]
             state[S_PREVIOUS_END1] = u1[last]
             state[S_PREVIOUS_END2] = u2[0]
             _kick_drift(u1, v1, a1, dt)
             _kick_drift(u2, v2, a2, dt)
-            # 2. gap of massless ends after the double step; the end nodes absorb the impulse
+            # 2. gap of massless ends after one step; the end nodes absorb the impulse
             r_free = offset + u2[0] - u1[last]
-            r_after = interface_gap(law, r_before, incoming, 2.0 * dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
+            r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
         else:
@@ -270,8 +278,7 @@ def advance(
             if not math.isfinite(drift) or drift > energy_tolerance:
                 state[S_FAILED_ENERGY] = total
                 return 2, step + 1, samples
-            if drift > state[S_MAX_DRIFT]:
-                state[S_MAX_DRIFT] = drift
+            state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
             if vrel > 0.0 and gap > r_stop:
                 if time - state[S_LAST_IN_RANGE] >= period:
                     return 1, step + 1, samples

@@ -20,7 +20,7 @@ from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, 
 from .discretization import RodDiscretization, discretize_rod, matched_nodes
 from .stability import check_time_step, stable_step
 
-__all__ = ["FemSetup", "build_setup", "run_collision", "POTENTIAL_TOLERANCE"]
+__all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 
 # Contact energy, relative to the energy of the relative motion, below which the
 # force counts as absent: the start gap and the end of the run are placed there.
@@ -283,6 +283,9 @@ class _Run:
         dt = setup.dt
         self.state[kernels.S_PREVIOUS_END1] = self.u[0][-1] - dt * self.v[0][-1] + 0.5 * dt * dt * self.a[0][-1]
         self.state[kernels.S_PREVIOUS_END2] = self.u[1][0] - dt * self.v[1][0] + 0.5 * dt * dt * self.a[1][0]
+        self.state[kernels.S_INCOMING] = (self.v[1][0] - 0.5 * dt * self.a[1][0]) - (
+            self.v[0][-1] - 0.5 * dt * self.a[0][-1]
+        )
         self.energy0 = energy
         self.energy_scale = scale
         self.momentum0 = sum(momenta)
@@ -335,7 +338,7 @@ def run_collision(setup: FemSetup, energy_tolerance: float = 0.05, max_time=None
     run = _Run(setup, energy_tolerance)
     if max_time is None:
         max_time = setup.gap / run.approach + 50.0 * run.period
-    max_steps = int(math.ceil(max_time / setup.dt))
+    max_steps = math.ceil(max_time / setup.dt)
     pieces_hist, pieces_energy = [], []
     status = kernels.STATUS_RUNNING
     while status == kernels.STATUS_RUNNING:
@@ -395,7 +398,7 @@ def _replay_fields(setup: FemSetup, energy_tolerance, times, force, samples: int
             record["displacement"].append(u.copy())
             record["velocity"].append(v.copy())
             record["stress"].append(stress)
-    left, right = setup.rods
+    left, _right = setup.rods
     offsets = (-0.5 * setup.gap - left.rod.length, 0.5 * setup.gap)
     rods = []
     for disc, record, offset in zip(setup.rods, records, offsets):

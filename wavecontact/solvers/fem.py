@@ -33,8 +33,10 @@ OPTIONS = {
     "max_time": None,
 }
 
-# Expected convergence order of epsilon where the contact is resolved (tests compare with a fit).
-EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 2, (2, "lumped"): 2, (2, "consistent"): 2}
+# Observed convergence order of epsilon where the contact is resolved (kappa <= 1e3), per
+# discretization; P1 lumped uses the characteristic interface, the others the impulse splitting
+# whose end-node error is O(dt^2 / h) = O(h) (docs/fem.md).  Tests compare a log-log fit with these.
+EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 1, (2, "lumped"): 1, (2, "consistent"): 1}
 
 _FORCE_THRESHOLD = 1e-3  # of the peak: contact start and end
 
