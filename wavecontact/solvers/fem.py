@@ -172,9 +172,11 @@ def _contact_window(time, force, dt):
 
 
 def _scheme_name(setup, options) -> str:
-    contact = {0: "exact exponential contact flow", 1: "exact penalty contact flow",
-               2: "elastic node impact", 3: "plastic (forward-increment) node impact"}[setup.law]
-    return f"P{options['order']} {options['mass']} mass, velocity Verlet with {contact} (impulse splitting)"
+    contact = {0: "exponential", 1: "penalty", 2: "hard (elastic node impact)", 3: "hard"}[setup.law]
+    base = f"P{options['order']} {options['mass']} mass, central differences, {contact} contact"
+    if setup.characteristic:
+        return base + " through the characteristic interface (massless ends, exact gap equation)"
+    return base + " through the impulse splitting (exact flow of the end-node pair)"
 
 
 def _check_options(options):

@@ -1,0 +1,140 @@
+"""The finite-element solver against independent references: the delay equation,
+the hard-core limit epsilon = gamma, Saint-Venant's wave theory and the
+two-material wave-theory result of docs/fem.md."""
+
+import math
+
+import numpy as np
+import pytest
+
+import wavecontact as wc
+from wavecontact import Exponential, Hard, Rod, Scene
+from wavecontact.solvers.fem import EXPECTED_ORDER
+
+
+def delay_reference(gamma, kappa):
+    return wc.collide(gamma, kappa, solver="delay").restitution
+
+
+@pytest.mark.parametrize("gamma, kappa", [(0.6, 20), (0.6, 100), (0.6173, 1000)])
+def test_agrees_with_delay_equation_where_contact_is_resolved(gamma, kappa):
+    result = wc.collide(gamma, kappa, solver="fem", elements=800)
+    assert abs(result.restitution - delay_reference(gamma, kappa)) < 1e-6
+
+
+def test_model_reference_values_at_800_elements():
+    # MODEL.md section 5, computed independently of this project
+    assert abs(wc.collide(0.6, 100, solver="fem", elements=800).restitution - 0.646697087) < 1e-6
+    assert abs(wc.collide(0.6, 20, solver="fem", elements=800).restitution - 0.75301321) < 1e-6
+
+
+@pytest.mark.parametrize("kappa", [1e4, 1e5])
+def test_stiff_exponential_contact_within_1e4(kappa):
+    result = wc.collide(0.6, kappa, solver="fem", elements=800)
+    assert abs(result.restitution - delay_reference(0.6, kappa)) < 1e-4
+
+
+def test_kappa_1e6_matches_asymptotic_formula():
+    # Eq. 23, accurate far below 1e-6 at this kappa (MODEL.md section 5)
+    gamma, kappa = 0.6, 1e6
+    asymptotic = gamma + math.log(kappa * (1 / gamma - gamma)) / kappa
+    result = wc.collide(gamma, kappa, solver="fem", elements=3200)
+    assert abs(result.restitution - asymptotic) < 1e-4
+
+
+@pytest.mark.parametrize("gamma, elements", [(1.0, 400), (0.5, 400), (0.6, 800), (0.3, 300), (0.1, 100)])
+def test_hard_limit_is_exact_when_the_long_rod_is_a_whole_number_of_elements(gamma, elements):
+    result = wc.collide(gamma, math.inf, solver="fem", elements=elements)
+    assert abs(result.restitution - gamma) < 1e-11
+
+
+@pytest.mark.parametrize("gamma", [0.6173, 0.75, 0.9])
+def test_hard_limit_converges_for_any_gamma(gamma):
+    coarse = abs(wc.collide(gamma, math.inf, solver="fem", elements=800).restitution - gamma)
+    fine = abs(wc.collide(gamma, math.inf, solver="fem", elements=3200).restitution - gamma)
+    assert fine < 1e-4
+    assert fine < coarse / 2 or fine < 1e-11
+
+
+def test_wave_theory_plateau_and_duration():
+    gamma = 0.6
+    result = wc.collide(gamma, math.inf, solver="fem", elements=800)
+    l1 = (1 + gamma) / 2
+    assert result.contact_duration == pytest.approx(2 * l1, rel=0.01)  # 2 l1 / c
+    inside = (result.time > result.contact_start + 0.1) & (result.time < result.contact_start + 2 * l1 - 0.1)
+    # Z V / 2 with Z = rho c A = 1 and V = 1
+    assert np.median(result.contact_force[inside]) == pytest.approx(0.5, rel=0.01)
+    assert np.all(np.abs(result.contact_force[inside] - 0.5) < 0.005)
+
+
+def test_two_materials_against_wave_theory():
+    # rod 1: Z1 = 1, round trip 2; rod 2: Z2 = 2, c2 = 1/2, round trip 4 (docs/fem.md):
+    # epsilon = (Z2 - Z1 + 2 Z2 m1 / m2) / (Z1 + Z2)
+    rod1, rod2 = Rod(1.0, density=1.0), Rod(1.0, density=4.0)
+    z1, z2, m1, m2 = rod1.impedance, rod2.impedance, rod1.mass, rod2.mass
+    expected = (z2 - z1 + 2 * z2 * m1 / m2) / (z1 + z2)
+    scene = Scene(rods=(rod1, rod2), velocities=(1.0, 0.0), contact=Hard())
+    result = wc.solve(scene, "fem", elements=200)
+    assert result.restitution == pytest.approx(expected, abs=1e-12)
+    assert result.contact_duration == pytest.approx(rod1.round_trip_time, rel=0.01)
+    stiff = Scene(rods=(rod1, rod2), velocities=(1.0, 0.0), contact=Exponential(1e5, 1e-12))
+    # finite stiffness shifts epsilon by O(ln(alpha) / alpha), as Eq. 23 does for one material
+    assert wc.solve(stiff, "fem", elements=400).restitution == pytest.approx(expected, abs=5e-4)
+
+
+def _observed_order(elements, errors):
+    slope = np.polyfit(np.log(elements), np.log(errors), 1)[0]
+    return -slope
+
+
+@pytest.mark.parametrize("order, mass", [(1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent")])
+def test_observed_order_of_each_discretization(order, mass):
+    reference = delay_reference(0.6, 100)
+    elements = np.array([100, 200, 400])
+    errors = [
+        abs(wc.collide(0.6, 100, solver="fem", elements=int(n), order=order, mass=mass).restitution - reference)
+        for n in elements
+    ]
+    observed = _observed_order(elements, errors)
+    assert abs(observed - EXPECTED_ORDER[(order, mass)]) < 0.3, (observed, errors)
+
+
+def test_energy_and_momentum_conservation():
+    result = wc.collide(0.6, 100, solver="fem", elements=800)
+    # the contact is resolved: the leapfrog energy is kept to ~1e-5 of the relative energy
+    assert result.diagnostics["energy_drift"] < 5e-5
+    assert result.diagnostics["momentum_drift"] < 1e-13
+    energies = result.extra["energies"]
+    total = energies["kinetic"] + energies["strain"] + energies["contact"]
+    assert np.ptp(total) / total[0] < 1e-3
+    # hard contact of equal rods: the lattice is exact, energy to round-off
+    exact = wc.collide(1.0, math.inf, solver="fem", elements=200)
+    assert exact.diagnostics["energy_drift"] < 1e-11
+    assert exact.diagnostics["momentum_drift"] < 1e-13
+
+
+def test_energy_after_collision_goes_to_the_long_rod():
+    gamma = 0.6
+    result = wc.collide(gamma, math.inf, solver="fem", elements=800)
+    short, long_ = result.extra["rod_energy_after"]
+    translational = 0.25  # mu V^2 / 2
+    assert short < 1e-10
+    # (1 - gamma^2) E_tr up to the O(h) energy of the merged end nodes at impact
+    assert long_ == pytest.approx((1 - gamma**2) * translational, rel=2e-3)
+
+
+def test_kappa_1e6_costs_about_the_same_as_kappa_100():
+    cheap = wc.collide(0.6, 100, solver="fem", elements=800).work["element_steps"]
+    stiff = wc.collide(0.6, 1e6, solver="fem", elements=800).work["element_steps"]
+    assert stiff <= 3 * cheap
+
+
+def test_result_histories_and_run_control():
+    result = wc.collide(0.6, 100, solver="fem", elements=200)
+    assert result.relative_velocity[0] == pytest.approx(-1.0, abs=1e-9)
+    assert result.relative_velocity[-1] == pytest.approx(result.restitution, abs=1e-12)
+    assert np.all(np.isfinite(result.contact_force))
+    # started out of range: the first force is negligible
+    assert result.contact_force[0] < 1e-12
+    assert result.work["steps"] == result.time.size
+    assert result.work["element_steps"] == result.work["steps"] * sum(result.work["elements"])
