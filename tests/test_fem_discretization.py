@@ -74,11 +74,11 @@ def test_penalty_flow_matches_ode_solution():
 def test_first_order_gap_equations_match_ode_solution():
     c, alpha, strength = 2.0, 50.0, 0.01
     for r, g, duration in [(0.05, -1.0, 0.01), (0.0, -1.0, 0.1), (-0.01, 0.5, 0.1)]:
-        exact = solve_ivp(lambda t, y: [g + c * alpha * strength * np.exp(-alpha * y[0])], (0, duration), [r],
-                          rtol=1e-12, atol=1e-14, method="Radau").y[0, -1]
+        exact = solve_ivp(lambda t, y, g=g: [g + c * alpha * strength * np.exp(-alpha * y[0])], (0, duration),
+                          [r], rtol=1e-12, atol=1e-14, method="Radau").y[0, -1]
         assert exponential_gap(r, g, duration, c, alpha, strength) == pytest.approx(exact, abs=1e-11)
     for r, g, duration in [(0.01, -1.0, 0.1), (-0.02, 0.1, 0.1)]:
-        exact = solve_ivp(lambda t, y: [g - c * 30.0 * min(y[0], 0.0)], (0, duration), [r], rtol=1e-12,
+        exact = solve_ivp(lambda t, y, g=g: [g - c * 30.0 * min(y[0], 0.0)], (0, duration), [r], rtol=1e-12,
                           atol=1e-14, max_step=1e-4).y[0, -1]
         assert penalty_gap(r, g, duration, c, 30.0) == pytest.approx(exact, abs=1e-9)
     # no overflow for an extremely stiff law
