@@ -45,7 +45,7 @@ def test_mass_and_stiffness_invariants():
             assert disc.mass_matrix.sum() == pytest.approx(rod.mass, rel=1e-13)
             assert np.abs(disc.stiffness @ np.ones(disc.n_nodes)).max() < 1e-12
             # stress of a uniform strain 0.01 is E * 0.01 at every node
-            stress = disc.stress_recovery @ (0.01 * disc.x)
+            stress = disc.stress_recovery() @ (0.01 * disc.x)
             assert stress == pytest.approx(np.full(disc.n_nodes, 0.03), rel=1e-12)
             assert disc.cells.shape == (disc.n_elements, order + 1)
 

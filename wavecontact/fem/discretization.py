@@ -71,9 +71,6 @@ class RodDiscretization:
         ``K`` in the left-to-right numbering.
     mass_matrix : scipy.sparse.csr_matrix
         ``M`` (diagonal when lumped) in the same numbering.
-    stress_recovery : scipy.sparse.csr_matrix
-        Maps nodal displacements to nodal stress ``E du/ds`` (force/area),
-        the element derivatives averaged over the elements sharing a node.
     """
 
     rod: Rod
@@ -86,7 +83,13 @@ class RodDiscretization:
     mass_cholesky: np.ndarray | None
     stiffness: sp.csr_matrix
     mass_matrix: sp.csr_matrix
-    stress_recovery: sp.csr_matrix
+
+    def stress_recovery(self) -> sp.csr_matrix:
+        """Matrix mapping nodal displacements to nodal stress ``E du/ds`` (force/area).
+
+        Element derivatives at each node, averaged over the elements sharing it.
+        """
+        return _stress_recovery(self.x, self.cells, self.rod.youngs_modulus).tocsr()
 
     @property
     def n_nodes(self) -> int:
@@ -300,7 +303,6 @@ def discretize_rod(
         mass_cholesky=cholesky,
         stiffness=stiffness,
         mass_matrix=mass_matrix,
-        stress_recovery=_stress_recovery(x, cells, rod.youngs_modulus).tocsr(),
     )
 
 

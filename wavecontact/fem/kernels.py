@@ -1,11 +1,12 @@
 """Time loop of two rods in contact: plain-array numba kernels.
 
-One step (kick-drift-kick, i.e. velocity Verlet / central differences):
+One step of central differences in leapfrog form (``v`` lives at half steps):
 
-1. half kick with the elastic forces: ``v += dt/2 a``;
-2. drift ``u += dt v`` of every node, the facing end nodes moved by the exact
-   contact flow (:mod:`.contact_flows`) through the columns ``M^-1 e_end``;
-3. new elastic accelerations ``a = M^-1 (-K u)`` and the second half kick.
+1. kick with the elastic forces ``v += dt M^-1 (-K u)`` and drift ``u += dt v``
+   (one sweep over the nodes for P1 lumped);
+2. contact: the facing end nodes are moved to the gap the contact law gives
+   after the step (:mod:`.contact_flows`), the correction spread along the
+   columns ``M^-1 e_end`` so that momentum is exchanged exactly.
 
 Elastic forces are evaluated as ``-sum_j K_ij (u_j - u_i)`` (rows of ``K``
 sum to zero), so a rigid translation produces no force at all.
@@ -109,22 +110,6 @@ def elastic_acceleration(u, bands, inverse_mass, cholesky, lumped, out):
 
 
 @kernel
-def _kick_drift(u, v, a, dt):
-    half = 0.5 * dt
-    for i in range(u.size):
-        vi = v[i] + half * a[i]
-        v[i] = vi
-        u[i] += dt * vi
-
-
-@kernel
-def _kick(v, a, dt):
-    half = 0.5 * dt
-    for i in range(v.size):
-        v[i] += half * a[i]
-
-
-@kernel
 def rod_energies(u, v, a, bands, mass_bands, dt):
     """Kinetic and strain energy of one rod; ``mass_bands`` in the layout of ``bands``.
 
@@ -162,9 +147,52 @@ def _mean_displacement(u, weights):
     return total / mass
 
 
+@kernel(fastmath=False)
+def _leapfrog_p1(u, v, bands, inverse_mass, dt):
+    """P1 lumped fast path of one step in a single sweep: ``v += dt M^-1 (-K u)``, ``u += dt v``.
+
+    Each node's displacement is overwritten right after its own acceleration
+    is known; the old value is kept in ``previous`` for the next node.
+    """
+    n = u.size
+    if n == 1:
+        u[0] += dt * v[0]
+        return
+    previous = u[0]
+    v[0] += dt * (-bands[1, 0] * (u[1] - previous) * inverse_mass[0])
+    u[0] = previous + dt * v[0]
+    for i in range(1, n - 1):
+        current = u[i]
+        force = -bands[1, i - 1] * (previous - current) - bands[1, i] * (u[i + 1] - current)
+        velocity = v[i] + dt * force * inverse_mass[i]
+        v[i] = velocity
+        u[i] = current + dt * velocity
+        previous = current
+    current = u[n - 1]
+    v[n - 1] += dt * (-bands[1, n - 2] * (previous - current) * inverse_mass[n - 1])
+    u[n - 1] = current + dt * v[n - 1]
+
+
+@kernel
+def _leapfrog_general(u, v, a, bands, inverse_mass, cholesky, lumped, dt):
+    elastic_acceleration(u, bands, inverse_mass, cholesky, lumped, a)
+    for i in range(u.size):
+        velocity = v[i] + dt * a[i]
+        v[i] = velocity
+        u[i] += dt * velocity
+
+
+@kernel
+def _synchronize(u, v, a, sync, bands, inverse_mass, cholesky, lumped, dt):
+    """Velocity at the time of ``u`` from the half-step velocity ``v``: ``v + dt/2 a(u)``."""
+    elastic_acceleration(u, bands, inverse_mass, cholesky, lumped, a)
+    for i in range(u.size):
+        sync[i] = v[i] + 0.5 * dt * a[i]
+
+
 @kernel
 def advance(
-    u1, v1, a1, u2, v2, a2,
+    u1, v1, a1, u2, v2, a2, sync1, sync2,
     bands1, bands2, inverse_mass1, inverse_mass2, cholesky1, cholesky2, lumped,
     mass_bands1, mass_bands2, weights1, weights2,
     column1, column2, m_inv, characteristic,
@@ -176,16 +204,18 @@ def advance(
 ):
     """Run up to ``max_steps`` steps; return ``(status, steps_done, energy_samples)``.
 
-    ``column1`` holds ``M1^-1 e_last`` for the last ``column1.size`` nodes of
-    rod 1, ``column2`` holds ``M2^-1 e_0`` for the first nodes of rod 2.
-    The gap is ``offset + u2[0] - u1[-1]``.  ``state`` (see ``S_*``) carries
-    time, centre-of-mass momenta and run control between calls.  Histories
-    get one entry per step (force = mean contact force over the step,
-    assigned to the step's midpoint); energies one entry per ``check_every``
-    steps.  The run stops (status 1) once the rods are apart and provably
-    stay apart: the end gap is bounded below by the centre-of-mass gap minus
-    ``bound_factor * sqrt(internal energy)`` per rod, or it has stayed out of
-    range for ``period`` (the longest free vibration period).
+    On entry and exit ``u`` holds displacements at the current time and ``v``
+    the velocities half a step earlier (leapfrog); ``a`` and ``sync`` are
+    scratch arrays.  ``column1`` holds ``M1^-1 e_last`` for the last
+    ``column1.size`` nodes of rod 1, ``column2`` holds ``M2^-1 e_0`` for the
+    first nodes of rod 2.  The gap is ``offset + u2[0] - u1[-1]``.  ``state``
+    (see ``S_*``) carries time, centre-of-mass momenta and run control between
+    calls.  Histories get one entry per step (force = mean contact force over
+    the step); energies one entry per ``check_every`` steps.  The run stops
+    (status 1) once the rods are apart and provably stay apart: the end gap is
+    bounded below by the centre-of-mass gap minus ``bound_factor *
+    sqrt(internal energy)`` per rod, or it has stayed out of range for
+    ``period`` (the longest free vibration period).
     """
     n1 = u1.size
     last = n1 - 1
@@ -197,8 +227,9 @@ def advance(
     for i in range(u2.size):
         mass2 += weights2[i]
     samples = 0
+    fast = lumped and bands1.shape[0] == 2 and bands2.shape[0] == 2
     for step in range(max_steps):
-        # 1. half kick + drift, remembering the end-node gap and rate before the drift
+        r_now = offset + u2[0] - u1[last]
         if characteristic:
             # Incoming characteristics: the lattice gives their mean rate over [t - dt, t + dt];
             # the rate over [t, t + dt] follows by subtracting the one over [t - dt, t].
@@ -207,25 +238,26 @@ def advance(
             mean_rate = ((u2[1] - end2) - (u1[last - 1] - end1)) / dt
             incoming = 2.0 * mean_rate - state[S_INCOMING]
             state[S_INCOMING] = incoming
-            r_now = offset + u2[0] - u1[last]
             state[S_PREVIOUS_END1] = u1[last]
             state[S_PREVIOUS_END2] = u2[0]
-            _kick_drift(u1, v1, a1, dt)
-            _kick_drift(u2, v2, a2, dt)
-            # 2. gap of massless ends after one step; the end nodes absorb the impulse
-            r_free = offset + u2[0] - u1[last]
+        # 1. kick with the elastic forces and drift (central differences)
+        if fast:
+            _leapfrog_p1(u1, v1, bands1, inverse_mass1, dt)
+            _leapfrog_p1(u2, v2, bands2, inverse_mass2, dt)
+        else:
+            _leapfrog_general(u1, v1, a1, bands1, inverse_mass1, cholesky1, lumped, dt)
+            _leapfrog_general(u2, v2, a2, bands2, inverse_mass2, cholesky2, lumped, dt)
+        # 2. contact: move the facing ends to the gap the contact law gives, spread along M^-1 e_end
+        r_free = offset + u2[0] - u1[last]
+        if characteristic:
             r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
         else:
-            r0 = offset + u2[0] - u1[last]
-            w0 = (v2[0] + 0.5 * dt * a2[0]) - (v1[last] + 0.5 * dt * a1[last])
-            _kick_drift(u1, v1, a1, dt)
-            _kick_drift(u2, v2, a2, dt)
-            # 2. exact contact flow of the end pair, spread along M^-1 e_end
-            r1, w1 = contact_flow(law, r0, w0, dt, m_inv, alpha, strength, stiffness)
+            w0 = v2[0] - v1[last]
+            r1, w1 = contact_flow(law, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv
-            shift = (r1 - r0 - w0 * dt) / m_inv
+            shift = (r1 - r_free) / m_inv
         if impulse != 0.0 or shift != 0.0:
             for k in range(column1.size):
                 u1[c1_start + k] -= column1[k] * shift
@@ -233,16 +265,10 @@ def advance(
             for k in range(column2.size):
                 u2[k] += column2[k] * shift
                 v2[k] += column2[k] * impulse
-        # 3. elastic accelerations and the second half kick
-        elastic_acceleration(u1, bands1, inverse_mass1, cholesky1, lumped, a1)
-        elastic_acceleration(u2, bands2, inverse_mass2, cholesky2, lumped, a2)
-        _kick(v1, a1, dt)
-        _kick(v2, a2, dt)
 
         state[S_MOMENTUM1] -= impulse
         state[S_MOMENTUM2] += impulse
-        t_prev = state[S_TIME]
-        time = t_prev + dt
+        time = state[S_TIME] + dt
         state[S_TIME] = time
         state[S_STEPS] += 1.0
         gap = offset + u2[0] - u1[last]
@@ -258,8 +284,10 @@ def advance(
             return 2, step + 1, samples
 
         if (step + 1) % check_every == 0:
-            kin1, str1, cor1 = rod_energies(u1, v1, a1, bands1, mass_bands1, dt)
-            kin2, str2, cor2 = rod_energies(u2, v2, a2, bands2, mass_bands2, dt)
+            _synchronize(u1, v1, a1, sync1, bands1, inverse_mass1, cholesky1, lumped, dt)
+            _synchronize(u2, v2, a2, sync2, bands2, inverse_mass2, cholesky2, lumped, dt)
+            kin1, str1, cor1 = rod_energies(u1, sync1, a1, bands1, mass_bands1, dt)
+            kin2, str2, cor2 = rod_energies(u2, sync2, a2, bands2, mass_bands2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             total = kin1 + str1 + kin2 + str2 + pot - cor1 - cor2
             kin1 -= cor1
@@ -278,7 +306,8 @@ def advance(
             if not math.isfinite(drift) or drift > energy_tolerance:
                 state[S_FAILED_ENERGY] = total
                 return 2, step + 1, samples
-            state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
+            if drift > state[S_MAX_DRIFT]:
+                state[S_MAX_DRIFT] = drift
             if vrel > 0.0 and gap > r_stop:
                 if time - state[S_LAST_IN_RANGE] >= period:
                     return 1, step + 1, samples
