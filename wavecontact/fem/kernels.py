@@ -306,8 +306,7 @@ def advance(
             if not math.isfinite(drift) or drift > energy_tolerance:
                 state[S_FAILED_ENERGY] = total
                 return 2, step + 1, samples
-            if drift > state[S_MAX_DRIFT]:
-                state[S_MAX_DRIFT] = drift
+            state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
             if vrel > 0.0 and gap > r_stop:
                 if time - state[S_LAST_IN_RANGE] >= period:
                     return 1, step + 1, samples

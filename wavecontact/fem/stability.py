@@ -83,7 +83,7 @@ def _element_bound(disc: RodDiscretization) -> float:
     return _reference_eigenvalue(disc.order, disc.mass_kind) * rod.wave_speed**2 / sizes.min() ** 2
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _reference_eigenvalue(order: int, mass_kind: str) -> float:
     from ..scene import Rod
     from .discretization import discretize_rod
