@@ -9,6 +9,7 @@ while that solver is not installed).
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import json
 import math
 
@@ -298,12 +299,34 @@ def test_cli_refuses_bad_arguments_in_one_line(stand_in_api, capsys, argv):
     assert "Traceback" not in err and err.count("\n") == 1 and err.startswith("wavecontact: error:")
 
 
-FEM_AVAILABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
-
-
 def test_default_reference_is_the_delay_solver_and_matches_model_md():
     # the study's errors go down to ~1e-8, so its reference must be better than that
     value, source = reference_restitution(0.6, 20)
     assert source == "delay solver"
     assert value == pytest.approx(EXACT_06_20, abs=1e-7)
     assert reference_restitution(0.6, math.inf)[0] == 0.6
+
+
+FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
+
+
+@pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")
+def test_real_study_p1_lumped_converges_at_its_declared_order():
+    from wavecontact.solvers import fem
+
+    # the solver declares its expected order per discretization; second order is the theory
+    # of central differences on lumped P1 when the contact is resolved
+    expected = getattr(fem, "EXPECTED_ORDER", {}).get((1, "lumped"), 2)
+    table = convergence_study(
+        0.6, 20, orders=(1,), masses=("lumped",), elements=(25, 50, 100, 200), progress=False
+    )
+    assert table.reference_source == "delay solver"
+    assert table.reference == pytest.approx(EXACT_06_20, abs=1e-7)
+    rows = table.rows
+    assert all(r.failure is None and r.steps > 0 and r.wall_time_s > 0 for r in rows)
+    errors = [r.error for r in rows]
+    assert all(a > b for a, b in itertools.pairwise(errors))  # refinement helps on every step
+    assert errors[-1] < 1e-5
+    fit = table.fit_for(1, "lumped")
+    assert fit.points == 4
+    assert fit.observed_order == pytest.approx(expected, abs=0.25)

@@ -241,3 +241,28 @@ def test_elements_of_any_order_become_sorted_two_node_segments():
     cells = np.array([[0, 1, 3], [2, 1, 4]])  # node order inside a cell is arbitrary
     segments = line_segments(x, cells)
     np.testing.assert_array_equal(segments, [[0, 3], [3, 1], [1, 4], [4, 2]])
+
+
+FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
+
+
+@pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")
+@pytest.mark.parametrize("format", ["vtu", "xdmf"])
+def test_fem_fields_write_and_read_back(tmp_path, format):
+    from wavecontact import collide
+
+    result = collide(
+        0.6, 20, solver="fem", elements=16, order=2, mass="consistent", record_fields=True, field_samples=40
+    )
+    written = write_fields(result, tmp_path, format=format)
+    assert written.format == format and written.note == ""
+    expected = sampled_fields(result)
+    back = read_fields(written.index)
+    np.testing.assert_array_equal(back["time"], expected["time"])
+    assert len(back["rods"]) == 2
+    for rod, rod_back in zip(expected["rods"], back["rods"]):
+        for name in ("x", *FIELD_NAMES):
+            np.testing.assert_array_equal(rod_back[name], rod[name])
+        assert rod_back["segments"].shape == (2 * rod["cells"].shape[0], 2)  # P2: two segments each
+    # the stress the solver reports is the impact stress: a compression near -Z V / 2 somewhere
+    assert -0.6 < min(rod["stress"].min() for rod in expected["rods"]) < -0.3

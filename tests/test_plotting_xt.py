@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib.util
+
 import numpy as np
 import pytest
 from test_io_fields import hard_impact_result  # exact fields of the hard-core impact
@@ -62,3 +64,48 @@ def test_results_without_fields_are_refused(tmp_path):
     assert not (tmp_path / "xt.png").exists()
     with pytest.raises(InvalidParameterError, match="field"):
         xt_figure(hard_impact_result(elements=4, samples=5), field="strain")
+
+
+def test_reference_layout_closes_the_initial_gap():
+    result = hard_impact_result(0.6, elements=10, samples=20)
+    rod1, rod2 = result.extra["fields"]["rods"]
+    rod1["x"] = rod1["x"] - 0.7  # rods placed apart, as a solver starts them
+    rod2["x"] = rod2["x"] + 0.7
+    x_min, x_max = xt_figure(result).axes[0].get_xlim()
+    assert x_min == pytest.approx(-0.8) and x_max == pytest.approx(0.8 / 0.6)
+    x_min, x_max = xt_figure(result, coordinates="deformed").axes[0].get_xlim()
+    assert x_max - x_min > 0.8 / 0.6 + 0.8 + 1.0  # deformed: the real positions, gap included
+
+
+FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
+
+
+@pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")
+def test_cli_collide_writes_fields_and_xt_diagram(tmp_path, capsys):
+    from wavecontact.cli import main
+    from wavecontact.io.fields import read_fields
+
+    png, fields = tmp_path / "xt.png", tmp_path / "fields"
+    code = main(
+        [
+            "collide",
+            "--gamma",
+            "0.6",
+            "--kappa",
+            "20",
+            "--solver",
+            "fem",
+            "--elements",
+            "20",
+            "--fields",
+            str(fields),
+            "--xt-plot",
+            str(png),
+        ]
+    )
+    assert code == 0, capsys.readouterr().err
+    assert png.stat().st_size > 20_000
+    back = read_fields(fields)
+    sizes = [rod["x"].size for rod in back["rods"]]
+    assert sizes[0] == 21 and sizes[1] > 21  # N elements on the short rod (P1), more on the long one
+    assert back["time"].size > 50

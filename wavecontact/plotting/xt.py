@@ -41,9 +41,11 @@ def xt_figure(
         Which sampled field to colour (stress in units of ``rho c V`` in the
         paper's setting, where the impact plateau is ``-1/2``).
     coordinates : {'reference', 'deformed'}
-        ``'reference'``: each node at its coordinate in the undeformed rods
-        (Lagrangian, the textbook picture); ``'deformed'``: at ``x + u(t)``,
-        so the approach, the contact and the separation are visible too.
+        ``'reference'``: each node at its coordinate in the undeformed rods,
+        the rods drawn end to end with the facing ends at ``x = 0``
+        (Lagrangian, the textbook picture; the initial gap is left out);
+        ``'deformed'``: at ``x + u(t)`` on the line, so the approach, the
+        contact and the separation are visible too.
     cmap : str
         A diverging matplotlib colour map; the scale is symmetric about 0.
     max_nodes, max_times : int
@@ -78,10 +80,11 @@ def xt_figure(
     ax = fig.add_subplot()
     ax.set_facecolor("0.82")  # outside the rods: grey, so a stress-free rod (near white) stands out
     mesh = None
-    for number, rod in enumerate(fields["rods"], start=1):
+    shifts = _abutting_shifts(fields["rods"]) if coordinates == "reference" else [0.0] * len(fields["rods"])
+    for number, (rod, shift) in enumerate(zip(fields["rods"], shifts), start=1):
         order = np.argsort(rod["x"], kind="stable")
         cols = order[_thin(order.size, max_nodes)]
-        x = rod["x"][cols][None, :]
+        x = rod["x"][cols][None, :] + shift
         if coordinates == "deformed":
             x = x + rod["displacement"][np.ix_(rows, cols)]
         else:
@@ -94,11 +97,11 @@ def xt_figure(
             ax.plot(x[:, end], t[:, end], color="0.25", lw=0.6)
         ax.annotate(
             f"rod {number}",
-            xy=(float(np.mean(x[0])), time[rows][0]),
-            xytext=(0, 3),
+            xy=(float(np.mean(x[-1])), time[rows][-1]),
+            xytext=(0, -3),
             textcoords="offset points",
             ha="center",
-            va="bottom",
+            va="top",
             fontsize=8,
             color="0.25",
         )
@@ -123,7 +126,7 @@ def xt_figure(
     ax.set_xlabel(
         "position x"
         + (" (units of l)" if dimensionless else "")
-        + ("  [reference]" if coordinates == "reference" else "  [deformed: x + u]")
+        + ("  [undeformed rods, contact faces at 0]" if coordinates == "reference" else "  [deformed: x + u]")
     )
     ax.set_ylabel("time" + (r" $\tau = t\,c/l$" if dimensionless else ""))
     ax.set_ylim(time[rows][0], time[rows][-1])
@@ -166,6 +169,18 @@ def plot_xt_diagram(result, path, **options) -> Path:
         raise InvalidParameterError(f"directory of the plot does not exist: {path.parent}")
     fig.savefig(path)
     return path
+
+
+def _abutting_shifts(rods) -> list:
+    """Shifts that close the gaps: each rod starts where the previous one ends, the first contact at 0."""
+    shifts, end = [], None
+    for rod in rods:
+        left, right = float(np.min(rod["x"])), float(np.max(rod["x"]))
+        shift = 0.0 if end is None else end - left
+        shifts.append(shift)
+        end = right + shift
+    first_contact = float(np.max(rods[0]["x"]))
+    return [shift - first_contact for shift in shifts]
 
 
 def _thin(size: int, at_most: int) -> np.ndarray:
