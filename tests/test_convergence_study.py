@@ -87,9 +87,11 @@ def test_fitted_order_recovers_the_known_exponent():
             assert r.steps == 40 * r.elements and r.wall_time_s == pytest.approx(1e-6 * r.elements**2)
         for r in rows[1:]:
             assert r.local_order == pytest.approx(p, abs=1e-6)
-    # every fem run went through the public options, nothing else
+    # every fem run went through the public options, nothing else; one untimed warm-up run
+    # on the coarsest mesh per discretization
     fem_calls = [c for c in fake.calls if c[2] == "fem"]
-    assert len(fem_calls) == 16
+    assert len(fem_calls) == 16 + 4
+    assert [c[4]["elements"] for c in fem_calls[:6]] == [25, 25, 50, 100, 200, 25]
     assert all(set(c[4]) == {"elements", "order", "mass"} for c in fem_calls)
 
 
@@ -330,3 +332,26 @@ def test_real_study_p1_lumped_converges_at_its_declared_order():
     fit = table.fit_for(1, "lumped")
     assert fit.points == 4
     assert fit.observed_order == pytest.approx(expected, abs=0.25)
+
+
+def test_plot_leaves_round_off_results_out_and_refuses_an_all_exact_study(tmp_path):
+    from wavecontact.plotting.convergence import convergence_figure, plot_convergence
+
+    exact = convergence_study(
+        0.6,
+        20,
+        orders=(1,),
+        masses=("lumped",),
+        elements=(10, 20),
+        collide=StandIn(round_off=True),
+        progress=False,
+    )
+    with pytest.raises(InvalidParameterError, match="round-off"):
+        plot_convergence(exact, tmp_path / "c.png")
+    mixed = convergence_study(
+        0.6, 20, orders=(1, 2), masses=("lumped",), elements=(10, 20), collide=StandIn(), progress=False
+    )
+    mixed.rows[0] = type(mixed.rows[0])(**{**mixed.rows[0].__dict__, "error": 1e-16})
+    ax_n = convergence_figure(mixed).axes[0]
+    assert len(ax_n.lines[0].get_xdata()) == 1
+    assert "1 mesh exact to round-off" in ax_n.get_legend().get_texts()[0].get_text()

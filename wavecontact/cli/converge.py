@@ -61,6 +61,12 @@ def add_parser(subparsers):
         default=None,
         help="no progress bar (it is shown on stderr only when that is a terminal)",
     )
+    p.add_argument(
+        "--no-warmup",
+        dest="warmup",
+        action="store_false",
+        help="do not run each discretization once untimed first (numba compilation then shows in the first row)",
+    )
     p.set_defaults(run=run)
     return p
 
@@ -79,6 +85,7 @@ def run(args) -> int:
         contact=args.contact,
         reference=args.reference,
         progress=args.progress,
+        warmup=args.warmup,
     )
     if args.plot:
         from ..plotting.convergence import plot_convergence

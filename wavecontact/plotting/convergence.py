@@ -28,27 +28,33 @@ def convergence_figure(table):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from ..studies.convergence import ERROR_FLOOR
+
     series = []
     for fit in table.fits:
-        rows = [r for r in table.rows_for(fit.order, fit.mass) if r.error is not None and r.error > 0]
+        done = [r for r in table.rows_for(fit.order, fit.mass) if r.error is not None]
+        rows = [r for r in done if r.error > ERROR_FLOOR]  # round-off results are not on a log scale
         if rows:
-            series.append((fit, rows))
+            series.append((fit, rows, len(done) - len(rows)))
     if not series:
-        raise InvalidParameterError("nothing to plot: no run of the study has a positive error")
+        raise InvalidParameterError("nothing to plot: no run of the study has an error above round-off")
 
     fig = Figure(figsize=(10, 4.4), dpi=150, layout="constrained")
     FigureCanvasAgg(fig)
     ax_n, ax_t = fig.subplots(1, 2)
     markers = "osD^v<>p"
-    for k, (fit, rows) in enumerate(series):
-        label = fit.label + (f" (p = {fit.observed_order:.2f})" if fit.observed_order is not None else "")
+    for k, (fit, rows, exact) in enumerate(series):
+        notes = [f"p = {fit.observed_order:.2f}"] if fit.observed_order is not None else []
+        if exact:
+            notes.append(f"{exact} mesh{'es' if exact > 1 else ''} exact to round-off, not shown")
+        label = fit.label + (f" ({'; '.join(notes)})" if notes else "")
         style = {"marker": markers[k % len(markers)], "ms": 4, "lw": 1.2, "label": label}
         ax_n.loglog([r.elements for r in rows], [r.error for r in rows], **style)
         timed = [r for r in rows if r.wall_time_s and r.wall_time_s > 0]
         if timed:
             ax_t.loglog([r.wall_time_s for r in timed], [r.error for r in timed], **style)
 
-    all_rows = [r for _, rows in series for r in rows]
+    all_rows = [r for _, rows, _ in series for r in rows]
     _guides(ax_n, [r.elements for r in all_rows], [r.error for r in all_rows], (1, 2), "N")
     timed = [r for r in all_rows if r.wall_time_s and r.wall_time_s > 0]
     if timed:
@@ -65,11 +71,11 @@ def convergence_figure(table):
     for ax in (ax_n, ax_t):
         ax.grid(True, which="major", alpha=0.3)
         ax.grid(True, which="minor", alpha=0.1)
-    ax_n.legend(fontsize=8, loc="lower left")
+    ax_n.legend(fontsize=8, loc="best")
     kappa = r"$\infty$" if math.isinf(table.kappa) else f"{table.kappa:g}"
     fig.suptitle(
         rf"mesh convergence of $\epsilon$: $\gamma$ = {table.gamma:g}, $\kappa$ = {kappa}, "
-        f"{table.contact} contact, reference {table.reference:.10g} ({table.reference_source})",
+        f"{table.contact} contact, reference {table.reference:.10g}",
         fontsize=9,
     )
     return fig
@@ -90,10 +96,10 @@ def _guides(ax, xs, ys, slopes, symbol):
     x0, x1 = xs.min(), xs.max()
     if x1 <= x0:
         return
-    anchor = ys[xs == x0].max()
+    anchor = ys.max() * 1.6  # from the upper left corner of the data, above every line
     for slope in slopes:
         x = np.array([x0, x1])
-        y = anchor * 1.6 * (x / x0) ** (-slope)
+        y = anchor * (x / x0) ** (-slope)
         exponent = f"{slope:g}" if slope != 0.5 else "1/2"
         ax.loglog(x, y, ls="--", lw=0.8, color="0.45")
         ax.annotate(
