@@ -355,3 +355,13 @@ def test_plot_leaves_round_off_results_out_and_refuses_an_all_exact_study(tmp_pa
     ax_n = convergence_figure(mixed).axes[0]
     assert len(ax_n.lines[0].get_xdata()) == 1
     assert "1 mesh exact to round-off" in ax_n.get_legend().get_texts()[0].get_text()
+
+
+def test_progress_bar_goes_to_stderr_only_when_asked(capsys):
+    kwargs = {"orders": (1,), "masses": ("lumped",), "elements": (10, 20, 40)}
+    convergence_study(0.6, 20, collide=StandIn(), progress=True, **kwargs)
+    captured = capsys.readouterr()
+    assert captured.out == "" and "/3 " in captured.err and "P1 lumped" in captured.err
+    convergence_study(0.6, 20, collide=StandIn(), progress=None, **kwargs)  # stderr is no tty here
+    convergence_study(0.6, 20, collide=StandIn(), progress=False, **kwargs)
+    assert capsys.readouterr().err == ""
