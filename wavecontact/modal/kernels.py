@@ -1,0 +1,423 @@
+"""Compiled kernels of the modal integrator (plain arrays in, plain arrays out).
+
+The system: rods with centre-of-mass positions ``X`` and velocities ``U``,
+mass-normalised mode coordinates ``q`` with velocities ``v`` and frequencies
+``omega``, and end values ``left``/``right`` of each mode; contact pairs
+``k`` join the right end of rod ``pair_a[k]`` to the left end of rod
+``pair_b[k]`` (``pair_offset[k]`` adds the ring circumference for the pair
+that faces across the ring's seam).
+
+Integrator (:func:`run_episode`): while every pair is provably out of range
+of its force, the linear free motion is applied in closed form over the whole
+stretch (oscillators rotated in phase space, centres of mass moved
+ballistically).  Otherwise a Strang splitting is taken: half kick by the
+contact forces, exact rotation of all oscillators over the step, half kick.
+The step comes from the contact alone (never from the highest mode), from
+the rate ``alpha_eff |dr/dt|`` at which the force changes, weighted by the
+force's size so that the toe of the exponential costs few steps, and from the
+linearised contact frequency.  Steps are rounded down to a geometric ladder
+whose rotation coefficients are tabulated once.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import kernel
+
+TOE_MARGIN = 5.0
+LAW_EXPONENTIAL = 0
+LAW_LINEAR = 1
+
+STATUS_RUNNING = 0  # max_steps reached: call again
+STATUS_SEPARATED = 1  # the episode's pair separated for good
+STATUS_FREE_FOREVER = 2  # no pair will ever meet again (line)
+STATUS_BUFFER_FULL = 3  # history buffer full: grow it and call again
+STATUS_STEP_UNDERFLOW = -1
+STATUS_NOT_FINITE = -2
+
+@kernel
+def contact_response(gap, law, alpha, strength, stiffness, compliance):
+    """Force, interaction energy and stiffness of one pair at the modal gap ``gap``.
+
+    With ``compliance > 0`` the contact acts through a massless spring of that
+    compliance (the omitted modes, statically): the true gap ``r`` solves
+    ``r - compliance * F(r) = gap``, the returned force is ``F(r)``, the energy
+    includes the spring's, and the stiffness is ``dF/dgap``.
+
+    Returns
+    -------
+    force, energy, stiffness, softening : float
+        ``softening = 1 + compliance * dF/dr`` (1 without compliance).
+    """
+    if law == LAW_EXPONENTIAL:
+        x = alpha * gap
+        if compliance <= 0.0:
+            if x < -700.0:
+                return math.inf, math.inf, math.inf, 1.0
+            energy = strength * math.exp(-x)
+            return alpha * energy, energy, alpha * alpha * energy, 1.0
+        # r - C alpha B exp(-alpha r) = gap  <=>  y exp(y) = beta exp(-x), y = alpha (r - gap)
+        log_z = math.log(alpha * alpha * strength * compliance) - x
+        if log_z < -30.0:
+            z = math.exp(log_z)
+            y = z * (1.0 - z)
+        else:
+            # Newton on u + exp(u) = log_z (u = log y): convex, increasing, started right of the root
+            u = log_z if log_z < 0.0 else math.log1p(log_z)
+            for _ in range(80):
+                eu = math.exp(u)
+                du = (u + eu - log_z) / (1.0 + eu)
+                u -= du
+                if abs(du) < 1e-15 * (1.0 + abs(u)):
+                    break
+            y = math.exp(u)
+        scale = 1.0 / (alpha * compliance)
+        force = y * scale
+        energy = (y + 0.5 * y * y) * scale / alpha
+        return force, energy, alpha * force / (1.0 + y), 1.0 + y
+    # linear spring on overlap (penalty; hard = infinite stiffness, then only the compliance)
+    if stiffness == math.inf:
+        series = 1.0 / compliance
+    else:
+        series = 1.0 / (1.0 / stiffness + compliance)
+    if gap >= 0.0:
+        return 0.0, 0.0, 0.0, 1.0
+    return -series * gap, 0.5 * series * gap * gap, series, 1.0
+
+@kernel
+def free_flight(q, v, omega, X, U, duration):
+    """Advance the force-free motion exactly by ``duration`` (in place)."""
+    for j in range(q.size):
+        w = omega[j]
+        c = math.cos(w * duration)
+        s = math.sin(w * duration)
+        qj = q[j]
+        q[j] = c * qj + s * v[j] / w
+        v[j] = -w * s * qj + c * v[j]
+    for i in range(X.size):
+        X[i] += U[i] * duration
+
+@kernel
+def end_sums(q, v, left, right, rod_first, sums):
+    """Per rod: modal displacement and velocity of the left and right end.
+
+    ``sums[i] = (sum left q, sum right q, sum left v, sum right v)`` for rod ``i``.
+    """
+    for i in range(rod_first.size - 1):
+        sl = 0.0
+        sr = 0.0
+        vl = 0.0
+        vr = 0.0
+        for j in range(rod_first[i], rod_first[i + 1]):
+            sl += left[j] * q[j]
+            sr += right[j] * q[j]
+            vl += left[j] * v[j]
+            vr += right[j] * v[j]
+        sums[i, 0] = sl
+        sums[i, 1] = sr
+        sums[i, 2] = vl
+        sums[i, 3] = vr
+
+@kernel
+def _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums):
+    """Velocity kick by the pair forces over ``h`` (in place); keeps the end
+    velocity sums ``sums[:, 2:4]`` up to date."""
+    n_rods = U.size
+    for i in range(n_rods):
+        end_force[i, 0] = 0.0
+        end_force[i, 1] = 0.0
+    for k in range(pair_a.size):
+        f = force[k]
+        if f != 0.0:
+            a = pair_a[k]
+            b = pair_b[k]
+            end_force[a, 1] -= f
+            end_force[b, 0] += f
+    for i in range(n_rods):
+        fl = end_force[i, 0] * h
+        fr = end_force[i, 1] * h
+        if fl == 0.0 and fr == 0.0:
+            continue
+        U[i] += (fl + fr) / mass[i]
+        dvl = 0.0
+        dvr = 0.0
+        for j in range(rod_first[i], rod_first[i + 1]):
+            dv = left[j] * fl + right[j] * fr
+            v[j] += dv
+            dvl += left[j] * dv
+            dvr += right[j] * dv
+        sums[i, 2] += dvl
+        sums[i, 3] += dvr
+
+@kernel
+def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
+    for k in range(pair_a.size):
+        a = pair_a[k]
+        b = pair_b[k]
+        gap[k] = (X[b] - half[b] + pair_offset[k] + sums[b, 0]) - (X[a] + half[a] + sums[a, 1])
+        gap_rate[k] = (U[b] + sums[b, 2]) - (U[a] + sums[a, 3])
+
+@kernel
+def _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
+            rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right):
+    """Rigorous bounds on the modal end motion under free flight.
+
+    ``reach[k]`` bounds |modal displacement| of the pair's two ends,
+    ``speed_bound[k]`` bounds |d gap / dt|.
+    """
+    for i in range(rod_first.size - 1):
+        al = 0.0
+        ar = 0.0
+        sl = 0.0
+        sr = 0.0
+        for j in range(rod_first[i], rod_first[i + 1]):
+            w = omega[j]
+            amp = math.sqrt(q[j] * q[j] + (v[j] / w) ** 2)
+            al += abs(left[j]) * amp
+            ar += abs(right[j]) * amp
+            sl += abs(left[j]) * amp * w
+            sr += abs(right[j]) * amp * w
+        amp_left[i, 0] = al
+        amp_left[i, 1] = sl
+        amp_right[i, 0] = ar
+        amp_right[i, 1] = sr
+    for k in range(pair_a.size):
+        a = pair_a[k]
+        b = pair_b[k]
+        rigid_gap[k] = (X[b] - half[b] + pair_offset[k]) - (X[a] + half[a])
+        rigid_rate[k] = U[b] - U[a]
+        reach[k] = amp_right[a, 0] + amp_left[b, 0]
+        speed_bound[k] = abs(rigid_rate[k]) + amp_right[a, 1] + amp_left[b, 1]
+
+@kernel
+def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+    """Force, stiffness and softened alpha of every pair; False if a force is not finite."""
+    finite = True
+    for k in range(gap.size):
+        f, _, kk, soft = contact_response(gap[k], law, alpha, strength, stiffness, pair_compliance[k])
+        if not math.isfinite(f):
+            finite = False
+        force[k] = f
+        keff[k] = kk
+        aeff[k] = alpha / soft
+    return finite
+
+
+@kernel
+def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
+                pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass,
+                law, alpha, strength, stiffness, contact_range,
+                step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, cos_table, sin_table,
+                clock, episode, counters, history, max_steps):
+    """Integrate until the current collision (episode) is over.
+
+    Parameters (all arrays are modified in place where they hold state)
+    ----------
+    q, v : float arrays (M,)
+        Mass-normalised mode coordinates and velocities.
+    omega, left, right : float arrays (M,)
+        Frequencies and end values of the modes, rod after rod.
+    rod_first : int array (n_rods + 1,)
+        Modes of rod ``i`` are ``rod_first[i]:rod_first[i + 1]``.
+    X, U, mass, half : float arrays (n_rods,)
+        Centre-of-mass positions and velocities, masses, half lengths.
+    pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass : arrays (K,)
+        Contact pairs (right end of a, left end of b), offset added to b's
+        position, residual compliance, inverse effective end mass.
+    law, alpha, strength, stiffness : contact law (see :func:`contact_response`).
+    contact_range : float
+        Gap beyond which the force is negligible (length).
+    step_accuracy, step_reach : float
+        ``eta`` of the step control and the largest change of ``alpha * gap``
+        allowed in one step while the force is small.
+    force_scale : float
+        Force against which "small" is measured.
+    dt_top, ladder_ratio : float
+        Largest step; the ladder is ``dt_top * ladder_ratio**-j``.
+    cos_table, sin_table : float arrays (J, M)
+        ``cos(omega dt_j)``, ``sin(omega dt_j) / omega``.
+    clock : float array (2,)
+        Current time; time at which the current episode began.
+    episode : int array (1,)
+        Pair of the collision under way, -1 before it starts.
+    counters : int array (4,)
+        Steps, free-flight skips, history length, history capacity use flag.
+    history : float array (H, 3)
+        Records ``(time, rigid gap rate, force)`` of the episode's pair; H = 0
+        records nothing.
+    max_steps : int
+        Return after this many steps (status 0).
+
+    Returns
+    -------
+    int
+        A status code (STATUS_*).
+    """
+    n_rods = X.size
+    n_pairs = pair_a.size
+    n_levels = cos_table.shape[0]
+    sums = np.empty((n_rods, 4))
+    end_force = np.empty((n_rods, 2))
+    amp_left = np.empty((n_rods, 2))
+    amp_right = np.empty((n_rods, 2))
+    gap = np.empty(n_pairs)
+    gap_rate = np.empty(n_pairs)
+    force = np.empty(n_pairs)
+    aeff = np.empty(n_pairs)
+    keff = np.empty(n_pairs)
+    rigid_gap = np.empty(n_pairs)
+    rigid_rate = np.empty(n_pairs)
+    reach = np.empty(n_pairs)
+    speed_bound = np.empty(n_pairs)
+    log_ratio = math.log(ladder_ratio)
+    recording = history.shape[0] > 0
+    steps_here = 0
+    skip_tolerance = 1e-6 * contact_range + 1e-12 * half[0]
+    # alpha * gap at which alpha B exp(-alpha gap) = force_scale (accuracy / reach)^2
+    significant_exponent = 0.0
+    if law == LAW_EXPONENTIAL:
+        significant_exponent = math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy) + TOE_MARGIN
+
+    end_sums(q, v, left, right, rod_first, sums)
+    _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
+    if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+        return STATUS_NOT_FINITE
+
+    while True:
+        all_far = True
+        for k in range(n_pairs):
+            if gap[k] <= contact_range:
+                all_far = False
+        dt_free = 0.0
+        if all_far:
+            _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
+                    rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right)
+            ep = episode[0]
+            if ep >= 0 and rigid_rate[ep] > 0.0 and rigid_gap[ep] - reach[ep] > contact_range:
+                return STATUS_SEPARATED
+            provably_free = True
+            skip = math.inf
+            for k in range(n_pairs):
+                # land a little short of the bound so that the next pass steps instead of skipping again
+                margin = rigid_gap[k] - reach[k] - contact_range
+                if margin <= skip_tolerance:
+                    provably_free = False
+                elif rigid_rate[k] < 0.0:
+                    skip = min(skip, (margin - 0.5 * skip_tolerance) / (-rigid_rate[k]))
+            if provably_free:
+                if skip == math.inf:
+                    return STATUS_FREE_FOREVER
+                free_flight(q, v, omega, X, U, skip)
+                clock[0] += skip
+                counters[1] += 1
+                end_sums(q, v, left, right, rod_first, sums)
+                _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
+                _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff)
+                if recording and episode[0] >= 0:
+                    n = counters[2]
+                    if n < history.shape[0]:
+                        history[n, 0] = clock[0]
+                        history[n, 1] = rigid_rate[episode[0]]
+                        history[n, 2] = force[episode[0]]
+                        counters[2] = n + 1
+                continue
+            dt_free = math.inf
+            for k in range(n_pairs):
+                dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
+        if episode[0] < 0:
+            best = 0
+            for k in range(1, n_pairs):
+                if gap[k] < gap[best]:
+                    best = k
+            episode[0] = best
+            clock[1] = clock[0]
+        if steps_here >= max_steps:
+            return STATUS_RUNNING
+        if recording and counters[2] >= history.shape[0]:
+            return STATUS_BUFFER_FULL
+
+        # step size from the contact alone
+        rate = 0.0
+        bounds_ready = all_far
+        for k in range(n_pairs):
+            r_k = 0.0
+            if law == LAW_EXPONENTIAL:
+                # distance (in alpha * gap) to where the force becomes significant for the step control
+                excess = alpha * gap[k] - significant_exponent
+                excess = max(excess, 0.0)
+                weight = math.sqrt(force[k] / force_scale) / step_accuracy
+                toe = 1.0 / (step_reach + excess)
+                if weight >= toe:
+                    # the force matters: resolve its rate of change
+                    r_k = aeff[k] * abs(gap_rate[k]) * weight
+                else:
+                    # small force: limit the change of alpha * gap per step by a bound on the gap
+                    # speed over the step (the momentary rate may vanish at a turning point)
+                    if not bounds_ready:
+                        _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b,
+                                pair_offset, rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right)
+                        bounds_ready = True
+                    r_k = aeff[k] * speed_bound[k] * toe
+            osc = math.sqrt(max(keff[k], 0.0) * pair_inverse_mass[k]) / step_accuracy
+            if law == LAW_LINEAR:
+                # the stiffness it will have once touching
+                if stiffness == math.inf:
+                    series = 1.0 / pair_compliance[k]
+                else:
+                    series = 1.0 / (1.0 / stiffness + pair_compliance[k])
+                osc = math.sqrt(series * pair_inverse_mass[k]) / step_accuracy
+            r_k = max(r_k, osc)
+            rate = max(rate, r_k)
+        dt = dt_top if rate * dt_top <= 1.0 else 1.0 / rate
+        if all_far and dt_free > dt:
+            dt = min(dt_free, dt_top)
+        level = int(math.ceil(math.log(dt_top / dt) / log_ratio - 1e-12))  # noqa: RUF046 (numba)
+        level = max(level, 0)
+        if level >= n_levels:
+            return STATUS_STEP_UNDERFLOW
+        dt = dt_top * math.exp(-level * log_ratio)
+        h = 0.5 * dt
+
+        _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums)
+        cos_row = cos_table[level]
+        sin_row = sin_table[level]
+        for j in range(q.size):
+            c = cos_row[j]
+            s_w = sin_row[j]
+            ws = omega[j] * omega[j] * s_w
+            qj = q[j]
+            q[j] = c * qj + s_w * v[j]
+            v[j] = c * v[j] - ws * qj
+        for i in range(n_rods):
+            X[i] += U[i] * dt
+        clock[0] += dt
+        end_sums(q, v, left, right, rod_first, sums)
+        _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
+        if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+            return STATUS_NOT_FINITE
+        _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums)
+        _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
+        counters[0] += 1
+        steps_here += 1
+        if recording:
+            n = counters[2]
+            ep = episode[0]
+            history[n, 0] = clock[0]
+            history[n, 1] = U[pair_b[ep]] - U[pair_a[ep]]
+            history[n, 2] = force[ep]
+            counters[2] = n + 1
+
+@kernel
+def rotation_tables(omega, dt_top, ladder_ratio, levels):
+    """``cos(omega dt_j)`` and ``sin(omega dt_j) / omega`` for ``dt_j = dt_top * ladder_ratio**-j``."""
+    cos_table = np.empty((levels, omega.size))
+    sin_table = np.empty((levels, omega.size))
+    for lev in range(levels):
+        dt = dt_top * ladder_ratio ** (-lev)
+        for j in range(omega.size):
+            cos_table[lev, j] = math.cos(omega[j] * dt)
+            sin_table[lev, j] = math.sin(omega[j] * dt) / omega[j]
+    return cos_table, sin_table

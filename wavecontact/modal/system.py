@@ -1,0 +1,226 @@
+"""Assembled modal system: rods, their modes, contact pairs; state, energy, stepping.
+
+:class:`ModalSystem` packs everything the compiled integrator needs into flat
+arrays once, and offers the bookkeeping around it (energies, modal energies,
+state snapshots).  Both the single-collision solver
+(:mod:`wavecontact.solvers.modal`) and the ring (:mod:`.ring`) are built on it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact import ContactLaw, Exponential, Hard, Penalty
+from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from . import kernels
+
+__all__ = ["ModalSystem", "StepControl", "contact_parameters"]
+
+# a force below force_scale * exp(-NEGLIGIBLE_EXPONENT) is treated as zero
+NEGLIGIBLE_EXPONENT = 40.0
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """Step-size control of the contact integrator (all dimensionless).
+
+    Attributes
+    ----------
+    accuracy : float
+        ``eta``: the step is at most ``eta`` over the linearised contact
+        frequency, and ``eta sqrt(F_scale / F)`` over the rate
+        ``alpha_eff |d gap/dt|`` at which the force changes.  The error in
+        epsilon falls like ``eta^2`` (Strang splitting).
+    reach : float
+        Largest change of ``alpha * gap`` in one step while the force is small.
+    ladder_ratio : float
+        Steps are ``dt_top * ladder_ratio**-j`` (rotations tabulated once).
+    levels : int
+        Number of ladder rungs (smallest step ``dt_top * ladder_ratio**-(levels-1)``).
+    """
+
+    accuracy: float = 0.05
+    reach: float = 1.0
+    ladder_ratio: float = 2.0**0.25
+    levels: int = 140
+
+    def __post_init__(self):
+        for name in ("accuracy", "reach"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 < value <= 10.0):
+                raise InvalidParameterError(f"step {name} must lie in (0, 10], got {value!r}")
+        if not (1.0 < self.ladder_ratio <= 2.0):
+            raise InvalidParameterError(f"ladder_ratio must lie in (1, 2], got {self.ladder_ratio!r}")
+
+
+def contact_parameters(law: ContactLaw, force_scale: float, static_correction: bool):
+    """Kernel encoding ``(code, alpha, strength, stiffness, contact_range)`` of a contact law."""
+    if isinstance(law, Exponential):
+        shift = max(0.0, math.log(law.alpha * law.strength / force_scale))
+        return kernels.LAW_EXPONENTIAL, law.alpha, law.strength, 0.0, (NEGLIGIBLE_EXPONENT + shift) / law.alpha
+    if isinstance(law, Hard):
+        if not static_correction:
+            raise UnsupportedSceneError(
+                "hard contact (kappa = inf) needs static_correction=True in the modal solver: without the "
+                "omitted modes' compliance a truncated rod end has a finite mass and a hard impact on it is "
+                "instantaneous and undefined; with it the limit is a contact spring of that compliance"
+            )
+        return kernels.LAW_LINEAR, 1.0, 0.0, math.inf, 0.0
+    if isinstance(law, Penalty):
+        if law.stiffness is None:
+            raise UnsupportedSceneError(
+                "the modal solver needs an explicit penalty stiffness (Penalty(stiffness=k)); "
+                "it has no mesh to choose one from"
+            )
+        return kernels.LAW_LINEAR, 1.0, 0.0, float(law.stiffness), 0.0
+    raise UnsupportedSceneError(f"the modal solver does not know the contact law {law!r}")
+
+
+class ModalSystem:
+    """Rods (centre of mass + kept modes) joined by contact pairs.
+
+    Parameters
+    ----------
+    rod_modes : sequence of RodModes
+        Modes of each rod, in order.
+    positions, velocities : sequence of float
+        Centre-of-mass positions (length) and velocities (length/time).
+    pairs : sequence of (int, int, float)
+        ``(a, b, offset)``: the right end of rod ``a`` faces the left end of
+        rod ``b``, whose position is shifted by ``offset`` (the circumference
+        for the pair across a ring's seam, else 0).
+    law : ContactLaw
+        The contact law of every pair.
+    force_scale : float
+        Typical contact force (force units), the yardstick of "negligible".
+    static_correction : bool
+        Add the omitted modes' end compliance in series with the contact.
+    control : StepControl
+        Step-size control.
+
+    Notes
+    -----
+    The residual compliance joins the two ends of one pair (the diagonal
+    terms); the cross-compliance between two pairs sharing a rod is left
+    out, which is exact as long as no rod is pushed at both ends at once
+    (always true on a ring much longer than the force's range).
+    """
+
+    def __init__(self, rod_modes, positions, velocities, pairs, law, force_scale,
+                 static_correction=True, control=StepControl()):
+        self.rod_modes = tuple(rod_modes)
+        self.rods = tuple(m.rod for m in self.rod_modes)
+        self.law = law
+        self.static_correction = bool(static_correction)
+        self.control = control
+        counts = [m.count for m in self.rod_modes]
+        self.rod_first = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.omega = np.concatenate([m.omega for m in self.rod_modes]).astype(float)
+        self.left = np.concatenate([m.left for m in self.rod_modes]).astype(float)
+        self.right = np.concatenate([m.right for m in self.rod_modes]).astype(float)
+        self.mass = np.array([r.mass for r in self.rods], dtype=float)
+        self.half = np.array([0.5 * r.length for r in self.rods], dtype=float)
+        self.q = np.zeros(self.omega.size)
+        self.v = np.zeros(self.omega.size)
+        self.X = np.array(positions, dtype=float)
+        self.U = np.array(velocities, dtype=float)
+        pairs = list(pairs)
+        self.pair_a = np.array([p[0] for p in pairs], dtype=np.int64)
+        self.pair_b = np.array([p[1] for p in pairs], dtype=np.int64)
+        self.pair_offset = np.array([p[2] for p in pairs], dtype=float)
+        compliance = []
+        inverse_mass = []
+        for a, b, _ in pairs:
+            ma, mb = self.rod_modes[a], self.rod_modes[b]
+            c = ma.residual_compliance[1, 1] + mb.residual_compliance[0, 0] if self.static_correction else 0.0
+            compliance.append(c)
+            inverse_mass.append(1.0 / self.mass[a] + 1.0 / self.mass[b]
+                                + float(np.sum(ma.right**2)) + float(np.sum(mb.left**2)))
+        self.pair_compliance = np.array(compliance, dtype=float)
+        self.pair_inverse_mass = np.array(inverse_mass, dtype=float)
+        self.force_scale = float(force_scale)
+        (self.law_code, self.alpha, self.strength, self.stiffness,
+         self.contact_range) = contact_parameters(law, self.force_scale, self.static_correction)
+        self.dt_top = 0.05 * min(r.length / r.wave_speed for r in self.rods)
+        if self.law_code == kernels.LAW_EXPONENTIAL:
+            self.dt_top = max(self.dt_top, 0.05 / (self.alpha * max(1e-300, np.max(np.abs(self.U)))))
+        self.cos_table, self.sin_table = kernels.rotation_tables(
+            self.omega, self.dt_top, control.ladder_ratio, control.levels
+        )
+        self.clock = np.zeros(2)
+        self.episode = np.full(1, -1, dtype=np.int64)
+        self.counters = np.zeros(4, dtype=np.int64)
+
+    # ---------------------------------------------------------------- stepping
+    def run_episode(self, history=None, max_steps=10_000_000):
+        """Integrate until the current collision is over; return the kernel status."""
+        if history is None:
+            history = np.empty((0, 3))
+        return kernels.run_episode(
+            self.q, self.v, self.omega, self.left, self.right, self.rod_first, self.X, self.U,
+            self.mass, self.half, self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance,
+            self.pair_inverse_mass, self.law_code, self.alpha, self.strength, self.stiffness,
+            self.contact_range, self.control.accuracy, self.control.reach, self.force_scale,
+            self.dt_top, self.control.ladder_ratio, self.cos_table, self.sin_table,
+            self.clock, self.episode, self.counters, history, int(max_steps),
+        )
+
+    @staticmethod
+    def check_status(status):
+        """Raise :class:`SolverFailure` for a failed kernel status."""
+        if status == kernels.STATUS_STEP_UNDERFLOW:
+            raise SolverFailure(
+                "modal integrator: the contact step fell below the smallest ladder step; the contact is "
+                "too stiff for the given modes (try static_correction=True or fewer modes)"
+            )
+        if status == kernels.STATUS_NOT_FINITE:
+            raise SolverFailure("modal integrator: the contact force overflowed (overlap far beyond the "
+                                "force's range); reduce step_accuracy")
+
+    # ------------------------------------------------------------- bookkeeping
+    def gaps(self) -> np.ndarray:
+        """Modal gap of each pair (length), without the residual spring."""
+        sums = np.empty((self.X.size, 4))
+        kernels.end_sums(self.q, self.v, self.left, self.right, self.rod_first, sums)
+        a, b = self.pair_a, self.pair_b
+        return (self.X[b] - self.half[b] + self.pair_offset + sums[b, 0]) - (self.X[a] + self.half[a] + sums[a, 1])
+
+    def contact_energy(self) -> float:
+        total = 0.0
+        for k, g in enumerate(self.gaps()):
+            _, energy, _, _ = kernels.contact_response(
+                float(g), self.law_code, self.alpha, self.strength, self.stiffness, float(self.pair_compliance[k])
+            )
+            total += energy
+        return total
+
+    def modal_energies(self) -> list:
+        """Energy of every kept mode, one array per rod (energy units)."""
+        e = 0.5 * (self.v**2 + (self.omega * self.q) ** 2)
+        return [e[self.rod_first[i]:self.rod_first[i + 1]].copy() for i in range(self.X.size)]
+
+    def translational_energy(self) -> float:
+        return float(0.5 * np.sum(self.mass * self.U**2))
+
+    def total_energy(self) -> float:
+        return self.translational_energy() + float(sum(np.sum(e) for e in self.modal_energies())) + self.contact_energy()
+
+    def momentum(self) -> float:
+        return float(np.sum(self.mass * self.U))
+
+    def get_state(self) -> dict:
+        return {
+            "q": self.q.copy(), "v": self.v.copy(), "X": self.X.copy(), "U": self.U.copy(),
+            "clock": self.clock.copy(), "episode": self.episode.copy(), "counters": self.counters.copy(),
+        }
+
+    def set_state(self, state: dict) -> None:
+        for name in ("q", "v", "X", "U", "clock", "episode", "counters"):
+            value = np.asarray(state[name])
+            target = getattr(self, name)
+            if value.shape != target.shape:
+                raise InvalidParameterError(f"state[{name!r}] has shape {value.shape}, expected {target.shape}")
+            target[...] = value
