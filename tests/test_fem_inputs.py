@@ -78,11 +78,17 @@ def test_rods_moving_apart_are_refused():
         wc.solve(scene, "fem", elements=10)
 
 
-def test_unresolvable_runs_raise_instead_of_returning_garbage():
-    # the impulse splitting of P2 elements cannot follow a contact this stiff: it must say so
-    try:
-        result = wc.collide(0.6, 1e6, solver="fem", elements=100, order=2)
-    except SolverFailure as failure:
-        assert "energy" in str(failure)
-    else:
-        assert math.isfinite(result.restitution) and result.diagnostics["energy_drift"] < 0.05
+def test_unstable_scheme_raises_instead_of_returning_garbage():
+    # the impulse splitting cannot follow a contact this stiff: the energy watchdog must stop it
+    with pytest.raises(SolverFailure, match="energy"):
+        wc.collide(0.6, 1e6, solver="fem", elements=100, order=2, scheme="splitting")
+
+
+@pytest.mark.parametrize("order, mass", [(1, "consistent"), (2, "lumped"), (2, "consistent")])
+def test_every_discretization_is_stable_for_stiff_contact(order, mass):
+    errors = []
+    for elements in (100, 400):
+        result = wc.collide(0.6, 1e6, solver="fem", elements=elements, order=order, mass=mass)
+        errors.append(abs(result.restitution - 0.6000139))  # Eq. 23 at kappa = 1e6
+        assert result.diagnostics["energy_drift"] < 0.05
+    assert errors[1] < errors[0] < 1e-2

@@ -29,6 +29,10 @@ __all__ = [
 ]
 
 STATUS_RUNNING = 0
+# contact treatments (docs/fem.md)
+SCHEME_CHARACTERISTIC = 0  # exact lattice: incoming characteristics + first-order gap equation
+SCHEME_INTERFACE = 1  # any mesh: massless-end gap equation with the end nodes' velocities
+SCHEME_SPLITTING = 2  # any mesh: impulse splitting with the exact two-body flow of the end nodes
 STATUS_SEPARATED = 1
 STATUS_FAILED = 2
 
@@ -195,7 +199,7 @@ def advance(
     u1, v1, a1, u2, v2, a2, sync1, sync2,
     bands1, bands2, inverse_mass1, inverse_mass2, cholesky1, cholesky2, lumped,
     mass_bands1, mass_bands2, weights1, weights2,
-    column1, column2, m_inv, characteristic,
+    column1, column2, m_inv, scheme,
     offset, law, alpha, strength, stiffness,
     dt, max_steps, r_stop, period, check_every, bound_factor1, bound_factor2,
     energy_tolerance, state,
@@ -230,7 +234,7 @@ def advance(
     fast = lumped and bands1.shape[0] == 2 and bands2.shape[0] == 2
     for step in range(max_steps):
         r_now = offset + u2[0] - u1[last]
-        if characteristic:
+        if scheme == SCHEME_CHARACTERISTIC:
             # Incoming characteristics: the lattice gives their mean rate over [t - dt, t + dt];
             # the rate over [t, t + dt] follows by subtracting the one over [t - dt, t].
             end1 = state[S_PREVIOUS_END1]
@@ -249,8 +253,14 @@ def advance(
             _leapfrog_general(u2, v2, a2, bands2, inverse_mass2, cholesky2, lumped, dt)
         # 2. contact: move the facing ends to the gap the contact law gives, spread along M^-1 e_end
         r_free = offset + u2[0] - u1[last]
-        if characteristic:
+        if scheme == SCHEME_CHARACTERISTIC:
             r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
+            shift = (r_after - r_free) / m_inv
+            impulse = shift / dt
+        elif scheme == SCHEME_INTERFACE:
+            # massless-end approximation: the ends close at their current relative velocity
+            w0 = v2[0] - v1[last]
+            r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
         else:

@@ -26,6 +26,11 @@ __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 # force counts as absent: the start gap and the end of the run are placed there.
 POTENTIAL_TOLERANCE = 1e-16
 _CHUNK = 1 << 15
+_SCHEMES = {
+    "characteristic": kernels.SCHEME_CHARACTERISTIC,
+    "interface": kernels.SCHEME_INTERFACE,
+    "splitting": kernels.SCHEME_SPLITTING,
+}
 _HARD_SCHEMES = {"plastic": LAW_HARD_PLASTIC, "elastic": LAW_HARD_ELASTIC}
 
 
@@ -45,7 +50,11 @@ class FemSetup:
     u0: tuple
     v0: tuple
     matched: bool
-    characteristic: bool
+    scheme: int
+
+    @property
+    def characteristic(self) -> bool:
+        return self.scheme == kernels.SCHEME_CHARACTERISTIC
 
 
 def _law_parameters(scene: Scene, rods, hard_scheme: str):
@@ -114,7 +123,13 @@ def build_setup(
         P1 lumped on matched meshes (the step equals the element travel time,
         where central differences are exact), 0.95 otherwise.
     hard_scheme : {'plastic', 'elastic'}
-        End-node impact rule for hard contact (see docs/fem.md).
+        End-node impact rule of hard contact in the 'splitting' scheme (see docs/fem.md).
+    scheme : {'auto', 'characteristic', 'interface', 'splitting'}
+        Contact treatment.  'auto': 'characteristic' on P1 lumped matched meshes
+        stepped at the element travel time (exact lattice, second order), else
+        'interface' (first order, stable for any stiffness).  'splitting' (the
+        impulse/RESPA splitting with the exact flow of the end-node pair) is kept
+        for comparison: it loses stability for stiff contact (kappa >~ 1e4).
     """
     if scene.is_ring or len(scene.rods) != 2:
         raise UnsupportedSceneError("the fem solver handles two rods on a line")
@@ -155,15 +170,19 @@ def build_setup(
     else:
         step = check_time_step(dt, limit)
     law, alpha, strength, stiffness = _law_parameters(scene, rods, hard_scheme)
-    characteristic = _is_exact_lattice(rods, step) and scheme in ("auto", "characteristic")
-    if scheme == "characteristic" and not characteristic:
+    if scheme not in ("auto",) + tuple(_SCHEMES):
+        raise InvalidParameterError(
+            f"scheme must be one of 'auto', {', '.join(map(repr, _SCHEMES))}, got {scheme!r}"
+        )
+    exact = _is_exact_lattice(rods, step)
+    if scheme == "characteristic" and not exact:
         raise InvalidParameterError(
             "scheme='characteristic' needs order=1, mass='lumped' and dt equal to the travel time h/c "
             "of the elements at both facing ends (the default matched mesh with dt=None)"
         )
-    if scheme not in ("auto", "characteristic", "splitting"):
-        raise InvalidParameterError(f"scheme must be 'auto', 'characteristic' or 'splitting', got {scheme!r}")
-
+    if scheme == "auto":
+        scheme = "characteristic" if exact else "interface"
+    scheme_code = _SCHEMES[scheme]
     u0, v0 = [], []
     for index, (disc, speed) in enumerate(zip(rods, scene.velocities)):
         u = np.zeros(disc.n_nodes)
@@ -204,7 +223,7 @@ def build_setup(
         )
     return FemSetup(
         rods=rods, dt=step, stable_step=limit, law=law, alpha=alpha, strength=strength, stiffness=stiffness,
-        gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, characteristic=characteristic,
+        gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, scheme=scheme_code,
     )
 
 
@@ -313,7 +332,7 @@ class _Run:
             left.stiffness_bands, right.stiffness_bands, self.inverse_mass[0], self.inverse_mass[1],
             self.cholesky[0], self.cholesky[1], self.lumped,
             self.mass_bands[0], self.mass_bands[1], left.lumped_mass, right.lumped_mass,
-            self.column1, self.column2, self.m_inv, s.characteristic,
+            self.column1, self.column2, self.m_inv, s.scheme,
             s.gap, s.law, s.alpha, s.strength, s.stiffness,
             s.dt, max_steps, s.r_stop, self.period, self.check_every, self.bound[0], self.bound[1],
             self.energy_tolerance, self.state,

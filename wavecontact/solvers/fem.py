@@ -34,8 +34,9 @@ OPTIONS = {
 }
 
 # Observed convergence order of epsilon where the contact is resolved (kappa <= 1e3), per
-# discretization; P1 lumped uses the characteristic interface, the others the impulse splitting
-# whose end-node error is O(dt^2 / h) = O(h) (docs/fem.md).  Tests compare a log-log fit with these.
+# discretization with scheme='auto': P1 lumped uses the characteristic interface (exact lattice),
+# the others the massless-end interface whose end-node mass error is O(h) (docs/fem.md).
+# Tests compare a log-log fit with these.
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 1, (2, "lumped"): 1, (2, "consistent"): 1}
 
 _FORCE_THRESHOLD = 1e-3  # of the peak: contact start and end
@@ -61,7 +62,9 @@ def solve(scene: Scene, **options) -> CollisionResult:
     courant : float or None
         Fraction of the stable step when ``dt`` is None (default: see :func:`build_setup`).
     hard_scheme : {'plastic', 'elastic'}
-        End-node impact rule for hard contact.
+        End-node impact rule for hard contact in the 'splitting' scheme.
+    scheme : {'auto', 'characteristic', 'interface', 'splitting'}
+        Contact treatment (see :func:`wavecontact.fem.simulation.build_setup`).
     record_fields : bool
         Sample displacement, velocity and stress fields over the collision
         into ``result.extra['fields']`` (runs the collision a second time).
@@ -174,8 +177,10 @@ def _contact_window(time, force, dt):
 def _scheme_name(setup, options) -> str:
     contact = {0: "exponential", 1: "penalty", 2: "hard (elastic node impact)", 3: "hard"}[setup.law]
     base = f"P{options['order']} {options['mass']} mass, central differences, {contact} contact"
-    if setup.characteristic:
-        return base + " through the characteristic interface (massless ends, exact gap equation)"
+    if setup.scheme == 0:
+        return base + " through the characteristic interface (incoming characteristics, exact gap equation)"
+    if setup.scheme == 1:
+        return base + " through the massless-end interface (exact gap equation)"
     return base + " through the impulse splitting (exact flow of the end-node pair)"
 
 

@@ -1,0 +1,132 @@
+"""Benchmark of the finite-element solver (issue 3), one command:
+
+    python benchmarks/bench_fem.py [--repeats 7]
+
+Prints Markdown tables:
+1. ns per element-step of the time loop (set-up excluded), P1 lumped, kappa = 100;
+2. the same mesh with the straightforward scikit-fem + scipy.sparse loop
+   (benchmarks/peers/fem_scipy_loop.py), measured in the same run;
+3. time to epsilon within 1e-6 of the delay reference at kappa = 100
+   (the whole ``collide`` call, set-up included), cheapest mesh that gets there;
+4. cost at kappa = 1e6 against kappa = 100 on the same mesh.
+All times are medians of repeated runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+from peers.fem_scipy_loop import scipy_fem_run
+
+import wavecontact
+from wavecontact.fem.simulation import build_setup, run_collision
+
+GAMMA = 0.6
+
+
+def median_time(function, repeats):
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - started)
+    return float(np.median(times))
+
+
+def loop_cost(kappa, elements, repeats):
+    """(seconds, element_steps, epsilon) of the time loop alone."""
+    setup = build_setup(wavecontact.two_rods(GAMMA, kappa), elements=elements)
+    out = run_collision(setup)
+    element_steps = out["steps"] * sum(d.n_elements for d in setup.rods)
+    seconds = median_time(lambda: run_collision(setup), repeats)
+    epsilon = abs(out["relative_velocity"][-1]) / out["run"].approach
+    return seconds, element_steps, epsilon
+
+
+def table_loop(repeats):
+    print("\n### Time loop, P1 lumped, kappa = 100 (target <= 2 ns per element-step)\n")
+    print("| elements (short rod) | elements (both) | steps | loop time (ms) | ns / element-step |")
+    print("|---:|---:|---:|---:|---:|")
+    for elements in (800, 3200, 10000):
+        setup = build_setup(wavecontact.two_rods(GAMMA, 100), elements=elements)
+        seconds, element_steps, _ = loop_cost(100, elements, repeats if elements < 10000 else 3)
+        both = sum(d.n_elements for d in setup.rods)
+        print(f"| {elements} | {both} | {element_steps // both} | {seconds * 1e3:.2f} | "
+              f"{seconds / element_steps * 1e9:.2f} |")
+
+
+def table_peer(repeats, reference):
+    print("\n### Against the scikit-fem + scipy.sparse loop on the same mesh (target >= 20x)\n")
+    print("| kappa | elements | ours: ns/el-step | peer: ns/el-step | speed-up per el-step | "
+          "ours: error | peer: error |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
+    for kappa, elements in ((100, 800), (100, 3200), (1e4, 800)):
+        seconds, element_steps, epsilon = loop_cost(kappa, elements, repeats)
+        runs = [scipy_fem_run(GAMMA, kappa, elements, courant=0.99) for _ in range(max(1, repeats // 3))]
+        peer_seconds = float(np.median([r[1] for r in runs]))
+        peer_eps, _, _, peer_steps = runs[0]
+        ours = seconds / element_steps * 1e9
+        theirs = peer_seconds / peer_steps * 1e9
+        exact = reference[kappa]
+        print(f"| {kappa:g} | {elements} | {ours:.2f} | {theirs:.1f} | {theirs / ours:.0f}x | "
+              f"{abs(epsilon - exact):.1e} | {abs(peer_eps - exact):.1e} |")
+    print("\n(peer at Courant number 0.99: at exactly 1 the contact stiffness makes it blow up even at kappa = 100;"
+          " at kappa = 1e4 it returns garbage on every mesh, see MODEL.md 5)")
+
+
+def table_time_to_accuracy(repeats, reference):
+    print("\n### Time to |epsilon - delay| <= 1e-6 at kappa = 100 (target < 20 ms; whole collide call)\n")
+    print("| elements | error | wall time (ms), set-up included | of which set-up (ms) |")
+    print("|---:|---:|---:|---:|")
+    exact = reference[100]
+    for elements in (100, 200, 400, 800):
+        result = wavecontact.collide(GAMMA, 100, solver="fem", elements=elements)
+        error = abs(result.restitution - exact)
+        seconds = median_time(lambda e=elements: wavecontact.collide(GAMMA, 100, solver="fem", elements=e), repeats)
+        setup = median_time(lambda e=elements: build_setup(wavecontact.two_rods(GAMMA, 100), elements=e), repeats)
+        print(f"| {elements} | {error:.1e} | {seconds * 1e3:.1f} | {setup * 1e3:.1f} |")
+        if error <= 1e-6:
+            break
+
+
+def table_stiffness(repeats, reference):
+    print("\n### Cost at kappa = 1e6 against kappa = 100, same mesh (target <= 3)\n")
+    print("| elements | kappa | steps | loop time (ms) | error | cost ratio vs kappa = 100 |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for elements in (800, 3200):
+        base = None
+        for kappa in (100, 1e4, 1e6, float("inf")):
+            seconds, element_steps, epsilon = loop_cost(kappa, elements, repeats)
+            base = base or seconds
+            exact = reference.get(kappa)
+            error = f"{abs(epsilon - exact):.1e}" if exact is not None else "n/a"
+            steps = element_steps // sum(d.n_elements for d in build_setup(
+                wavecontact.two_rods(GAMMA, kappa), elements=elements).rods)
+            print(f"| {elements} | {kappa:g} | {steps} | {seconds * 1e3:.2f} | {error} | {seconds / base:.2f} |")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args(argv)
+    print(f"# wavecontact FE benchmark ({platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} cores, numba {wavecontact._jit.NUMBA_ENABLED})")
+    wavecontact.collide(GAMMA, 100, solver="fem", elements=50)  # compile / load the kernels
+    reference = {kappa: wavecontact.collide(GAMMA, kappa, solver="delay").restitution for kappa in (100, 1e4, 1e6)}
+    reference[float("inf")] = GAMMA
+    table_loop(args.repeats)
+    table_peer(args.repeats, reference)
+    table_time_to_accuracy(args.repeats, reference)
+    table_stiffness(args.repeats, reference)
+
+
+if __name__ == "__main__":
+    main()
