@@ -29,7 +29,7 @@ __all__ = ["scipy_fem_restitution", "scipy_fem_run"]
 
 
 def _rod_matrices(length: float, h: float):
-    count = max(1, int(math.floor(length / h * (1 + 1e-12))))
+    count = max(1, math.floor(length / h * (1 + 1e-12)))
     span = min(count * h, length)
     basis = Basis(MeshLine(np.linspace(0.0, span, count + 1)), ElementLineP1())
     stiffness = laplace.assemble(basis)  # E = A = 1
@@ -63,7 +63,7 @@ def scipy_fem_run(gamma: float, kappa: float, elements: int, courant: float = 1.
     u = np.zeros_like(v)
     dt = courant * h
     t_end = gap0 + 2 * l1 + 2 * l2 + 1.0
-    steps = int(math.ceil(t_end / dt))
+    steps = math.ceil(t_end / dt)
     started = time.perf_counter()
     force = np.zeros_like(u)
     for _ in range(steps):
