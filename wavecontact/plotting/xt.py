@@ -20,6 +20,12 @@ from ..errors import InvalidParameterError
 __all__ = ["plot_xt_diagram", "xt_figure"]
 
 COORDINATES = ("reference", "deformed")
+_LABEL_BOX = {
+    "boxstyle": "round,pad=0.15",
+    "fc": "white",
+    "ec": "none",
+    "alpha": 0.75,
+}  # readable on any colour
 
 
 def xt_figure(
@@ -103,7 +109,8 @@ def xt_figure(
             ha="center",
             va="top",
             fontsize=8,
-            color="0.25",
+            color="0.2",
+            bbox=_LABEL_BOX,
         )
 
     start, duration = getattr(result, "contact_start", None), getattr(result, "contact_duration", None)
@@ -119,7 +126,8 @@ def xt_figure(
                 ha="right",
                 va="bottom",
                 fontsize=7,
-                color="0.35",
+                color="0.25",
+                bbox=_LABEL_BOX,
             )
 
     dimensionless = getattr(result, "gamma", None) is not None
