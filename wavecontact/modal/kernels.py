@@ -28,6 +28,10 @@ import numpy as np
 from .._jit import kernel
 
 TOE_MARGIN = 5.0
+# reassociation lets the compiler vectorise the modal sums; no flags that assume finite values
+# (the kernels compare with inf on purpose)
+_FAST = {"reassoc", "contract", "arcp", "nsz"}
+
 LAW_EXPONENTIAL = 0
 LAW_LINEAR = 1
 
@@ -38,7 +42,7 @@ STATUS_BUFFER_FULL = 3  # history buffer full: grow it and call again
 STATUS_STEP_UNDERFLOW = -1
 STATUS_NOT_FINITE = -2
 
-@kernel
+@kernel(error_model="numpy")
 def contact_response(gap, law, alpha, strength, stiffness, compliance):
     """Force, interaction energy and stiffness of one pair at the modal gap ``gap``.
 
@@ -67,11 +71,14 @@ def contact_response(gap, law, alpha, strength, stiffness, compliance):
         else:
             # Newton on u + exp(u) = log_z (u = log y): convex, increasing, started right of the root
             u = log_z if log_z < 0.0 else math.log1p(log_z)
-            for _ in range(80):
+            for _ in range(60):
                 eu = math.exp(u)
                 du = (u + eu - log_z) / (1.0 + eu)
                 u -= du
-                if abs(du) < 1e-15 * (1.0 + abs(u)):
+                if abs(du) < 1e-8 * (1.0 + abs(u)):
+                    # quadratic convergence: one more step reaches round-off
+                    eu = math.exp(u)
+                    u -= (u + eu - log_z) / (1.0 + eu)
                     break
             y = math.exp(u)
         scale = 1.0 / (alpha * compliance)
@@ -87,7 +94,7 @@ def contact_response(gap, law, alpha, strength, stiffness, compliance):
         return 0.0, 0.0, 0.0, 1.0
     return -series * gap, 0.5 * series * gap * gap, series, 1.0
 
-@kernel
+@kernel(error_model="numpy")
 def free_flight(q, v, omega, X, U, duration):
     """Advance the force-free motion exactly by ``duration`` (in place)."""
     for j in range(q.size):
@@ -100,7 +107,7 @@ def free_flight(q, v, omega, X, U, duration):
     for i in range(X.size):
         X[i] += U[i] * duration
 
-@kernel
+@kernel(fastmath=_FAST, error_model="numpy")
 def end_sums(q, v, left, right, rod_first, sums):
     """Per rod: modal displacement and velocity of the left and right end.
 
@@ -121,7 +128,7 @@ def end_sums(q, v, left, right, rod_first, sums):
         sums[i, 2] = vl
         sums[i, 3] = vr
 
-@kernel
+@kernel(fastmath=_FAST, error_model="numpy")
 def _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums):
     """Velocity kick by the pair forces over ``h`` (in place); keeps the end
     velocity sums ``sums[:, 2:4]`` up to date."""
@@ -152,7 +159,7 @@ def _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_forc
         sums[i, 2] += dvl
         sums[i, 3] += dvr
 
-@kernel
+@kernel(error_model="numpy")
 def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
     for k in range(pair_a.size):
         a = pair_a[k]
@@ -160,8 +167,8 @@ def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
         gap[k] = (X[b] - half[b] + pair_offset[k] + sums[b, 0]) - (X[a] + half[a] + sums[a, 1])
         gap_rate[k] = (U[b] + sums[b, 2]) - (U[a] + sums[a, 3])
 
-@kernel
-def _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
+@kernel(fastmath=_FAST, error_model="numpy")
+def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
             rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right):
     """Rigorous bounds on the modal end motion under free flight.
 
@@ -175,11 +182,13 @@ def _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b, pai
         sr = 0.0
         for j in range(rod_first[i], rod_first[i + 1]):
             w = omega[j]
-            amp = math.sqrt(q[j] * q[j] + (v[j] / w) ** 2)
+            # amplitude times frequency: sqrt of twice the mode's energy
+            amp_w = math.sqrt(w * w * q[j] * q[j] + v[j] * v[j])
+            amp = amp_w * inverse_omega[j]
             al += abs(left[j]) * amp
             ar += abs(right[j]) * amp
-            sl += abs(left[j]) * amp * w
-            sr += abs(right[j]) * amp * w
+            sl += abs(left[j]) * amp_w
+            sr += abs(right[j]) * amp_w
         amp_left[i, 0] = al
         amp_left[i, 1] = sl
         amp_right[i, 0] = ar
@@ -192,7 +201,33 @@ def _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b, pai
         reach[k] = amp_right[a, 0] + amp_left[b, 0]
         speed_bound[k] = abs(rigid_rate[k]) + amp_right[a, 1] + amp_left[b, 1]
 
-@kernel
+@kernel(fastmath=_FAST, error_model="numpy")
+def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin_row, sums):
+    """Exact free rotation of every oscillator over one ladder step, and the new end sums."""
+    for i in range(rod_first.size - 1):
+        sl = 0.0
+        sr = 0.0
+        vl = 0.0
+        vr = 0.0
+        for j in range(rod_first[i], rod_first[i + 1]):
+            c = cos_row[j]
+            qj = q[j]
+            vj = v[j]
+            qn = c * qj + sin_over_omega_row[j] * vj
+            vn = c * vj - omega_sin_row[j] * qj
+            q[j] = qn
+            v[j] = vn
+            sl += left[j] * qn
+            sr += right[j] * qn
+            vl += left[j] * vn
+            vr += right[j] * vn
+        sums[i, 0] = sl
+        sums[i, 1] = sr
+        sums[i, 2] = vl
+        sums[i, 3] = vr
+
+
+@kernel(error_model="numpy")
 def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
     """Force, stiffness and softened alpha of every pair; False if a force is not finite."""
     finite = True
@@ -206,12 +241,12 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
     return finite
 
 
-@kernel
+@kernel(error_model="numpy")
 def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass,
                 law, alpha, strength, stiffness, contact_range,
                 step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, cos_table, sin_table,
-                clock, episode, counters, history, max_steps):
+                omega_sin_table, clock, episode, counters, history, max_steps):
     """Integrate until the current collision (episode) is over.
 
     Parameters (all arrays are modified in place where they hold state)
@@ -220,7 +255,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         Mass-normalised mode coordinates and velocities.
     omega, left, right : float arrays (M,)
         Frequencies and end values of the modes, rod after rod.
-    rod_first : int array (n_rods + 1,)
+    rod_first : uint64 array (n_rods + 1,)
         Modes of rod ``i`` are ``rod_first[i]:rod_first[i + 1]``.
     X, U, mass, half : float arrays (n_rods,)
         Centre-of-mass positions and velocities, masses, half lengths.
@@ -237,8 +272,8 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         Force against which "small" is measured.
     dt_top, ladder_ratio : float
         Largest step; the ladder is ``dt_top * ladder_ratio**-j``.
-    cos_table, sin_table : float arrays (J, M)
-        ``cos(omega dt_j)``, ``sin(omega dt_j) / omega``.
+    cos_table, sin_table, omega_sin_table : float arrays (J, M)
+        ``cos(omega dt_j)``, ``sin(omega dt_j) / omega``, ``omega sin(omega dt_j)``.
     clock : float array (2,)
         Current time; time at which the current episode began.
     episode : int array (1,)
@@ -259,6 +294,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     n_rods = X.size
     n_pairs = pair_a.size
     n_levels = cos_table.shape[0]
+    inverse_omega = 1.0 / omega
     sums = np.empty((n_rods, 4))
     end_force = np.empty((n_rods, 2))
     amp_left = np.empty((n_rods, 2))
@@ -293,7 +329,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 all_far = False
         dt_free = 0.0
         if all_far:
-            _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
+            _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
                     rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right)
             ep = episode[0]
             if ep >= 0 and rigid_rate[ep] > 0.0 and rigid_gap[ep] - reach[ep] > contact_range:
@@ -357,7 +393,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                     # small force: limit the change of alpha * gap per step by a bound on the gap
                     # speed over the step (the momentary rate may vanish at a turning point)
                     if not bounds_ready:
-                        _bounds(q, v, omega, left, right, rod_first, X, U, half, pair_a, pair_b,
+                        _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b,
                                 pair_offset, rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right)
                         bounds_ready = True
                     r_k = aeff[k] * speed_bound[k] * toe
@@ -382,19 +418,10 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         h = 0.5 * dt
 
         _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums)
-        cos_row = cos_table[level]
-        sin_row = sin_table[level]
-        for j in range(q.size):
-            c = cos_row[j]
-            s_w = sin_row[j]
-            ws = omega[j] * omega[j] * s_w
-            qj = q[j]
-            q[j] = c * qj + s_w * v[j]
-            v[j] = c * v[j] - ws * qj
+        _rotate(q, v, left, right, rod_first, cos_table[level], sin_table[level], omega_sin_table[level], sums)
         for i in range(n_rods):
             X[i] += U[i] * dt
         clock[0] += dt
-        end_sums(q, v, left, right, rod_first, sums)
         _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
             return STATUS_NOT_FINITE
@@ -410,14 +437,17 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             history[n, 2] = force[ep]
             counters[2] = n + 1
 
-@kernel
+@kernel(error_model="numpy")
 def rotation_tables(omega, dt_top, ladder_ratio, levels):
-    """``cos(omega dt_j)`` and ``sin(omega dt_j) / omega`` for ``dt_j = dt_top * ladder_ratio**-j``."""
+    """``cos(omega dt_j)``, ``sin(omega dt_j) / omega`` and ``omega sin(omega dt_j)`` for ``dt_j = dt_top * ladder_ratio**-j``."""
     cos_table = np.empty((levels, omega.size))
     sin_table = np.empty((levels, omega.size))
+    omega_sin_table = np.empty((levels, omega.size))
     for lev in range(levels):
         dt = dt_top * ladder_ratio ** (-lev)
         for j in range(omega.size):
+            sine = math.sin(omega[j] * dt)
             cos_table[lev, j] = math.cos(omega[j] * dt)
-            sin_table[lev, j] = math.sin(omega[j] * dt) / omega[j]
-    return cos_table, sin_table
+            sin_table[lev, j] = sine / omega[j]
+            omega_sin_table[lev, j] = omega[j] * sine
+    return cos_table, sin_table, omega_sin_table

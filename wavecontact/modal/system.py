@@ -42,7 +42,7 @@ class StepControl:
         Number of ladder rungs (smallest step ``dt_top * ladder_ratio**-(levels-1)``).
     """
 
-    accuracy: float = 0.05
+    accuracy: float = 0.025
     reach: float = 1.0
     ladder_ratio: float = 2.0**0.25
     levels: int = 140
@@ -117,7 +117,8 @@ class ModalSystem:
         self.static_correction = bool(static_correction)
         self.control = control
         counts = [m.count for m in self.rod_modes]
-        self.rod_first = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        # unsigned offsets let the compiler drop negative-index handling and vectorise the mode loops
+        self.rod_first = np.concatenate([[0], np.cumsum(counts)]).astype(np.uint64)
         self.omega = np.concatenate([m.omega for m in self.rod_modes]).astype(float)
         self.left = np.concatenate([m.left for m in self.rod_modes]).astype(float)
         self.right = np.concatenate([m.right for m in self.rod_modes]).astype(float)
@@ -147,7 +148,7 @@ class ModalSystem:
         self.dt_top = 0.05 * min(r.length / r.wave_speed for r in self.rods)
         if self.law_code == kernels.LAW_EXPONENTIAL:
             self.dt_top = max(self.dt_top, 0.05 / (self.alpha * max(1e-300, np.max(np.abs(self.U)))))
-        self.cos_table, self.sin_table = kernels.rotation_tables(
+        self.cos_table, self.sin_table, self.omega_sin_table = kernels.rotation_tables(
             self.omega, self.dt_top, control.ladder_ratio, control.levels
         )
         self.clock = np.zeros(2)
@@ -164,7 +165,7 @@ class ModalSystem:
             self.mass, self.half, self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance,
             self.pair_inverse_mass, self.law_code, self.alpha, self.strength, self.stiffness,
             self.contact_range, self.control.accuracy, self.control.reach, self.force_scale,
-            self.dt_top, self.control.ladder_ratio, self.cos_table, self.sin_table,
+            self.dt_top, self.control.ladder_ratio, self.cos_table, self.sin_table, self.omega_sin_table,
             self.clock, self.episode, self.counters, history, int(max_steps),
         )
 
