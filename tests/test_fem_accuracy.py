@@ -103,14 +103,15 @@ def test_energy_and_momentum_conservation():
     result = wc.collide(0.6, 100, solver="fem", elements=800)
     # the contact is resolved: the leapfrog energy is kept to ~1e-5 of the relative energy
     assert result.diagnostics["energy_drift"] < 5e-5
-    assert result.diagnostics["momentum_drift"] < 1e-13
+    # round-off: velocities are displacement differences over dt, |u| / (V dt) ~ 1e3 times eps
+    assert result.diagnostics["momentum_drift"] < 1e-11
     energies = result.extra["energies"]
     total = energies["kinetic"] + energies["strain"] + energies["contact"]
     assert np.ptp(total) / total[0] < 1e-3
     # hard contact of equal rods: the lattice is exact, energy to round-off
     exact = wc.collide(1.0, math.inf, solver="fem", elements=200)
     assert exact.diagnostics["energy_drift"] < 1e-11
-    assert exact.diagnostics["momentum_drift"] < 1e-13
+    assert exact.diagnostics["momentum_drift"] < 1e-11
 
 
 def test_energy_after_collision_goes_to_the_long_rod():

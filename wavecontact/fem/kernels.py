@@ -327,3 +327,156 @@ def advance(
                 if centre_gap - spread > r_stop:
                     return 1, step + 1, samples
     return 0, max_steps, samples
+
+
+@kernel(fastmath=False)
+def _lattice_step(current, previous, bands, inverse_mass, dt):
+    """One step of the exact lattice, written into ``previous``.
+
+    Interior nodes: ``u_new = u_left + u_right - u_old`` (uniform P1 lumped at
+    Courant number 1: d'Alembert's formula, additions only).  The two end
+    nodes (different masses: half or point mass) use the general central
+    difference ``u_new = 2 u - u_old + dt^2 M^-1 (-K u)``.
+    """
+    n = current.size
+    scale = dt * dt
+    first = 2.0 * current[0] - previous[0] - scale * inverse_mass[0] * bands[1, 0] * (current[1] - current[0])
+    last = 2.0 * current[n - 1] - previous[n - 1] - scale * inverse_mass[n - 1] * bands[1, n - 2] * (
+        current[n - 2] - current[n - 1]
+    )
+    for i in range(1, n - 1):
+        previous[i] = current[i - 1] + current[i + 1] - previous[i]
+    previous[0] = first
+    previous[n - 1] = last
+
+
+@kernel
+def _staggered_energies(current, previous, bands, masses, dt):
+    """Kinetic energy of ``(current - previous)/dt`` and strain ``u_prev K u_cur / 2`` (P1).
+
+    Their sum is the energy central differences conserve exactly for free rods.
+    """
+    n = current.size
+    kinetic = 0.0
+    strain = 0.0
+    for i in range(n):
+        velocity = (current[i] - previous[i]) / dt
+        kinetic += 0.5 * masses[i] * velocity * velocity
+    for e in range(n - 1):
+        strain -= 0.5 * bands[1, e] * (previous[e + 1] - previous[e]) * (current[e + 1] - current[e])
+    return kinetic, strain
+
+
+@kernel
+def advance_lattice(
+    u1, w1, u2, w2,
+    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv,
+    offset, law, alpha, strength, stiffness,
+    dt, max_steps, r_stop, period, check_every, bound_factor1, bound_factor2,
+    energy_tolerance, state,
+    hist_time, hist_force, hist_vrel, hist_gap,
+    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
+):
+    """The characteristic scheme on the exact lattice (P1 lumped, uniform interior, Courant 1).
+
+    Same contract as :func:`advance`, except that the state is two time levels:
+    ``u`` holds displacements at the current time and ``w`` one step earlier.
+    """
+    n1 = u1.size
+    last = n1 - 1
+    mass1 = 0.0
+    for i in range(n1):
+        mass1 += weights1[i]
+    mass2 = 0.0
+    for i in range(u2.size):
+        mass2 += weights2[i]
+    samples = 0
+    current1, previous1, current2, previous2 = u1, w1, u2, w2
+    swapped = False
+    status = 0
+    done = max_steps
+    for step in range(max_steps):
+        r_now = offset + current2[0] - current1[last]
+        # incoming characteristics: mean rate over [t - dt, t + dt], then the single step ahead
+        mean_rate = ((current2[1] - previous2[0]) - (current1[last - 1] - previous1[last])) / dt
+        incoming = 2.0 * mean_rate - state[S_INCOMING]
+        state[S_INCOMING] = incoming
+        _lattice_step(current1, previous1, bands1, inverse_mass1, dt)
+        _lattice_step(current2, previous2, bands2, inverse_mass2, dt)
+        # previous* now hold the new displacements
+        r_free = offset + previous2[0] - previous1[last]
+        r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
+        shift = (r_after - r_free) / m_inv
+        impulse = shift / dt
+        if shift != 0.0:
+            previous1[last] -= inverse_mass1[last] * shift
+            previous2[0] += inverse_mass2[0] * shift
+        current1, previous1 = previous1, current1
+        current2, previous2 = previous2, current2
+        swapped = not swapped
+
+        state[S_MOMENTUM1] -= impulse
+        state[S_MOMENTUM2] += impulse
+        time = state[S_TIME] + dt
+        state[S_TIME] = time
+        state[S_STEPS] += 1.0
+        gap = offset + current2[0] - current1[last]
+        vrel = state[S_MOMENTUM2] / mass2 - state[S_MOMENTUM1] / mass1
+        hist_time[step] = time
+        hist_force[step] = impulse / dt
+        hist_vrel[step] = vrel
+        hist_gap[step] = gap
+        if gap <= r_stop or impulse != 0.0:
+            state[S_LAST_IN_RANGE] = time
+        if not (math.isfinite(gap) and math.isfinite(vrel)):
+            state[S_FAILED_ENERGY] = math.nan
+            status = 2
+            done = step + 1
+            break
+
+        if (step + 1) % check_every == 0:
+            kin1, str1 = _staggered_energies(current1, previous1, bands1, weights1, dt)
+            kin2, str2 = _staggered_energies(current2, previous2, bands2, weights2, dt)
+            pot = contact_potential(law, gap, alpha, strength, stiffness)
+            total = kin1 + str1 + kin2 + str2 + pot
+            internal1 = kin1 + str1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
+            internal2 = kin2 + str2 - 0.5 * state[S_MOMENTUM2] ** 2 / mass2
+            if samples < energy_time.size:
+                energy_time[samples] = time
+                energy_kinetic[samples] = kin1 + kin2
+                energy_strain[samples] = str1 + str2
+                energy_contact[samples] = pot
+                energy_internal1[samples] = internal1
+                energy_internal2[samples] = internal2
+                samples += 1
+            drift = abs(total - state[S_ENERGY0]) / state[S_ENERGY_SCALE]
+            if not math.isfinite(drift) or drift > energy_tolerance:
+                state[S_FAILED_ENERGY] = total
+                status = 2
+                done = step + 1
+                break
+            state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
+            if vrel > 0.0 and gap > r_stop:
+                finished = time - state[S_LAST_IN_RANGE] >= period
+                if not finished:
+                    spread = bound_factor1 * math.sqrt(max(internal1, 0.0)) + bound_factor2 * math.sqrt(
+                        max(internal2, 0.0)
+                    )
+                    centre_gap = offset + _mean_displacement(current2, weights2) - _mean_displacement(
+                        current1, weights1
+                    )
+                    finished = centre_gap - spread > r_stop
+                if finished:
+                    status = 1
+                    done = step + 1
+                    break
+    if swapped:  # hand the current time level back in u, the previous one in w
+        for i in range(n1):
+            value = u1[i]
+            u1[i] = w1[i]
+            w1[i] = value
+        for i in range(u2.size):
+            value = u2[i]
+            u2[i] = w2[i]
+            w2[i] = value
+    return status, done, samples
