@@ -51,8 +51,9 @@ class RingSimulation:
     seed : int or None
         Accepted for a stable interface; the cold start is deterministic and
         does not use it.
-    step_accuracy : float
-        ``eta`` of the contact step control (see :class:`StepControl`).
+    step_accuracy, step_reach : float
+        Contact step control (see :class:`StepControl`); the defaults keep
+        the energy drift near 1e-7 of the total per collision.
     mode_source : {'analytic', 'fe'}
         Where the modes come from.
 
@@ -68,7 +69,7 @@ class RingSimulation:
     """
 
     def __init__(self, gamma, kappa, modes, static_correction=True, circumference=None, seed=None,
-                 step_accuracy=StepControl.accuracy, mode_source="analytic"):
+                 step_accuracy=StepControl.accuracy, step_reach=StepControl.reach, mode_source="analytic"):
         scene = two_rods(gamma, kappa)
         self.gamma = float(gamma)
         self.kappa = float(kappa)
@@ -98,7 +99,7 @@ class RingSimulation:
             scene.contact,
             force_scale=self.reduced_mass * approach,  # mu V c / l
             static_correction=self.static_correction,
-            control=StepControl(accuracy=step_accuracy),
+            control=StepControl(accuracy=step_accuracy, reach=step_reach),
         )
         if self.system.contact_range >= gap:
             raise InvalidParameterError(

@@ -42,7 +42,7 @@ class StepControl:
         Number of ladder rungs (smallest step ``dt_top * ladder_ratio**-(levels-1)``).
     """
 
-    accuracy: float = 0.025
+    accuracy: float = 0.0125
     reach: float = 1.0
     ladder_ratio: float = 2.0**0.25
     levels: int = 140

@@ -1,0 +1,150 @@
+"""The modal solver against the delay equation, the FE solver, wave theory and itself."""
+
+import math
+
+import numpy as np
+import pytest
+
+import wavecontact as wc
+from wavecontact import Hard, Penalty, Rod, Scene, two_rods
+from wavecontact.errors import InvalidParameterError, UnsupportedSceneError
+
+# MODEL.md section 5 (independent delay-equation values)
+REFERENCE = {20: 0.75301321, 100: 0.646697087}
+
+
+@pytest.mark.parametrize("kappa, modes", [(20, 40), (100, 100)])
+def test_static_correction_reaches_the_delay_reference(kappa, modes):
+    result = wc.collide(0.6, kappa, solver="modal", modes=modes)
+    assert abs(result.restitution - REFERENCE[kappa]) < 1e-5
+    assert result.work["modes"] == modes
+    assert result.solver == "modal"
+
+
+def test_agrees_with_the_delay_solver_at_another_gamma():
+    delay = wc.collide(0.75, 50, solver="delay").restitution
+    modal = wc.collide(0.75, 50, solver="modal", modes=100).restitution
+    assert abs(modal - delay) < 2e-6
+
+
+def test_agrees_with_the_fe_solver():
+    fem = wc.collide(0.6, 100, solver="fem", elements=400).restitution
+    modal = wc.collide(0.6, 100, solver="modal", modes=100).restitution
+    assert abs(modal - fem) < 2e-6
+
+
+def _errors(kappa, counts, correction):
+    reference = REFERENCE[kappa]
+    return np.array([
+        abs(wc.collide(0.6, kappa, solver="modal", modes=int(n), static_correction=correction,
+                       step_accuracy=0.006, history=False).restitution - reference)
+        for n in counts
+    ])
+
+
+def test_truncation_orders_with_and_without_static_correction():
+    """Plain truncation converges like 1/N; the residual compliance makes it at least N^-2."""
+    counts = np.array([10, 20, 40, 80])
+    plain = _errors(20, counts, False)
+    corrected = _errors(20, counts, True)
+    plain_order = -np.polyfit(np.log(counts), np.log(plain), 1)[0]
+    corrected_order = -np.polyfit(np.log(counts), np.log(corrected), 1)[0]
+    assert 0.9 < plain_order < 1.1
+    assert corrected_order > 2.0
+    assert plain[0] == pytest.approx(1.6e-2, rel=0.05)  # the value measured in the issue
+    assert np.all(corrected < plain / 100.0)
+
+
+def test_energy_and_momentum_bookkeeping():
+    result = wc.collide(0.6, 100, solver="modal", modes=60)
+    assert result.diagnostics["energy_drift"] < 1e-6
+    assert result.diagnostics["momentum_drift"] < 1e-13
+    extra = result.extra
+    total_after = extra["translational_energy_after"] + sum(extra["vibration_energy"])
+    assert total_after == pytest.approx(extra["translational_energy_before"], rel=1e-6)
+    # translational energy left = epsilon^2 of the initial one
+    assert extra["translational_energy_after"] == pytest.approx(
+        result.restitution**2 * extra["translational_energy_before"], rel=1e-12
+    )
+
+
+def test_hard_collision_modal_energies_follow_eq25():
+    """kappa = inf: the short rod keeps (almost) nothing, the long one carries Eq. 25 mode by mode."""
+    gamma = 0.6
+    result = wc.collide(gamma, math.inf, solver="modal", modes=100)
+    e_tr = result.extra["translational_energy_before"]
+    energies = result.extra["modal_energies"] / e_tr
+    nu = np.arange(1, 101)
+    gamma1, gamma2 = 1.0 + gamma, 1.0 + 1.0 / gamma
+    eq25 = (1.0 / nu**2) * (2.0 * gamma2 / math.pi**2) * np.sin(nu * math.pi * gamma1 / gamma2) ** 2
+    np.testing.assert_allclose(energies[1][:20], eq25[:20], atol=5e-4)
+    assert energies[0].sum() < 2e-3
+    assert energies[1].sum() == pytest.approx(1.0 - gamma**2, abs=3e-3)
+    assert result.restitution == pytest.approx(gamma, abs=1e-3)
+
+
+def test_hard_limit_converges_to_gamma():
+    errors = [abs(wc.collide(0.6, math.inf, solver="modal", modes=n, history=False).restitution - 0.6)
+              for n in (25, 100, 400)]
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[2] < 5e-4
+
+
+def test_contact_duration_and_plateau_of_wave_theory():
+    """Large kappa: contact lasts about 2 l1 / c = 1 + gamma (as the delay solver says), force plateau Z V / 2."""
+    result = wc.collide(0.6, 2000, solver="modal", modes=100)
+    delay = wc.collide(0.6, 2000, solver="delay")
+    assert result.contact_duration == pytest.approx(delay.contact_duration, rel=0.005)
+    assert result.contact_duration == pytest.approx(1.6, rel=0.04)
+    force = result.contact_force
+    t = result.time
+    middle = (t > result.contact_start + 0.4) & (t < result.contact_start + 1.2)
+    assert np.median(force[middle]) == pytest.approx(0.5, rel=0.02)
+
+
+def test_fe_modes_give_the_same_restitution():
+    analytic = wc.collide(0.6, 100, solver="modal", modes=40).restitution
+    fe = wc.collide(0.6, 100, solver="modal", modes=40, mode_source="fe", fe_order=2, fe_elements=200).restitution
+    assert abs(fe - analytic) < 1e-6
+
+
+def test_general_scene_with_unequal_rods_and_materials():
+    """solve() takes any two rods on a line; a uniform initial velocity field is a rigid motion."""
+    rods = (Rod(1.0, density=2.0, youngs_modulus=3.0), Rod(1.5, density=1.0, youngs_modulus=2.0))
+    contact = wc.Exponential(alpha=200.0, strength=1e-4)
+    base = Scene(rods=rods, velocities=(0.5, -0.5), contact=contact)
+    shifted = Scene(rods=rods, velocities=(0.5, -0.3), contact=contact,
+                    initial_velocity=(None, lambda s: np.full_like(s, -0.2)))
+    a = wc.solve(base, "modal", modes=60)
+    b = wc.solve(shifted, "modal", modes=60)
+    assert a.restitution == pytest.approx(b.restitution, abs=1e-9)
+    assert 0.0 < a.restitution < 1.0
+    assert a.diagnostics["energy_drift"] < 1e-6
+
+
+def test_penalty_contact_with_a_given_stiffness():
+    result = wc.solve(two_rods(0.6, 100, contact=Penalty(stiffness=1e4)), "modal", modes=100)
+    assert result.restitution == pytest.approx(0.6, abs=0.02)
+
+
+@pytest.mark.parametrize(
+    "scene, options, message",
+    [
+        (two_rods(0.6, math.inf), {"static_correction": False}, "static_correction"),
+        (two_rods(0.6, 100, contact=Penalty()), {}, "penalty stiffness"),
+        (Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(0.5, -0.5), contact=Hard(), ring_circumference=5.0),
+         {}, "RingSimulation"),
+        (Scene(rods=(Rod(1.0),) * 3, velocities=(1.0, 0.0, -1.0), contact=Hard()), {}, "two rods"),
+        (Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(-0.5, 0.5), contact=Hard()), {}, "approach"),
+    ],
+)
+def test_unsupported_scenes_are_refused(scene, options, message):
+    with pytest.raises(UnsupportedSceneError, match=message):
+        wc.solve(scene, "modal", **options)
+
+
+@pytest.mark.parametrize("options", [{"modes": 0}, {"modes": 1.5}, {"step_accuracy": 0.0},
+                                     {"mode_source": "guess"}, {"unknown": 1}])
+def test_bad_options_are_refused(options):
+    with pytest.raises(InvalidParameterError):
+        wc.collide(0.6, 100, solver="modal", **options)
