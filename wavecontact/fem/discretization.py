@@ -237,7 +237,12 @@ def _lagrange_derivative(xs: np.ndarray, j: int, k: int) -> np.ndarray:
 
 
 def discretize_rod(
-    rod: Rod, vertices: np.ndarray, order: int = 1, mass_kind: str = "lumped", remainder_at=None
+    rod: Rod,
+    vertices: np.ndarray,
+    order: int = 1,
+    mass_kind: str = "lumped",
+    remainder_at=None,
+    lump_remainder: bool = True,
 ) -> RodDiscretization:
     """Assemble the finite-element model of ``rod`` on the given element end points.
 
@@ -254,6 +259,9 @@ def discretize_rod(
     remainder_at : {None, 'left', 'right'}
         If the vertices stop short of that end of the rod, the mass of the
         missing piece is added to the end node there (total mass is exact).
+    lump_remainder : bool
+        False: leave the missing piece out (the model rod is shorter and
+        lighter by less than one element; the caller accounts for its mass).
 
     Returns
     -------
@@ -271,7 +279,7 @@ def discretize_rod(
     consistent = (mass.assemble(basis) * (rod.density * rod.area)).tocsr()[perm][:, perm].tocsr()
     x = basis.doflocs[0][perm].copy()
     missing = rod.length - (vertices[-1] - vertices[0])
-    if missing > 1e-12 * rod.length:
+    if lump_remainder and missing > 1e-12 * rod.length:
         end = 0 if remainder_at == "left" else x.size - 1
         extra = sp.csr_matrix(([rod.density * rod.area * missing], ([end], [end])), shape=consistent.shape)
         consistent = (consistent + extra).tocsr()
