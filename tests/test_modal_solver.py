@@ -55,13 +55,23 @@ def test_truncation_orders_with_and_without_static_correction():
     assert np.all(corrected < plain / 100.0)
 
 
+def test_energy_error_is_second_order_in_the_step_and_momentum_exact():
+    steps = np.array([0.025, 0.0125, 0.00625])
+    drifts = []
+    for eta in steps:
+        result = wc.collide(0.6, 100, solver="modal", modes=60, step_accuracy=float(eta), history=False)
+        drifts.append(result.diagnostics["energy_drift"])
+        assert result.diagnostics["momentum_drift"] < 1e-13
+    order = np.polyfit(np.log(steps), np.log(drifts), 1)[0]
+    assert 1.7 < order < 2.3  # Strang splitting
+    assert drifts[1] < 3e-6  # the default step
+
+
 def test_energy_and_momentum_bookkeeping():
     result = wc.collide(0.6, 100, solver="modal", modes=60)
-    assert result.diagnostics["energy_drift"] < 1e-6
-    assert result.diagnostics["momentum_drift"] < 1e-13
     extra = result.extra
     total_after = extra["translational_energy_after"] + sum(extra["vibration_energy"])
-    assert total_after == pytest.approx(extra["translational_energy_before"], rel=1e-6)
+    assert total_after == pytest.approx(extra["translational_energy_before"], rel=3e-6)
     # translational energy left = epsilon^2 of the initial one
     assert extra["translational_energy_after"] == pytest.approx(
         result.restitution**2 * extra["translational_energy_before"], rel=1e-12
@@ -119,7 +129,7 @@ def test_general_scene_with_unequal_rods_and_materials():
     b = wc.solve(shifted, "modal", modes=60)
     assert a.restitution == pytest.approx(b.restitution, abs=1e-9)
     assert 0.0 < a.restitution < 1.0
-    assert a.diagnostics["energy_drift"] < 1e-6
+    assert a.diagnostics["energy_drift"] < 3e-6
 
 
 def test_penalty_contact_with_a_given_stiffness():
