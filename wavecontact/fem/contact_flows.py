@@ -224,3 +224,17 @@ def interface_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     if law == LAW_PENALTY:
         return penalty_gap(r, g, duration, compliance, stiffness)
     return hard_gap(r, g, duration)
+
+
+@kernel
+def exponential_gap_linear(r, rate, slope, duration, compliance, alpha, strength, substeps):
+    """``r' = rate + slope (t - duration/2) + compliance alpha B exp(-alpha r)`` over ``duration``.
+
+    The closing rate varies linearly within the step (mean ``rate``); each of
+    ``substeps`` sub-steps uses the exact constant-rate solution at its midpoint rate.
+    """
+    h = duration / substeps
+    for k in range(substeps):
+        middle = (k + 0.5) * h - 0.5 * duration
+        r = exponential_gap(r, rate + slope * middle, h, compliance, alpha, strength)
+    return r

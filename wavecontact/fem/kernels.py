@@ -17,7 +17,13 @@ from __future__ import annotations
 import math
 
 from .._jit import kernel
-from .contact_flows import contact_flow, contact_potential, interface_gap
+from .contact_flows import (
+    LAW_EXPONENTIAL,
+    contact_flow,
+    contact_potential,
+    exponential_gap_linear,
+    interface_gap,
+)
 
 __all__ = [
     "STATUS_FAILED",
@@ -370,7 +376,7 @@ def _staggered_energies(current, previous, bands, masses, dt):
 @kernel
 def advance_lattice(
     u1, w1, u2, w2,
-    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv,
+    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv, substeps,
     offset, law, alpha, strength, stiffness,
     dt, max_steps, r_stop, period, check_every, bound_factor1, bound_factor2,
     energy_tolerance, state,
@@ -400,12 +406,18 @@ def advance_lattice(
         # incoming characteristics: mean rate over [t - dt, t + dt], then the single step ahead
         mean_rate = ((current2[1] - previous2[0]) - (current1[last - 1] - previous1[last])) / dt
         incoming = 2.0 * mean_rate - state[S_INCOMING]
+        slope = (incoming - state[S_INCOMING]) / dt
         state[S_INCOMING] = incoming
         _lattice_step(current1, previous1, bands1, inverse_mass1, dt)
         _lattice_step(current2, previous2, bands2, inverse_mass2, dt)
         # previous* now hold the new displacements
         r_free = offset + previous2[0] - previous1[last]
-        r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
+        if law == LAW_EXPONENTIAL and substeps > 1:
+            r_after = exponential_gap_linear(
+                r_now, incoming, slope, dt, 0.5 * m_inv * dt, alpha, strength, substeps
+            )
+        else:
+            r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
         shift = (r_after - r_free) / m_inv
         impulse = shift / dt
         if shift != 0.0:

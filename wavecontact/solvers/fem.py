@@ -33,10 +33,10 @@ OPTIONS = {
     "max_time": None,
 }
 
-# Observed convergence order of epsilon where the contact is resolved (kappa <= 1e3), per
-# discretization with scheme='auto': P1 lumped uses the characteristic interface (exact lattice),
-# the others the massless-end interface whose end-node mass error is O(h) (docs/fem.md).
-# Tests compare a log-log fit with these.
+# Convergence order of epsilon where the contact is resolved (kappa <= 1e3), per discretization
+# with scheme='auto': P1 lumped uses the characteristic interface on the exact lattice (at least
+# second order; about third where the error keeps one sign), the others the massless-end interface
+# whose end-node mass error is O(h) (docs/fem.md).  Tests compare a log-log fit with these.
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 1, (2, "lumped"): 1, (2, "consistent"): 1}
 
 _FORCE_THRESHOLD = 1e-3  # of the peak: contact start and end
