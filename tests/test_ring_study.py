@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import subprocess
 import sys
 import time
@@ -149,6 +148,9 @@ def test_spectral_entropy_of_boltzmann_modes_matches_eq11():
     eta = spectral_entropy(relative_modal_energies(energies))
     m = 2 * n
     exact = 1.0 - (special.digamma(m + 1) - special.digamma(2)) / math.log(m)
+    assert ring_study.equilibrium_spectral_entropy_finite(n) == pytest.approx(exact, rel=1e-12)
+    harmonic = sum(1.0 / k for k in range(1, m + 1))
+    assert exact == pytest.approx(1.0 - (harmonic - 1.0) / math.log(m), rel=1e-12)
     standard_error = np.std(eta) / math.sqrt(eta.size)
     assert abs(np.mean(eta) - exact) < 4 * standard_error
     assert exact == pytest.approx(equilibrium_spectral_entropy(n), rel=0.01)
@@ -392,39 +394,52 @@ def test_real_ring_resume_is_bit_for_bit(tmp_path):
 @needs_ring_simulation
 def test_cli_killed_subprocess_resumes_to_the_same_result(tmp_path):
     """Kill the real CLI after its first checkpoint, rerun it, compare with an uninterrupted run."""
-    base = [sys.executable, "-m", "wavecontact", "ring", "--gamma", "0.6173", "--kappa", "200",
-            "--modes", "8", "--collisions", "60", "--checkpoint-every", "10", "--no-progress"]
-    env = dict(os.environ)
-    straight = subprocess.run([*base, "--out", str(tmp_path / "a")], check=False, capture_output=True, text=True,
-                              env=env, timeout=300)
+    base = [sys.executable, "-m", "wavecontact", "ring", "--gamma", "0.6173", "--kappa", "4000",
+            "--modes", "12", "--collisions", "300", "--checkpoint-every", "20", "--no-progress"]
+    straight = subprocess.run([*base, "--out", str(tmp_path / "a")], check=False, capture_output=True,
+                              text=True, timeout=300)
     assert straight.returncode == 0, straight.stderr
     killed_dir = tmp_path / "b"
     proc = subprocess.Popen([*base, "--out", str(killed_dir)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, env=env)
+                            stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 240
     checkpoint = killed_dir / ring_study.CHECKPOINT_NAME
     while not checkpoint.exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.005)
+        time.sleep(0.002)
     proc.kill()
     proc.wait()
     if (killed_dir / "ring.npz").exists():
         pytest.skip("the run finished before it could be killed")
     assert checkpoint.exists()
     again = subprocess.run([*base, "--out", str(killed_dir)], check=False, capture_output=True, text=True,
-                           env=env, timeout=300)
+                           timeout=300)
     assert again.returncode == 0, again.stderr
     assert "resuming from checkpoint" in again.stderr
     _assert_same_run(RingRun.load_npz(tmp_path / "a" / "ring.npz"), RingRun.load_npz(killed_dir / "ring.npz"))
 
 
-def _physics_checks(run: RingRun, relax_max: int, eta_tolerance: float, corr_max: float):
+def _physics_checks(run: RingRun, relax_max: int, corr_max: float):
     s = run.statistics()
     e_eq = equilibrium_translational_energy(run.modes)
-    assert s.energy_drift < 1e-6
+    # energy bookkeeping of the integrator over the whole run
+    assert s.energy_drift < 1e-3
+    np.testing.assert_allclose(run.translational_energy[1:], run.translational_energy_after[:-1], rtol=1e-12)
+    np.testing.assert_allclose(run.restitution ** 2, run.translational_energy_after / run.translational_energy,
+                               rtol=1e-9)
+    # Eq. 8: relaxation and the stationary mean
     assert s.relaxation_collisions is not None and s.relaxation_collisions <= relax_max
-    assert abs(s.mean_translational_energy / e_eq - 1.0) < max(0.15, 4 * s.translational_energy_standard_error / e_eq)
+    assert abs(s.mean_translational_energy - e_eq) < 4 * s.translational_energy_standard_error
+    assert s.translational_energy_standard_error < 0.1 * e_eq
+    # Eq. 9: Boltzmann fluctuations, KS on decorrelated samples
+    assert s.ks_samples >= 200
     assert s.ks_pvalue > 1e-3
-    assert abs(s.mean_spectral_entropy - equilibrium_spectral_entropy(run.modes)) < eta_tolerance
+    # Eq. 10-11: equipartition among the modes.  At N = 12 Eq. 11 (0.133) and its exact finite-N
+    # value for Boltzmann modes (0.1265) differ by 5 %: compare with the latter closely.
+    assert abs(s.mean_spectral_entropy / s.equilibrium_spectral_entropy_finite - 1.0) < 0.04
+    assert abs(s.mean_spectral_entropy / s.equilibrium_spectral_entropy - 1.0) < 0.1
+    w = s.mean_relative_spectrum
+    assert np.max(np.abs(w * 2 * run.modes - 1.0)) < 0.3
+    # Eq. 13: successive collisions nearly uncorrelated
     assert abs(s.restitution_correlation_coefficient_lag1) < corr_max
     return s
 
@@ -432,8 +447,8 @@ def _physics_checks(run: RingRun, relax_max: int, eta_tolerance: float, corr_max
 @needs_ring_simulation
 def test_real_ring_relaxes_to_equipartition():
     """Sec. III at a small size: Eq. 8 mean, Eq. 9 law (KS), Eq. 11 entropy, weak C_eps(1)."""
-    run = run_ring(0.6173, 4000.0, 12, 600, progress=False)
-    _physics_checks(run, relax_max=150, eta_tolerance=0.04, corr_max=0.2)
+    run = run_ring(0.6173, 4000.0, 12, 4000, progress=False)
+    _physics_checks(run, relax_max=60, corr_max=0.15)
 
 
 @pytest.mark.slow
@@ -441,5 +456,5 @@ def test_real_ring_relaxes_to_equipartition():
 def test_real_ring_paper_size():
     """The paper's run: gamma = 0.6173, kappa = 4000, N = 75, 4500 collisions."""
     run = run_ring(0.6173, 4000.0, 75, 4500, progress=False)
-    s = _physics_checks(run, relax_max=120, eta_tolerance=0.02, corr_max=0.1)
-    assert s.entropy_settling_collisions is not None and s.entropy_settling_collisions <= 15
+    s = _physics_checks(run, relax_max=120, corr_max=0.1)
+    assert s.entropy_settling_collisions is not None and s.entropy_settling_collisions <= 60

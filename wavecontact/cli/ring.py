@@ -119,8 +119,9 @@ def run(args) -> int:
           f"values): D = {stats.ks_statistic:.4f}, p = {stats.ks_pvalue:.3g} (all values: p = "
           f"{stats.ks_pvalue_all_samples:.3g}; lag-1 autocorrelation of E_tr "
           f"{stats.translational_energy_autocorrelation_lag1:+.3f})")
-    print(f"  spectral entropy: stationary mean {stats.mean_spectral_entropy:.4f} vs Eq. 11 "
-          f"{stats.equilibrium_spectral_entropy:.4f}; settled after "
+    print(f"  spectral entropy: stationary mean {stats.mean_spectral_entropy:.4f} +- "
+          f"{stats.spectral_entropy_standard_error:.1g} vs Eq. 11 {stats.equilibrium_spectral_entropy:.4f} "
+          f"(finite-N value {stats.equilibrium_spectral_entropy_finite:.4f}); settled after "
           f"{_format(stats.entropy_settling_collisions, 'd')} collisions")
     print(f"  restitution: mean {stats.mean_restitution:.4f}, C(1)/C(0) = "
           f"{stats.restitution_correlation_coefficient_lag1:+.3f}; energy drift {stats.energy_drift:.2e}")

@@ -49,6 +49,7 @@ __all__ = [
     "decorrelation_stride",
     "default_transient",
     "equilibrium_spectral_entropy",
+    "equilibrium_spectral_entropy_finite",
     "equilibrium_translational_energy",
     "ks_exponential",
     "relative_modal_energies",
@@ -115,6 +116,25 @@ def equilibrium_spectral_entropy(modes: int) -> float:
     """
     n = _require_modes(modes)
     return 0.423 / math.log(2 * n)
+
+
+def equilibrium_spectral_entropy_finite(modes: int) -> float:
+    """Exact mean of ``eta`` for ``2 N`` independent exponential modal energies.
+
+    Then ``w`` is uniform on the simplex and the mean of ``h`` is
+    ``psi(2N + 1) - psi(2) = H_(2N) - 1`` (``psi`` the digamma function,
+    ``H`` the harmonic number), so ``<eta> = 1 - (H_(2N) - 1) / ln(2N)
+    = (1 - C_Euler - 1/(4N) + O(N^-2)) / ln(2N)``; Eq. 11 is its leading term.
+
+    Parameters
+    ----------
+    modes : int
+        Modes per rod ``N`` (>= 1).
+    """
+    from scipy.special import digamma
+
+    n = _require_modes(modes)
+    return 1.0 - float(digamma(2 * n + 1) - digamma(2)) / math.log(2 * n)
 
 
 def _require_modes(modes) -> int:
@@ -356,7 +376,9 @@ class RingStatistics:
     ks_pvalue: float
     ks_pvalue_all_samples: float
     equilibrium_spectral_entropy: float
+    equilibrium_spectral_entropy_finite: float
     mean_spectral_entropy: float
+    spectral_entropy_standard_error: float
     entropy_settling_collisions: int | None
     mean_restitution: float
     restitution_correlation: np.ndarray
@@ -516,7 +538,12 @@ class RingRun:
             ks_pvalue=float(ks.pvalue),
             ks_pvalue_all_samples=float(ks_all.pvalue),
             equilibrium_spectral_entropy=equilibrium_spectral_entropy(self.modes),
+            equilibrium_spectral_entropy_finite=equilibrium_spectral_entropy_finite(self.modes),
             mean_spectral_entropy=float(np.mean(eta_stationary)),
+            spectral_entropy_standard_error=float(
+                np.std(eta_stationary, ddof=1)
+                * math.sqrt(decorrelation_stride(eta_stationary) / eta_stationary.size)
+            ),
             entropy_settling_collisions=eta_settle,
             mean_restitution=float(np.mean(self.restitution[transient:])),
             restitution_correlation=corr,
