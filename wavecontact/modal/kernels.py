@@ -44,12 +44,21 @@ STATUS_NOT_FINITE = -2
 
 @kernel(error_model="numpy")
 def contact_response(gap, law, alpha, strength, stiffness, compliance):
+    """See :func:`contact_response_from`; starts the inner solve from scratch."""
+    return contact_response_from(gap, law, alpha, strength, stiffness, compliance, math.nan)
+
+
+@kernel(error_model="numpy")
+def contact_response_from(gap, law, alpha, strength, stiffness, compliance, guess):
     """Force, interaction energy and stiffness of one pair at the modal gap ``gap``.
 
     With ``compliance > 0`` the contact acts through a massless spring of that
     compliance (the omitted modes, statically): the true gap ``r`` solves
     ``r - compliance * F(r) = gap``, the returned force is ``F(r)``, the energy
     includes the spring's, and the stiffness is ``dF/dgap``.
+
+    ``guess`` (``nan``: none) starts the inner Newton solve for
+    ``log(alpha (r - gap))``.
 
     Returns
     -------
@@ -70,7 +79,10 @@ def contact_response(gap, law, alpha, strength, stiffness, compliance):
             y = z * (1.0 - z)
         else:
             # Newton on u + exp(u) = log_z (u = log y): convex, increasing, started right of the root
-            u = log_z if log_z < 0.0 else math.log1p(log_z)
+            if math.isnan(guess):
+                u = log_z if log_z < 0.0 else math.log1p(log_z)
+            else:
+                u = guess  # the previous step's root: Newton then needs two or three iterations
             for _ in range(60):
                 eu = math.exp(u)
                 du = (u + eu - log_z) / (1.0 + eu)
@@ -129,6 +141,19 @@ def end_sums(q, v, left, right, rod_first, sums):
         sums[i, 3] = vr
 
 @kernel(fastmath=_FAST, error_model="numpy")
+def _kick_modes(v, left, right, first, stop, impulse_left, impulse_right):
+    """Kick the modes ``first:stop`` of one rod by end impulses; return the change of the end velocities."""
+    dvl = 0.0
+    dvr = 0.0
+    for j in range(first, stop):
+        dv = left[j] * impulse_left + right[j] * impulse_right
+        v[j] += dv
+        dvl += left[j] * dv
+        dvr += right[j] * dv
+    return dvl, dvr
+
+
+@kernel(fastmath=_FAST, error_model="numpy")
 def _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums):
     """Velocity kick by the pair forces over ``h`` (in place); keeps the end
     velocity sums ``sums[:, 2:4]`` up to date."""
@@ -149,13 +174,7 @@ def _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_forc
         if fl == 0.0 and fr == 0.0:
             continue
         U[i] += (fl + fr) / mass[i]
-        dvl = 0.0
-        dvr = 0.0
-        for j in range(rod_first[i], rod_first[i + 1]):
-            dv = left[j] * fl + right[j] * fr
-            v[j] += dv
-            dvl += left[j] * dv
-            dvr += right[j] * dv
+        dvl, dvr = _kick_modes(v, left, right, rod_first[i], rod_first[i + 1], fl, fr)
         sums[i, 2] += dvl
         sums[i, 3] += dvr
 
@@ -232,7 +251,12 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
     """Force, stiffness and softened alpha of every pair; False if a force is not finite."""
     finite = True
     for k in range(gap.size):
-        f, _, kk, soft = contact_response(gap[k], law, alpha, strength, stiffness, pair_compliance[k])
+        guess = math.nan
+        if law == LAW_EXPONENTIAL and pair_compliance[k] > 0.0:
+            previous = alpha / aeff[k] - 1.0  # aeff = alpha / (1 + y): last step's y
+            if previous > 1e-6:
+                guess = math.log(previous)
+        f, _, kk, soft = contact_response_from(gap[k], law, alpha, strength, stiffness, pair_compliance[k], guess)
         if not math.isfinite(f):
             finite = False
         force[k] = f
@@ -302,7 +326,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     gap = np.empty(n_pairs)
     gap_rate = np.empty(n_pairs)
     force = np.empty(n_pairs)
-    aeff = np.empty(n_pairs)
+    aeff = np.full(n_pairs, alpha)
     keff = np.empty(n_pairs)
     rigid_gap = np.empty(n_pairs)
     rigid_rate = np.empty(n_pairs)
