@@ -161,7 +161,7 @@ def fe_modes(rod: Rod, modes: int, elements: int | None = None, order: int = 1) 
     Solves ``K phi = omega^2 M phi`` (consistent mass) with
     :func:`scipy.linalg.eigh` (dense; all modes, so the residual compliance
     of the omitted discrete modes is exact for the discrete model) when the
-    model has at most 3000 unknowns, else with :func:`scipy.sparse.linalg.eigsh`
+    model has at most 600 unknowns, else with :func:`scipy.sparse.linalg.eigsh`
     in shift-invert mode, the residual then following from the inertia-relief
     compliance of the whole discrete rod minus the kept modes.
 
@@ -189,7 +189,7 @@ def fe_modes(rod: Rod, modes: int, elements: int | None = None, order: int = 1) 
             f"modes ({n}) must be below the number of unknowns of the FE model ({size}); use more elements"
         )
     ends = np.array([i_left, i_right])
-    if size <= 3000:
+    if size <= 600:
         values, vectors = linalg.eigh(stiffness.toarray(), mass_matrix.toarray())
         values, vectors = values[1:], vectors[:, 1:]  # drop the rigid mode
         end_values = vectors[ends, :]
