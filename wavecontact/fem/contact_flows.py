@@ -233,6 +233,12 @@ def exponential_gap_linear(r, rate, slope, duration, compliance, alpha, strength
     The closing rate varies linearly within the step (mean ``rate``); each of
     ``substeps`` sub-steps uses the exact constant-rate solution at its midpoint rate.
     """
+    lowest = r + min(0.0, rate - 0.5 * abs(slope) * duration) * duration
+    coefficient = compliance * alpha * strength
+    if alpha * lowest - math.log(coefficient * duration) > 14.0:
+        # the force moves the gap by less than 1e-6 over the step: the variation of the rate
+        # within the step cannot matter, one exact constant-rate solution is enough
+        return exponential_gap(r, rate, duration, compliance, alpha, strength)
     h = duration / substeps
     for k in range(substeps):
         middle = (k + 0.5) * h - 0.5 * duration

@@ -412,7 +412,8 @@ def advance_lattice(
         _lattice_step(current2, previous2, bands2, inverse_mass2, dt)
         # previous* now hold the new displacements
         r_free = offset + previous2[0] - previous1[last]
-        if law == LAW_EXPONENTIAL and substeps > 1:
+        if law == LAW_EXPONENTIAL and substeps > 1 and abs(slope) * dt > 1e-7 * abs(incoming):
+            # the incoming rate varies within the step: reconstruct it linearly and sub-step
             r_after = exponential_gap_linear(
                 r_now, incoming, slope, dt, 0.5 * m_inv * dt, alpha, strength, substeps
             )
