@@ -188,17 +188,20 @@ def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
 
 @kernel(fastmath=_FAST, error_model="numpy")
 def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
-            rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right):
+            rigid_gap, rigid_rate, reach, speed_bound, accel_bound, amp_left, amp_right):
     """Rigorous bounds on the modal end motion under free flight.
 
     ``reach[k]`` bounds |modal displacement| of the pair's two ends,
-    ``speed_bound[k]`` bounds |d gap / dt|.
+    ``speed_bound[k]`` bounds |d gap / dt| and ``accel_bound[k]`` bounds
+    |d^2 gap / dt^2|.
     """
     for i in range(rod_first.size - 1):
         al = 0.0
         ar = 0.0
         sl = 0.0
         sr = 0.0
+        cl = 0.0
+        cr = 0.0
         for j in range(rod_first[i], rod_first[i + 1]):
             w = omega[j]
             # amplitude times frequency: sqrt of twice the mode's energy
@@ -208,10 +211,14 @@ def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair
             ar += abs(right[j]) * amp
             sl += abs(left[j]) * amp_w
             sr += abs(right[j]) * amp_w
+            cl += abs(left[j]) * amp_w * w
+            cr += abs(right[j]) * amp_w * w
         amp_left[i, 0] = al
         amp_left[i, 1] = sl
+        amp_left[i, 2] = cl
         amp_right[i, 0] = ar
         amp_right[i, 1] = sr
+        amp_right[i, 2] = cr
     for k in range(pair_a.size):
         a = pair_a[k]
         b = pair_b[k]
@@ -219,6 +226,7 @@ def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair
         rigid_rate[k] = U[b] - U[a]
         reach[k] = amp_right[a, 0] + amp_left[b, 0]
         speed_bound[k] = abs(rigid_rate[k]) + amp_right[a, 1] + amp_left[b, 1]
+        accel_bound[k] = amp_right[a, 2] + amp_left[b, 2]
 
 @kernel(fastmath=_FAST, error_model="numpy")
 def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin_row, sums):
@@ -321,8 +329,8 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     inverse_omega = 1.0 / omega
     sums = np.empty((n_rods, 4))
     end_force = np.empty((n_rods, 2))
-    amp_left = np.empty((n_rods, 2))
-    amp_right = np.empty((n_rods, 2))
+    amp_left = np.empty((n_rods, 3))
+    amp_right = np.empty((n_rods, 3))
     gap = np.empty(n_pairs)
     gap_rate = np.empty(n_pairs)
     force = np.empty(n_pairs)
@@ -332,6 +340,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     rigid_rate = np.empty(n_pairs)
     reach = np.empty(n_pairs)
     speed_bound = np.empty(n_pairs)
+    accel_bound = np.empty(n_pairs)
     log_ratio = math.log(ladder_ratio)
     recording = history.shape[0] > 0
     steps_here = 0
@@ -354,7 +363,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         dt_free = 0.0
         if all_far:
             _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
-                    rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right)
+                    rigid_gap, rigid_rate, reach, speed_bound, accel_bound, amp_left, amp_right)
             ep = episode[0]
             if ep >= 0 and rigid_rate[ep] > 0.0 and rigid_gap[ep] - reach[ep] > contact_range:
                 return STATUS_SEPARATED
@@ -418,9 +427,14 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                     # speed over the step (the momentary rate may vanish at a turning point)
                     if not bounds_ready:
                         _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b,
-                                pair_offset, rigid_gap, rigid_rate, reach, speed_bound, amp_left, amp_right)
+                                pair_offset, rigid_gap, rigid_rate, reach, speed_bound, accel_bound,
+                                amp_left, amp_right)
                         bounds_ready = True
-                    r_k = aeff[k] * speed_bound[k] * toe
+                    # largest dt with alpha_eff (|dr/dt| dt + accel_bound dt^2 / 2) <= reach + excess:
+                    # the momentary rate plus a rigorous bound on how fast it can change
+                    room = step_reach + excess
+                    ar = aeff[k] * abs(gap_rate[k])
+                    r_k = (ar + math.sqrt(ar * ar + 2.0 * aeff[k] * accel_bound[k] * room)) / (2.0 * room)
             osc = math.sqrt(max(keff[k], 0.0) * pair_inverse_mass[k]) / step_accuracy
             if law == LAW_LINEAR:
                 # the stiffness it will have once touching

@@ -43,7 +43,7 @@ class StepControl:
     """
 
     accuracy: float = 0.0125
-    reach: float = 1.0
+    reach: float = 0.25
     ladder_ratio: float = 2.0**0.25
     levels: int = 140
 

@@ -24,8 +24,8 @@ step_accuracy : float
     ``eta`` of the contact step control (error in epsilon ~ eta^2).
 step_reach : float
     Largest change of ``alpha * gap`` per step while the force is small
-    (the toe of the exponential).  With the defaults epsilon is within a few
-    1e-8 of the exact solution of the same N-mode equations; smaller values
+    (the toe of the exponential).  With the defaults epsilon is within about
+    1e-7 of the exact solution of the same N-mode equations; smaller values
     of both make the error fall like ``eta^2`` further down.
 history : bool
     Record the relative velocity and contact force at every step.
