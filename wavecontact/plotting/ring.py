@@ -121,8 +121,12 @@ def plot_spectral_entropy(runs: RingRun | Sequence[RingRun], path, dpi: int = 15
         eta = run.spectral_entropy()
         collisions = np.arange(1, run.n_collisions + 1)  # eta[j] is measured after collision j + 1
         ax.semilogx(collisions, eta, "-", lw=0.8, color=colour, alpha=0.85, label=f"N = {run.modes}")
-        ax.axhline(equilibrium_spectral_entropy(run.modes), ls="--", color=colour, lw=1.2,
-                   label=f"Eq. 11 for N = {run.modes}: {equilibrium_spectral_entropy(run.modes):.4f}")
+        level = equilibrium_spectral_entropy(run.modes)
+        if len(runs) == 1:
+            label = f"Eq. 11: 0.423 / ln(2N) = {level:.4f}"
+        else:
+            label = "Eq. 11 (dashed, same colour)" if index == 0 else None
+        ax.axhline(level, ls="--", color=colour, lw=1.2, label=label)
     ax.set_xlim(1, max(r.n_collisions for r in runs))
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("collision number")
