@@ -327,6 +327,9 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     n_pairs = pair_a.size
     n_levels = cos_table.shape[0]
     inverse_omega = 1.0 / omega
+    omega_max = 0.0
+    for j in range(omega.size):
+        omega_max = max(omega_max, omega[j])
     sums = np.empty((n_rods, 4))
     end_force = np.empty((n_rods, 2))
     amp_left = np.empty((n_rods, 3))
@@ -420,8 +423,9 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 weight = math.sqrt(force[k] / force_scale) / step_accuracy
                 toe = 1.0 / (step_reach + excess)
                 if weight >= toe:
-                    # the force matters: resolve its rate of change
-                    r_k = aeff[k] * abs(gap_rate[k]) * weight
+                    # the force matters: resolve its rate of change, and keep every kept mode's
+                    # phase advance per step below one radian (kicks at omega dt near pi resonate)
+                    r_k = max(aeff[k] * abs(gap_rate[k]) * weight, omega_max)
                 else:
                     # small force: limit the change of alpha * gap per step by a bound on the gap
                     # speed over the step (the momentary rate may vanish at a turning point)
