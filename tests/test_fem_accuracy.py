@@ -150,3 +150,11 @@ def test_result_histories_and_run_control():
     assert result.contact_force[0] < 1e-12
     assert result.work["steps"] == result.time.size
     assert result.work["element_steps"] == result.work["steps"] * sum(result.work["elements"])
+
+
+def test_contact_window_agrees_with_the_delay_solver():
+    for kappa in (100, 1e4):
+        fem = wc.collide(0.6, kappa, solver="fem", elements=800)
+        delay = wc.collide(0.6, kappa, solver="delay")
+        # same definition (force above 1% of its peak); the FE force is a mean over each step
+        assert fem.contact_duration == pytest.approx(delay.contact_duration, abs=5 * fem.work["dt"])
