@@ -1,0 +1,418 @@
+"""Speed against error for every solver and discretization; writes docs/performance.md.
+
+One command regenerates the report and its figures:
+
+    python benchmarks/performance.py            # full report (about 15-30 minutes on 2 cores)
+    python benchmarks/performance.py --quick    # smaller meshes and fewer repeats, for a look
+
+Sections of the report: the machine and library versions; error against wall
+time (Pareto fronts) for kappa in {20, 100, 1e4, 1e6, inf} and gamma in
+{0.6, 0.2173}; peers measured in the same run at matched accuracy (JiTCDDE on
+the delay equation, scipy solve_ivp DOP853/Radau on the modal equations, a
+plain scikit-fem + scipy.sparse loop on the FE equations); how the cost grows
+with elements, modes and kappa; a recommendation table (cheapest method per
+target error); and where a method fails (its error message, not a number).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import importlib
+import math
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE / "peers"))
+
+import wavecontact
+from wavecontact.plotting.compare import comparison_figure
+from wavecontact.studies.compare import Method, compare_solvers
+
+GAMMAS = (0.6, 0.2173)
+KAPPAS = (20.0, 100.0, 1e4, 1e6, math.inf)
+DISCRETIZATIONS = ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
+TARGETS = (1e-3, 1e-6, 1e-9)
+TIME_CAP = 20.0  # s: larger resolutions of a family are skipped once one run takes longer
+
+
+def median_time(function, repeats):
+    times, value = [], None
+    for _ in range(repeats):
+        started = time.perf_counter()
+        value = function()
+        times.append(time.perf_counter() - started)
+    return float(np.median(times)), value
+
+
+def kappa_text(kappa):
+    return "inf" if math.isinf(kappa) else f"{kappa:g}"
+
+
+def methods_for(quick):
+    elements = (25, 50, 100, 200, 400) if quick else (25, 50, 100, 200, 400, 800, 1600, 3200)
+    modes = (10, 20, 40, 80) if quick else (10, 20, 40, 80, 160, 320)
+    families = [[Method("delay", {"rtol": r}, f"rtol={r:.0e}") for r in (1e-3, 1e-5, 1e-7, 1e-9, 1e-11)]]
+    for order, mass in DISCRETIZATIONS:
+        families.append([
+            Method("fem", {"elements": n, "order": order, "mass": mass}, f"P{order} {mass}, {n} elements",
+                   "element_steps")
+            for n in elements
+        ])
+    for correction in (True, False):
+        name = "static correction" if correction else "plain truncation"
+        families.append([
+            Method("modal", {"modes": n, "static_correction": correction}, f"{n} modes, {name}", "modes")
+            for n in modes
+        ])
+    return families
+
+
+def pareto_case(gamma, kappa, families, repeats):
+    """All families on one case; a family stops growing once a run exceeds TIME_CAP."""
+    rows, reference, source = [], None, None
+    for family in families:
+        for method in family:
+            table = compare_solvers(gamma, kappa, [method], repeats=repeats, progress=False)
+            reference, source = table.reference, table.reference_source
+            rows.extend(table.rows)
+            row = table.rows[0]
+            if row.ok and row.wall_time_s > TIME_CAP:
+                break
+    table.rows = rows
+    return table
+
+
+def section_machine(command):
+    import scipy
+    import skfem
+
+    versions = {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+                "scikit-fem": getattr(skfem, "__version__", "?"), "wavecontact": wavecontact.__version__}
+    for name in ("numba", "meshio", "matplotlib", "jitcdde"):
+        try:
+            versions[name] = importlib.import_module(name).__version__
+        except (ImportError, AttributeError):
+            versions[name] = "not installed"
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    lines = [
+        f"Generated {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC} by `{command}`.",
+        "",
+        f"Machine: {cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}.",
+        "",
+        "| library | version |",
+        "|---|---|",
+        *(f"| {k} | {v} |" for k, v in versions.items()),
+    ]
+    return "\n".join(lines)
+
+
+def section_pareto(tables, figure_dir):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    out = ["## Error against wall time", "",
+           "Every solver and discretization on the same collisions; the error is against the delay "
+           "equation at rtol = 1e-13 (the exact hard-core recursion for kappa = inf). Times are medians "
+           "of repeated runs of the whole `collide` call, set-up included. Points at 1e-16 are exact "
+           "to round-off.", ""]
+    for gamma in GAMMAS:
+        fig = Figure(figsize=(16, 4.2), layout="constrained")
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(1, len(KAPPAS))
+        for ax, kappa in zip(axes, KAPPAS):
+            comparison_figure(tables[(gamma, kappa)], ax=ax)
+        name = f"pareto_gamma_{gamma:g}.png"
+        fig.savefig(figure_dir / name, dpi=110)
+        out += [f"![error against time, gamma = {gamma:g}](figures/{name})", ""]
+    out += ["### Failures and breakdowns", "",
+            "A method that cannot give a trustworthy number raises an error; it is listed here with "
+            "its message. No point of the sweep is NaN, inf or silently wrong unless listed as such.", "",
+            "| gamma | kappa | method | outcome |", "|---|---|---|---|"]
+    silent = 0
+    for (gamma, kappa), table in tables.items():
+        for row in table.rows:
+            if not row.ok:
+                out.append(f"| {gamma:g} | {kappa_text(kappa)} | {row.solver}: {row.resolution} | "
+                           f"error: {row.status.splitlines()[0][:160]} |")
+            elif not math.isfinite(row.restitution):
+                silent += 1
+                out.append(f"| {gamma:g} | {kappa_text(kappa)} | {row.solver}: {row.resolution} | "
+                           f"NON-FINITE {row.restitution} |")
+    out += ["", f"Non-finite values returned without an error: {silent}.", ""]
+    out += ["### Smallest error reached by each method family", "",
+            "| gamma | kappa | " + " | ".join(_families(tables)) + " |",
+            "|---|---|" + "---|" * len(_families(tables))]
+    for (gamma, kappa), table in tables.items():
+        best = {}
+        for row in table.rows:
+            if row.ok:
+                family = _family(row)
+                best[family] = min(best.get(family, math.inf), row.error)
+        cells = [f"{best[f]:.1e}" if f in best else "failed" for f in _families(tables)]
+        out.append(f"| {gamma:g} | {kappa_text(kappa)} | " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def _family(row):
+    if row.solver == "delay":
+        return "delay"
+    if row.solver == "fem":
+        return "fem " + row.resolution.split(",")[0]
+    return "modal " + row.resolution.split(", ")[-1]
+
+
+def _families(tables):
+    seen = []
+    for table in tables.values():
+        for row in table.rows:
+            family = _family(row)
+            if family not in seen:
+                seen.append(family)
+    return seen
+
+
+def recommendations(tables):
+    """Cheapest row with error <= target, per (kappa, target), gamma = 0.6."""
+    lines = ["| kappa | target error | cheapest method | error | time (ms) |", "|---|---|---|---|---|"]
+    for kappa in KAPPAS:
+        table = tables[(GAMMAS[0], kappa)]
+        for target in TARGETS:
+            good = [r for r in table.rows if r.ok and r.error <= target]
+            if not good:
+                lines.append(f"| {kappa_text(kappa)} | {target:.0e} | none reached it | | |")
+                continue
+            best = min(good, key=lambda r: r.wall_time_s)
+            lines.append(f"| {kappa_text(kappa)} | {target:.0e} | {best.solver}: {best.resolution} | "
+                         f"{best.error:.1e} | {1e3 * best.wall_time_s:.3g} |")
+    return "\n".join(lines)
+
+
+def section_peers(repeats, quick):
+    out = ["## Peers at matched accuracy (same run)", ""]
+    # delay equation vs JiTCDDE
+    out += ["### Delay equation: wavecontact vs JiTCDDE", ""]
+    try:
+        from jitcdde_delay import JitcddePeer, timed_restitution
+
+        peer = JitcddePeer(0.6, t_max=60.0)
+        out += [f"JiTCDDE compiles its C code once ({peer.compile_time:.2f} s, not counted below). Both "
+                "solvers are run at the loosest tolerance whose error is <= 1e-9.", "",
+                "| kappa | JiTCDDE (ms) | error | wavecontact (ms) | error | speed-up |", "|---|---|---|---|---|---|"]
+        for kappa in (20.0, 100.0, 1000.0):
+            exact = wavecontact.collide(0.6, kappa, rtol=1e-13).restitution
+            theirs = ours = None
+            for rtol in (1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12):
+                seconds, value = timed_restitution(peer, kappa, rtol, repeats=1)
+                if math.isfinite(value) and abs(value - exact) <= 1e-9:
+                    seconds, value = timed_restitution(peer, kappa, rtol, repeats=max(3, repeats))
+                    theirs = (seconds, abs(value - exact))
+                    break
+            for rtol in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
+                value = wavecontact.collide(0.6, kappa, rtol=rtol).restitution
+                if abs(value - exact) <= 1e-9:
+                    seconds, _ = median_time(lambda r=rtol, k=kappa: wavecontact.collide(0.6, k, rtol=r),
+                                             10 * repeats)
+                    ours = (seconds, abs(value - exact))
+                    break
+            if theirs and ours:
+                out.append(f"| {kappa:g} | {1e3 * theirs[0]:.2f} | {theirs[1]:.1e} | {1e3 * ours[0]:.3f} | "
+                           f"{ours[1]:.1e} | {theirs[0] / ours[0]:.0f}x |")
+            else:
+                out.append(f"| {kappa:g} | {'n/a' if not theirs else theirs} | | {ours} | | |")
+    except ImportError as exc:
+        out.append(f"JiTCDDE not installed ({exc}); `pip install jitcdde` to include it.")
+    out.append("")
+    # modal equations vs solve_ivp
+    out += ["### Modal equations: wavecontact vs scipy solve_ivp", ""]
+    try:
+        import modal_solve_ivp
+
+        modes = 40 if quick else 75
+        kappa = 100.0
+        reference, _ = modal_solve_ivp.restitution(0.6, kappa, modes, 1e-12)
+        result = wavecontact.collide(0.6, kappa, solver="modal", modes=modes)
+        ours_error = abs(result.restitution - reference)
+        ours_time, _ = median_time(lambda: wavecontact.collide(0.6, kappa, solver="modal", modes=modes), repeats)
+        out += [f"gamma = 0.6, kappa = {kappa:g}, N = {modes} modes per rod with static correction. Error "
+                "against the same equations solved by DOP853 at rtol = 1e-12; each peer at the loosest "
+                "tolerance at least as accurate as wavecontact.", "",
+                "| integrator | rtol | error | median time (ms) | wavecontact speed-up |", "|---|---|---|---|---|",
+                f"| wavecontact modal | default | {ours_error:.1e} | {1e3 * ours_time:.2f} | 1x |"]
+        for method in ("DOP853", "Radau"):
+            found = None
+            for rtol in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
+                try:
+                    value, seconds = modal_solve_ivp.restitution(0.6, kappa, modes, rtol, method=method)
+                except RuntimeError as exc:
+                    found = ("failed", str(exc))
+                    break
+                if abs(value - reference) <= max(ours_error, 1e-12):
+                    runs = [modal_solve_ivp.restitution(0.6, kappa, modes, rtol, method=method)[1]
+                            for _ in range(max(1, repeats // 2))]
+                    found = (rtol, abs(value - reference), float(np.median(runs)))
+                    break
+                if seconds > 120:
+                    found = ("too slow", f"{seconds:.0f} s at rtol {rtol:g} with error {abs(value - reference):.1e}")
+                    break
+            if found is None:
+                out.append(f"| {method} | down to 1e-10 | not as accurate | | |")
+            elif isinstance(found[0], str):
+                out.append(f"| {method} | {found[0]} | {found[1]} | | |")
+            else:
+                out.append(f"| {method} | {found[0]:.0e} | {found[1]:.1e} | {1e3 * found[2]:.1f} | "
+                           f"{found[2] / ours_time:.0f}x |")
+    except ImportError as exc:
+        out.append(f"modal peer unavailable: {exc}")
+    out.append("")
+    # FE loop vs plain scipy.sparse loop
+    out += ["### Finite elements: wavecontact's time loop vs a plain scikit-fem + scipy.sparse loop", ""]
+    from fem_scipy_loop import scipy_fem_run
+
+    from wavecontact.fem.simulation import build_setup, run_collision
+
+    out += ["Same mesh, P1 lumped, kappa = 100; cost per element-step of the time loop (set-up excluded "
+            "for both).", "", "| elements | wavecontact (ns / element-step) | scipy.sparse loop (ns / element-step) "
+            "| speed-up |", "|---|---|---|---|"]
+    for elements in ((400, 800) if quick else (800, 3200)):
+        setup = build_setup(wavecontact.two_rods(0.6, 100.0), elements=elements)
+        first = run_collision(setup)
+        element_steps = first["steps"] * sum(d.n_elements for d in setup.rods)
+        ours, _ = median_time(lambda s=setup: run_collision(s), max(3, repeats))
+        peer = [scipy_fem_run(0.6, 100.0, elements, courant=0.99) for _ in range(max(1, repeats // 2))]
+        peer_seconds = float(np.median([p[1] for p in peer]))
+        peer_steps = peer[0][3]
+        a, b = 1e9 * ours / element_steps, 1e9 * peer_seconds / peer_steps
+        out.append(f"| {elements} | {a:.2f} | {b:.1f} | {b / a:.0f}x |")
+    return "\n".join(out)
+
+
+def section_growth(repeats, quick, figure_dir):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    out = ["## How the cost grows", ""]
+    fig = Figure(figsize=(14, 4), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax_el, ax_modes, ax_kappa = fig.subplots(1, 3)
+    # elements
+    elements = (100, 200, 400, 800) if quick else (100, 200, 400, 800, 1600, 3200)
+    times = [median_time(lambda n=n: wavecontact.collide(0.6, 100.0, solver="fem", elements=n), repeats)[0]
+             for n in elements]
+    slope = np.polyfit(np.log(elements), np.log(times), 1)[0]
+    ax_el.loglog(elements, times, "s-", label=f"fem P1 lumped (slope {slope:.2f})")
+    ax_el.set_xlabel("elements on the short rod")
+    ax_el.set_ylabel("wall time (s)")
+    ax_el.legend()
+    out.append(f"* FE, P1 lumped, kappa = 100: time ~ elements^{slope:.2f} over {elements[0]}-{elements[-1]} "
+               "elements (expected about 2 at a fixed physical time under the CFL limit: elements x steps).")
+    # modes
+    modes = (10, 20, 40, 80) if quick else (10, 20, 40, 80, 160, 320)
+    times = [median_time(lambda n=n: wavecontact.collide(0.6, 100.0, solver="modal", modes=n), repeats)[0]
+             for n in modes]
+    slope = np.polyfit(np.log(modes), np.log(times), 1)[0]
+    ax_modes.loglog(modes, times, "^-", label=f"modal (slope {slope:.2f})")
+    ax_modes.set_xlabel("modes per rod")
+    ax_modes.legend()
+    out.append(f"* Modal, kappa = 100: time ~ modes^{slope:.2f} over {modes[0]}-{modes[-1]} modes.")
+    # kappa
+    kappas = (10.0, 100.0, 1e3, 1e4, 1e5, 1e6)
+    rows = ["", "| kappa | delay (ms) | fem P1 lumped 800 (ms) | modal 80 (ms) |", "|---|---|---|---|"]
+    series = {"delay": [], "fem": [], "modal": []}
+    for kappa in kappas:
+        cells = []
+        for solver, options in (("delay", {}), ("fem", {"elements": 800}), ("modal", {"modes": 80})):
+            try:
+                seconds, _ = median_time(
+                    lambda k=kappa, s=solver, o=options: wavecontact.collide(0.6, k, solver=s, **o), repeats)
+                series[solver].append(seconds)
+                cells.append(f"{1e3 * seconds:.3g}")
+            except wavecontact.WavecontactError as exc:
+                series[solver].append(math.nan)
+                cells.append(f"error: {str(exc)[:60]}")
+        rows.append(f"| {kappa:g} | " + " | ".join(cells) + " |")
+    for solver, marker in (("delay", "o-"), ("fem", "s-"), ("modal", "^-")):
+        ax_kappa.loglog(kappas, series[solver], marker, label=solver)
+    ax_kappa.set_xlabel(r"$\kappa$")
+    ax_kappa.legend()
+    out.append("* Against kappa (gamma = 0.6):")
+    out += rows
+    fig.savefig(figure_dir / "cost_growth.png", dpi=110)
+    out += ["", "![cost growth](figures/cost_growth.png)"]
+    return "\n".join(out)
+
+
+def update_readme(table_text):
+    readme = ROOT / "README.md"
+    text = readme.read_text()
+    start, end = "<!-- recommendations:start -->", "<!-- recommendations:end -->"
+    if start in text and end in text:
+        head, rest = text.split(start, 1)
+        _, tail = rest.split(end, 1)
+        readme.write_text(f"{head}{start}\n{table_text}\n{end}{tail}")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description="Regenerate docs/performance.md and its figures.")
+    parser.add_argument("--quick", action="store_true", help="smaller resolutions and repeats")
+    parser.add_argument("--repeats", type=int, default=None, help="median over this many runs (default 3, quick 1)")
+    parser.add_argument("--out", default=str(ROOT / "docs"), help="directory of performance.md (default docs/)")
+    args = parser.parse_args(argv)
+    repeats = args.repeats or (1 if args.quick else 3)
+    out_dir = Path(args.out)
+    figure_dir = out_dir / "figures"
+    figure_dir.mkdir(parents=True, exist_ok=True)
+    command = "python benchmarks/performance.py" + (" --quick" if args.quick else "") + (
+        f" --repeats {args.repeats}" if args.repeats else "")
+
+    for solver, options in (("delay", {}), ("fem", {"elements": 50}), ("modal", {"modes": 10})):
+        wavecontact.collide(0.6, 100.0, solver=solver, **options)  # compile the kernels before timing
+    families = methods_for(args.quick)
+    tables = {}
+    for gamma in GAMMAS:
+        for kappa in KAPPAS:
+            started = time.perf_counter()
+            tables[(gamma, kappa)] = pareto_case(gamma, kappa, families, repeats)
+            print(f"gamma = {gamma:g}, kappa = {kappa_text(kappa)}: {time.perf_counter() - started:.0f} s",
+                  file=sys.stderr)
+    recommendation = recommendations(tables)
+    parts = [
+        "# Performance: speed against error",
+        "",
+        section_machine(command),
+        "",
+        "## Which method to use",
+        "",
+        "The cheapest measured method (gamma = 0.6) that reaches each target error, from the runs below.",
+        "",
+        recommendation,
+        "",
+        section_pareto(tables, figure_dir),
+        "",
+        section_peers(repeats, args.quick),
+        "",
+        section_growth(repeats, args.quick, figure_dir),
+        "",
+    ]
+    (out_dir / "performance.md").write_text("\n".join(parts))
+    update_readme(recommendation)
+    print(f"wrote {out_dir / 'performance.md'}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
