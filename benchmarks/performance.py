@@ -78,11 +78,10 @@ def methods_for(quick):
 
 def pareto_case(gamma, kappa, families, repeats):
     """All families on one case; a family stops growing once a run exceeds TIME_CAP."""
-    rows, reference, source = [], None, None
+    rows = []
     for family in families:
         for method in family:
             table = compare_solvers(gamma, kappa, [method], repeats=repeats, progress=False)
-            reference, source = table.reference, table.reference_source
             rows.extend(table.rows)
             row = table.rows[0]
             if row.ok and row.wall_time_s > TIME_CAP:
@@ -127,10 +126,10 @@ def section_pareto(tables, figure_dir):
     from matplotlib.figure import Figure
 
     out = ["## Error against wall time", "",
-           "Every solver and discretization on the same collisions; the error is against the delay "
+           ("Every solver and discretization on the same collisions; the error is against the delay "
            "equation at rtol = 1e-13 (the exact hard-core recursion for kappa = inf). Times are medians "
            "of repeated runs of the whole `collide` call, set-up included. Points at 1e-16 are exact "
-           "to round-off.", ""]
+           "to round-off."), ""]
     for gamma in GAMMAS:
         fig = Figure(figsize=(16, 4.2), layout="constrained")
         FigureCanvasAgg(fig)
@@ -141,8 +140,8 @@ def section_pareto(tables, figure_dir):
         fig.savefig(figure_dir / name, dpi=110)
         out += [f"![error against time, gamma = {gamma:g}](figures/{name})", ""]
     out += ["### Failures and breakdowns", "",
-            "A method that cannot give a trustworthy number raises an error; it is listed here with "
-            "its message. No point of the sweep is NaN, inf or silently wrong unless listed as such.", "",
+            ("A method that cannot give a trustworthy number raises an error; it is listed here with "
+            "its message. No point of the sweep is NaN, inf or silently wrong unless listed as such."), "",
             "| gamma | kappa | method | outcome |", "|---|---|---|---|"]
     silent = 0
     for (gamma, kappa), table in tables.items():
@@ -211,8 +210,8 @@ def section_peers(repeats, quick):
         from jitcdde_delay import JitcddePeer, timed_restitution
 
         peer = JitcddePeer(0.6, t_max=60.0)
-        out += [f"JiTCDDE compiles its C code once ({peer.compile_time:.2f} s, not counted below). Both "
-                "solvers are run at the loosest tolerance whose error is <= 1e-9.", "",
+        out += [(f"JiTCDDE compiles its C code once ({peer.compile_time:.2f} s, not counted below). Both "
+                "solvers are run at the loosest tolerance whose error is <= 1e-9."), "",
                 "| kappa | JiTCDDE (ms) | error | wavecontact (ms) | error | speed-up |", "|---|---|---|---|---|---|"]
         for kappa in (20.0, 100.0, 1000.0):
             exact = wavecontact.collide(0.6, kappa, rtol=1e-13).restitution
@@ -249,9 +248,9 @@ def section_peers(repeats, quick):
         result = wavecontact.collide(0.6, kappa, solver="modal", modes=modes)
         ours_error = abs(result.restitution - reference)
         ours_time, _ = median_time(lambda: wavecontact.collide(0.6, kappa, solver="modal", modes=modes), repeats)
-        out += [f"gamma = 0.6, kappa = {kappa:g}, N = {modes} modes per rod with static correction. Error "
+        out += [(f"gamma = 0.6, kappa = {kappa:g}, N = {modes} modes per rod with static correction. Error "
                 "against the same equations solved by DOP853 at rtol = 1e-12; each peer at the loosest "
-                "tolerance at least as accurate as wavecontact.", "",
+                "tolerance at least as accurate as wavecontact."), "",
                 "| integrator | rtol | error | median time (ms) | wavecontact speed-up |", "|---|---|---|---|---|",
                 f"| wavecontact modal | default | {ours_error:.1e} | {1e3 * ours_time:.2f} | 1x |"]
         for method in ("DOP853", "Radau"):
@@ -286,9 +285,9 @@ def section_peers(repeats, quick):
 
     from wavecontact.fem.simulation import build_setup, run_collision
 
-    out += ["Same mesh, P1 lumped, kappa = 100; cost per element-step of the time loop (set-up excluded "
-            "for both).", "", "| elements | wavecontact (ns / element-step) | scipy.sparse loop (ns / element-step) "
-            "| speed-up |", "|---|---|---|---|"]
+    out += [("Same mesh, P1 lumped, kappa = 100; cost per element-step of the time loop (set-up excluded "
+            "for both)."), "", ("| elements | wavecontact (ns / element-step) | scipy.sparse loop (ns / element-step) "
+            "| speed-up |"), "|---|---|---|---|"]
     for elements in ((400, 800) if quick else (800, 3200)):
         setup = build_setup(wavecontact.two_rods(0.6, 100.0), elements=elements)
         first = run_collision(setup)
