@@ -28,6 +28,8 @@ def add_parser(subparsers):
     fem.add_argument("--mass", choices=("lumped", "consistent"))
     fem.add_argument("--contact", choices=("exponential", "penalty", "hard"), default="exponential")
     fem.add_argument("--fields", metavar="DIR", help="write stress/velocity fields for ParaView into DIR")
+    fem.add_argument("--fields-format", choices=("vtu", "xdmf"), default="vtu",
+                     help="VTU files with a PVD index (default) or one XDMF time series")
     fem.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
     modal = p.add_argument_group("modal solver")
     modal.add_argument("--modes", type=positive_int, help="modes per rod")
@@ -72,7 +74,7 @@ def run(args) -> int:
     if args.fields:
         from ..io.fields import write_fields
 
-        write_fields(result, args.fields)
+        write_fields(result, args.fields, format=args.fields_format)
     if args.xt_plot:
         from ..plotting.xt import plot_xt_diagram
 
