@@ -245,8 +245,11 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path):
         if index == 61:
             raise KeyboardInterrupt
 
+    interrupted = []
     with pytest.raises(KeyboardInterrupt):
-        _toy_run(tmp_path / "broken", collisions=120, checkpoint_every=25, callback=interrupt)
+        _toy_run(tmp_path / "broken", collisions=120, checkpoint_every=25, callback=interrupt,
+                 log=interrupted.append)
+    assert interrupted == ["interrupted; run again to resume from the checkpoint at collision 50"]
     assert (tmp_path / "broken" / ring_study.CHECKPOINT_NAME).exists()
     assert not list((tmp_path / "broken").glob(".*.tmp")), "a temporary checkpoint file was left behind"
     messages = []

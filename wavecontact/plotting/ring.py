@@ -84,7 +84,7 @@ def plot_translational_energy(run: RingRun, path, statistics: RingStatistics | N
               stats.equilibrium_translational_energy * 1e-3)
     ax.set_ylim(low * 0.7, float(np.max(energy)) * 1.6)
     ax.set_xlabel("collision number")
-    ax.set_ylabel(r"translational energy $E_{tr}$  [$\mu V^2$ units, start $=1/4$]")
+    ax.set_ylabel(r"translational energy $E_{tr}$  (start: $\mu V^2/2 = 1/4$)")
     ax.set_title(_title(run), fontsize=10)
     ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
 

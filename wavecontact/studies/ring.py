@@ -849,6 +849,7 @@ def run_ring(
         from tqdm import tqdm
 
         bar = tqdm(total=m, initial=min(resumed_from, m), unit="collision", desc="ring", dynamic_ncols=True)
+    last_checkpoint = resumed_from if checkpoint is not None and resumed_from else None
     try:
         while len(recorder) < m:
             record = simulation.next_collision()
@@ -862,6 +863,14 @@ def run_ring(
                 _write_checkpoint(
                     checkpoint, parameters, simulation, recorder, wall_before + _time.perf_counter() - start
                 )
+                last_checkpoint = done
+    except KeyboardInterrupt:
+        if log is not None:
+            if last_checkpoint:
+                log(f"interrupted; run again to resume from the checkpoint at collision {last_checkpoint}")
+            elif checkpoint is not None:
+                log("interrupted before the first checkpoint; a new run will start from the beginning")
+        raise
     finally:
         if bar is not None:
             bar.close()
