@@ -169,3 +169,20 @@ def test_soft_contact_matches_delay_and_keeps_its_energy(gamma, kappa):
     delay = wc.collide(gamma, kappa, solver="delay").restitution
     assert abs(modal.restitution - delay) < 1e-6
     assert modal.diagnostics["energy_drift"] < 2e-3  # 5e-2 before the one-radian cap
+
+
+def test_initial_velocity_field_is_projected_on_the_modes():
+    """A field shaped like mode 2 of the long rod puts exactly its kinetic energy into that mode."""
+    scene0 = two_rods(0.6, 100)
+    rod = scene0.rods[1]
+    amplitude = 0.05
+    shape = lambda s: amplitude * math.sqrt(2.0 / rod.mass) * np.cos(2.0 * math.pi * s / rod.length)
+    scene = Scene(rods=scene0.rods, velocities=scene0.velocities, contact=scene0.contact,
+                  initial_velocity=(None, shape))
+    result = wc.solve(scene, "modal", modes=60)
+    extra = result.extra
+    injected = 0.5 * amplitude**2  # unit modal mass
+    total_after = extra["translational_energy_after"] + sum(extra["vibration_energy"])
+    assert total_after == pytest.approx(extra["translational_energy_before"] + injected, rel=3e-6)
+    cold = wc.solve(scene0, "modal", modes=60)
+    assert result.restitution != pytest.approx(cold.restitution, abs=1e-4)  # the warm rod collides differently
