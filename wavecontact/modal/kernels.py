@@ -140,51 +140,54 @@ def end_sums(q, v, left, right, rod_first, sums):
         sums[i, 2] = vl
         sums[i, 3] = vr
 
-@kernel(fastmath=_FAST, error_model="numpy")
-def _kick_modes(v, left, right, first, stop, impulse_left, impulse_right):
-    """Kick the modes ``first:stop`` of one rod by end impulses; return the change of the end velocities."""
-    dvl = 0.0
-    dvr = 0.0
-    for j in range(first, stop):
-        dv = left[j] * impulse_left + right[j] * impulse_right
-        v[j] += dv
-        dvl += left[j] * dv
-        dvr += right[j] * dv
-    return dvl, dvr
+@kernel(error_model="numpy")
+def _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending):
+    """Kick by the pair forces over ``h`` without touching the mode velocities.
 
-
-@kernel(fastmath=_FAST, error_model="numpy")
-def _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums):
-    """Velocity kick by the pair forces over ``h`` (in place); keeps the end
-    velocity sums ``sums[:, 2:4]`` up to date."""
-    n_rods = U.size
-    for i in range(n_rods):
-        end_force[i, 0] = 0.0
-        end_force[i, 1] = 0.0
+    The centres of mass and the end-velocity sums are updated at once (the
+    sums through ``rod_products`` = per rod ``(sum left^2, sum left right,
+    sum right^2)``); the end impulses are added to ``pending`` and reach the
+    mode velocities in the next :func:`_rotate` or :func:`_flush` (one pass
+    over the modes per step instead of three).
+    """
     for k in range(pair_a.size):
-        f = force[k]
+        f = force[k] * h
         if f != 0.0:
             a = pair_a[k]
             b = pair_b[k]
-            end_force[a, 1] -= f
-            end_force[b, 0] += f
-    for i in range(n_rods):
-        fl = end_force[i, 0] * h
-        fr = end_force[i, 1] * h
-        if fl == 0.0 and fr == 0.0:
+            U[a] -= f / mass[a]
+            U[b] += f / mass[b]
+            pending[a, 1] -= f
+            pending[b, 0] += f
+            sums[a, 2] -= rod_products[a, 1] * f
+            sums[a, 3] -= rod_products[a, 2] * f
+            sums[b, 2] += rod_products[b, 0] * f
+            sums[b, 3] += rod_products[b, 1] * f
+
+
+@kernel(fastmath=_FAST, error_model="numpy")
+def _flush(v, left, right, rod_first, pending):
+    """Apply the pending end impulses to the mode velocities."""
+    for i in range(rod_first.size - 1):
+        pl = pending[i, 0]
+        pr = pending[i, 1]
+        if pl == 0.0 and pr == 0.0:
             continue
-        U[i] += (fl + fr) / mass[i]
-        dvl, dvr = _kick_modes(v, left, right, rod_first[i], rod_first[i + 1], fl, fr)
-        sums[i, 2] += dvl
-        sums[i, 3] += dvr
+        pending[i, 0] = 0.0
+        pending[i, 1] = 0.0
+        for j in range(rod_first[i], rod_first[i + 1]):
+            v[j] += left[j] * pl + right[j] * pr
+
 
 @kernel(error_model="numpy")
 def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
+    """Modal gap and gap rate of every pair from the centres of mass and the end sums."""
     for k in range(pair_a.size):
         a = pair_a[k]
         b = pair_b[k]
         gap[k] = (X[b] - half[b] + pair_offset[k] + sums[b, 0]) - (X[a] + half[a] + sums[a, 1])
         gap_rate[k] = (U[b] + sums[b, 2]) - (U[a] + sums[a, 3])
+
 
 @kernel(fastmath=_FAST, error_model="numpy")
 def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
@@ -229,17 +232,22 @@ def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair
         accel_bound[k] = amp_right[a, 2] + amp_left[b, 2]
 
 @kernel(fastmath=_FAST, error_model="numpy")
-def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin_row, sums):
-    """Exact free rotation of every oscillator over one ladder step, and the new end sums."""
+def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin_row, sums, pending):
+    """Apply the pending end impulses to the mode velocities, rotate every oscillator exactly over
+    one ladder step, and recompute the end sums (one pass over the modes)."""
     for i in range(rod_first.size - 1):
         sl = 0.0
         sr = 0.0
         vl = 0.0
         vr = 0.0
+        pl = pending[i, 0]
+        pr = pending[i, 1]
+        pending[i, 0] = 0.0
+        pending[i, 1] = 0.0
         for j in range(rod_first[i], rod_first[i + 1]):
             c = cos_row[j]
             qj = q[j]
-            vj = v[j]
+            vj = v[j] + left[j] * pl + right[j] * pr
             qn = c * qj + sin_over_omega_row[j] * vj
             vn = c * vj - omega_sin_row[j] * qj
             q[j] = qn
@@ -331,7 +339,6 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     for j in range(omega.size):
         omega_max = max(omega_max, omega[j])
     sums = np.empty((n_rods, 4))
-    end_force = np.empty((n_rods, 2))
     amp_left = np.empty((n_rods, 3))
     amp_right = np.empty((n_rods, 3))
     gap = np.empty(n_pairs)
@@ -353,18 +360,28 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     if law == LAW_EXPONENTIAL:
         significant_exponent = math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy) + TOE_MARGIN
 
+    pending = np.zeros((n_rods, 2))
+    rod_products = np.zeros((n_rods, 3))
+    for i in range(n_rods):
+        for j in range(rod_first[i], rod_first[i + 1]):
+            rod_products[i, 0] += left[j] * left[j]
+            rod_products[i, 1] += left[j] * right[j]
+            rod_products[i, 2] += right[j] * right[j]
+
     end_sums(q, v, left, right, rod_first, sums)
     _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
     if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
         return STATUS_NOT_FINITE
 
     while True:
+        # every return below leaves the mode velocities complete (pending impulses applied)
         all_far = True
         for k in range(n_pairs):
             if gap[k] <= contact_range:
                 all_far = False
         dt_free = 0.0
         if all_far:
+            _flush(v, left, right, rod_first, pending)
             _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
                     rigid_gap, rigid_rate, reach, speed_bound, accel_bound, amp_left, amp_right)
             ep = episode[0]
@@ -407,8 +424,10 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             episode[0] = best
             clock[1] = clock[0]
         if steps_here >= max_steps:
+            _flush(v, left, right, rod_first, pending)
             return STATUS_RUNNING
         if recording and counters[2] >= history.shape[0]:
+            _flush(v, left, right, rod_first, pending)
             return STATUS_BUFFER_FULL
 
         # step size from the contact alone
@@ -430,6 +449,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                     # small force: limit the change of alpha * gap per step by a bound on the gap
                     # speed over the step (the momentary rate may vanish at a turning point)
                     if not bounds_ready:
+                        _flush(v, left, right, rod_first, pending)
                         _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b,
                                 pair_offset, rigid_gap, rigid_rate, reach, speed_bound, accel_bound,
                                 amp_left, amp_right)
@@ -455,19 +475,22 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         level = int(math.ceil(math.log(dt_top / dt) / log_ratio - 1e-12))  # noqa: RUF046 (numba)
         level = max(level, 0)
         if level >= n_levels:
+            _flush(v, left, right, rod_first, pending)
             return STATUS_STEP_UNDERFLOW
         dt = dt_top * math.exp(-level * log_ratio)
         h = 0.5 * dt
 
-        _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums)
-        _rotate(q, v, left, right, rod_first, cos_table[level], sin_table[level], omega_sin_table[level], sums)
+        _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
+        _rotate(q, v, left, right, rod_first, cos_table[level], sin_table[level], omega_sin_table[level], sums,
+                pending)
         for i in range(n_rods):
             X[i] += U[i] * dt
         clock[0] += dt
         _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+            _flush(v, left, right, rod_first, pending)
             return STATUS_NOT_FINITE
-        _kick(v, U, mass, left, right, rod_first, pair_a, pair_b, force, h, end_force, sums)
+        _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
         _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         counters[0] += 1
         steps_here += 1
