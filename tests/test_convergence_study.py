@@ -319,8 +319,10 @@ def test_real_study_p1_lumped_converges_at_its_declared_order():
     # the solver declares its expected order per discretization; second order is the theory
     # of central differences on lumped P1 when the contact is resolved
     expected = getattr(fem, "EXPECTED_ORDER", {}).get((1, "lumped"), 2)
+    # meshes on which the long rod (l2 = l1 / 0.6) is a whole number of elements: otherwise the
+    # far-end remainder alternates between 1/3 and 2/3 of an element and scatters the fit
     table = convergence_study(
-        0.6, 20, orders=(1,), masses=("lumped",), elements=(25, 50, 100, 200), progress=False
+        0.6, 20, orders=(1,), masses=("lumped",), elements=(24, 48, 96, 192), progress=False
     )
     assert table.reference_source == "delay solver"
     assert table.reference == pytest.approx(EXACT_06_20, abs=1e-7)
