@@ -81,7 +81,7 @@ def pareto_case(gamma, kappa, families, repeats):
     rows = []
     for family in families:
         for method in family:
-            table = compare_solvers(gamma, kappa, [method], repeats=repeats, progress=False)
+            table = compare_solvers(gamma, kappa, [method], repeats=repeats, progress=False, warmup=False)
             rows.extend(table.rows)
             row = table.rows[0]
             if row.ok and row.wall_time_s > TIME_CAP:

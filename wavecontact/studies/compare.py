@@ -126,7 +126,7 @@ def reference_restitution(gamma: float, kappa: float) -> tuple:
 
 
 def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 1,
-                    progress: bool | None = None) -> ComparisonTable:
+                    progress: bool | None = None, warmup: bool = True) -> ComparisonTable:
     """Run every method on the collision ``(gamma, kappa)``.
 
     Parameters
@@ -139,6 +139,9 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
         Repeat each solve and keep the median wall time (s).
     progress : bool or None
         tqdm bar on stderr (default: when stderr is a terminal).
+    warmup : bool
+        Run each solver once untimed first, so that compilation of its
+        kernels is not charged to the first row.
 
     Returns
     -------
@@ -156,8 +159,16 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
 
         iterator = tqdm(methods, desc="compare", file=sys.stderr)
     contact = "hard" if math.isinf(kappa) else "exponential"
+    warmed = set()
     rows = []
     for method in iterator:
+        if warmup and method.solver not in warmed:
+            # load or compile the solver's kernels before anything is timed
+            warmed.add(method.solver)
+            try:
+                collide(gamma, kappa, method.solver, contact=contact, **method.options)
+            except WavecontactError:
+                pass
         times = []
         try:
             for _ in range(int(repeats)):
