@@ -186,3 +186,12 @@ def test_initial_velocity_field_is_projected_on_the_modes():
     assert total_after == pytest.approx(extra["translational_energy_before"] + injected, rel=3e-6)
     cold = wc.solve(scene0, "modal", modes=60)
     assert result.restitution != pytest.approx(cold.restitution, abs=1e-4)  # the warm rod collides differently
+
+
+def test_fourth_order_composition_reaches_the_reference_with_fewer_steps():
+    second = wc.collide(0.6, 100, solver="modal", modes=100, history=False)
+    fourth = wc.collide(0.6, 100, solver="modal", modes=100, step_order=4, step_accuracy=0.1, history=False)
+    assert abs(fourth.restitution - REFERENCE[100]) < 2e-6
+    assert fourth.work["steps"] < second.work["steps"] / 4  # three substeps each: still cheaper
+    with pytest.raises(InvalidParameterError, match="order"):
+        wc.collide(0.6, 100, solver="modal", step_order=3)

@@ -285,8 +285,8 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
 def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass,
                 law, alpha, strength, stiffness, contact_range,
-                step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, cos_table, sin_table,
-                omega_sin_table, clock, episode, counters, history, max_steps):
+                step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight,
+                cos_table, sin_table, omega_sin_table, clock, episode, counters, history, max_steps):
     """Integrate until the current collision (episode) is over.
 
     Parameters (all arrays are modified in place where they hold state)
@@ -312,8 +312,12 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         Force against which "small" is measured.
     dt_top, ladder_ratio : float
         Largest step; the ladder is ``dt_top * ladder_ratio**-j``.
-    cos_table, sin_table, omega_sin_table : float arrays (J, M)
-        ``cos(omega dt_j)``, ``sin(omega dt_j) / omega``, ``omega sin(omega dt_j)``.
+    sub_index, sub_weight : int and float arrays (S,)
+        The step's Strang substeps: table to use and fraction of the step
+        (``[0], [1.0]`` for order 2; the triple jump for order 4).
+    cos_table, sin_table, omega_sin_table : float arrays (F, J, M)
+        ``cos(omega f dt_j)``, ``sin(omega f dt_j) / omega``, ``omega sin(omega f dt_j)``
+        for each distinct substep fraction ``f``.
     clock : float array (2,)
         Current time; time at which the current episode began.
     episode : int array (1,)
@@ -333,8 +337,15 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     """
     n_rods = X.size
     n_pairs = pair_a.size
-    n_levels = cos_table.shape[0]
+    n_levels = cos_table.shape[1]
     inverse_omega = 1.0 / omega
+    # farthest a composed step strays from its start, in units of the step (1.35 for the triple jump):
+    # the rigorous free-flight and toe limits must hold for every substep's end point
+    excursion = 0.0
+    partial = 0.0
+    for sub in range(sub_weight.size):
+        partial += sub_weight[sub]
+        excursion = max(excursion, abs(partial))
     omega_max = 0.0
     for j in range(omega.size):
         omega_max = max(omega_max, omega[j])
@@ -469,29 +480,33 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 osc = math.sqrt(series * pair_inverse_mass[k]) / step_accuracy
             r_k = max(r_k, osc)
             rate = max(rate, r_k)
+        rate *= excursion
         dt = dt_top if rate * dt_top <= 1.0 else 1.0 / rate
-        if all_far and dt_free > dt:
-            dt = min(dt_free, dt_top)
+        if all_far and dt_free / excursion > dt:
+            dt = min(dt_free / excursion, dt_top)
         level = int(math.ceil(math.log(dt_top / dt) / log_ratio - 1e-12))  # noqa: RUF046 (numba)
         level = max(level, 0)
         if level >= n_levels:
             _flush(v, left, right, rod_first, pending)
             return STATUS_STEP_UNDERFLOW
         dt = dt_top * math.exp(-level * log_ratio)
-        h = 0.5 * dt
-
-        _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
-        _rotate(q, v, left, right, rod_first, cos_table[level], sin_table[level], omega_sin_table[level], sums,
-                pending)
-        for i in range(n_rods):
-            X[i] += U[i] * dt
-        clock[0] += dt
-        _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-        if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
-            _flush(v, left, right, rod_first, pending)
-            return STATUS_NOT_FINITE
-        _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
-        _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
+        # one step = a composition of Strang substeps (one for order 2, the triple jump for order 4)
+        for sub in range(sub_index.size):
+            kind = sub_index[sub]
+            dt_sub = sub_weight[sub] * dt
+            h = 0.5 * dt_sub
+            _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
+            _rotate(q, v, left, right, rod_first, cos_table[kind, level], sin_table[kind, level],
+                    omega_sin_table[kind, level], sums, pending)
+            for i in range(n_rods):
+                X[i] += U[i] * dt_sub
+            clock[0] += dt_sub
+            _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
+            if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+                _flush(v, left, right, rod_first, pending)
+                return STATUS_NOT_FINITE
+            _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
+            _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         counters[0] += 1
         steps_here += 1
         if recording:
@@ -503,16 +518,37 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             counters[2] = n + 1
 
 @kernel(error_model="numpy")
-def rotation_tables(omega, dt_top, ladder_ratio, levels):
-    """``cos(omega dt_j)``, ``sin(omega dt_j) / omega`` and ``omega sin(omega dt_j)`` for ``dt_j = dt_top * ladder_ratio**-j``."""
-    cos_table = np.empty((levels, omega.size))
-    sin_table = np.empty((levels, omega.size))
-    omega_sin_table = np.empty((levels, omega.size))
-    for lev in range(levels):
-        dt = dt_top * ladder_ratio ** (-lev)
-        for j in range(omega.size):
-            sine = math.sin(omega[j] * dt)
-            cos_table[lev, j] = math.cos(omega[j] * dt)
-            sin_table[lev, j] = sine / omega[j]
-            omega_sin_table[lev, j] = omega[j] * sine
+def rotation_tables(omega, dt_top, ladder_ratio, levels, fractions):
+    """Rotation coefficients of every substep fraction ``f`` on every ladder rung.
+
+    ``cos(omega f dt_j)``, ``sin(omega f dt_j) / omega`` and ``omega sin(omega f dt_j)``
+    for ``dt_j = dt_top * ladder_ratio**-j``; arrays of shape (F, levels, M).
+    """
+    shape = (fractions.size, levels, omega.size)
+    cos_table = np.empty(shape)
+    sin_table = np.empty(shape)
+    omega_sin_table = np.empty(shape)
+    for f in range(fractions.size):
+        for lev in range(levels):
+            dt = fractions[f] * dt_top * ladder_ratio ** (-lev)
+            for j in range(omega.size):
+                sine = math.sin(omega[j] * dt)
+                cos_table[f, lev, j] = math.cos(omega[j] * dt)
+                sin_table[f, lev, j] = sine / omega[j]
+                omega_sin_table[f, lev, j] = omega[j] * sine
     return cos_table, sin_table, omega_sin_table
+
+
+def composition(order):
+    """Substeps of one step: ``(fractions, sub_index, sub_weight)`` for order 2 or 4.
+
+    Order 4 is the symmetric triple jump ``S(w1 h) S(w0 h) S(w1 h)`` with
+    ``w1 = 1 / (2 - 2^(1/3))``, ``w0 = 1 - 2 w1`` (Yoshida 1990).
+    """
+    if order == 2:
+        return np.array([1.0]), np.array([0], dtype=np.int64), np.array([1.0])
+    if order == 4:
+        w1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+        w0 = 1.0 - 2.0 * w1
+        return np.array([w1, w0]), np.array([0, 1, 0], dtype=np.int64), np.array([w1, w0, w1])
+    raise ValueError(f"order must be 2 or 4, got {order!r}")

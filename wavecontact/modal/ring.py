@@ -51,9 +51,9 @@ class RingSimulation:
     seed : int or None
         Accepted for a stable interface; the cold start is deterministic and
         does not use it.
-    step_accuracy, step_reach : float
+    step_accuracy, step_reach, step_order
         Contact step control (see :class:`StepControl`); the defaults keep
-        the energy drift near 1e-7 of the total per collision.
+        the energy drift near 5e-8 of the total per collision.
     mode_source : {'analytic', 'fe'}
         Where the modes come from.
 
@@ -69,7 +69,8 @@ class RingSimulation:
     """
 
     def __init__(self, gamma, kappa, modes, static_correction=True, circumference=None, seed=None,
-                 step_accuracy=StepControl.accuracy, step_reach=StepControl.reach, mode_source="analytic"):
+                 step_accuracy=StepControl.accuracy, step_reach=StepControl.reach, step_order=StepControl.order,
+                 mode_source="analytic"):
         scene = two_rods(gamma, kappa)
         self.gamma = float(gamma)
         self.kappa = float(kappa)
@@ -99,7 +100,7 @@ class RingSimulation:
             scene.contact,
             force_scale=self.reduced_mass * approach,  # mu V c / l
             static_correction=self.static_correction,
-            control=StepControl(accuracy=step_accuracy, reach=step_reach),
+            control=StepControl(accuracy=step_accuracy, reach=step_reach, order=step_order),
         )
         if self.system.contact_range >= gap:
             raise InvalidParameterError(

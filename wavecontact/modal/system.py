@@ -40,18 +40,23 @@ class StepControl:
         Steps are ``dt_top * ladder_ratio**-j`` (rotations tabulated once).
     levels : int
         Number of ladder rungs (smallest step ``dt_top * ladder_ratio**-(levels-1)``).
+    order : {2, 4}
+        Strang splitting (2) or its symmetric triple-jump composition (4).
     """
 
     accuracy: float = 0.0125
     reach: float = 0.25
     ladder_ratio: float = 2.0**0.25
     levels: int = 140
+    order: int = 2
 
     def __post_init__(self):
         for name in ("accuracy", "reach"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 < value <= 10.0):
                 raise InvalidParameterError(f"step {name} must lie in (0, 10], got {value!r}")
+        if self.order not in (2, 4):
+            raise InvalidParameterError(f"step order must be 2 or 4, got {self.order!r}")
         if not (1.0 < self.ladder_ratio <= 2.0):
             raise InvalidParameterError(f"ladder_ratio must lie in (1, 2], got {self.ladder_ratio!r}")
 
@@ -148,8 +153,9 @@ class ModalSystem:
         self.dt_top = 0.05 * min(r.length / r.wave_speed for r in self.rods)
         if self.law_code == kernels.LAW_EXPONENTIAL:
             self.dt_top = max(self.dt_top, 0.05 / (self.alpha * max(1e-300, np.max(np.abs(self.U)))))
+        fractions, self.sub_index, self.sub_weight = kernels.composition(control.order)
         self.cos_table, self.sin_table, self.omega_sin_table = kernels.rotation_tables(
-            self.omega, self.dt_top, control.ladder_ratio, control.levels
+            self.omega, self.dt_top, control.ladder_ratio, control.levels, fractions
         )
         self.clock = np.zeros(2)
         self.episode = np.full(1, -1, dtype=np.int64)
@@ -165,7 +171,7 @@ class ModalSystem:
             self.mass, self.half, self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance,
             self.pair_inverse_mass, self.law_code, self.alpha, self.strength, self.stiffness,
             self.contact_range, self.control.accuracy, self.control.reach, self.force_scale,
-            self.dt_top, self.control.ladder_ratio, self.cos_table, self.sin_table, self.omega_sin_table,
+            self.dt_top, self.control.ladder_ratio, self.sub_index, self.sub_weight, self.cos_table, self.sin_table, self.omega_sin_table,
             self.clock, self.episode, self.counters, history, int(max_steps),
         )
 

@@ -27,6 +27,10 @@ step_reach : float
     (the toe of the exponential).  With the defaults epsilon is within about
     1e-7 of the exact solution of the same N-mode equations; smaller values
     of both make the error fall like ``eta^2`` further down.
+step_order : {2, 4}
+    2: Strang splitting; 4: its triple-jump composition (three substeps per
+    step; at ``kappa = 4000`` about 1.7x cheaper for the same accuracy with
+    ``step_accuracy`` 0.1-0.2).
 history : bool
     Record the relative velocity and contact force at every step.
 """
@@ -56,6 +60,7 @@ OPTIONS = {
     "fe_order": 1,
     "step_accuracy": StepControl.accuracy,
     "step_reach": StepControl.reach,
+    "step_order": StepControl.order,
     "history": True,
 }
 
@@ -80,7 +85,7 @@ def _project_field(rod, modes, field):
 
 
 def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
-           step_reach=OPTIONS["step_reach"]):
+           step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"]):
     if scene.is_ring:
         raise UnsupportedSceneError(
             "the modal solver's single-collision mode takes two rods on a line; for rods on a ring "
@@ -121,7 +126,7 @@ def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_
         )
     z_a, z_b = rod_a.impedance, rod_b.impedance
     force_scale = z_a * z_b / (z_a + z_b) * approach  # wave-theory force plateau
-    control = StepControl(accuracy=step_accuracy, reach=step_reach)
+    control = StepControl(accuracy=step_accuracy, reach=step_reach, order=step_order)
     probe = ModalSystem(basis, (0.0, 1.0), velocities, [(0, 1, 0.0)], scene.contact, force_scale,
                         static_correction, control)
     if scene.gaps is not None:
@@ -139,7 +144,7 @@ def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_
 
 def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_source="analytic",
           fe_elements=None, fe_order=1, step_accuracy=OPTIONS["step_accuracy"],
-          step_reach=OPTIONS["step_reach"], history=True) -> CollisionResult:
+          step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"], history=True) -> CollisionResult:
     """One collision of two rods on a line with the modal expansion.
 
     Returns
@@ -151,7 +156,7 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
         per rod, ``translational_energy_before/after``, ``residual_compliance``.
     """
     system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
-                         step_reach)
+                         step_reach, step_order)
     energy_before = system.total_energy()
     momentum_before = system.momentum()
     w_before = float(system.U[1] - system.U[0])
