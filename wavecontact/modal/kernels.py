@@ -469,7 +469,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                     # the momentary rate plus a rigorous bound on how fast it can change
                     room = step_reach + excess
                     ar = aeff[k] * abs(gap_rate[k])
-                    r_k = (ar + math.sqrt(ar * ar + 2.0 * aeff[k] * accel_bound[k] * room)) / (2.0 * room)
+                    r_k = excursion * (ar + math.sqrt(ar * ar + 2.0 * aeff[k] * accel_bound[k] * room)) / (2.0 * room)
             osc = math.sqrt(max(keff[k], 0.0) * pair_inverse_mass[k]) / step_accuracy
             if law == LAW_LINEAR:
                 # the stiffness it will have once touching
@@ -480,7 +480,6 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 osc = math.sqrt(series * pair_inverse_mass[k]) / step_accuracy
             r_k = max(r_k, osc)
             rate = max(rate, r_k)
-        rate *= excursion
         dt = dt_top if rate * dt_top <= 1.0 else 1.0 / rate
         if all_far and dt_free / excursion > dt:
             dt = min(dt_free / excursion, dt_top)
