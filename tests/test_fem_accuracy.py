@@ -88,16 +88,55 @@ def _observed_order(elements, errors):
     return -slope
 
 
-@pytest.mark.parametrize("order, mass", [(1, "consistent"), (2, "lumped"), (2, "consistent")])
-def test_observed_order_of_the_interface_scheme(order, mass):
-    reference = delay_reference(0.6, 100)
-    elements = np.array([200, 400, 800])
-    errors = [
-        abs(wc.collide(0.6, 100, solver="fem", elements=int(n), order=order, mass=mass).restitution - reference)
-        for n in elements
-    ]
-    observed = _observed_order(elements, errors)
+def _uniform(length, elements):
+    return np.linspace(0.0, length, elements + 1)
+
+
+# gamma = 0.6: the long rod is a whole number of elements (l2 / h = N / 0.6), no far-end remainder
+ORDER_MESHES = np.array([24, 48, 96, 192])
+
+
+@pytest.mark.parametrize(
+    "order, mass, options",
+    [
+        (1, "consistent", {}),
+        (2, "lumped", {}),
+        (2, "consistent", {}),
+        (1, "lumped", {"courant": 0.9}),  # off the exact lattice
+        (1, "lumped", {"unequal": True}),  # user meshes, element sizes 3:4 across the contact
+    ],
+)
+def test_observed_order_where_the_contact_is_resolved(order, mass, options):
+    gamma, kappa = 0.6, 20.0  # alpha V h / c <= 0.67 on these meshes: 'auto' picks the force scheme
+    reference = delay_reference(gamma, kappa)
+    l1, l2 = (1 + gamma) / 2, (1 + gamma) / (2 * gamma)
+    errors = []
+    for n in ORDER_MESHES:
+        kwargs = dict(options)
+        if kwargs.pop("unequal", False):
+            kwargs["nodes"] = (_uniform(l1, int(n)), _uniform(l2, int(n) * 5 // 4))
+        result = wc.collide(gamma, kappa, solver="fem", elements=int(n), order=order, mass=mass, **kwargs)
+        assert "force at the end nodes" in result.extra["scheme"]
+        errors.append(abs(result.restitution - reference))
+    observed = _observed_order(ORDER_MESHES, errors)
     assert abs(observed - EXPECTED_ORDER[(order, mass)]) < 0.3, (observed, errors)
+
+
+def test_massless_end_interface_is_first_order():
+    # the fallback for unresolved contact, forced here on a resolved one to expose its O(h) error
+    reference = delay_reference(0.6, 20)
+    errors = [
+        abs(wc.collide(0.6, 20, solver="fem", elements=int(n), order=2, scheme="interface").restitution - reference)
+        for n in ORDER_MESHES
+    ]
+    assert abs(_observed_order(ORDER_MESHES, errors) - 1.0) < 0.2, errors
+
+
+def test_auto_scheme_falls_back_to_the_interface_for_unresolved_contact():
+    for kappa, expected in ((100, "force at the end nodes"), (1e4, "massless-end interface"),
+                            (math.inf, "massless-end interface")):
+        result = wc.collide(0.6, kappa, solver="fem", elements=200, order=2)
+        assert expected in result.extra["scheme"]
 
 
 def test_observed_order_of_the_characteristic_scheme():

@@ -29,6 +29,7 @@ __all__ = [
     "LAW_HARD_PLASTIC",
     "LAW_PENALTY",
     "contact_flow",
+    "contact_force",
     "contact_potential",
     "exponential_flow",
     "hard_elastic_flow",
@@ -131,6 +132,21 @@ def contact_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
     if law == LAW_HARD_ELASTIC:
         return hard_elastic_flow(r, w, dt)
     return hard_plastic_update(r, w, dt)
+
+
+@kernel
+def contact_force(law, r, alpha, strength, stiffness):
+    """Contact force at gap ``r`` (force, pushing the ends apart); zero for hard contact."""
+    if law == LAW_EXPONENTIAL:
+        exponent = -alpha * r
+        if exponent > 700.0:
+            return math.inf
+        return alpha * strength * math.exp(exponent)
+    if law == LAW_PENALTY:
+        if r < 0.0:
+            return -stiffness * r
+        return 0.0
+    return 0.0
 
 
 @kernel

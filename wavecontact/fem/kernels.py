@@ -20,6 +20,7 @@ from .._jit import kernel
 from .contact_flows import (
     LAW_EXPONENTIAL,
     contact_flow,
+    contact_force,
     contact_potential,
     exponential_gap_linear,
     interface_gap,
@@ -39,6 +40,7 @@ STATUS_RUNNING = 0
 SCHEME_CHARACTERISTIC = 0  # exact lattice: incoming characteristics + first-order gap equation
 SCHEME_INTERFACE = 1  # any mesh: massless-end gap equation with the end nodes' velocities
 SCHEME_SPLITTING = 2  # any mesh: impulse splitting with the exact two-body flow of the end nodes
+SCHEME_FORCE = 3  # any mesh, resolved contact: plain central differences, force at the end nodes
 STATUS_SEPARATED = 1
 STATUS_FAILED = 2
 
@@ -263,6 +265,10 @@ def advance(
             r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
+        elif scheme == SCHEME_FORCE:
+            # plain central differences: the force at the start of the step, as a kick
+            impulse = contact_force(law, r_now, alpha, strength, stiffness) * dt
+            shift = impulse * dt
         elif scheme == SCHEME_INTERFACE:
             # massless-end approximation: the ends close at their current relative velocity
             w0 = v2[0] - v1[last]

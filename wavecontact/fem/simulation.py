@@ -29,10 +29,17 @@ _CHUNK = 1 << 15
 # sub-steps of the gap equation with a linearly varying incoming rate, where the contact is resolved
 _GAP_SUBSTEPS = 8
 _RESOLVED = 10.0  # alpha V dt at or below which the incoming rate is reconstructed
+# plain central differences with the contact force ('force' scheme, resolved exponential contact):
+FORCE_COURANT = 0.95  # fraction of the stable step including the contact stiffness
+FORCE_PEAK = 2.0  # bound of the peak force in units of Z_eff V (the hard-contact plateau is 1)
+FORCE_RESOLUTION = 1.0  # largest alpha V dt
+FORCE_MAX_COST = 4.0  # largest ratio of the mesh's step to the contact-resolving step
+FORCE_MESH_RESOLUTION = 1.0  # largest alpha V h / c of the facing end elements
 _SCHEMES = {
     "characteristic": kernels.SCHEME_CHARACTERISTIC,
     "interface": kernels.SCHEME_INTERFACE,
     "splitting": kernels.SCHEME_SPLITTING,
+    "force": kernels.SCHEME_FORCE,
 }
 _HARD_SCHEMES = {"plastic": LAW_HARD_PLASTIC, "elastic": LAW_HARD_ELASTIC}
 
@@ -128,12 +135,19 @@ def build_setup(
         where central differences are exact), 0.95 otherwise.
     hard_scheme : {'plastic', 'elastic'}
         End-node impact rule of hard contact in the 'splitting' scheme (see docs/fem.md).
-    scheme : {'auto', 'characteristic', 'interface', 'splitting'}
+    scheme : {'auto', 'characteristic', 'force', 'interface', 'splitting'}
         Contact treatment.  'auto': 'characteristic' on P1 lumped matched meshes
-        stepped at the element travel time (exact lattice, second order), else
-        'interface' (first order, stable for any stiffness).  'splitting' (the
-        impulse/RESPA splitting with the exact flow of the end-node pair) is kept
-        for comparison: it loses stability for stiff contact (kappa >~ 1e4).
+        stepped at the element travel time (exact lattice, second order); else,
+        for an exponential law that the facing elements resolve
+        (``alpha V h / c <= FORCE_MESH_RESOLUTION``), 'force' (plain central
+        differences with the contact force at the end nodes, second order) at
+        the smaller of the mesh's step and the contact-resolving step of
+        :func:`_force_step` (at most ``FORCE_MAX_COST`` times smaller); else
+        'interface' (massless-end gap equation, first order, stable for any
+        stiffness).  With a user ``dt``, 'force' is chosen only if ``dt`` is
+        within the contact-resolving step.  'splitting' (the impulse/RESPA
+        splitting with the exact flow of the end-node pair) is kept for
+        comparison: it loses stability for stiff contact (kappa >~ 1e4).
     """
     if scene.is_ring or len(scene.rods) != 2:
         raise UnsupportedSceneError("the fem solver handles two rods on a line")
@@ -185,15 +199,31 @@ def build_setup(
             "scheme='characteristic' needs order=1, mass='lumped' and dt equal to the travel time h/c "
             "of the elements at both facing ends (the default matched mesh with dt=None)"
         )
+    approach_speed = abs(scene.velocities[0] - scene.velocities[1])
+    force_step = _force_step(rods, limit, law, alpha, approach_speed) if law == LAW_EXPONENTIAL else 0.0
+    if scheme == "force":
+        if law != LAW_EXPONENTIAL:
+            raise InvalidParameterError("scheme='force' needs the exponential contact law")
+        if dt is None:
+            step = min(step, force_step)
     if scheme == "auto":
-        scheme = "characteristic" if exact else "interface"
+        if exact:
+            scheme = "characteristic"
+        elif law == LAW_EXPONENTIAL and _end_travel_time(rods) * alpha * approach_speed > FORCE_MESH_RESOLUTION:
+            scheme = "interface"  # the mesh does not resolve the force's rise
+        elif step <= force_step:
+            scheme = "force"
+        elif dt is None and FORCE_MAX_COST * force_step >= step:
+            # the contact is resolved by a step at most FORCE_MAX_COST times smaller than the mesh's
+            scheme, step = "force", force_step
+        else:
+            scheme = "interface"
     scheme_code = _SCHEMES[scheme]
     # Where the collision time 1/(alpha V) spans at least 1/10 of a step, the incoming rate is
     # reconstructed linearly inside the step (from the last two step means) and the gap equation
     # sub-stepped: this removes most of the error of holding the rate constant during the release.
     # Where the contact is stiffer the rate jumps from step to step and the reconstruction would
     # overshoot, so it is held constant (the hard limit stays exact).
-    approach_speed = abs(scene.velocities[0] - scene.velocities[1])
     resolved = law == LAW_EXPONENTIAL and alpha * approach_speed * step <= _RESOLVED
     gap_substeps = _GAP_SUBSTEPS if resolved else 1
     u0, v0 = [], []
@@ -248,6 +278,31 @@ def build_setup(
         gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, scheme=scheme_code,
         gap_substeps=gap_substeps,
     )
+
+
+def _end_travel_time(rods) -> float:
+    """Longest wave travel time ``h / c`` of the two elements at the contact (time)."""
+    left, right = rods
+    h1 = left.x[-1] - left.x[left.cells[-1, 0]]
+    h2 = right.x[right.cells[0, 1]] - right.x[0]
+    return max(h1 / left.rod.wave_speed, h2 / right.rod.wave_speed)
+
+
+def _force_step(rods, limit: float, law: int, alpha: float, approach: float) -> float:
+    """Largest step at which plain central differences resolve the exponential contact.
+
+    Two bounds: stability of the end nodes on the contact's stiffness (its
+    largest value ``alpha F_max``, ``F_max = FORCE_PEAK Z_eff V``, added to the
+    elastic ``lambda_max``) and resolution of the collision time,
+    ``alpha V dt <= FORCE_RESOLUTION``.
+    """
+    left, right = rods
+    m_inv = left.inverse_mass_column(left.n_nodes - 1)[-1] + right.inverse_mass_column(0)[0]
+    impedance = 1.0 / (1.0 / left.rod.impedance + 1.0 / right.rod.impedance)
+    contact_stiffness = alpha * FORCE_PEAK * impedance * approach
+    lambda_max = (2.0 / limit) ** 2
+    stable = FORCE_COURANT * 2.0 / math.sqrt(lambda_max + m_inv * contact_stiffness)
+    return min(stable, FORCE_RESOLUTION / (alpha * approach))
 
 
 def _contact_unresolved(scene: Scene, step: float) -> bool:
