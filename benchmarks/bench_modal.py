@@ -66,7 +66,7 @@ def single_collision(kappa: float, repeats: int) -> list:
             repeats,
         )
         rows.append(("modal", f"eta={eta}", abs(result.restitution - reference), wall, result.work["steps"]))
-    for eta in (0.1, 0.05):
+    for eta in (0.2, 0.1, 0.05):
         result, wall = median_time(
             lambda eta=eta: wavecontact.collide(GAMMA, kappa, solver="modal", modes=MODES, step_accuracy=eta,
                                                 step_order=4, history=False),
