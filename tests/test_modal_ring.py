@@ -95,3 +95,30 @@ def test_bad_ring_parameters_are_refused():
     state = RingSimulation(GAMMA, 100, 12).get_state()
     with pytest.raises(InvalidParameterError):
         ring.set_state(state)
+
+
+def test_three_rods_on_a_ring_conserve_energy_and_momentum():
+    """The modal system is not limited to two rods: three rods, three facing pairs."""
+    from wavecontact import Exponential, Rod
+    from wavecontact.modal import ModalSystem, analytic_modes
+
+    rods = [Rod(0.8), Rod(1.0), Rod(1.3)]
+    circumference = 8.0
+    positions = [0.4, 2.5, 5.4]
+    velocities = np.array([0.7, -0.2, -0.3])
+    velocities -= np.sum([r.mass for r in rods] * velocities) / sum(r.mass for r in rods)
+    system = ModalSystem(
+        [analytic_modes(r, 20) for r in rods], positions, velocities,
+        [(0, 1, 0.0), (1, 2, 0.0), (2, 0, circumference)],
+        Exponential(alpha=500.0, strength=0.5 / 500.0**2), force_scale=0.5,
+    )
+    energy = system.total_energy()
+    pairs = set()
+    for _ in range(60):
+        system.episode[0] = -1
+        status = system.run_episode()
+        assert status == 1
+        pairs.add(int(system.episode[0]))
+    assert pairs == {0, 1, 2}
+    assert abs(system.total_energy() - energy) < 1e-5 * energy
+    assert abs(system.momentum()) < 1e-12
