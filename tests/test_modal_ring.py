@@ -116,9 +116,12 @@ def test_three_rods_on_a_ring_conserve_energy_and_momentum():
     pairs = set()
     for _ in range(60):
         system.episode[0] = -1
+        before = system.U.copy()
         status = system.run_episode()
         assert status == 1
         pairs.add(int(system.episode[0]))
+        # a real collision every time (not a pair that had just separated and was still close)
+        assert np.max(np.abs(system.U - before)) > 1e-6
     assert pairs == {0, 1, 2}
     assert abs(system.total_energy() - energy) < 1e-5 * energy
     assert abs(system.momentum()) < 1e-12

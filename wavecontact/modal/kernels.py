@@ -391,6 +391,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             if gap[k] <= contact_range:
                 all_far = False
         dt_free = 0.0
+        candidate = -1
         if all_far:
             _flush(v, left, right, rod_first, pending)
             _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
@@ -400,11 +401,17 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 return STATUS_SEPARATED
             provably_free = True
             skip = math.inf
+            closest_margin = math.inf
             for k in range(n_pairs):
                 # land a little short of the bound so that the next pass steps instead of skipping again
                 margin = rigid_gap[k] - reach[k] - contact_range
                 if margin <= skip_tolerance:
                     provably_free = False
+                    # the collision about to be resolved is the pair that cannot be proven free
+                    # (not a pair that has just separated and is still close)
+                    if margin < closest_margin and rigid_rate[k] <= 0.0:
+                        closest_margin = margin
+                        candidate = k
                 elif rigid_rate[k] < 0.0:
                     skip = min(skip, (margin - 0.5 * skip_tolerance) / (-rigid_rate[k]))
             if provably_free:
@@ -428,12 +435,19 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             for k in range(n_pairs):
                 dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
         if episode[0] < 0:
-            best = 0
-            for k in range(1, n_pairs):
-                if gap[k] < gap[best]:
-                    best = k
-            episode[0] = best
-            clock[1] = clock[0]
+            # the collision begins with the first pair that closes in and cannot be proven free, or
+            # that is within reach of the force; a pair that has just separated but whose ends still
+            # vibrate within the bound only keeps the integrator stepping
+            best = -1
+            if all_far:
+                best = candidate
+            else:
+                for k in range(n_pairs):
+                    if gap[k] <= contact_range and (best < 0 or gap[k] < gap[best]):
+                        best = k
+            if best >= 0:
+                episode[0] = best
+                clock[1] = clock[0]
         if steps_here >= max_steps:
             _flush(v, left, right, rod_first, pending)
             return STATUS_RUNNING
@@ -510,7 +524,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         steps_here += 1
         if recording:
             n = counters[2]
-            ep = episode[0]
+            ep = max(episode[0], 0)
             history[n, 0] = clock[0]
             history[n, 1] = U[pair_b[ep]] - U[pair_a[ep]]
             history[n, 2] = force[ep]
