@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["CollisionResult"]
+__all__ = ["CollisionResult", "to_jsonable"]
 
 
 @dataclass
@@ -88,7 +88,7 @@ class CollisionResult:
             "work": dict(self.work),
             "diagnostics": dict(self.diagnostics),
         }
-        return _jsonable(out)
+        return to_jsonable(out)
 
     def to_json(self, **kwargs) -> str:
         """One JSON object with :meth:`summary`; ``inf`` is written as ``"inf"``."""
@@ -102,12 +102,12 @@ class CollisionResult:
         np.savez(path, summary=json.dumps(self.summary()), **arrays)
 
 
-def _jsonable(value):
-    """Make floats, numpy scalars and infinities JSON-safe."""
+def to_jsonable(value):
+    """Make floats, numpy scalars and infinities JSON-safe (``inf`` -> ``"inf"``)."""
     if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
+        return {k: to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [to_jsonable(v) for v in value]
     if isinstance(value, (np.integer,)):
         return int(value)
     if isinstance(value, (float, np.floating)):

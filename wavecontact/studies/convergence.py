@@ -29,6 +29,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..errors import InvalidParameterError, SolverFailure
+from ..result import to_jsonable
 
 __all__ = [
     "ConvergenceRow",
@@ -147,7 +148,7 @@ class ConvergenceTable:
 
     def to_dict(self) -> dict:
         """JSON-ready dict: the collision, the reference, and per discretization its fit and rows."""
-        return _jsonable(
+        return to_jsonable(
             {
                 "gamma": self.gamma,
                 "kappa": self.kappa,
@@ -470,18 +471,3 @@ def _progress_bar(total: int, progress: bool | None):
     return tqdm(total=total, file=sys.stderr, unit="run", leave=False)
 
 
-def _jsonable(value):
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        number = float(value)
-        if math.isinf(number):
-            return "inf" if number > 0 else "-inf"
-        if math.isnan(number):
-            return "nan"
-        return number
-    return value
