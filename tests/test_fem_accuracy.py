@@ -28,6 +28,15 @@ def test_model_reference_values_at_800_elements():
     assert abs(wc.collide(0.6, 20, solver="fem", elements=800).restitution - 0.75301321) < 1e-6
 
 
+@pytest.mark.parametrize("gamma", [0.95, 0.99, 1.0])
+def test_gamma_near_one_where_the_contact_is_resolved(gamma):
+    # both reflected waves return almost together and the release is as sharp as the onset:
+    # the step means of the incoming rate alone (linear reconstruction) gave 3e-6 at gamma = 1
+    for kappa in (100, 1000):
+        result = wc.collide(gamma, kappa, solver="fem", elements=800)
+        assert abs(result.restitution - delay_reference(gamma, kappa)) < 1e-6
+
+
 @pytest.mark.parametrize("kappa", [1e4, 1e5])
 def test_stiff_exponential_contact_within_1e4(kappa):
     result = wc.collide(0.6, kappa, solver="fem", elements=800)

@@ -9,7 +9,13 @@ from scipy.integrate import solve_ivp
 
 import wavecontact as wc
 from wavecontact import Rod
-from wavecontact.fem.contact_flows import exponential_flow, exponential_gap, penalty_flow, penalty_gap
+from wavecontact.fem.contact_flows import (
+    exponential_flow,
+    exponential_gap,
+    exponential_gap_quartic,
+    penalty_flow,
+    penalty_gap,
+)
 from wavecontact.fem.discretization import discretize_rod, matched_nodes, uniform_nodes
 from wavecontact.fem.stability import largest_eigenvalue, stable_step
 
@@ -83,6 +89,26 @@ def test_first_order_gap_equations_match_ode_solution():
         assert penalty_gap(r, g, duration, c, 30.0) == pytest.approx(exact, abs=1e-9)
     # no overflow for an extremely stiff law
     assert math.isfinite(exponential_gap(0.0, -1.0, 1e-3, 2.0, 1e9, 1e-20))
+
+
+def test_quartic_rate_reconstruction_matches_ode_solution():
+    # closing rate a smooth function of time; the kernel only sees its means over five steps
+    c, alpha, strength, dt = 2.0, 50.0, 1e-3, 0.02
+
+    def rate(t):
+        return -1.0 + 0.8 * np.sin(3.0 * t) + 0.3 * t * t
+
+    def step_mean(k):
+        t = np.linspace((k - 0.5) * dt, (k + 0.5) * dt, 2001)
+        return np.trapezoid(rate(t), t) / dt
+
+    means = np.array([step_mean(k) for k in range(-2, 3)])
+    exact = solve_ivp(lambda t, y: [rate(t) + c * alpha * strength * np.exp(-alpha * y[0])], (-dt / 2, dt / 2),
+                      [0.05], rtol=1e-12, atol=1e-14, method="Radau").y[0, -1]
+    quartic = exponential_gap_quartic(0.05, means, dt, c, alpha, strength, 64)
+    constant = exponential_gap(0.05, means[2], dt, c, alpha, strength)
+    assert abs(quartic - exact) < 1e-9
+    assert abs(constant - exact) > 100 * abs(quartic - exact)  # the reconstruction matters here
 
 
 def test_fields_layout_for_the_io_helpers():

@@ -260,3 +260,42 @@ def exponential_gap_linear(r, rate, slope, duration, compliance, alpha, strength
         middle = (k + 0.5) * h - 0.5 * duration
         r = exponential_gap(r, rate + slope * middle, h, compliance, alpha, strength)
     return r
+
+
+@kernel
+def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, substeps):
+    """Gap equation with the closing rate reconstructed from five consecutive step means.
+
+    ``rates`` = mean closing rates over the steps ``-2 .. 2`` around this one
+    (index 2 is this step).  The rate inside the step is the quartic whose
+    means over those five steps equal ``rates`` (fourth-order accurate for a
+    smooth rate, centred: it uses the incoming waves of the next two steps
+    too); each of ``substeps`` sub-steps uses the exact constant-rate solution
+    with the quartic's mean over the sub-step.
+    """
+    m2, m1, q0, p1, p2 = rates[0], rates[1], rates[2], rates[3], rates[4]
+    # coefficients of s^k, s = (t - mid-step) / duration in [-1/2, 1/2]
+    c0 = (9.0 * (m2 + p2) - 116.0 * (m1 + p1) + 2134.0 * q0) / 1920.0
+    c1 = (5.0 * (m2 - p2) - 34.0 * (m1 - p1)) / 48.0
+    c2 = (-(m2 + p2) + 12.0 * (m1 + p1) - 22.0 * q0) / 16.0
+    c3 = (-(m2 - p2) + 2.0 * (m1 - p1)) / 12.0
+    c4 = ((m2 + p2) - 4.0 * (m1 + p1) + 6.0 * q0) / 24.0
+    spread = 0.5 * abs(c1) + 0.25 * abs(c2) + 0.125 * abs(c3) + 0.0625 * abs(c4) + abs(c0 - q0)
+    lowest = r + min(0.0, q0 - spread) * duration
+    coefficient = compliance * alpha * strength
+    if alpha * lowest - math.log(coefficient * duration) > 14.0:
+        return exponential_gap(r, q0, duration, compliance, alpha, strength)
+    h = 1.0 / substeps
+    for k in range(substeps):
+        a = -0.5 + k * h
+        b = a + h
+        a2, b2 = a * a, b * b
+        mean = (
+            c0 * h
+            + c1 * (b2 - a2) / 2.0
+            + c2 * (b2 * b - a2 * a) / 3.0
+            + c3 * (b2 * b2 - a2 * a2) / 4.0
+            + c4 * (b2 * b2 * b - a2 * a2 * a) / 5.0
+        ) / h
+        r = exponential_gap(r, mean, h * duration, compliance, alpha, strength)
+    return r

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .._jit import kernel
 from .contact_flows import (
     LAW_EXPONENTIAL,
@@ -23,6 +25,7 @@ from .contact_flows import (
     contact_force,
     contact_potential,
     exponential_gap_linear,
+    exponential_gap_quartic,
     interface_gap,
 )
 
@@ -57,7 +60,8 @@ S_ENERGY_SCALE = 8
 S_PREVIOUS_END1 = 9
 S_PREVIOUS_END2 = 10
 S_INCOMING = 11
-STATE_SIZE = 12
+S_INCOMING_EARLIER = 12  # incoming rate one step before S_INCOMING
+STATE_SIZE = 13
 
 
 @kernel(fastmath=False)
@@ -382,7 +386,7 @@ def _staggered_energies(current, previous, bands, masses, dt):
 @kernel
 def advance_lattice(
     u1, w1, u2, w2,
-    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv, substeps,
+    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv, substeps, centered,
     offset, law, alpha, strength, stiffness,
     dt, max_steps, r_stop, period, check_every, bound_factor1, bound_factor2,
     energy_tolerance, state,
@@ -403,6 +407,7 @@ def advance_lattice(
     for i in range(u2.size):
         mass2 += weights2[i]
     samples = 0
+    rates = np.zeros(5)
     current1, previous1, current2, previous2 = u1, w1, u2, w2
     swapped = False
     status = 0
@@ -412,17 +417,35 @@ def advance_lattice(
         # incoming characteristics: mean rate over [t - dt, t + dt], then the single step ahead
         mean_rate = ((current2[1] - previous2[0]) - (current1[last - 1] - previous1[last])) / dt
         incoming = 2.0 * mean_rate - state[S_INCOMING]
-        slope = (incoming - state[S_INCOMING]) / dt
+        varies = False
+        if substeps > 1:
+            if centered:
+                # the interior carries the incoming waves of the next steps too: node j gives the
+                # mean over [t + (j - 2) dt, t + j dt]; five step means centred on this step
+                rates[0] = state[S_INCOMING_EARLIER]
+                rates[1] = state[S_INCOMING]
+                rates[2] = incoming
+                for j in (2, 3):
+                    later = ((current2[j] - previous2[j - 1]) - (current1[last - j] - previous1[last - j + 1])) / dt
+                    rates[j + 1] = 2.0 * later - rates[j]
+                variation = max(abs(rates[0] - incoming), abs(rates[1] - incoming), abs(rates[3] - incoming),
+                                abs(rates[4] - incoming))
+            else:
+                variation = abs(incoming - state[S_INCOMING])
+            varies = law == LAW_EXPONENTIAL and variation > 1e-7 * abs(incoming)
+        state[S_INCOMING_EARLIER] = state[S_INCOMING]
         state[S_INCOMING] = incoming
         _lattice_step(current1, previous1, bands1, inverse_mass1, dt)
         _lattice_step(current2, previous2, bands2, inverse_mass2, dt)
         # previous* now hold the new displacements
         r_free = offset + previous2[0] - previous1[last]
-        if law == LAW_EXPONENTIAL and substeps > 1 and abs(slope) * dt > 1e-7 * abs(incoming):
-            # the incoming rate varies within the step: reconstruct it linearly and sub-step
-            r_after = exponential_gap_linear(
-                r_now, incoming, slope, dt, 0.5 * m_inv * dt, alpha, strength, substeps
-            )
+        if varies:
+            # the incoming rate varies within the step: reconstruct it and sub-step the gap equation
+            if centered:
+                r_after = exponential_gap_quartic(r_now, rates, dt, 0.5 * m_inv * dt, alpha, strength, substeps)
+            else:
+                slope = (incoming - state[S_INCOMING_EARLIER]) / dt
+                r_after = exponential_gap_linear(r_now, incoming, slope, dt, 0.5 * m_inv * dt, alpha, strength, substeps)
         else:
             r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
         shift = (r_after - r_free) / m_inv

@@ -27,7 +27,7 @@ __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 POTENTIAL_TOLERANCE = 1e-16
 _CHUNK = 1 << 15
 # sub-steps of the gap equation with a linearly varying incoming rate, where the contact is resolved
-_GAP_SUBSTEPS = 8
+_GAP_SUBSTEPS = 32
 _RESOLVED = 10.0  # alpha V dt at or below which the incoming rate is reconstructed
 # plain central differences with the contact force ('force' scheme, resolved exponential contact):
 FORCE_COURANT = 0.95  # fraction of the stable step including the contact stiffness
@@ -62,6 +62,7 @@ class FemSetup:
     matched: bool
     scheme: int
     gap_substeps: int = 1
+    centered: bool = False
 
     @property
     def characteristic(self) -> bool:
@@ -220,12 +221,15 @@ def build_setup(
             scheme = "interface"
     scheme_code = _SCHEMES[scheme]
     # Where the collision time 1/(alpha V) spans at least 1/10 of a step, the incoming rate is
-    # reconstructed linearly inside the step (from the last two step means) and the gap equation
-    # sub-stepped: this removes most of the error of holding the rate constant during the release.
-    # Where the contact is stiffer the rate jumps from step to step and the reconstruction would
-    # overshoot, so it is held constant (the hard limit stays exact).
+    # reconstructed inside the step (the quartic with the step means of two steps before and two
+    # after, which the interior nodes already carry) and the gap equation sub-stepped: holding the
+    # rate constant was the dominant error during the release.  Where the contact is stiffer the
+    # rate jumps from step to step and a reconstruction would overshoot, so it is held constant
+    # (the hard limit stays exact).
     resolved = law == LAW_EXPONENTIAL and alpha * approach_speed * step <= _RESOLVED
     gap_substeps = _GAP_SUBSTEPS if resolved else 1
+    # the quartic reconstruction reads the incoming waves three nodes into each rod
+    centered = resolved and min(d.n_nodes for d in rods) >= 5
     u0, v0 = [], []
     for index, (disc, speed) in enumerate(zip(rods, scene.velocities)):
         u = np.zeros(disc.n_nodes)
@@ -276,7 +280,7 @@ def build_setup(
     return FemSetup(
         rods=rods, dt=step, stable_step=limit, law=law, alpha=alpha, strength=strength, stiffness=stiffness,
         gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, scheme=scheme_code,
-        gap_substeps=gap_substeps,
+        gap_substeps=gap_substeps, centered=centered,
     )
 
 
@@ -413,6 +417,7 @@ class _Run:
         self.state[kernels.S_INCOMING] = (self.v[1][0] - 0.5 * dt * self.a[1][0]) - (
             self.v[0][-1] - 0.5 * dt * self.a[0][-1]
         )
+        self.state[kernels.S_INCOMING_EARLIER] = self.state[kernels.S_INCOMING]
         # the time loop keeps velocities half a step behind the displacements
         for v, a in zip(self.v, self.a):
             v -= 0.5 * dt * a
@@ -445,7 +450,7 @@ class _Run:
             status, done, samples = kernels.advance_lattice(
                 self.u[0], self.w[0], self.u[1], self.w[1],
                 left.stiffness_bands, right.stiffness_bands, self.inverse_mass[0], self.inverse_mass[1],
-                left.lumped_mass, right.lumped_mass, self.m_inv, s.gap_substeps,
+                left.lumped_mass, right.lumped_mass, self.m_inv, s.gap_substeps, s.centered,
                 s.gap, s.law, s.alpha, s.strength, s.stiffness,
                 s.dt, max_steps, s.r_stop, self.period, self.check_every, self.bound[0], self.bound[1],
                 self.energy_tolerance, self.state,
