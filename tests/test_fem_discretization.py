@@ -105,10 +105,12 @@ def test_quartic_rate_reconstruction_matches_ode_solution():
     means = np.array([step_mean(k) for k in range(-2, 3)])
     exact = solve_ivp(lambda t, y: [rate(t) + c * alpha * strength * np.exp(-alpha * y[0])], (-dt / 2, dt / 2),
                       [0.05], rtol=1e-12, atol=1e-14, method="Radau").y[0, -1]
-    quartic = exponential_gap_quartic(0.05, means, dt, c, alpha, strength, 64)
+    gauss = exponential_gap_quartic(0.05, means, dt, c, alpha, strength, 0)
+    substeps = exponential_gap_quartic(0.05, means, dt, c, alpha, strength, 32)
     constant = exponential_gap(0.05, means[2], dt, c, alpha, strength)
-    assert abs(quartic - exact) < 1e-9
-    assert abs(constant - exact) > 100 * abs(quartic - exact)  # the reconstruction matters here
+    assert abs(gauss - exact) < 1e-9
+    assert abs(substeps - exact) < 1e-8
+    assert abs(constant - exact) > 100 * abs(substeps - exact)  # the reconstruction matters here
 
 
 def test_fields_layout_for_the_io_helpers():

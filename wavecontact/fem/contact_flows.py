@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .._jit import kernel
 
 __all__ = [
@@ -262,16 +264,26 @@ def exponential_gap_linear(r, rate, slope, duration, compliance, alpha, strength
     return r
 
 
+# Gauss-Legendre rule on [-1, 1] for the integral in the linear gap equation (exact to degree 31)
+_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(16)
+
+
 @kernel
 def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, substeps):
     """Gap equation with the closing rate reconstructed from five consecutive step means.
 
     ``rates`` = mean closing rates over the steps ``-2 .. 2`` around this one
-    (index 2 is this step).  The rate inside the step is the quartic whose
-    means over those five steps equal ``rates`` (fourth-order accurate for a
-    smooth rate, centred: it uses the incoming waves of the next two steps
-    too); each of ``substeps`` sub-steps uses the exact constant-rate solution
-    with the quartic's mean over the sub-step.
+    (index 2 is this step).  The rate inside the step is the quartic ``q(t)``
+    whose means over those five steps equal ``rates`` (fourth-order accurate
+    for a smooth rate, centred: it uses the incoming waves of the next two
+    steps too).  ``y = exp(alpha r)`` obeys the linear ``y' = alpha (q y + c)``,
+    so ``y(T) = exp(alpha Q(T)) (y(0) + alpha c int_0^T exp(-alpha Q(s)) ds)``
+    with ``Q = int q``.  ``substeps = 0``: the integral is taken with 16-point
+    Gauss-Legendre (in logarithms: no overflow), accurate to round-off for the
+    steps where the reconstruction is used.  ``substeps > 0``: the step is cut
+    into that many sub-steps, each solved exactly with the quartic's mean rate
+    over it (second order in the sub-step), and the reconstruction is skipped
+    where the force moves the gap by less than 1e-6 over the step.
     """
     m2, m1, q0, p1, p2 = rates[0], rates[1], rates[2], rates[3], rates[4]
     # coefficients of s^k, s = (t - mid-step) / duration in [-1/2, 1/2]
@@ -283,19 +295,44 @@ def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, sub
     spread = 0.5 * abs(c1) + 0.25 * abs(c2) + 0.125 * abs(c3) + 0.0625 * abs(c4) + abs(c0 - q0)
     lowest = r + min(0.0, q0 - spread) * duration
     coefficient = compliance * alpha * strength
-    if alpha * lowest - math.log(coefficient * duration) > 14.0:
+    negligible = 14.0 if substeps > 0 else 30.0
+    if alpha * lowest - math.log(coefficient * duration) > negligible:
+        # the force moves the gap by less than exp(-negligible) over the step: its shape cannot matter
         return exponential_gap(r, q0, duration, compliance, alpha, strength)
-    h = 1.0 / substeps
-    for k in range(substeps):
-        a = -0.5 + k * h
-        b = a + h
-        a2, b2 = a * a, b * b
-        mean = (
-            c0 * h
-            + c1 * (b2 - a2) / 2.0
-            + c2 * (b2 * b - a2 * a) / 3.0
-            + c3 * (b2 * b2 - a2 * a2) / 4.0
-            + c4 * (b2 * b2 * b - a2 * a2 * a) / 5.0
-        ) / h
-        r = exponential_gap(r, mean, h * duration, compliance, alpha, strength)
-    return r
+    if substeps > 0:
+        h = 1.0 / substeps
+        for k in range(substeps):
+            a = -0.5 + k * h
+            mean = (_antiderivative(c0, c1, c2, c3, c4, a + h) - _antiderivative(c0, c1, c2, c3, c4, a)) / h
+            r = exponential_gap(r, mean, h * duration, compliance, alpha, strength)
+        return r
+    # alpha Q(s) at the Gauss nodes (Q from the start of the step), then log of the integral
+    n = _GAUSS_NODES.size
+    exponents = np.empty(n)
+    top = -math.inf
+    for i in range(n):
+        x = 0.5 * _GAUSS_NODES[i]
+        exponents[i] = -alpha * duration * _antiderivative(c0, c1, c2, c3, c4, x)
+        top = max(top, exponents[i])
+    total = 0.0
+    for i in range(n):
+        total += _GAUSS_WEIGHTS[i] * math.exp(exponents[i] - top)
+    log_integral = top + math.log(0.5 * duration * total)
+    first = alpha * r
+    second = math.log(alpha * coefficient) + log_integral
+    high = max(first, second)
+    log_y = high + math.log(math.exp(first - high) + math.exp(second - high))
+    return (alpha * duration * _antiderivative(c0, c1, c2, c3, c4, 0.5) + log_y) / alpha
+
+
+@kernel
+def _antiderivative(c0, c1, c2, c3, c4, x):
+    """``int_{-1/2}^{x} sum_k c_k s^k ds``."""
+    a = -0.5
+    return (
+        c0 * (x - a)
+        + c1 * (x**2 - a**2) / 2.0
+        + c2 * (x**3 - a**3) / 3.0
+        + c3 * (x**4 - a**4) / 4.0
+        + c4 * (x**5 - a**5) / 5.0
+    )

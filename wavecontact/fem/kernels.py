@@ -386,7 +386,7 @@ def _staggered_energies(current, previous, bands, masses, dt):
 @kernel
 def advance_lattice(
     u1, w1, u2, w2,
-    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv, substeps, centered,
+    bands1, bands2, inverse_mass1, inverse_mass2, weights1, weights2, m_inv, substeps, centered, gauss,
     offset, law, alpha, strength, stiffness,
     dt, max_steps, r_stop, period, check_every, bound_factor1, bound_factor2,
     energy_tolerance, state,
@@ -432,7 +432,7 @@ def advance_lattice(
                                 abs(rates[4] - incoming))
             else:
                 variation = abs(incoming - state[S_INCOMING])
-            varies = law == LAW_EXPONENTIAL and variation > 1e-7 * abs(incoming)
+            varies = law == LAW_EXPONENTIAL and variation > (1e-13 if gauss else 1e-7) * abs(incoming)
         state[S_INCOMING_EARLIER] = state[S_INCOMING]
         state[S_INCOMING] = incoming
         _lattice_step(current1, previous1, bands1, inverse_mass1, dt)
@@ -442,7 +442,9 @@ def advance_lattice(
         if varies:
             # the incoming rate varies within the step: reconstruct it and sub-step the gap equation
             if centered:
-                r_after = exponential_gap_quartic(r_now, rates, dt, 0.5 * m_inv * dt, alpha, strength, substeps)
+                r_after = exponential_gap_quartic(
+                    r_now, rates, dt, 0.5 * m_inv * dt, alpha, strength, 0 if gauss else substeps
+                )
             else:
                 slope = (incoming - state[S_INCOMING_EARLIER]) / dt
                 r_after = exponential_gap_linear(r_now, incoming, slope, dt, 0.5 * m_inv * dt, alpha, strength, substeps)

@@ -30,6 +30,7 @@ OPTIONS = {
     "courant": None,
     "hard_scheme": "plastic",
     "scheme": "auto",
+    "gap_quadrature": "substeps",
     "record_fields": False,
     "field_samples": 300,
     "energy_tolerance": 0.05,
@@ -72,6 +73,9 @@ def solve(scene: Scene, **options) -> CollisionResult:
         End-node impact rule for hard contact in the 'splitting' scheme.
     scheme : {'auto', 'characteristic', 'force', 'interface', 'splitting'}
         Contact treatment (see :func:`wavecontact.fem.simulation.build_setup`).
+    gap_quadrature : {'substeps', 'gauss'}
+        Integration of the gap equation inside a step where the characteristic
+        scheme reconstructs the incoming rate (see :func:`build_setup`).
     record_fields : bool
         Sample displacement, velocity and stress fields over the collision
         into ``result.extra['fields']`` (runs the collision a second time).
@@ -98,6 +102,7 @@ def solve(scene: Scene, **options) -> CollisionResult:
         courant=options["courant"],
         hard_scheme=options["hard_scheme"],
         scheme=options["scheme"],
+        gap_quadrature=options["gap_quadrature"],
     )
     out = run_collision(
         setup,
