@@ -8,7 +8,10 @@ Prints Markdown tables:
    (benchmarks/peers/fem_scipy_loop.py), measured in the same run;
 3. time to epsilon within 1e-6 of the delay reference at kappa = 100
    (the whole ``collide`` call, set-up included), cheapest mesh that gets there;
-4. cost at kappa = 1e6 against kappa = 100 on the same mesh.
+4. cost at kappa = 1e6 against kappa = 100 on the same mesh;
+5. the other discretizations (P1 consistent, P2, P1 lumped off the exact lattice): contact
+   scheme chosen by 'auto', step, cost and error at kappa = 100 and 1e6;
+6. the two gap quadratures of the characteristic scheme (gap_quadrature='substeps' / 'gauss').
 All times are medians of repeated runs.
 """
 
@@ -122,6 +125,39 @@ def table_stiffness(repeats, reference):
             print(f"| {elements} | {kappa:g} | {steps} | {seconds * 1e3:.2f} | {error} | {seconds / base:.2f} |")
 
 
+def table_discretizations(repeats, reference):
+    print("\n### Other discretizations, 800 elements (scheme chosen by 'auto')\n")
+    print("| discretization | kappa | scheme | dt / stable step | steps | loop time (ms) | ns / element-step | error |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|")
+    cases = (("P1 consistent", 1, "consistent", {}), ("P2 lumped", 2, "lumped", {}),
+             ("P2 consistent", 2, "consistent", {}), ("P1 lumped, Courant 0.9", 1, "lumped", {"courant": 0.9}))
+    for name, order, mass, extra in cases:
+        for kappa in (100, 1e6):
+            setup = build_setup(wavecontact.two_rods(GAMMA, kappa), elements=800, order=order, mass=mass, **extra)
+            out = run_collision(setup)
+            element_steps = out["steps"] * sum(d.n_elements for d in setup.rods)
+            seconds = median_time(lambda s=setup: run_collision(s), max(3, repeats // 2))
+            result = wavecontact.collide(GAMMA, kappa, solver="fem", elements=800, order=order, mass=mass, **extra)
+            scheme = {1: "interface", 3: "force"}.get(setup.scheme, str(setup.scheme))
+            print(f"| {name} | {kappa:g} | {scheme} | {setup.dt / setup.stable_step:.2f} | {out['steps']} | "
+                  f"{seconds * 1e3:.1f} | {seconds / element_steps * 1e9:.2f} | "
+                  f"{abs(result.restitution - reference[kappa]):.1e} |")
+
+
+def table_gap_quadrature(repeats):
+    print("\n### Gap quadrature of the characteristic scheme, P1 lumped, 800 elements\n")
+    print("| gamma | kappa | gap_quadrature | loop time (ms) | error |")
+    print("|---:|---:|---|---:|---:|")
+    for gamma, kappa in ((GAMMA, 100), (1.0, 1000)):
+        exact = wavecontact.collide(gamma, kappa, solver="delay").restitution
+        for quadrature in ("substeps", "gauss"):
+            setup = build_setup(wavecontact.two_rods(gamma, kappa), elements=800, gap_quadrature=quadrature)
+            seconds = median_time(lambda s=setup: run_collision(s), repeats)
+            epsilon = wavecontact.collide(gamma, kappa, solver="fem", elements=800,
+                                          gap_quadrature=quadrature).restitution
+            print(f"| {gamma} | {kappa:g} | {quadrature} | {seconds * 1e3:.2f} | {abs(epsilon - exact):.1e} |")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
@@ -135,6 +171,8 @@ def main(argv=None):
     table_peer(args.repeats, reference)
     table_time_to_accuracy(args.repeats, reference)
     table_stiffness(args.repeats, reference)
+    table_discretizations(args.repeats, reference)
+    table_gap_quadrature(args.repeats)
 
 
 if __name__ == "__main__":
