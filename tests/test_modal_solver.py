@@ -59,7 +59,8 @@ def test_energy_error_is_second_order_in_the_step_and_momentum_exact():
     steps = np.array([0.025, 0.0125, 0.00625])
     drifts = []
     for eta in steps:
-        result = wc.collide(0.6, 100, solver="modal", modes=60, step_accuracy=float(eta), history=False)
+        result = wc.collide(0.6, 100, solver="modal", modes=60, step_method="splitting",
+                            step_accuracy=float(eta), history=False)
         drifts.append(result.diagnostics["energy_drift"])
         assert result.diagnostics["momentum_drift"] < 1e-13
     order = np.polyfit(np.log(steps), np.log(drifts), 1)[0]
@@ -190,14 +191,69 @@ def test_initial_velocity_field_is_projected_on_the_modes():
 
 def test_fourth_order_composition_converges_faster():
     """Triple jump against a very fine second-order run of the same 30-mode system (kappa = 4000)."""
-    fine = wc.collide(0.6, 4000, solver="modal", modes=30, step_accuracy=0.003, history=False).restitution
+    split = {"step_method": "splitting", "history": False}
+    fine = wc.collide(0.6, 4000, solver="modal", modes=30, step_accuracy=0.003, **split).restitution
     etas = np.array([0.2, 0.1, 0.05])
-    runs = [wc.collide(0.6, 4000, solver="modal", modes=30, step_order=4, step_accuracy=float(e), history=False)
+    runs = [wc.collide(0.6, 4000, solver="modal", modes=30, step_order=4, step_accuracy=float(e), **split)
             for e in etas]
     errors = np.array([abs(r.restitution - fine) for r in runs])
     assert np.polyfit(np.log(etas), np.log(errors), 1)[0] > 3.0
-    default = wc.collide(0.6, 4000, solver="modal", modes=30, history=False)
+    default = wc.collide(0.6, 4000, solver="modal", modes=30, **split)
     assert errors[-1] < 1e-7 < abs(default.restitution - fine)
     assert 3 * runs[-1].work["steps"] < default.work["steps"]  # three substeps each, still cheaper
     with pytest.raises(InvalidParameterError, match="order"):
         wc.collide(0.6, 100, solver="modal", step_order=3)
+
+
+def _peer():
+    import pathlib
+    import sys
+
+    peers = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "peers"
+    sys.path.insert(0, str(peers))
+    try:
+        import modal_solve_ivp
+    finally:
+        sys.path.remove(str(peers))
+    return modal_solve_ivp
+
+
+@pytest.mark.parametrize("kappa", [100.0, 4000.0])
+def test_collocation_matches_scipy_on_the_same_modal_equations(kappa):
+    """The default integrator against DOP853 at rtol 1e-11 on the same N-mode system (independent integrator)."""
+    exact, _ = _peer().restitution(0.6, kappa, 20, 1e-11)
+    result = wc.collide(0.6, kappa, solver="modal", modes=20, history=False)
+    assert result.work["step_method"] == "collocation"
+    assert abs(result.restitution - exact) < 1e-9
+    assert result.diagnostics["energy_drift"] < 1e-8
+    assert result.diagnostics["momentum_drift"] < 1e-14
+
+
+def test_collocation_error_falls_at_high_order_with_the_steps():
+    """Radau collocation with s = 4 stages: error against the step count falls faster than steps^-4."""
+    exact, _ = _peer().restitution(0.6, 4000.0, 20, 1e-11)
+    errors, steps = [], []
+    for tolerance in (1e-1, 1e-2, 1e-3):
+        result = wc.collide(0.6, 4000.0, solver="modal", modes=20, collocation_stages=4,
+                            collocation_tolerance=tolerance, history=False)
+        errors.append(abs(result.restitution - exact))
+        steps.append(result.work["steps"])
+    order = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert order > 4.0
+    assert errors[-1] < 1e-8
+
+
+def test_collocation_and_splitting_agree_on_hard_and_soft_contacts():
+    """The two integrators of the same equations: hard contact (kink in the law) and a long soft one."""
+    for kappa, tol in ((math.inf, 2e-6), (1.0, 1e-6)):
+        a = wc.collide(0.6, kappa, solver="modal", modes=50, history=False)
+        b = wc.collide(0.6, kappa, solver="modal", modes=50, step_method="splitting", step_accuracy=0.005,
+                       history=False)
+        assert abs(a.restitution - b.restitution) < tol
+
+
+@pytest.mark.parametrize("options", [{"step_method": "rk4"}, {"collocation_stages": 0},
+                                     {"collocation_tolerance": 0.0}])
+def test_bad_collocation_options_are_refused(options):
+    with pytest.raises(InvalidParameterError):
+        wc.collide(0.6, 100, solver="modal", **options)

@@ -153,15 +153,21 @@ class ModalSystem:
         self.dt_top = 0.05 * min(r.length / r.wave_speed for r in self.rods)
         if self.law_code == kernels.LAW_EXPONENTIAL:
             self.dt_top = max(self.dt_top, 0.05 / (self.alpha * max(1e-300, np.max(np.abs(self.U)))))
-        fractions, self.sub_index, self.sub_weight = kernels.composition(control.order)
-        self.cos_table, self.sin_table, self.omega_sin_table = kernels.rotation_tables(
-            self.omega, self.dt_top, control.ladder_ratio, control.levels, fractions
-        )
+        self._fractions, self.sub_index, self.sub_weight = kernels.composition(control.order)
+        self._rotation_tables = None  # filled on the first splitting step (the collocation path needs none)
         self.clock = np.zeros(2)
         self.episode = np.full(1, -1, dtype=np.int64)
         self.counters = np.zeros(4, dtype=np.int64)
 
     # ---------------------------------------------------------------- stepping
+    def rotation_tables(self):
+        """``(cos, sin / omega, omega sin)`` of every substep fraction on every ladder rung (cached)."""
+        if self._rotation_tables is None:
+            self._rotation_tables = kernels.rotation_tables(
+                self.omega, self.dt_top, self.control.ladder_ratio, self.control.levels, self._fractions
+            )
+        return self._rotation_tables
+
     def run_episode(self, history=None, max_steps=10_000_000):
         """Integrate until the current collision is over; return the kernel status."""
         if history is None:
@@ -171,7 +177,7 @@ class ModalSystem:
             self.mass, self.half, self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance,
             self.pair_inverse_mass, self.law_code, self.alpha, self.strength, self.stiffness,
             self.contact_range, self.control.accuracy, self.control.reach, self.force_scale,
-            self.dt_top, self.control.ladder_ratio, self.sub_index, self.sub_weight, self.cos_table, self.sin_table, self.omega_sin_table,
+            self.dt_top, self.control.ladder_ratio, self.sub_index, self.sub_weight, *self.rotation_tables(),
             self.clock, self.episode, self.counters, history, int(max_steps),
         )
 

@@ -30,6 +30,17 @@ step_reach : float
 step_order : {2, 4}
     2: Strang splitting; 4: its triple-jump composition (three substeps per
     step, error ~ eta^4; use ``step_accuracy`` 0.05-0.1).
+step_method : {'collocation', 'splitting'}
+    'collocation': adaptive exponential Radau collocation (oscillators
+    integrated exactly against a polynomial contact force; high order, the
+    fast and accurate choice for one collision); 'splitting': kicks and exact
+    rotations (the ring's integrator; ``step_accuracy``, ``step_reach`` and
+    ``step_order`` apply to it only).
+collocation_stages : int
+    Radau IIA stages ``s`` of the collocation (order up to ``2 s - 1``).
+collocation_tolerance : float
+    Accepted step-to-step change of the predicted node forces, relative to
+    the force scale ``Z V / 2`` (the restitution error is far smaller).
 history : bool
     Record the relative velocity and contact force at every step.
 """
@@ -37,12 +48,13 @@ history : bool
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import numpy as np
 
 from ..contact import Exponential
-from ..errors import InvalidParameterError, UnsupportedSceneError
-from ..modal import kernels
+from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..modal import collocation, kernels
 from ..modal.modes import rod_modes
 from ..modal.system import ModalSystem, StepControl
 from ..result import CollisionResult
@@ -60,8 +72,17 @@ OPTIONS = {
     "step_accuracy": StepControl.accuracy,
     "step_reach": StepControl.reach,
     "step_order": StepControl.order,
+    "step_method": "collocation",
+    "collocation_stages": 6,
+    "collocation_tolerance": 1e-2,
     "history": True,
 }
+_STEP_METHODS = ("collocation", "splitting")
+# largest change of alpha_eff * gap per collocation step where the force matters
+_EXPONENT_STEP = 2.0
+# collocation tables of recent systems (filling costs ~0.1 ms per step size; repeated collisions reuse them)
+_TABLE_CACHE: OrderedDict = OrderedDict()
+_TABLE_CACHE_SIZE = 8
 
 # start with alpha * gap this far beyond the negligible-force range
 _START_MARGIN = 5.0
@@ -141,27 +162,47 @@ def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_
     return probe, gap
 
 
-def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_source="analytic",
-          fe_elements=None, fe_order=1, step_accuracy=OPTIONS["step_accuracy"],
-          step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"], history=True) -> CollisionResult:
-    """One collision of two rods on a line with the modal expansion.
+def _collocation_tables(system, coupling, stages):
+    key = (system.omega.tobytes(), coupling.tobytes(), float(system.mass[0]), float(system.mass[1]),
+           int(stages), float(system.dt_top))
+    tables = _TABLE_CACHE.get(key)
+    if tables is None:
+        tables = collocation.CollocationTables(system.omega, coupling, 1.0 / system.mass[0] + 1.0 / system.mass[1],
+                                               stages, system.dt_top)
+        _TABLE_CACHE[key] = tables
+        while len(_TABLE_CACHE) > _TABLE_CACHE_SIZE:
+            _TABLE_CACHE.popitem(last=False)
+    else:
+        _TABLE_CACHE.move_to_end(key)
+    return tables
 
-    Returns
-    -------
-    CollisionResult
-        ``work``: ``modes``, ``steps``, ``free_flights``; ``diagnostics``:
-        ``energy_drift`` (relative), ``momentum_drift``; ``extra``:
-        ``modal_energies`` (2, modes) after the collision, ``vibration_energy``
-        per rod, ``translational_energy_before/after``, ``residual_compliance``.
-    """
-    system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
-                         step_reach, step_order)
-    energy_before = system.total_energy()
-    momentum_before = system.momentum()
-    w_before = float(system.U[1] - system.U[0])
-    e_tr_before = 0.5 * float(np.sum(system.mass * system.U**2))
-    buffer = np.empty((4096 if history else 0, 3))
-    chunks = []
+
+def _run_collocation(system, stages, tolerance, buffer, chunks):
+    """Advance ``system`` (two rods, one pair) through its collision by exponential collocation."""
+    first = system.rod_first.astype(np.int64)
+    coupling = np.concatenate([-system.right[first[0]:first[1]], system.left[first[1]:first[2]]])
+    tables = _collocation_tables(system, coupling, stages)
+    counters = np.zeros(4, dtype=np.int64)
+    while True:
+        status = collocation.run_collision(
+            system.q, system.v, system.omega, coupling, system.X, system.U, system.mass, system.half,
+            float(system.pair_compliance[0]), system.law_code, system.alpha, system.strength, system.stiffness,
+            system.contact_range, system.force_scale, float(tolerance), _EXPONENT_STEP, *tables.arrays(), system.clock, counters,
+            buffer, 100_000_000,
+        )
+        system.check_status(status)
+        if status == kernels.STATUS_BUFFER_FULL:
+            chunks.append(buffer[: counters[2]].copy())
+            counters[2] = 0
+            buffer = np.empty((2 * buffer.shape[0], 3))
+            continue
+        if status == kernels.STATUS_SEPARATED:
+            return buffer[: counters[2]], {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
+                                           "stages": int(stages)}
+        raise SolverFailure(f"modal collocation stopped with status {status}")
+
+
+def _run_splitting(system, buffer, chunks):
     while True:
         status = system.run_episode(history=buffer)
         system.check_status(status)
@@ -173,9 +214,49 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
         if status == kernels.STATUS_FREE_FOREVER:
             raise UnsupportedSceneError("the rods never come within range of the contact force")
         if status == kernels.STATUS_SEPARATED:
-            break
+            return buffer[: system.counters[2]], {"steps": int(system.counters[0]),
+                                                  "free_flights": int(system.counters[1])}
+
+
+def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_source="analytic",
+          fe_elements=None, fe_order=1, step_accuracy=OPTIONS["step_accuracy"],
+          step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"], step_method=OPTIONS["step_method"],
+          collocation_stages=OPTIONS["collocation_stages"], collocation_tolerance=OPTIONS["collocation_tolerance"],
+          history=True) -> CollisionResult:
+    """One collision of two rods on a line with the modal expansion.
+
+    Returns
+    -------
+    CollisionResult
+        ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
+        ``stages`` for collocation, ``free_flights`` for splitting);
+        ``diagnostics``: ``energy_drift`` (relative), ``momentum_drift``;
+        ``extra``: ``modal_energies`` (2, modes) after the collision,
+        ``vibration_energy`` per rod, ``translational_energy_before/after``,
+        ``residual_compliance``.
+    """
+    if step_method not in _STEP_METHODS:
+        raise InvalidParameterError(f"step_method must be one of {_STEP_METHODS}, got {step_method!r}")
+    if step_method == "collocation":
+        if isinstance(collocation_stages, bool) or not isinstance(collocation_stages, (int, np.integer)) \
+                or not 1 <= collocation_stages <= 8:
+            raise InvalidParameterError(f"collocation_stages must be an integer in [1, 8], got {collocation_stages!r}")
+        if not (isinstance(collocation_tolerance, (int, float)) and 0.0 < collocation_tolerance <= 1.0):
+            raise InvalidParameterError(f"collocation_tolerance must lie in (0, 1], got {collocation_tolerance!r}")
+    system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
+                         step_reach, step_order)
+    energy_before = system.total_energy()
+    momentum_before = system.momentum()
+    w_before = float(system.U[1] - system.U[0])
+    e_tr_before = 0.5 * float(np.sum(system.mass * system.U**2))
+    buffer = np.empty((4096 if history else 0, 3))
+    chunks = []
+    if step_method == "collocation":
+        tail, work = _run_collocation(system, collocation_stages, collocation_tolerance, buffer, chunks)
+    else:
+        tail, work = _run_splitting(system, buffer, chunks)
     if history:
-        chunks.append(buffer[: system.counters[2]].copy())
+        chunks.append(tail.copy())
         records = np.concatenate(chunks)
     else:
         records = np.empty((0, 3))
@@ -202,12 +283,7 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
         contact_force=force,
         contact_start=contact_start,
         contact_duration=contact_duration,
-        work={
-            "modes": int(modes),
-            "steps": int(system.counters[0]),
-            "free_flights": int(system.counters[1]),
-            "mode_source": mode_source,
-        },
+        work={"modes": int(modes), "mode_source": mode_source, "step_method": step_method, **work},
         diagnostics={
             "energy_drift": abs(energy_after - energy_before) / energy_before,
             "momentum_drift": abs(system.momentum() - momentum_before),

@@ -1,0 +1,462 @@
+"""Exponential collocation integrator for one contact pair (single collisions).
+
+Between two rods touching at one pair of ends the only coupling is the scalar
+contact force ``F(t)``.  Over a step of length ``h`` this integrator replaces
+``F`` by the polynomial of degree ``s - 1`` through its values at the
+Radau IIA nodes ``theta_1 h, ..., theta_s h`` (``theta_s = 1``) and integrates
+every oscillator and both centres of mass *exactly* against that polynomial
+(the integrals are ``phi`` functions of ``i omega h``, tabulated per step size).
+The gap at the nodes is then an affine function of the ``s`` node forces, so
+a step is an ``s``-dimensional implicit equation ``F_i = F(r_i(F))`` solved by
+Newton, whatever the number of modes.  One step costs two passes over the
+modes; the order is up to ``2 s - 1`` for smooth forces, and no step limit
+comes from the highest mode (no kicks, hence no impulse resonance).
+
+The step size is adapted from the difference between the node forces and the
+previous step's polynomial extrapolated to the same times (an ``O(h^s)``
+estimate), rounded down to a geometric ladder of sizes whose tables are filled
+the first time they are used.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import kernel
+from .kernels import (
+    LAW_EXPONENTIAL,
+    STATUS_BUFFER_FULL,
+    STATUS_NOT_FINITE,
+    STATUS_RUNNING,
+    STATUS_SEPARATED,
+    STATUS_STEP_UNDERFLOW,
+    contact_response_from,
+)
+
+__all__ = ["CollocationTables", "radau_nodes", "run_collision"]
+
+
+def radau_nodes(stages: int) -> np.ndarray:
+    """Radau IIA nodes on (0, 1] (the last one is 1): zeros of ``P_s(2x-1) - P_{s-1}(2x-1)``."""
+    if stages < 1:
+        raise ValueError("stages must be at least 1")
+    if stages == 1:
+        return np.array([1.0])
+    coefficients = np.zeros(stages + 1)
+    coefficients[stages] = 1.0
+    coefficients[stages - 1] = -1.0
+    roots = np.polynomial.legendre.legroots(coefficients)
+    nodes = np.sort(0.5 * (np.real(roots) + 1.0))
+    nodes[-1] = 1.0
+    return nodes
+
+
+# largest growth of the step from one step to the next
+GROW = 2.0
+# node forces below FLOOR * force_scale are controlled relatively (see run_collision)
+FLOOR = 1e-2
+_TAYLOR_TERMS = 22  # |x| < 1: the series of phi_s(i x) to x^21 reaches round-off for every s >= 1
+
+
+@kernel(error_model="numpy")
+def _phi(x, count, inverse_factorial, re, im):
+    """``phi_0 .. phi_count`` at the imaginary point ``z = i x`` (real and imaginary parts).
+
+    ``phi_0(z) = exp(z)``, ``phi_{k+1}(z) = (phi_k(z) - 1/k!) / z``; for ``|x| < 1`` the highest
+    one from its Taylor series ``sum_n (i x)^n / (n + count)!`` (Horner in ``x^2``) and the
+    others by the stable backward recurrence ``phi_k = i x phi_{k+1} + 1/k!``.
+    ``inverse_factorial[n] = 1/n!`` for ``n < count + _TAYLOR_TERMS``.
+    """
+    if abs(x) < 1.0:
+        y = -x * x
+        sum_re = 0.0
+        sum_im = 0.0
+        for n in range(_TAYLOR_TERMS - 2, -1, -2):  # even powers: (i x)^n = (-x^2)^(n/2)
+            sum_re = sum_re * y + inverse_factorial[n + count]
+            sum_im = sum_im * y + inverse_factorial[n + 1 + count]
+        re[count] = sum_re
+        im[count] = x * sum_im
+        for k in range(count - 1, -1, -1):
+            re[k] = -x * im[k + 1] + inverse_factorial[k]
+            im[k] = x * re[k + 1]
+    else:
+        re[0] = math.cos(x)
+        im[0] = math.sin(x)
+        for k in range(count):
+            # (a + i b - 1/k!) / (i x) = b / x - i (a - 1/k!) / x
+            re[k + 1] = im[k] / x
+            im[k + 1] = -(re[k] - inverse_factorial[k]) / x
+
+
+@kernel(error_model="numpy")
+def _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv,
+                node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled):
+    """Tables of one ladder step ``h``: node rotations, exact polynomial-force integrals, gap response."""
+    s = nodes.size
+    re = np.empty(s + 1)
+    im = np.empty(s + 1)
+    factorials = np.ones(s)
+    for k in range(1, s):
+        factorials[k] = factorials[k - 1] * k
+    inverse_factorial = np.ones(s + _TAYLOR_TERMS + 1)
+    for n in range(1, inverse_factorial.size):
+        inverse_factorial[n] = inverse_factorial[n - 1] / n
+    g = np.zeros((s, s))  # gap at node i per monomial coefficient k of the force
+    for i in range(s):
+        for k in range(s):
+            g[i, k] = inverse_mass_rigid * h * h * nodes[i] ** (k + 2) / ((k + 1) * (k + 2))
+    for j in range(omega.size):
+        w = omega[j]
+        c2 = coupling[j] * coupling[j]
+        for i in range(s):
+            t = nodes[i] * h
+            _phi(w * t, s, inverse_factorial, re, im)
+            node_cos[level, i, j] = re[0]
+            node_sin[level, i, j] = im[0] / w
+            # int_0^t sin(w (t - tau)) / w (tau / h)^k d tau = k! theta^k t Im(phi_{k+1}(i w t)) / w
+            power = 1.0
+            for k in range(s):
+                g[i, k] += c2 * factorials[k] * power * t * im[k + 1] / w
+                power *= nodes[i]
+            if i == s - 1:  # the last Radau node is the step's end
+                end_cos[level, j] = re[0]
+                end_sin[level, j] = im[0] / w
+                end_wsin[level, j] = w * im[0]
+                for k in range(s):
+                    end_s[level, k, j] = factorials[k] * t * im[k + 1] / w
+                    end_c[level, k, j] = factorials[k] * t * re[k + 1]
+    # gap response to the node forces: r = r_free + (g vinv) F
+    for i in range(s):
+        for m in range(s):
+            total = 0.0
+            for k in range(s):
+                total += g[i, k] * vinv[k, m]
+            response[level, i, m] = total
+    filled[level] = 1
+
+
+@kernel(error_model="numpy")
+def _solve_small(matrix, rhs, out):
+    """Gaussian elimination with partial pivoting (matrix and rhs are overwritten)."""
+    n = rhs.size
+    for col in range(n):
+        pivot = col
+        for row in range(col + 1, n):
+            if abs(matrix[row, col]) > abs(matrix[pivot, col]):
+                pivot = row
+        if pivot != col:
+            for k in range(n):
+                tmp = matrix[col, k]
+                matrix[col, k] = matrix[pivot, k]
+                matrix[pivot, k] = tmp
+            tmp = rhs[col]
+            rhs[col] = rhs[pivot]
+            rhs[pivot] = tmp
+        d = matrix[col, col]
+        for row in range(col + 1, n):
+            factor = matrix[row, col] / d
+            if factor != 0.0:
+                for k in range(col, n):
+                    matrix[row, k] -= factor * matrix[col, k]
+                rhs[row] -= factor * rhs[col]
+    for row in range(n - 1, -1, -1):
+        total = rhs[row]
+        for k in range(row + 1, n):
+            total -= matrix[row, k] * out[k]
+        out[row] = total / matrix[row, row]
+
+
+@kernel(error_model="numpy")
+def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
+    """Force and stiffness (-dF/dgap) at the modal gap; ``guess_force`` seeds the Lambert-W solve."""
+    guess = math.nan
+    if law == LAW_EXPONENTIAL and compliance > 0.0 and guess_force > 0.0:
+        y = guess_force * alpha * compliance
+        if y > 1e-6:
+            guess = math.log(y)
+    f, _, k, _ = contact_response_from(gap, law, alpha, strength, stiffness, compliance, guess)
+    return f, k
+
+
+@kernel(fastmath={"reassoc", "contract", "arcp", "nsz"}, error_model="numpy")
+def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
+                  contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
+                  node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled,
+                  clock, counters, history, max_steps):
+    """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
+
+    Parameters
+    ----------
+    q, v, omega : float arrays (M,)
+        Mass-normalised mode coordinates, velocities and frequencies of both rods.
+    coupling : float array (M,)
+        ``d gap / d q``: minus the right-end value for rod 0's modes, the
+        left-end value for rod 1's.
+    X, U, mass, half : float arrays (2,)
+        Centres of mass, their velocities, masses, half lengths.
+    compliance : float
+        Residual compliance in series with the contact law.
+    law, alpha, strength, stiffness : contact law (see ``kernels.contact_response``).
+    contact_range, force_scale : float
+        Gap beyond which the force is negligible; typical force.
+    tolerance : float
+        Accepted difference between predicted and solved node forces, relative to ``force_scale``.
+    exponent_step : float
+        Largest change of ``alpha_eff * gap`` per step where the force matters (exponential law).
+    h_top, ladder_ratio : float
+        Largest step; steps are ``h_top * ladder_ratio**-j``.
+    nodes, vinv : arrays (s,), (s, s)
+        Collocation nodes and the inverse Vandermonde matrix (node forces -> monomial coefficients).
+    node_cos ... filled : tables filled on first use by ``_fill_level``.
+    clock : float array (2,)
+        Time; (unused second slot kept for symmetry with the splitting kernel).
+    counters : int array (4,)
+        Accepted steps, rejected steps, history length, filled levels.
+    history : float array (H, 3)
+        ``(time, U1 - U0, force)`` after every step; H = 0 records nothing.
+    max_steps : int
+        Return (status 0) after this many accepted steps.
+    """
+    s = nodes.size
+    n_levels = filled.size
+    n_modes = q.size
+    log_ratio = math.log(ladder_ratio)
+    inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
+    recording = history.shape[0] > 0
+
+    free_gap = np.empty(s)
+    forces = np.empty(s)
+    predicted = np.empty(s)
+    stiff = np.empty(s)
+    residual = np.empty(s)
+    delta = np.empty(s)
+    matrix = np.empty((s, s))
+    coefficients = np.empty(s)
+    previous = np.zeros(s)
+    cq = np.empty(n_modes)
+    cv = np.empty(n_modes)
+    load_q = np.empty(n_modes)
+    load_v = np.empty(n_modes)
+
+    # state at the start
+    sq = 0.0
+    sv = 0.0
+    for j in range(n_modes):
+        sq += coupling[j] * q[j]
+        sv += coupling[j] * v[j]
+    rigid_gap = X[1] - half[1] - X[0] - half[0]
+    rigid_rate = U[1] - U[0]
+    force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
+    if not math.isfinite(force_now):
+        return STATUS_NOT_FINITE
+    have_previous = False
+    h_previous = 1.0
+    # first step from the contact's rate
+    rate = alpha * abs(rigid_rate + sv) + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
+    h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
+    level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-12)))  # noqa: RUF046
+    steps_here = 0
+
+    while True:
+        if steps_here >= max_steps:
+            return STATUS_RUNNING
+        if recording and counters[2] >= history.shape[0]:
+            return STATUS_BUFFER_FULL
+        if level >= n_levels:
+            return STATUS_STEP_UNDERFLOW
+        h = h_top * math.exp(-level * log_ratio)
+        if filled[level] == 0:
+            _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv, node_cos, node_sin,
+                        end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
+            counters[3] += 1
+        # free gap at the nodes (no force over the step)
+        for i in range(s):
+            free_gap[i] = rigid_gap + rigid_rate * nodes[i] * h
+        for j in range(n_modes):
+            cq[j] = coupling[j] * q[j]
+            cv[j] = coupling[j] * v[j]
+        for i in range(s):
+            node_c = node_cos[level, i]
+            node_s = node_sin[level, i]
+            total = 0.0
+            for j in range(n_modes):
+                total += node_c[j] * cq[j] + node_s[j] * cv[j]
+            free_gap[i] += total
+        # predictor: last step's polynomial continued
+        for i in range(s):
+            if have_previous:
+                u = 1.0 + nodes[i] * h / h_previous
+                value = 0.0
+                for k in range(s - 1, -1, -1):
+                    value = value * u + previous[k]
+                predicted[i] = value
+            else:
+                predicted[i] = force_now
+            forces[i] = max(predicted[i], 0.0)
+        # Newton on the s node forces
+        converged = False
+        for _ in range(60):
+            finite = True
+            biggest = 0.0
+            for i in range(s):
+                gap_i = free_gap[i]
+                for m in range(s):
+                    gap_i += response[level, i, m] * forces[m]
+                f_i, k_i = _force(gap_i, law, alpha, strength, stiffness, compliance, forces[i])
+                if not (math.isfinite(f_i) and math.isfinite(k_i)):
+                    finite = False
+                    break
+                residual[i] = f_i - forces[i]
+                stiff[i] = k_i
+                biggest = max(biggest, abs(forces[i]), abs(f_i))
+            if not finite:
+                break
+            for i in range(s):
+                for m in range(s):
+                    matrix[i, m] = stiff[i] * response[level, i, m]
+                matrix[i, i] += 1.0
+            _solve_small(matrix, residual, delta)
+            change = 0.0
+            for i in range(s):
+                forces[i] += delta[i]
+                change = max(change, abs(delta[i]))
+            if not math.isfinite(change):
+                break
+            if change <= 1e-13 * (force_scale + biggest):
+                converged = True
+                break
+        if not converged:
+            level += 4
+            continue
+        # mixed test: absolute at forces above FLOOR * force_scale, relative below (a brief light touch
+        # after the main contact must not be stepped over)
+        error = 0.0
+        for i in range(s):
+            scale = FLOOR * force_scale + abs(forces[i]) + abs(predicted[i])
+            error = max(error, abs(forces[i] - predicted[i]) / scale)
+        error *= (FLOOR + 1.0) / tolerance
+        if error > 1.0 and level < n_levels - 1:
+            shrink = math.log(1.1 * error ** (1.0 / s)) / log_ratio
+            level += max(1, int(math.ceil(shrink)))  # noqa: RUF046
+            counters[1] += 1
+            continue
+        # accept: monomial coefficients of the force polynomial in tau / h
+        for k in range(s):
+            total = 0.0
+            for m in range(s):
+                total += vinv[k, m] * forces[m]
+            coefficients[k] = total
+        for j in range(n_modes):
+            load_q[j] = 0.0
+            load_v[j] = 0.0
+        for k in range(s):
+            a_k = coefficients[k]
+            row_s = end_s[level, k]
+            row_c = end_c[level, k]
+            for j in range(n_modes):
+                load_q[j] += a_k * row_s[j]
+                load_v[j] += a_k * row_c[j]
+        sq = 0.0
+        sv = 0.0
+        e_cos = end_cos[level]
+        e_sin = end_sin[level]
+        e_wsin = end_wsin[level]
+        for j in range(n_modes):
+            c = e_cos[j]
+            qj = q[j]
+            vj = v[j]
+            qn = c * qj + e_sin[j] * vj + coupling[j] * load_q[j]
+            vn = c * vj - e_wsin[j] * qj + coupling[j] * load_v[j]
+            q[j] = qn
+            v[j] = vn
+            sq += coupling[j] * qn
+            sv += coupling[j] * vn
+        impulse = 0.0
+        moment = 0.0
+        for k in range(s):
+            impulse += coefficients[k] * h / (k + 1)
+            moment += coefficients[k] * h * h / ((k + 1) * (k + 2))
+        X[0] += U[0] * h - moment / mass[0]
+        X[1] += U[1] * h + moment / mass[1]
+        U[0] -= impulse / mass[0]
+        U[1] += impulse / mass[1]
+        clock[0] += h
+        for k in range(s):
+            previous[k] = coefficients[k]
+        h_previous = h
+        have_previous = True
+        force_now = forces[s - 1]
+        counters[0] += 1
+        steps_here += 1
+        if recording:
+            n = counters[2]
+            history[n, 0] = clock[0]
+            history[n, 1] = U[1] - U[0]
+            history[n, 2] = force_now
+            counters[2] = n + 1
+        rigid_gap = X[1] - half[1] - X[0] - half[0]
+        rigid_rate = U[1] - U[0]
+        # separated for good: the pair opens and the ends' largest excursion cannot reach the force
+        if rigid_rate > 0.0 and rigid_gap + sq > contact_range:
+            reach = 0.0
+            for j in range(n_modes):
+                w = omega[j]
+                reach += abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
+            if rigid_gap - reach > contact_range:
+                return STATUS_SEPARATED
+        # next step: from the error estimate, and (exponential law) at most `exponent_step` e-folds of
+        # the force per step once it is within ~30 e-folds of the force scale: the absolute estimate
+        # alone lets the onset of a stiff contact be crossed in one coarse step
+        grow = GROW if error <= 1e-12 else min(GROW, 0.9 / error ** (1.0 / s))
+        h_wanted = min(h_top, h * max(grow, 0.2))
+        if law == LAW_EXPONENTIAL and force_now > 0.0:
+            softening = 1.0 + alpha * compliance * force_now
+            rate = alpha / softening * abs(rigid_rate + sv)
+            room = exponent_step + max(0.0, -math.log(force_now / force_scale) - 30.0)
+            if rate * h_wanted > room:
+                h_wanted = room / rate
+        level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
+
+
+class CollocationTables:
+    """Lazily filled step tables of :func:`run_collision` for one set of modes and couplings.
+
+    Parameters
+    ----------
+    omega, coupling : float arrays (M,)
+        Mode frequencies (rad/time) and gap couplings.
+    inverse_mass_rigid : float
+        ``1/m_0 + 1/m_1``.
+    stages : int
+        Radau IIA stages ``s`` (order up to ``2 s - 1``).
+    h_top : float
+        Largest step (time).
+    ladder_ratio : float
+        Ratio of consecutive step sizes.
+    levels : int
+        Number of step sizes.
+    """
+
+    def __init__(self, omega, coupling, inverse_mass_rigid, stages, h_top, ladder_ratio=2.0**0.25, levels=120):
+        self.nodes = radau_nodes(stages)
+        s = self.nodes.size
+        self.vinv = np.linalg.inv(np.vander(self.nodes, s, increasing=True))
+        m = omega.size
+        self.h_top = float(h_top)
+        self.ladder_ratio = float(ladder_ratio)
+        self.node_cos = np.empty((levels, s, m))
+        self.node_sin = np.empty((levels, s, m))
+        self.end_cos = np.empty((levels, m))
+        self.end_sin = np.empty((levels, m))
+        self.end_wsin = np.empty((levels, m))
+        self.end_s = np.empty((levels, s, m))
+        self.end_c = np.empty((levels, s, m))
+        self.response = np.empty((levels, s, s))
+        self.filled = np.zeros(levels, dtype=np.int64)
+        self.inverse_mass_rigid = float(inverse_mass_rigid)
+
+    def arrays(self):
+        return (self.h_top, self.ladder_ratio, self.nodes, self.vinv, self.node_cos, self.node_sin, self.end_cos,
+                self.end_sin, self.end_wsin, self.end_s, self.end_c, self.response, self.filled)
