@@ -30,6 +30,10 @@ def test_refuses_bad_mass_and_scheme():
         wc.collide(0.6, 100, solver="fem", elements=20, order=2, scheme="characteristic")
     with pytest.raises(InvalidParameterError, match="unknown option"):
         wc.collide(0.6, 100, solver="fem", element=20)
+    with pytest.raises(InvalidParameterError, match="exponential"):
+        wc.collide(0.6, math.inf, solver="fem", elements=20, scheme="force")
+    with pytest.raises(InvalidParameterError, match="gap_quadrature"):
+        wc.collide(0.6, 100, solver="fem", elements=20, gap_quadrature="simpson")
 
 
 def test_refuses_a_step_above_the_stable_limit():

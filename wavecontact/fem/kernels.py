@@ -4,9 +4,11 @@ One step of central differences in leapfrog form (``v`` lives at half steps):
 
 1. kick with the elastic forces ``v += dt M^-1 (-K u)`` and drift ``u += dt v``
    (one sweep over the nodes for P1 lumped);
-2. contact: the facing end nodes are moved to the gap the contact law gives
-   after the step (:mod:`.contact_flows`), the correction spread along the
-   columns ``M^-1 e_end`` so that momentum is exchanged exactly.
+2. contact, along the columns ``M^-1 e_end`` so that momentum is exchanged
+   exactly: either the force of the gap at the start of the step as a kick
+   (``SCHEME_FORCE``: plain central differences, where the contact is
+   resolved) or the facing end nodes moved to the gap the contact law gives
+   after the step (:mod:`.contact_flows`: interface schemes).
 
 Elastic forces are evaluated as ``-sum_j K_ij (u_j - u_i)`` (rows of ``K``
 sum to zero), so a rigid translation produces no force at all.
