@@ -439,7 +439,7 @@ class CollocationTables:
         Number of step sizes.
     """
 
-    def __init__(self, omega, coupling, inverse_mass_rigid, stages, h_top, ladder_ratio=2.0**0.25, levels=120):
+    def __init__(self, omega, coupling, inverse_mass_rigid, stages, h_top, ladder_ratio=2.0**0.5, levels=60):
         self.nodes = radau_nodes(stages)
         s = self.nodes.size
         self.vinv = np.linalg.inv(np.vander(self.nodes, s, increasing=True))
