@@ -215,7 +215,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     counters : int array (4,)
         Accepted steps, rejected steps, history length, filled levels.
     history : float array (H, 3)
-        ``(time, U1 - U0, force)`` after every step; H = 0 records nothing.
+        ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing.
     max_steps : int
         Return (status 0) after this many accepted steps.
     """
@@ -262,7 +262,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     while True:
         if steps_here >= max_steps:
             return STATUS_RUNNING
-        if recording and counters[2] >= history.shape[0]:
+        if recording and counters[2] + s > history.shape[0]:
             return STATUS_BUFFER_FULL
         if level >= n_levels:
             return STATUS_STEP_UNDERFLOW
@@ -378,6 +378,20 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         for k in range(s):
             impulse += coefficients[k] * h / (k + 1)
             moment += coefficients[k] * h * h / ((k + 1) * (k + 2))
+        if recording:
+            # every node of the step: time, relative velocity of the centres of mass, force
+            relative = U[1] - U[0]
+            for i in range(s):
+                partial = 0.0
+                power = nodes[i]
+                for k in range(s):
+                    partial += coefficients[k] * h * power / (k + 1)
+                    power *= nodes[i]
+                n = counters[2]
+                history[n, 0] = clock[0] + nodes[i] * h
+                history[n, 1] = relative + inverse_mass_rigid * partial
+                history[n, 2] = forces[i]
+                counters[2] = n + 1
         X[0] += U[0] * h - moment / mass[0]
         X[1] += U[1] * h + moment / mass[1]
         U[0] -= impulse / mass[0]
@@ -390,12 +404,6 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         force_now = forces[s - 1]
         counters[0] += 1
         steps_here += 1
-        if recording:
-            n = counters[2]
-            history[n, 0] = clock[0]
-            history[n, 1] = U[1] - U[0]
-            history[n, 2] = force_now
-            counters[2] = n + 1
         rigid_gap = X[1] - half[1] - X[0] - half[0]
         rigid_rate = U[1] - U[0]
         # separated for good: the pair opens and the ends' largest excursion cannot reach the force
