@@ -180,6 +180,89 @@ def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
     return f, k
 
 
+@kernel(error_model="numpy")
+def _newton_forces(free_gap, response, law, alpha, strength, stiffness, compliance, force_scale, forces,
+                   residual, stiff, delta, matrix, counters):
+    """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged."""
+    s = forces.size
+    for _ in range(60):
+        counters[4] += 1
+        biggest = 0.0
+        for i in range(s):
+            gap_i = free_gap[i]
+            for m in range(s):
+                gap_i += response[i, m] * forces[m]
+            f_i, k_i = _force(gap_i, law, alpha, strength, stiffness, compliance, forces[i])
+            if not (math.isfinite(f_i) and math.isfinite(k_i)):
+                return False
+            residual[i] = f_i - forces[i]
+            stiff[i] = k_i
+            biggest = max(biggest, abs(forces[i]), abs(f_i))
+        for i in range(s):
+            for m in range(s):
+                matrix[i, m] = stiff[i] * response[i, m]
+            matrix[i, i] += 1.0
+        _solve_small(matrix, residual, delta)
+        change = 0.0
+        for i in range(s):
+            forces[i] += delta[i]
+            change = max(change, abs(delta[i]))
+        if not math.isfinite(change):
+            return False
+        if change <= 1e-13 * (force_scale + biggest):
+            return True
+    return False
+
+
+@kernel(error_model="numpy")
+def _newton_lambert(free_gap, response, predicted, alpha, log_beta, compliance, force_scale, forces,
+                    residual, delta, matrix, counters):
+    """Newton for the exponential law in series with a compliance, in ``u_i = log(alpha C F_i)``.
+
+    The node equations ``u_i + exp(u_i) = log(alpha^2 B C) - alpha r_i`` with
+    ``r_i = r_free,i + sum_m R_im exp(u_m) / (alpha C)`` need one exponential per node and
+    iteration (the force-based Newton solves a Lambert-W equation inside every evaluation).
+    """
+    s = forces.size
+    scale = 1.0 / (alpha * compliance)
+    u = residual  # reuse the work arrays: u in `residual`, the right-hand side in `delta`
+    rhs = np.empty(s)
+    for i in range(s):
+        if predicted[i] * alpha * compliance > 1e-300:
+            u[i] = math.log(predicted[i] * alpha * compliance)
+        else:
+            x = log_beta - alpha * free_gap[i]
+            u[i] = x if x < 0.0 else math.log1p(x)
+    for _ in range(60):
+        counters[4] += 1
+        biggest = 0.0
+        for i in range(s):
+            forces[i] = math.exp(u[i]) * scale
+            biggest = max(biggest, forces[i])
+        for i in range(s):
+            gap_i = free_gap[i]
+            for m in range(s):
+                gap_i += response[i, m] * forces[m]
+            y = forces[i] * alpha * compliance
+            rhs[i] = -(u[i] + y - log_beta + alpha * gap_i)
+            for m in range(s):
+                matrix[i, m] = alpha * response[i, m] * forces[m]
+            matrix[i, i] += 1.0 + y
+        _solve_small(matrix, rhs, delta)
+        change = 0.0
+        for i in range(s):
+            step = min(delta[i], 2.0)  # a convex exponential: never overshoot upwards
+            u[i] += step
+            change = max(change, abs(step) * forces[i])
+        if not math.isfinite(change):
+            return False
+        if change <= 1e-13 * (force_scale + biggest):
+            for i in range(s):
+                forces[i] = math.exp(u[i]) * scale
+            return True
+    return False
+
+
 @kernel(fastmath={"reassoc", "contract", "arcp", "nsz"}, error_model="numpy")
 def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
                   contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
@@ -212,8 +295,8 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     node_cos ... filled : tables filled on first use by ``_fill_level``.
     clock : float array (2,)
         Time; (unused second slot kept for symmetry with the splitting kernel).
-    counters : int array (4,)
-        Accepted steps, rejected steps, history length, filled levels.
+    counters : int array (5,)
+        Accepted steps, rejected steps, history length, filled levels, Newton iterations.
     history : float array (H, 3)
         ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing.
     max_steps : int
@@ -258,6 +341,8 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
     level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-12)))  # noqa: RUF046
     steps_here = 0
+    lambert = law == LAW_EXPONENTIAL and compliance > 0.0
+    log_beta = math.log(alpha * alpha * strength * compliance) if lambert else 0.0
 
     while True:
         if steps_here >= max_steps:
@@ -296,37 +381,12 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
                 predicted[i] = force_now
             forces[i] = max(predicted[i], 0.0)
         # Newton on the s node forces
-        converged = False
-        for _ in range(60):
-            finite = True
-            biggest = 0.0
-            for i in range(s):
-                gap_i = free_gap[i]
-                for m in range(s):
-                    gap_i += response[level, i, m] * forces[m]
-                f_i, k_i = _force(gap_i, law, alpha, strength, stiffness, compliance, forces[i])
-                if not (math.isfinite(f_i) and math.isfinite(k_i)):
-                    finite = False
-                    break
-                residual[i] = f_i - forces[i]
-                stiff[i] = k_i
-                biggest = max(biggest, abs(forces[i]), abs(f_i))
-            if not finite:
-                break
-            for i in range(s):
-                for m in range(s):
-                    matrix[i, m] = stiff[i] * response[level, i, m]
-                matrix[i, i] += 1.0
-            _solve_small(matrix, residual, delta)
-            change = 0.0
-            for i in range(s):
-                forces[i] += delta[i]
-                change = max(change, abs(delta[i]))
-            if not math.isfinite(change):
-                break
-            if change <= 1e-13 * (force_scale + biggest):
-                converged = True
-                break
+        if lambert:
+            converged = _newton_lambert(free_gap, response[level], predicted, alpha, log_beta, compliance,
+                                        force_scale, forces, residual, delta, matrix, counters)
+        else:
+            converged = _newton_forces(free_gap, response[level], law, alpha, strength, stiffness, compliance,
+                                       force_scale, forces, residual, stiff, delta, matrix, counters)
         if not converged:
             level += 4
             continue

@@ -182,7 +182,7 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
     first = system.rod_first.astype(np.int64)
     coupling = np.concatenate([-system.right[first[0]:first[1]], system.left[first[1]:first[2]]])
     tables = _collocation_tables(system, coupling, stages)
-    counters = np.zeros(4, dtype=np.int64)
+    counters = np.zeros(5, dtype=np.int64)
     while True:
         status = collocation.run_collision(
             system.q, system.v, system.omega, coupling, system.X, system.U, system.mass, system.half,
@@ -198,7 +198,7 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
             continue
         if status == kernels.STATUS_SEPARATED:
             return buffer[: counters[2]], {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
-                                           "stages": int(stages)}
+                                           "newton_iterations": int(counters[4]), "stages": int(stages)}
         raise SolverFailure(f"modal collocation stopped with status {status}")
 
 
