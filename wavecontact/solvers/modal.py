@@ -4,8 +4,10 @@ Each rod keeps ``modes`` vibration modes (analytic for a uniform rod, or the
 eigenmodes of its finite-element model); the contact acts on the two facing
 ends through their modal displacements.  With ``static_correction=True`` the
 compliance of the omitted modes at the ends is put in series with the contact
-law, which turns the ~1/N truncation error into a much faster one.  See
-``docs/modal.md``.
+law, which turns the ~1/N truncation error into a much faster one.  The
+collision is integrated by exponential Radau collocation
+(:mod:`wavecontact.modal.collocation`) or, on request, by the ring's
+kick-rotate-kick splitting.  See ``docs/modal.md``.
 
 Options
 -------
@@ -20,16 +22,10 @@ fe_elements : int or None
     Elements per rod for ``mode_source='fe'`` (default ``max(8 modes, 64)``).
 fe_order : {1, 2}
     Element order for ``mode_source='fe'``.
-step_accuracy : float
-    ``eta`` of the contact step control (error in epsilon ~ eta^2).
-step_reach : float
-    Largest change of ``alpha * gap`` per step while the force is small
-    (the toe of the exponential).  With the defaults epsilon is within about
-    1e-7 of the exact solution of the same N-mode equations; smaller values
-    of both make the error fall like ``eta^2`` further down.
-step_order : {2, 4}
-    2: Strang splitting; 4: its triple-jump composition (three substeps per
-    step, error ~ eta^4; use ``step_accuracy`` 0.05-0.1).
+step_accuracy, step_reach, step_order
+    Step control of the splitting only (see ``StepControl`` and docs/modal.md):
+    ``eta`` of the contact step (error ~ eta^2), the largest change of
+    ``alpha * gap`` per step in the force's toe, and the order (2 or 4).
 step_method : {'collocation', 'splitting'}
     'collocation': adaptive exponential Radau collocation (oscillators
     integrated exactly against a polynomial contact force; high order, the
