@@ -194,3 +194,16 @@ def test_scenes_outside_the_delay_equation_are_refused():
     )
     with pytest.raises(UnsupportedSceneError, match="material"):
         wavecontact.solve(scene, "delay")
+
+
+@pytest.mark.parametrize("gamma", [0.1, 0.6, 1.0])
+@pytest.mark.parametrize("kappa", [0.1, 1.0, 2.0])
+def test_comb_sums_agree_with_every_copy(monkeypatch, gamma, kappa):
+    """Soft contacts sum old delayed copies through running comb sums; the
+    result must equal the one that interpolates every copy on its own."""
+    import wavecontact.solvers.delay as delay
+
+    with_comb = wavecontact.collide(gamma, kappa, rtol=1e-10).restitution
+    monkeypatch.setattr(delay, "COMB_BELOW_KAPPA", 0.0)
+    every_copy = wavecontact.collide(gamma, kappa, rtol=1e-10).restitution
+    assert abs(with_comb - every_copy) < 1e-11

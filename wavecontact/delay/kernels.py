@@ -78,10 +78,10 @@ _LINEAR_THRESHOLD = 1e-9
 
 @kernel
 def hermite5(t, w, d1, d2, last, s):
-    """Value and derivative at ``s`` of the quintic Hermite interpolant of the
-    history ``(t, w, d1, d2)[:last + 1]``; zero for ``s <= t[0]``."""
+    """Value, first and second derivative at ``s`` of the quintic Hermite
+    interpolant of the history ``(t, w, d1, d2)[:last + 1]``; zero for ``s <= t[0]``."""
     if s <= t[0]:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     lo = 0
     hi = last
     while hi - lo > 1:
@@ -115,7 +115,13 @@ def hermite5(t, w, d1, d2, last, s):
     dh4 = -12.0 * x2 + 28.0 * x3 - 15.0 * x4
     dh5 = 1.5 * x2 - 4.0 * x3 + 2.5 * x4
     slope = (dy * dh3 + a0 * dh1 + b0 * dh2 + a1 * dh4 + b1 * dh5) / h
-    return value, slope
+    ch3 = 60.0 * x - 180.0 * x2 + 120.0 * x3
+    ch1 = -36.0 * x + 96.0 * x2 - 60.0 * x3
+    ch2 = 1.0 - 9.0 * x + 18.0 * x2 - 10.0 * x3
+    ch4 = -24.0 * x + 84.0 * x2 - 60.0 * x3
+    ch5 = 3.0 * x - 12.0 * x2 + 10.0 * x3
+    curvature = (dy * ch3 + a0 * ch1 + b0 * ch2 + a1 * ch4 + b1 * ch5) / (h * h)
+    return value, slope, curvature
 
 
 @kernel
@@ -132,11 +138,14 @@ def noise_value(s, freq, cos_amp, sin_amp):
 
 
 @kernel
-def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope):
+def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, direct_copies):
     """``S(s) = sum_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
-    round-off) are skipped.
+    round-off) are skipped.  With ``direct_copies = K > 0`` the copies older
+    than ``K`` round trips are taken at once from the stored comb sums
+    ``C_i(v) = sum_{m>=1} W(v - m Gamma_i)`` (rows ``3i, 3i+1, 3i+2`` of
+    ``comb``: value, slope, curvature) as ``C_i(s - K Gamma_i)``.
     """
     total = 0.0
     slope = 0.0
@@ -147,7 +156,14 @@ def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope):
             u = s - n * gamma_i
             if u <= t_significant:
                 break
-            value, derivative = hermite5(t, w, d1, d2, last, u)
+            if direct_copies > 0 and n > direct_copies:
+                value, derivative, _c = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
+                                                 u + gamma_i)
+                total += value
+                if want_slope:
+                    slope += derivative
+                break
+            value, derivative, _c = hermite5(t, w, d1, d2, last, u)
             total += value
             if want_slope:
                 slope += derivative
@@ -156,8 +172,19 @@ def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope):
 
 
 @kernel
-def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, want_slope):
-    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope)
+def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
+    """``C_i(s) = W(s - Gamma_i) + C_i(s - Gamma_i)`` with its two derivatives."""
+    u = s - gamma_i
+    wv, ws, wc = hermite5(t, w, d1, d2, last, u)
+    cv, cs, cc = hermite5(t, comb[row], comb[row + 1], comb[row + 2], last, u)
+    return wv + cv, ws + cs, wc + cc
+
+
+@kernel
+def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, want_slope,
+              comb, direct_copies):
+    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb,
+                                      direct_copies)
     q, dq = noise_value(s, freq, cos_amp, sin_amp)
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq
 
@@ -189,6 +216,7 @@ def integrate_delay_equation(
     nodes,
     weights_k,
     weights_g,
+    direct_copies,
 ):
     """Integrate Eq. 16 from ``tau = 0`` until ``W`` has settled.
 
@@ -212,6 +240,11 @@ def integrate_delay_equation(
         Give up (status 1) after this many accepted steps.
     nodes, weights_k, weights_g : ndarray
         Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and Gauss weights).
+    direct_copies : int
+        0: every delayed copy of ``W`` is interpolated on its own.  ``K > 0``:
+        copies older than ``K`` round trips come from running comb sums, one
+        interpolation per rod whatever the number of copies.  Only for smooth
+        ``W`` (soft contact), where the comb sums interpolate as well as ``W``.
 
     Returns
     -------
@@ -229,6 +262,7 @@ def integrate_delay_equation(
     w = np.empty(capacity)
     d1 = np.empty(capacity)
     d2 = np.empty(capacity)
+    comb = np.zeros((3 * delays.shape[0], capacity))
     scale = max(kappa, 1e-300)
     tol = rtol * scale * 0.05
     negligible = math.log(max(rtol * 1e-4 * min(scale, 1.0) * scale, 1e-300))
@@ -241,7 +275,7 @@ def integrate_delay_equation(
     t[0] = 0.0
     w[0] = 0.0
     g_now, gp_now = _exponent(
-        0.0, kappa, a0, t, w, d1, d2, 0, delays, math.inf, freq, cos_amp, sin_amp, True
+        0.0, kappa, a0, t, w, d1, d2, 0, delays, math.inf, freq, cos_amp, sin_amp, True, comb, direct_copies
     )
     d1[0] = math.exp(g_now)
     d2[0] = d1[0] * (gp_now - d1[0])
@@ -275,7 +309,7 @@ def integrate_delay_equation(
                 n = 1
                 while True:
                     u = t0 - n * delays[i]
-                    if u <= t_significant - h_max:
+                    if u <= t_significant - h_max or (0 < direct_copies < n - 1):
                         break
                     if u >= 0.0:
                         lo = 0
@@ -300,7 +334,8 @@ def integrate_delay_equation(
 
         t1 = t0 + h
         g1, gp1 = _exponent(
-            t1, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, True
+            t1, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, True, comb,
+            direct_copies,
         )
         a = (g1 - g_now) / h
         # nodes of the transformed rule: e^{a s} ds becomes uniform
@@ -321,7 +356,8 @@ def integrate_delay_equation(
             else:
                 s = h * x
             gs, _unused = _exponent(
-                t0 + s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, False
+                t0 + s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, False, comb,
+                direct_copies,
             )
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)
@@ -366,6 +402,15 @@ def integrate_delay_equation(
             d1_new[: last + 1] = d1[: last + 1]
             d2_new[: last + 1] = d2[: last + 1]
             t, w, d1, d2 = t_new, w_new, d1_new, d2_new
+            comb_new = np.zeros((comb.shape[0], capacity))
+            comb_new[:, : last + 1] = comb[:, : last + 1]
+            comb = comb_new
+        if direct_copies > 0:
+            for i in range(delays.shape[0]):
+                value, slope, curvature = comb_values(t, w, d1, d2, last, t1, delays[i], comb, 3 * i)
+                comb[3 * i, last + 1] = value
+                comb[3 * i + 1, last + 1] = slope
+                comb[3 * i + 2, last + 1] = curvature
         last += 1
         t[last] = t1
         w[last] = w1

@@ -42,6 +42,11 @@ OPTIONS = {"rtol": 1e-11, "initial_gap": None, "end_time": None, "noise": None, 
 ORDER = 6  # Gauss-Kronrod (3, 7) on the smooth remainder, quintic Hermite history
 
 GAP_MARGIN = 40.0  # exp(-40) ~ 4e-18: the force at the start is below round-off
+# Soft contacts last many round trips; there W is smooth on the scale of a round trip, and the
+# copies older than DIRECT_COPIES round trips are summed through running comb sums (one
+# interpolation per rod instead of one per copy).  Sharp features (kappa >> 1) keep every copy.
+COMB_BELOW_KAPPA = 2.0
+DIRECT_COPIES = 1
 
 _STATUS = {
     kernels.STATUS_MAX_STEPS: "the step limit (max_steps) was reached; raise max_steps or rtol",
@@ -116,6 +121,7 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
         float(kappa), float(a0), delays, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
+        DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
     )
     if status != kernels.STATUS_OK:
         raise SolverFailure(f"delay solver (gamma={gamma:g}, kappa={kappa:g}): {_STATUS[status]}")
