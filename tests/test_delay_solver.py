@@ -201,7 +201,7 @@ def test_scenes_outside_the_delay_equation_are_refused():
 def test_comb_sums_agree_with_every_copy(monkeypatch, gamma, kappa):
     """Soft contacts sum old delayed copies through running comb sums; the
     result must equal the one that interpolates every copy on its own."""
-    import wavecontact.solvers.delay as delay
+    from wavecontact.solvers import delay
 
     with_comb = wavecontact.collide(gamma, kappa, rtol=1e-10).restitution
     monkeypatch.setattr(delay, "COMB_BELOW_KAPPA", 0.0)
