@@ -187,7 +187,7 @@ class ModalSystem:
         if status == kernels.STATUS_STEP_UNDERFLOW:
             raise SolverFailure(
                 "modal integrator: the contact step fell below the smallest ladder step; the contact is "
-                "too stiff for the given modes (try static_correction=True or fewer modes)"
+                "too stiff for this resolution (try more modes, static_correction=True or step_method='splitting')"
             )
         if status == kernels.STATUS_NOT_FINITE:
             raise SolverFailure("modal integrator: the contact force overflowed (overlap far beyond the "

@@ -248,7 +248,17 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
     buffer = np.empty((4096 if history else 0, 3))
     chunks = []
     if step_method == "collocation":
-        tail, work = _run_collocation(system, collocation_stages, collocation_tolerance, buffer, chunks)
+        try:
+            tail, work = _run_collocation(system, collocation_stages, collocation_tolerance, buffer, chunks)
+        except SolverFailure as failure:
+            # the collocation's Newton solve can stall on a stiff contact seen by few modes; the
+            # splitting takes any contact (its step follows the force), so start over with it
+            system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order,
+                                 step_accuracy, step_reach, step_order)
+            chunks = []
+            tail, work = _run_splitting(system, buffer, chunks)
+            work["fallback"] = f"splitting after: {failure}"
+            step_method = "splitting"
     else:
         tail, work = _run_splitting(system, buffer, chunks)
     if history:
