@@ -262,8 +262,8 @@ def test_bad_collocation_options_are_refused(options):
 def test_stalled_collocation_falls_back_to_the_splitting():
     """With 20 modes at kappa = 1e4 the collocation's Newton solve stalls; the
     solver restarts with the splitting instead of failing, and says so."""
-    result = wavecontact.collide(0.6, 1e4, solver="modal", modes=20)
-    reference = wavecontact.collide(0.6, 1e4).restitution
+    result = wc.collide(0.6, 1e4, solver="modal", modes=20)
+    reference = wc.collide(0.6, 1e4).restitution
     assert "fallback" in result.work and result.work["step_method"] == "splitting"
     assert abs(result.restitution - reference) < 1e-2  # truncation error of 20 modes
     assert result.diagnostics["energy_drift"] < 1e-3
