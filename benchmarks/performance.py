@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import importlib
+import json
 import math
 import os
 import platform
@@ -34,7 +35,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE / "peers"))
 
 import wavecontact
-from wavecontact.plotting.compare import comparison_figure
+from wavecontact.plotting.compare import comparison_figure, method_family
 from wavecontact.studies.compare import Method, compare_solvers
 
 GAMMAS = (0.6, 0.2173)
@@ -138,11 +139,16 @@ def section_pareto(tables, figure_dir):
            "of repeated runs of the whole `collide` call, set-up included. Points at 1e-16 are exact "
            "to round-off."), ""]
     for gamma in GAMMAS:
-        fig = Figure(figsize=(16, 4.2), layout="constrained")
+        fig = Figure(figsize=(16, 4.8), layout="constrained")
         FigureCanvasAgg(fig)
         axes = fig.subplots(1, len(KAPPAS))
         for ax, kappa in zip(axes, KAPPAS):
-            comparison_figure(tables[(gamma, kappa)], ax=ax)
+            comparison_figure(tables[(gamma, kappa)], ax=ax, legend=False)
+        handles = {}
+        for ax in axes:
+            for handle, label in zip(*ax.get_legend_handles_labels()):
+                handles.setdefault(label, handle)
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=len(handles), fontsize=8)
         name = f"pareto_gamma_{gamma:g}.png"
         fig.savefig(figure_dir / name, dpi=110)
         out += [f"![error against time, gamma = {gamma:g}](figures/{name})", ""]
@@ -176,11 +182,7 @@ def section_pareto(tables, figure_dir):
 
 
 def _family(row):
-    if row.solver == "delay":
-        return "delay"
-    if row.solver == "fem":
-        return "fem " + row.resolution.split(",")[0]
-    return "modal " + row.resolution.split(", ")[-1]
+    return method_family(row)
 
 
 def _families(tables):
@@ -400,6 +402,9 @@ def main(argv=None):
             print(f"gamma = {gamma:g}, kappa = {kappa_text(kappa)}: {time.perf_counter() - started:.0f} s",
                   file=sys.stderr)
     recommendation = recommendations(tables)
+
+    (figure_dir / "performance_data.json").write_text(json.dumps(
+        {f"{g:g},{kappa_text(k)}": t.to_dict() for (g, k), t in tables.items()}, indent=1))
     parts = [
         "# Performance: speed against error",
         "",

@@ -5,15 +5,25 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-__all__ = ["comparison_figure", "plot_comparison"]
+__all__ = ["comparison_figure", "method_family", "plot_comparison"]
 
 MARKERS = {"delay": "o", "fem": "s", "modal": "^"}
 
 
-def comparison_figure(table, ax=None):
-    """Scatter of ``error`` against ``wall_time_s`` for the rows of a
-    :class:`~wavecontact.studies.compare.ComparisonTable`, one series per
-    solver and discretization; failed rows are listed in the title."""
+def method_family(row) -> str:
+    """The series a comparison row belongs to: one per solver and discretization."""
+    if row.solver == "fem":
+        return "fem: " + row.resolution.split(",")[0]
+    if row.solver == "modal":
+        return "modal: " + row.resolution.split(", ")[-1]
+    return row.solver
+
+
+def comparison_figure(table, ax=None, legend: bool = True):
+    """Error against wall time for the rows of a
+    :class:`~wavecontact.studies.compare.ComparisonTable`: one line per solver
+    and discretization, in the order of increasing resolution; failed rows are
+    counted in the title.  Exact results are drawn at 1e-16."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -23,30 +33,26 @@ def comparison_figure(table, ax=None):
         FigureCanvasAgg(fig)
         ax = fig.add_subplot()
     series = {}
-    failures = []
+    failures = 0
     for row in table.rows:
         if not row.ok:
-            failures.append(f"{row.solver} {row.resolution}")
+            failures += 1
             continue
-        key = (row.solver, row.resolution.split(",")[0] if row.solver != "delay" else "")
-        series.setdefault(key, []).append(row)
+        series.setdefault(method_family(row), []).append(row)
     floor = 1e-16
-    for (solver, family), rows in series.items():
-        rows = sorted(rows, key=lambda r: r.wall_time_s)
-        label = solver if not family else f"{solver}: {family}"
-        if solver == "modal":
-            label = f"modal: {rows[0].resolution.split(', ')[-1]}"
+    for family, rows in series.items():
         ax.loglog([r.wall_time_s for r in rows], [max(r.error, floor) for r in rows],
-                  marker=MARKERS.get(solver, "x"), label=label)
+                  marker=MARKERS.get(rows[0].solver, "x"), ms=4, label=family)
     kappa = r"$\infty$" if math.isinf(table.kappa) else f"{table.kappa:g}"
     title = rf"$\gamma$ = {table.gamma:g}, $\kappa$ = {kappa}"
     if failures:
-        title += f"  (failed: {len(failures)})"
+        title += f"  ({failures} refused)"
     ax.set_title(title)
     ax.set_xlabel("wall time per collision (s)")
     ax.set_ylabel(r"$|\epsilon - \epsilon_{ref}|$")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="best")
+    if legend:
+        ax.legend(fontsize=7, loc="best")
     return fig if fig is not None else ax.figure
 
 
