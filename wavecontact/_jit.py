@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["kernel", "NUMBA_ENABLED"]
+__all__ = ["NUMBA_ENABLED", "kernel"]
 
 _FORCE_PURE = os.environ.get("WAVECONTACT_PURE_PYTHON", "") not in ("", "0")
 

@@ -9,12 +9,12 @@ from __future__ import annotations
 import math
 
 __all__ = [
-    "WavecontactError",
     "InvalidParameterError",
-    "UnsupportedSceneError",
     "SolverFailure",
-    "require_positive",
+    "UnsupportedSceneError",
+    "WavecontactError",
     "require_finite",
+    "require_positive",
 ]
 
 

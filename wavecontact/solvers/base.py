@@ -19,7 +19,7 @@ import time
 
 from ..errors import InvalidParameterError
 
-__all__ = ["check_options", "Stopwatch"]
+__all__ = ["Stopwatch", "check_options"]
 
 
 def check_options(solver_name: str, allowed: dict, given: dict) -> dict:
