@@ -18,7 +18,7 @@ from ..scene import Scene
 from . import kernels
 from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
 from .discretization import RodDiscretization, discretize_rod, matched_nodes
-from .stability import check_time_step, stable_step
+from .stability import check_time_step, mass_bands, stable_step
 
 __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 
@@ -371,16 +371,6 @@ def _is_exact_lattice(rods, dt: float) -> bool:
     return True
 
 
-def _mass_bands(disc: RodDiscretization) -> np.ndarray:
-    bands = np.zeros_like(disc.stiffness_bands)
-    if disc.mass_kind == "lumped":
-        bands[0] = disc.lumped_mass
-    else:
-        for d in range(bands.shape[0]):
-            bands[d, : disc.n_nodes - d] = disc.mass_matrix.diagonal(d)
-    return bands
-
-
 class _Run:
     """Mutable state of one time integration (used for the main run and the field replay)."""
 
@@ -394,7 +384,7 @@ class _Run:
         self.cholesky = [
             d.mass_cholesky if d.mass_cholesky is not None else np.zeros((1, 1)) for d in setup.rods
         ]
-        self.mass_bands = [_mass_bands(d) for d in setup.rods]
+        self.mass_bands = [mass_bands(d) for d in setup.rods]
         column1 = left.inverse_mass_column(left.n_nodes - 1)
         column2 = right.inverse_mass_column(0)
         start = int(np.flatnonzero(column1)[0])
