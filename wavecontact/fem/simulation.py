@@ -18,7 +18,7 @@ from ..scene import Scene
 from . import kernels
 from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
 from .discretization import RodDiscretization, discretize_rod, matched_nodes
-from .stability import check_time_step, mass_bands, stable_step
+from .stability import banded_mass, check_time_step, stable_step
 
 __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 
@@ -384,7 +384,7 @@ class _Run:
         self.cholesky = [
             d.mass_cholesky if d.mass_cholesky is not None else np.zeros((1, 1)) for d in setup.rods
         ]
-        self.mass_bands = [mass_bands(d) for d in setup.rods]
+        self.mass_bands = [banded_mass(d) for d in setup.rods]
         column1 = left.inverse_mass_column(left.n_nodes - 1)
         column2 = right.inverse_mass_column(0)
         start = int(np.flatnonzero(column1)[0])

@@ -60,7 +60,7 @@ def count_below(stiffness_bands, mass_bands, sigma):
     return negative
 
 
-def mass_bands(disc: RodDiscretization) -> np.ndarray:
+def banded_mass(disc: RodDiscretization) -> np.ndarray:
     """The mass matrix of ``disc`` in the lower banded storage of its stiffness."""
     bands = np.zeros_like(disc.stiffness_bands)
     if disc.mass_kind == "lumped":
@@ -98,7 +98,7 @@ def _reference_eigenvalue(order: int, mass_kind: str) -> float:
 def largest_eigenvalue(disc: RodDiscretization, rtol: float = 1e-13) -> float:
     """Largest eigenvalue of ``M^-1 K`` for one rod (1/time^2), by inertia bisection."""
     stiffness = np.ascontiguousarray(disc.stiffness_bands)
-    mass_bands = np.ascontiguousarray(mass_bands(disc))
+    mass_bands = np.ascontiguousarray(banded_mass(disc))
     n = disc.n_nodes
     upper = _element_bound(disc) * (1.0 + 1e-9)
     lower = 0.0
