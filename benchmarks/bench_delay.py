@@ -24,21 +24,14 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from timing import median_time
+
 import wavecontact
 from wavecontact.solvers.delay import solve_delay_equation
 from wavecontact.studies.sweep import restitution_map
 
 TARGET = 1e-9
 RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
-
-
-def median_time(function, repeats):
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - started)
-    return float(np.median(times))
 
 
 def reference(gamma, kappa):

@@ -28,20 +28,12 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 
 from peers.fem_scipy_loop import scipy_fem_run
+from timing import median_time
 
 import wavecontact
 from wavecontact.fem.simulation import build_setup, run_collision
 
 GAMMA = 0.6
-
-
-def median_time(function, repeats):
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - started)
-    return float(np.median(times))
 
 
 def loop_cost(kappa, elements, repeats):

@@ -77,11 +77,8 @@ _LINEAR_THRESHOLD = 1e-9
 
 
 @kernel
-def hermite5(t, w, d1, d2, last, s):
-    """Value, first and second derivative at ``s`` of the quintic Hermite
-    interpolant of the history ``(t, w, d1, d2)[:last + 1]``; zero for ``s <= t[0]``."""
-    if s <= t[0]:
-        return 0.0, 0.0, 0.0
+def locate(t, last, s):
+    """Index ``j`` of the stored step ``[t[j], t[j + 1]]`` that holds ``s`` (binary search)."""
     lo = 0
     hi = last
     while hi - lo > 1:
@@ -90,6 +87,16 @@ def hermite5(t, w, d1, d2, last, s):
             lo = mid
         else:
             hi = mid
+    return lo
+
+
+@kernel
+def hermite5(t, w, d1, d2, last, s):
+    """Value, first and second derivative at ``s`` of the quintic Hermite
+    interpolant of the history ``(t, w, d1, d2)[:last + 1]``; zero for ``s <= t[0]``."""
+    if s <= t[0]:
+        return 0.0, 0.0, 0.0
+    lo = locate(t, last, s)
     h = t[lo + 1] - t[lo]
     x = (s - t[lo]) / h
     x = min(x, 1.0)
@@ -312,14 +319,7 @@ def integrate_delay_equation(
                     if u <= t_significant - h_max or (0 < direct_copies < n - 1):
                         break
                     if u >= 0.0:
-                        lo = 0
-                        hi = last
-                        while hi - lo > 1:
-                            mid = (lo + hi) >> 1
-                            if t[mid] <= u:
-                                lo = mid
-                            else:
-                                hi = mid
+                        lo = locate(t, last, u)
                         j = min(lo + 2, last)
                         reach = t[j] - u
                         if reach > 0.0 and j > lo:

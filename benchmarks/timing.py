@@ -1,0 +1,15 @@
+"""Timing helper shared by the benchmark scripts."""
+
+import time
+
+import numpy as np
+
+
+def median_time(function, repeats):
+    """Median wall time (s) of ``repeats`` calls of ``function()``."""
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - started)
+    return float(np.median(times))
