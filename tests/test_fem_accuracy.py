@@ -66,6 +66,18 @@ def test_very_stiff_exponential_contact_any_gamma(gamma):
         assert abs(result.restitution - delay_reference(gamma, kappa)) < 1e-6
 
 
+def test_equal_rods_at_unresolved_stiffness_converge_past_the_crossover():
+    # gamma = 1 gives epsilon = 1 for every kappa (MODEL.md section 4). With alpha V dt > 10 the
+    # release is a fraction of a step: a mesh-independent error of about 0.7/kappa (docs/fem.md 7),
+    # inside 1e-4; once alpha V h/c drops below about 4 the scheme converges again.
+    kappa = 1e5
+    plateau = [abs(wc.collide(1.0, kappa, solver="fem", elements=n).restitution - 1.0) for n in (800, 3200)]
+    assert max(plateau) < 1e-5
+    resolved = [abs(wc.collide(1.0, kappa, solver="fem", elements=n).restitution - 1.0) for n in (25600, 51200)]
+    assert resolved[0] < plateau[1] / 4
+    assert resolved[1] < resolved[0] / 4
+
+
 def test_wave_theory_plateau_and_duration():
     gamma = 0.6
     result = wc.collide(gamma, math.inf, solver="fem", elements=800)
