@@ -13,7 +13,7 @@ import sys
 
 from ..errors import WavecontactError
 
-COMMANDS = ("collide", "converge", "ring", "compare")
+COMMANDS = ("collide", "converge", "ring", "equipartition", "compare")
 
 
 class _Parser(argparse.ArgumentParser):
