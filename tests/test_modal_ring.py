@@ -56,7 +56,8 @@ def test_first_collision_is_the_line_collision():
 
 def test_far_pair_is_the_mirror_image_of_the_near_pair():
     """Reversed velocities: the far pair (across the seam) meets first; by reflection symmetry of
-    uniform rods the outcome must equal the near pair's, mode by mode (a wrong sign pattern fails)."""
+    uniform rods the outcome must equal the near pair's, mode by mode (checks the far pair's geometry;
+    its end signs need warm rods, see the next test)."""
     near = RingSimulation(0.6, 100, 30).next_collision()
     ring = RingSimulation(0.6, 100, 30)
     ring.system.U *= -1.0
@@ -125,3 +126,33 @@ def test_three_rods_on_a_ring_conserve_energy_and_momentum():
     assert pairs == {0, 1, 2}
     assert abs(system.total_energy() - energy) < 1e-5 * energy
     assert abs(system.momentum()) < 1e-12
+
+
+def test_far_pair_of_warm_rods_is_the_mirror_image_of_a_near_pair():
+    """A cold collision cannot tell the end signs apart (modal energies are squares), a warm one can.
+
+    After the first (near) collision the long rod rings. Mirroring the ring (x -> -x) maps the next,
+    far-pair impact onto a near-pair impact of the mirrored state: each rod's displacement field
+    u(s) -> -u(l - s), i.e. q_nu -> -(-1)^nu q_nu, rigid velocities reversed, and the centre distance
+    across the seam becomes the near distance. Both must give the same collision; a far pair coupled
+    with the near pair's sign pattern fails this by orders of magnitude."""
+    ring = RingSimulation(0.6, 100, 30)
+    ring.next_collision()
+    state = ring.get_state()
+    far = ring.next_collision()
+    assert far["pair"] == "far"
+
+    mirrored = RingSimulation(0.6, 100, 30)
+    modes = mirrored.modes
+    flip = -np.tile((-1.0) ** np.arange(1, modes + 1), 2)
+    swapped = dict(state)
+    swapped["q"] = state["q"] * flip
+    swapped["v"] = state["v"] * flip
+    x1, x2 = state["X"]
+    swapped["X"] = np.array([-x1, mirrored.circumference - x2])
+    swapped["U"] = -state["U"]
+    mirrored.set_state(swapped)
+    near = mirrored.next_collision()
+    assert near["pair"] == "near"
+    assert near["restitution"] == pytest.approx(far["restitution"], abs=1e-9)
+    np.testing.assert_allclose(near["modal_energies"], far["modal_energies"], atol=1e-10)
