@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import wavecontact as wc
+from wavecontact import Scene
 from wavecontact.errors import InvalidParameterError
 from wavecontact.modal import RingSimulation
 
@@ -156,3 +157,47 @@ def test_far_pair_of_warm_rods_is_the_mirror_image_of_a_near_pair():
     assert near["pair"] == "near"
     assert near["restitution"] == pytest.approx(far["restitution"], abs=1e-9)
     np.testing.assert_allclose(near["modal_energies"], far["modal_energies"], atol=1e-10)
+
+
+def _ring_state_in_more_modes(state, modes, refined):
+    """The same fields in ``refined``, a ring that keeps more modes per rod (the extra ones at rest)."""
+    more = refined.modes
+    padded = refined.get_state()
+    padded.update({name: state[name] for name in ("X", "U", "clock", "episode", "counters", "collisions")})
+    for name in ("q", "v"):
+        values = np.zeros(2 * more)
+        values[:modes], values[more:more + modes] = state[name][:modes], state[name][modes:]
+        padded[name] = values
+    return padded
+
+
+def _modal_field(coefficients, rod):
+    """``u(s) = sum_nu c_nu sqrt(2/m) cos(nu pi s / l)``: the free-free modes in physical space."""
+    nu = np.arange(1, coefficients.size + 1)
+    return lambda s: math.sqrt(2.0 / rod.mass) * (np.cos(np.outer(np.atleast_1d(s), nu) * math.pi / rod.length)
+                                                  @ coefficients)
+
+
+def test_warm_far_pair_collision_agrees_with_the_fe_solver():
+    """Second collision of the ring (far pair, the long rod ringing from the first) against the FE
+    solver started from the same fields on a line (rod 2 left, rod 1 right): the modal result
+    converges to the FE one as modes are added to the same initial state."""
+    gamma, kappa, modes = GAMMA, 4000, 30
+    ring = RingSimulation(gamma, kappa, modes)
+    ring.next_collision()
+    state = ring.get_state()
+    rod1, rod2 = wc.two_rods(gamma, kappa).rods
+    q, v, (x1, x2), (u1, u2) = state["q"], state["v"], state["X"], state["U"]
+    gap = (x1 + ring.circumference - 0.5 * rod1.length) - (x2 + 0.5 * rod2.length)
+    scene = Scene(rods=(rod2, rod1), velocities=(u2, u1), contact=wc.two_rods(gamma, kappa).contact, gaps=(gap,),
+                  initial_displacement=(_modal_field(q[modes:], rod2), _modal_field(q[:modes], rod1)),
+                  initial_velocity=(_modal_field(v[modes:], rod2), _modal_field(v[:modes], rod1)))
+    fe = wc.solve(scene, solver="fem", elements=800).restitution
+    errors = []
+    for more in (modes, 8 * modes):
+        refined = RingSimulation(gamma, kappa, more)
+        refined.set_state(_ring_state_in_more_modes(state, modes, refined))
+        record = refined.next_collision()
+        assert record["pair"] == "far"
+        errors.append(abs(record["restitution"] - fe))
+    assert errors[1] < 1e-5 and errors[1] < errors[0] / 10, errors
