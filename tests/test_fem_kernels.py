@@ -7,6 +7,7 @@ whose masses differ), with the characteristic contact treatment of
 :func:`wavecontact.fem.kernels.advance_lattice` read off the node arrays.
 """
 
+import itertools
 import math
 
 import numpy as np
@@ -16,6 +17,7 @@ import wavecontact as wc
 from wavecontact.fem import kernels
 from wavecontact.fem.contact_flows import (
     LAW_EXPONENTIAL,
+    exponential_gap,
     exponential_gap_linear,
     exponential_gap_quartic,
     interface_gap,
@@ -200,3 +202,31 @@ def test_pure_python_kernel_gives_the_compiled_results():
     np.testing.assert_allclose(force_a, force_b, rtol=1e-13, atol=1e-13 * np.abs(force_a).max())
     np.testing.assert_allclose(u_a, u_b, rtol=0, atol=1e-14)
     np.testing.assert_allclose(w_a, w_b, rtol=0, atol=1e-14)
+
+
+def _logarithmic_substeps(r, rates, duration, compliance, alpha, strength, substeps):
+    """The quartic's sub-step chain, each sub-step the exact constant-rate solution in logarithms."""
+    m2, m1, q0, p1, p2 = rates
+    coefficients = [  # of s^k, s = (t - mid-step) / duration, as in docs/fem.md
+        (9.0 * (m2 + p2) - 116.0 * (m1 + p1) + 2134.0 * q0) / 1920.0,
+        (5.0 * (m2 - p2) - 34.0 * (m1 - p1)) / 48.0,
+        (-(m2 + p2) + 12.0 * (m1 + p1) - 22.0 * q0) / 16.0,
+        (-(m2 - p2) + 2.0 * (m1 - p1)) / 12.0,
+        ((m2 + p2) - 4.0 * (m1 + p1) + 6.0 * q0) / 24.0,
+    ]
+    antiderivative = np.polynomial.Polynomial(coefficients).integ()
+    edges = np.linspace(-0.5, 0.5, substeps + 1)
+    for a, b in itertools.pairwise(edges):
+        mean = (antiderivative(b) - antiderivative(a)) / (b - a)
+        r = exponential_gap(r, mean, duration / substeps, compliance, alpha, strength)
+    return r
+
+
+@pytest.mark.parametrize("r", [0.08, 0.02, -0.05, -3.0, -20.0])  # -3 and -20: deep overlap, K out of range
+def test_quartic_substeps_in_linear_form_equal_the_logarithmic_chain(r):
+    rates = np.array([-1.0, -0.7, -0.2, 0.4, 0.9])
+    alpha, strength, compliance, dt = 50.0, 1e-3, 2.0, 0.02
+    expected = _logarithmic_substeps(r, rates, dt, compliance, alpha, strength, 32)
+    got = exponential_gap_quartic(r, rates, dt, compliance, alpha, strength, 32)
+    assert math.isfinite(got)
+    assert got == pytest.approx(expected, rel=1e-13, abs=1e-14)
