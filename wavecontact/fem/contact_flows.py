@@ -300,7 +300,10 @@ def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, sub
         # the force moves the gap by less than exp(-negligible) over the step: its shape cannot matter
         return exponential_gap(r, q0, duration, compliance, alpha, strength)
     if substeps > 0:
-        h = 1.0 / substeps
+        r_end = _quartic_substeps_linear(r, c0, c1, c2, c3, c4, duration, coefficient, alpha, substeps)
+        if math.isfinite(r_end):
+            return r_end
+        h = 1.0 / substeps  # out of the linear form's range: the same sub-steps in logarithms
         for k in range(substeps):
             a = -0.5 + k * h
             mean = (_antiderivative(c0, c1, c2, c3, c4, a + h) - _antiderivative(c0, c1, c2, c3, c4, a)) / h
@@ -326,13 +329,41 @@ def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, sub
 
 
 @kernel
+def _quartic_substeps_linear(r, c0, c1, c2, c3, c4, duration, coefficient, alpha, substeps):
+    """The sub-steps of :func:`exponential_gap_quartic` on ``Y = exp(alpha (r - r_0))``.
+
+    Over a sub-step of length ``tau`` with constant rate ``q`` the exact
+    solution (that of :func:`exponential_gap`) is linear in ``Y``:
+    ``Y <- exp(z) Y + K expm1(z) / z`` with ``z = alpha q tau`` and ``K =
+    coefficient alpha tau exp(-alpha r_0)``; both terms are positive, so the
+    chain is accurate to a few ulps per sub-step and needs one ``expm1`` each
+    instead of the logarithmic form's six transcendentals.  Returns NaN where
+    ``K`` or ``Y`` would leave the floating-point range (the caller then uses
+    the logarithmic form).
+    """
+    h = 1.0 / substeps
+    tau = h * duration
+    exponent = math.log(coefficient * alpha * tau) - alpha * r
+    if exponent > 600.0:
+        return math.nan
+    scaled = math.exp(exponent)
+    y = 1.0
+    lower = _antiderivative(c0, c1, c2, c3, c4, -0.5)
+    for k in range(substeps):
+        upper = _antiderivative(c0, c1, c2, c3, c4, -0.5 + (k + 1) * h)
+        z = alpha * tau * ((upper - lower) / h)
+        lower = upper
+        growth = math.expm1(z)
+        y = y + growth * y + scaled * (growth / z if z != 0.0 else 1.0)
+    if not (0.0 < y < 1e300):
+        return math.nan
+    return r + math.log(y) / alpha
+
+
+@kernel
 def _antiderivative(c0, c1, c2, c3, c4, x):
-    """``int_{-1/2}^{x} sum_k c_k s^k ds``."""
+    """``int_{-1/2}^{x} sum_k c_k s^k ds`` (Horner: no powers)."""
     a = -0.5
-    return (
-        c0 * (x - a)
-        + c1 * (x**2 - a**2) / 2.0
-        + c2 * (x**3 - a**3) / 3.0
-        + c3 * (x**4 - a**4) / 4.0
-        + c4 * (x**5 - a**5) / 5.0
-    )
+    at_x = x * (c0 + x * (c1 / 2.0 + x * (c2 / 3.0 + x * (c3 / 4.0 + x * (c4 / 5.0)))))
+    at_a = a * (c0 + a * (c1 / 2.0 + a * (c2 / 3.0 + a * (c3 / 4.0 + a * (c4 / 5.0)))))
+    return at_x - at_a

@@ -12,6 +12,11 @@ One step of central differences in leapfrog form (``v`` lives at half steps):
 
 Elastic forces are evaluated as ``-sum_j K_ij (u_j - u_i)`` (rows of ``K``
 sum to zero), so a rigid translation produces no force at all.
+
+The exact lattice (P1 lumped, uniform interior, Courant number 1) has its own
+loop, :func:`advance_lattice`: each rod is carried as d'Alembert's two waves
+in circular buffers, so a step costs O(1) (end nodes and contact) and the
+fields are rebuilt, O(N), only for the periodic checks and on return.
 """
 
 from __future__ import annotations
@@ -347,25 +352,80 @@ def advance(
     return 0, max_steps, samples
 
 
-@kernel(fastmath=False)
-def _lattice_step(current, previous, bands, inverse_mass, dt):
-    """One step of the exact lattice, written into ``previous``.
+@kernel
+def _lattice_buffer_mask(n_nodes):
+    """``mask`` of circular buffers of ``mask + 1`` (a power of two) >= ``n_nodes + 2`` entries."""
+    size = 4
+    while size < n_nodes + 2:
+        size *= 2
+    return size - 1
 
-    Interior nodes: ``u_new = u_left + u_right - u_old`` (uniform P1 lumped at
-    Courant number 1: d'Alembert's formula, additions only).  The two end
-    nodes (different masses: half or point mass) use the general central
-    difference ``u_new = 2 u - u_old + dt^2 M^-1 (-K u)``.
+
+@kernel(fastmath=False)
+def _lattice_split(current, previous, right_going, left_going, mask):
+    """Write two time levels of one rod as ``u_i^n = F[i + n] + G[i - n]`` (``n = 0``: ``current``).
+
+    ``left_going`` is ``F`` and ``right_going`` is ``G``, both circular
+    (index ``k`` lives at ``k & mask``).  Level 0 fixes ``F[i] + G[i]`` and
+    level -1 fixes ``F[i - 1] + G[i + 1]``; with the gauge ``F[-1] = F[0] = 0``
+    the two recursions below give ``F[-1..N]`` and ``G[0..N+1]`` (``N`` the
+    last node).  Both grow at most like the rigid displacement of the rod.
     """
-    n = current.size
-    scale = dt * dt
-    first = 2.0 * current[0] - previous[0] - scale * inverse_mass[0] * bands[1, 0] * (current[1] - current[0])
-    last = 2.0 * current[n - 1] - previous[n - 1] - scale * inverse_mass[n - 1] * bands[1, n - 2] * (
-        current[n - 2] - current[n - 1]
-    )
-    for i in range(1, n - 1):
-        previous[i] = current[i - 1] + current[i + 1] - previous[i]
-    previous[0] = first
-    previous[n - 1] = last
+    last = current.size - 1
+    left_going[-1 & mask] = 0.0
+    left_going[0] = 0.0
+    right_going[0] = current[0]
+    right_going[1] = previous[0]
+    for i in range(1, last + 1):
+        left_going[i & mask] = current[i] - right_going[i & mask]
+        right_going[(i + 1) & mask] = previous[i] - left_going[(i - 1) & mask]
+
+
+@kernel(fastmath=False)
+def _lattice_fields(right_going, left_going, mask, n, ends, current, previous):
+    """Both time levels ``n`` and ``n - 1`` of one rod from ``F`` and ``G`` (O(N)).
+
+    The end nodes are taken from ``ends`` = (first now, first before, last
+    now, last before): the lattice keeps them as they were computed.
+    """
+    last = current.size - 1
+    for i in range(1, last):
+        current[i] = left_going[(i + n) & mask] + right_going[(i - n) & mask]
+        previous[i] = left_going[(i + n - 1) & mask] + right_going[(i - n + 1) & mask]
+    current[0] = ends[0]
+    previous[0] = ends[1]
+    current[last] = ends[2]
+    previous[last] = ends[3]
+
+
+@kernel(fastmath=False)
+def _lattice_ends(right_going, left_going, mask, n, last, ends, first_coefficient, last_coefficient):
+    """Displacements of the two end nodes at level ``n + 1`` (general central difference).
+
+    ``coefficient = dt^2 M^-1 K_(end, neighbour)``: ``u_new = 2 u - u_old - coefficient
+    (u_neighbour - u)``.  The neighbours are interior nodes: ``F + G``.
+    """
+    second = left_going[(n + 1) & mask] + right_going[(1 - n) & mask]
+    before_last = left_going[(last - 1 + n) & mask] + right_going[(last - 1 - n) & mask]
+    first = 2.0 * ends[0] - ends[1] - first_coefficient * (second - ends[0])
+    final = 2.0 * ends[2] - ends[3] - last_coefficient * (before_last - ends[2])
+    return first, final
+
+
+@kernel(fastmath=False)
+def _lattice_enter(right_going, left_going, mask, n, last, ends, first, final):
+    """Step one rod from level ``n`` to ``n + 1`` given its new end displacements: O(1).
+
+    The interior at ``n + 1`` is already carried by ``F`` and ``G``; only the
+    wave entering at each end is new: ``G[-(n + 1)]`` at node 0 and
+    ``F[N + n + 1]`` at node ``N``.
+    """
+    right_going[(-n - 1) & mask] = first - left_going[(n + 1) & mask]
+    left_going[(last + n + 1) & mask] = final - right_going[(last - n - 1) & mask]
+    ends[1] = ends[0]
+    ends[0] = first
+    ends[3] = ends[2]
+    ends[2] = final
 
 
 @kernel
@@ -399,25 +459,55 @@ def advance_lattice(
 
     Same contract as :func:`advance`, except that the state is two time levels:
     ``u`` holds displacements at the current time and ``w`` one step earlier.
+
+    Each rod is carried as d'Alembert's exact solution of the interior update
+    ``u_i^{n+1} = u_{i-1}^n + u_{i+1}^n - u_i^{n-1}``: ``u_i^n = F[i + n] +
+    G[i - n]`` with circular buffers ``F`` (left-going) and ``G``
+    (right-going).  A step computes only the two end nodes of each rod
+    (general central difference: their masses differ), applies the contact
+    shift to the facing ends and stores the one new entry of ``F`` and of
+    ``G`` that enters each rod there: O(1) work per step.  The full fields are
+    rebuilt (O(N)) only for the energy and separation checks every
+    ``check_every`` steps and for the hand-back in ``u``/``w`` on return.
     """
     n1 = u1.size
+    n2 = u2.size
     last = n1 - 1
+    last2 = n2 - 1
     mass1 = 0.0
     for i in range(n1):
         mass1 += weights1[i]
     mass2 = 0.0
-    for i in range(u2.size):
+    for i in range(n2):
         mass2 += weights2[i]
+    mask1 = _lattice_buffer_mask(n1)
+    mask2 = _lattice_buffer_mask(n2)
+    f1 = np.empty(mask1 + 1)  # F, G of rod 1
+    g1 = np.empty(mask1 + 1)
+    f2 = np.empty(mask2 + 1)
+    g2 = np.empty(mask2 + 1)
+    _lattice_split(u1, w1, g1, f1, mask1)
+    _lattice_split(u2, w2, g2, f2, mask2)
+    # end nodes (first now, first before, last now, last before), kept as computed
+    ends1 = np.array([u1[0], w1[0], u1[last], w1[last]])
+    ends2 = np.array([u2[0], w2[0], u2[last2], w2[last2]])
+    scale = dt * dt
+    first1 = scale * inverse_mass1[0] * bands1[1, 0]
+    final1 = scale * inverse_mass1[last] * bands1[1, last - 1]
+    first2 = scale * inverse_mass2[0] * bands2[1, 0]
+    final2 = scale * inverse_mass2[last2] * bands2[1, last2 - 1]
     samples = 0
     rates = np.zeros(5)
-    current1, previous1, current2, previous2 = u1, w1, u2, w2
-    swapped = False
     status = 0
     done = max_steps
+    n = 0  # time level of the current displacements, counted from the call
     for step in range(max_steps):
-        r_now = offset + current2[0] - current1[last]
-        # incoming characteristics: mean rate over [t - dt, t + dt], then the single step ahead
-        mean_rate = ((current2[1] - previous2[0]) - (current1[last - 1] - previous1[last])) / dt
+        r_now = offset + ends2[0] - ends1[2]
+        # incoming characteristics: mean rate over [t - dt, t + dt], then the single step ahead;
+        # u2[1] now - u2[0] before = F2[n + 1] - F2[n - 1], u1[N - 1] now - u1[N] before likewise in G1
+        arriving2 = (f2[(n + 1) & mask2] + g2[(1 - n) & mask2]) - ends2[1]
+        arriving1 = (f1[(last - 1 + n) & mask1] + g1[(last - 1 - n) & mask1]) - ends1[3]
+        mean_rate = (arriving2 - arriving1) / dt
         incoming = 2.0 * mean_rate - state[S_INCOMING]
         varies = False
         if substeps > 1:
@@ -428,7 +518,13 @@ def advance_lattice(
                 rates[1] = state[S_INCOMING]
                 rates[2] = incoming
                 for j in (2, 3):
-                    later = ((current2[j] - previous2[j - 1]) - (current1[last - j] - previous1[last - j + 1])) / dt
+                    later2 = (f2[(j + n) & mask2] + g2[(j - n) & mask2]) - (
+                        f2[(j - 1 + n - 1) & mask2] + g2[(j - 1 - n + 1) & mask2]
+                    )
+                    later1 = (f1[(last - j + n) & mask1] + g1[(last - j - n) & mask1]) - (
+                        f1[(last - j + 1 + n - 1) & mask1] + g1[(last - j + 1 - n + 1) & mask1]
+                    )
+                    later = (later2 - later1) / dt
                     rates[j + 1] = 2.0 * later - rates[j]
                 variation = max(abs(rates[0] - incoming), abs(rates[1] - incoming), abs(rates[3] - incoming),
                                 abs(rates[4] - incoming))
@@ -437,10 +533,9 @@ def advance_lattice(
             varies = law == LAW_EXPONENTIAL and variation > (1e-13 if gauss else 1e-7) * abs(incoming)
         state[S_INCOMING_EARLIER] = state[S_INCOMING]
         state[S_INCOMING] = incoming
-        _lattice_step(current1, previous1, bands1, inverse_mass1, dt)
-        _lattice_step(current2, previous2, bands2, inverse_mass2, dt)
-        # previous* now hold the new displacements
-        r_free = offset + previous2[0] - previous1[last]
+        start1, end1 = _lattice_ends(g1, f1, mask1, n, last, ends1, first1, final1)
+        start2, end2 = _lattice_ends(g2, f2, mask2, n, last2, ends2, first2, final2)
+        r_free = offset + start2 - end1
         if varies:
             # far apart the force cannot move the gap by a round-off amount within the step, and the
             # reconstruction of the incoming rate (waves still ringing in the rods) buys nothing
@@ -461,18 +556,18 @@ def advance_lattice(
         shift = (r_after - r_free) / m_inv
         impulse = shift / dt
         if shift != 0.0:
-            previous1[last] -= inverse_mass1[last] * shift
-            previous2[0] += inverse_mass2[0] * shift
-        current1, previous1 = previous1, current1
-        current2, previous2 = previous2, current2
-        swapped = not swapped
+            end1 -= inverse_mass1[last] * shift
+            start2 += inverse_mass2[0] * shift
+        _lattice_enter(g1, f1, mask1, n, last, ends1, start1, end1)
+        _lattice_enter(g2, f2, mask2, n, last2, ends2, start2, end2)
+        n += 1
 
         state[S_MOMENTUM1] -= impulse
         state[S_MOMENTUM2] += impulse
         time = state[S_TIME] + dt
         state[S_TIME] = time
         state[S_STEPS] += 1.0
-        gap = offset + current2[0] - current1[last]
+        gap = offset + ends2[0] - ends1[2]
         vrel = state[S_MOMENTUM2] / mass2 - state[S_MOMENTUM1] / mass1
         hist_time[step] = time
         hist_force[step] = impulse / dt
@@ -487,8 +582,11 @@ def advance_lattice(
             break
 
         if (step + 1) % check_every == 0:
-            kin1, str1 = _staggered_energies(current1, previous1, bands1, weights1, dt)
-            kin2, str2 = _staggered_energies(current2, previous2, bands2, weights2, dt)
+            # the full fields, O(N): into u and w, which are handed back rebuilt on return anyway
+            _lattice_fields(g1, f1, mask1, n, ends1, u1, w1)
+            _lattice_fields(g2, f2, mask2, n, ends2, u2, w2)
+            kin1, str1 = _staggered_energies(u1, w1, bands1, weights1, dt)
+            kin2, str2 = _staggered_energies(u2, w2, bands2, weights2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             total = kin1 + str1 + kin2 + str2 + pot
             internal1 = kin1 + str1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
@@ -514,21 +612,13 @@ def advance_lattice(
                     spread = bound_factor1 * math.sqrt(max(internal1, 0.0)) + bound_factor2 * math.sqrt(
                         max(internal2, 0.0)
                     )
-                    centre_gap = offset + _mean_displacement(current2, weights2) - _mean_displacement(
-                        current1, weights1
-                    )
+                    centre_gap = offset + _mean_displacement(u2, weights2) - _mean_displacement(u1, weights1)
                     finished = centre_gap - spread > r_stop
                 if finished:
                     status = 1
                     done = step + 1
                     break
-    if swapped:  # hand the current time level back in u, the previous one in w
-        for i in range(n1):
-            value = u1[i]
-            u1[i] = w1[i]
-            w1[i] = value
-        for i in range(u2.size):
-            value = u2[i]
-            u2[i] = w2[i]
-            w2[i] = value
+    # hand the current time level back in u, the previous one in w
+    _lattice_fields(g1, f1, mask1, n, ends1, u1, w1)
+    _lattice_fields(g2, f2, mask2, n, ends2, u2, w2)
     return status, done, samples
