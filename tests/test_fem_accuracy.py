@@ -173,6 +173,16 @@ def test_massless_end_interface_is_first_order():
     assert abs(_observed_order(ORDER_MESHES, errors) - 1.0) < 0.2, errors
 
 
+@pytest.mark.parametrize("options", [{"order": 2}, {"mass": "consistent"}, {"courant": 0.9}])
+def test_dispersive_discretizations_converge_like_h_to_two_thirds_in_the_hard_limit(options):
+    # a second-order scheme spreads a step front over (c t h^2)^(1/3) (docs/fem.md section 3): the
+    # release, timed by that front, converges like h^(2/3) whatever the contact treatment
+    elements = np.array([100, 200, 400, 800])
+    errors = [abs(wc.collide(0.6, math.inf, solver="fem", elements=int(n), **options).restitution - 0.6)
+              for n in elements]
+    assert abs(_observed_order(elements, errors) - 2 / 3) < 0.1, errors
+
+
 def test_auto_scheme_falls_back_to_the_interface_for_unresolved_contact():
     for kappa, expected in ((100, "force at the end nodes"), (1e4, "massless-end interface"),
                             (math.inf, "massless-end interface")):
