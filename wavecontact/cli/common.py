@@ -36,3 +36,11 @@ def positive_int(text: str) -> int:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
     return value
+
+
+def add_ring_options(parser: argparse.ArgumentParser) -> None:
+    """``--out``, ``--no-progress`` and ``--no-static-correction``, shared by the ring commands."""
+    parser.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
+    parser.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    parser.add_argument("--no-static-correction", dest="static_correction", action="store_false",
+                        help="plain modal truncation (no residual flexibility)")

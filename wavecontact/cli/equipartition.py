@@ -6,7 +6,7 @@ import json
 import math
 from pathlib import Path
 
-from .common import gamma_value, kappa_value, positive_int
+from .common import add_ring_options, gamma_value, kappa_value, positive_int
 
 ENTROPY_NAME = "entropy.csv"
 SUMMARY_NAME = "equipartition.json"
@@ -41,10 +41,7 @@ def add_parser(subparsers):
     p.add_argument("--realisations", type=positive_int, default=5, help="realisations per N (default 5)")
     p.add_argument("--threshold", type=_threshold, default=1.5,
                    help="settled when eta <= THRESHOLD x its equipartition mean (default 1.5)")
-    p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
-    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
-    p.add_argument("--no-static-correction", dest="static_correction", action="store_false",
-                   help="plain modal truncation (no residual flexibility)")
+    add_ring_options(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON instead of a table")
     p.set_defaults(run=run)
     return p

@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from .common import gamma_value, kappa_value, positive_int
+from .common import add_ring_options, gamma_value, kappa_value, positive_int
 
 SUMMARY_NAME = "summary.json"
 SPECTRUM_NAME = "modal_spectrum.csv"
@@ -39,12 +39,9 @@ def add_parser(subparsers):
     p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]")
     p.add_argument("--modes", type=positive_int, required=True, help="modes per rod N")
     p.add_argument("--collisions", type=positive_int, required=True, help="number of collisions M")
-    p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
+    add_ring_options(p)
     p.add_argument("--checkpoint-every", type=positive_int, default=100, metavar="K",
                    help="write a checkpoint every K collisions (default 100)")
-    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
-    p.add_argument("--no-static-correction", dest="static_correction", action="store_false",
-                   help="plain modal truncation (no residual flexibility)")
     p.add_argument("--transient", type=_nonnegative_int, default=None,
                    help="collisions discarded before stationary averages (default: chosen from the relaxation)")
     p.add_argument("--max-lag", type=positive_int, default=20, help="largest lag k of C_eps(k) (default 20)")
