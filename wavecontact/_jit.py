@@ -4,13 +4,24 @@ Kernels are written as plain Python functions on NumPy arrays and decorated
 with :func:`kernel`.  With numba installed they are compiled (and cached on
 disk); without it, or with ``WAVECONTACT_PURE_PYTHON=1`` in the environment,
 the same functions run as ordinary Python: correct, only much slower.
+
+numba checks a cached kernel only against the file that defines it, not
+against helpers it inlines from other modules, so an edit to such a helper
+alone would leave the old compiled code in use.  On import, the cached
+kernels of the whole package are therefore dropped whenever any of its
+sources changed (:func:`refresh_kernel_cache`).
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
+from itertools import chain
+from pathlib import Path
 
-__all__ = ["NUMBA_ENABLED", "kernel"]
+__all__ = ["NUMBA_ENABLED", "kernel", "refresh_kernel_cache"]
+
+_STAMP_NAME = "wavecontact-sources.sha1"
 
 _FORCE_PURE = os.environ.get("WAVECONTACT_PURE_PYTHON", "") not in ("", "0")
 
@@ -23,6 +34,49 @@ try:  # pragma: no cover - exercised by the import itself
 except ImportError:  # pragma: no cover
     _numba = None
     NUMBA_ENABLED = False
+
+
+def _sources_digest(root: Path) -> str:
+    digest = hashlib.sha1()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def refresh_kernel_cache(root=None) -> bool:
+    """Delete numba's cached kernels below ``root`` if a source there changed since they were cached.
+
+    Parameters
+    ----------
+    root : path, optional
+        Package directory (default: this package).  The digest of its
+        ``*.py`` files is kept in ``root/__pycache__``; cache files in a
+        ``NUMBA_CACHE_DIR`` elsewhere are not touched.
+
+    Returns
+    -------
+    bool
+        True if the digest changed (and the ``*.nbi``/``*.nbc`` files were
+        deleted); False if it did not, or if the directory is read-only.
+    """
+    root = Path(root) if root is not None else Path(__file__).resolve().parent
+    try:
+        current = _sources_digest(root)
+        stamp = root / "__pycache__" / _STAMP_NAME
+        if stamp.is_file() and stamp.read_text() == current:
+            return False
+        for cached in chain(root.rglob("*.nbi"), root.rglob("*.nbc")):
+            cached.unlink(missing_ok=True)
+        stamp.parent.mkdir(exist_ok=True)
+        stamp.write_text(current)
+        return True
+    except OSError:  # read-only installation: numba then cannot cache there either
+        return False
+
+
+if NUMBA_ENABLED:
+    refresh_kernel_cache()
 
 
 def kernel(function=None, **options):

@@ -1,0 +1,27 @@
+"""The kernel cache is dropped when any source of the package changes (numba only checks the
+defining file, not the helpers a kernel inlines from other modules)."""
+
+from wavecontact._jit import refresh_kernel_cache
+
+
+def test_cached_kernels_are_dropped_when_any_source_changes(tmp_path):
+    package = tmp_path / "pkg"
+    (package / "sub" / "__pycache__").mkdir(parents=True)
+    (package / "kernels.py").write_text("def f():\n    return 1\n")
+    (package / "sub" / "helpers.py").write_text("def g():\n    return 2\n")
+    cached = [package / "sub" / "__pycache__" / "kernels.f-1.py311.nbi",
+              package / "sub" / "__pycache__" / "kernels.f-1.py311.1.nbc"]
+    for path in cached:
+        path.write_bytes(b"old")
+    assert refresh_kernel_cache(package)  # no digest yet: caches of unknown origin go
+    assert not any(path.exists() for path in cached)
+
+    for path in cached:
+        path.write_bytes(b"new")
+    assert not refresh_kernel_cache(package)  # nothing changed: the cache stays
+    assert all(path.exists() for path in cached)
+
+    (package / "sub" / "helpers.py").write_text("def g():\n    return 3\n")  # only a helper module
+    assert refresh_kernel_cache(package)
+    assert not any(path.exists() for path in cached)
+    assert not refresh_kernel_cache(package)
