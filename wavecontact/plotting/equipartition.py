@@ -54,12 +54,11 @@ def plot_equipartition(study: EquipartitionStudy, path, dpi: int = 150) -> Path:
     ax.grid(alpha=0.3, which="both")
 
     medians = []
-    for index, n in enumerate(study.modes):
-        settled = [s for s in study.settling(n) if s is not None]
-        ax_n.plot([n] * len(settled), settled, "o", color=f"C{index}", ms=4, alpha=0.6)
-        row = next(r for r in study.table() if r["modes"] == n)
+    for index, row in enumerate(study.table()):
+        settled = [s for s in row["settling"] if s is not None]
+        ax_n.plot([row["modes"]] * len(settled), settled, "o", color=f"C{index}", ms=4, alpha=0.6)
         if row["median_settling"] is not None:
-            medians.append((n, row["median_settling"]))
+            medians.append((row["modes"], row["median_settling"]))
     if medians:
         n_values, s_values = np.array(medians, dtype=float).T
         slope = study.scaling_exponent()
