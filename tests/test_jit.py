@@ -25,3 +25,17 @@ def test_cached_kernels_are_dropped_when_any_source_changes(tmp_path):
     assert refresh_kernel_cache(package)
     assert not any(path.exists() for path in cached)
     assert not refresh_kernel_cache(package)
+
+
+def test_first_call_reports_kernel_preparation_and_a_warm_call_does_not():
+    import subprocess
+    import sys
+
+    import wavecontact as wc
+    from wavecontact._jit import NUMBA_ENABLED
+
+    code = "import wavecontact as wc; print(wc.collide(0.6, 100).diagnostics['includes_kernel_preparation'])"
+    first = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert first == str(NUMBA_ENABLED)  # a fresh process loads (or compiles) the delay kernels
+    wc.collide(0.6, 100)
+    assert wc.collide(0.6, 100).diagnostics["includes_kernel_preparation"] is False

@@ -19,7 +19,7 @@ import os
 from itertools import chain
 from pathlib import Path
 
-__all__ = ["NUMBA_ENABLED", "kernel", "refresh_kernel_cache"]
+__all__ = ["NUMBA_ENABLED", "kernel", "prepared_kernel_count", "refresh_kernel_cache"]
 
 _STAMP_NAME = "wavecontact-sources.sha1"
 
@@ -79,6 +79,19 @@ if NUMBA_ENABLED:
     refresh_kernel_cache()
 
 
+_KERNELS = []  # every compiled kernel, to tell a first (compiling or cache-loading) call from a warm one
+
+
+def prepared_kernel_count() -> int:
+    """How many (kernel, signature) pairs numba has compiled or loaded from its cache in this process.
+
+    A solve during which this number grows paid a one-time cost (compilation,
+    or loading from the on-disk cache) on top of its own work.  Always 0
+    without numba.
+    """
+    return sum(len(compiled.signatures) for compiled in _KERNELS)
+
+
 def kernel(function=None, **options):
     """Compile ``function`` with ``numba.njit(cache=True, **options)`` when available.
 
@@ -92,7 +105,9 @@ def kernel(function=None, **options):
             return func
         settings = {"cache": True, "nogil": True}
         settings.update(options)
-        return _numba.njit(**settings)(func)
+        compiled = _numba.njit(**settings)(func)
+        _KERNELS.append(compiled)
+        return compiled
 
     if function is not None:
         return wrap(function)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ._jit import prepared_kernel_count
 from .contact import ContactLaw
 from .errors import InvalidParameterError
 from .result import CollisionResult
@@ -27,13 +28,18 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
     Returns
     -------
     CollisionResult
-        With ``wall_time_s`` measured around the whole solve.
+        With ``wall_time_s`` measured around the whole solve, and
+        ``diagnostics["includes_kernel_preparation"]`` True when numba compiled or
+        loaded kernels during it (a first call: that time is not the solver's cost).
     """
     module = get_solver(solver)
     merged = check_options(solver, module.OPTIONS, options)
+    prepared = prepared_kernel_count()
     with Stopwatch() as watch:
         result = module.solve(scene, **merged)
     result.wall_time_s = watch.seconds
+    # numba compiled or loaded kernels during this call: its wall time is not the solver's cost
+    result.diagnostics["includes_kernel_preparation"] = prepared_kernel_count() > prepared
     return result
 
 

@@ -92,5 +92,8 @@ def run(args) -> int:
         line = f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa}, solver = {result.solver}"
         if result.error_estimate is not None:
             line += f", error estimate {result.error_estimate:.1e}"
-        print(line + f", {1e3 * result.wall_time_s:.3g} ms)")
+        line += f", {1e3 * result.wall_time_s:.3g} ms"
+        if result.diagnostics.get("includes_kernel_preparation"):
+            line += ", including numba's one-time compilation or cache loading"
+        print(line + ")")
     return 0
