@@ -12,7 +12,11 @@ from wavecontact.cli import main
 from wavecontact.errors import InvalidParameterError
 from wavecontact.plotting.equipartition import plot_equipartition
 from wavecontact.studies.equipartition import equipartition_by_modes, settling_collision
-from wavecontact.studies.ring import equilibrium_spectral_entropy_finite, relative_modal_energies, spectral_entropy
+from wavecontact.studies.ring import (
+    equilibrium_spectral_entropy_finite,
+    relative_modal_energies,
+    spectral_entropy,
+)
 
 GAMMA = 0.6173
 

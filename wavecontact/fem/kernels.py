@@ -214,6 +214,37 @@ def _synchronize(u, v, a, sync, bands, inverse_mass, cholesky, lumped, dt):
 
 
 @kernel
+def _energy_check(
+    kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state, samples,
+    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
+):
+    """Record one energy sample and watch the balance (the periodic check of both time loops).
+
+    Returns ``(samples, internal1, internal2, within)``: the updated sample
+    count, each rod's internal energy (total minus its translation), and
+    False when the relative drift of the total is not finite or exceeds
+    ``energy_tolerance`` (then ``state[S_FAILED_ENERGY]`` holds the total).
+    """
+    total = kinetic1 + strain1 + kinetic2 + strain2 + potential
+    internal1 = kinetic1 + strain1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
+    internal2 = kinetic2 + strain2 - 0.5 * state[S_MOMENTUM2] ** 2 / mass2
+    if samples < energy_time.size:
+        energy_time[samples] = time
+        energy_kinetic[samples] = kinetic1 + kinetic2
+        energy_strain[samples] = strain1 + strain2
+        energy_contact[samples] = potential
+        energy_internal1[samples] = internal1
+        energy_internal2[samples] = internal2
+        samples += 1
+    drift = abs(total - state[S_ENERGY0]) / state[S_ENERGY_SCALE]
+    if not math.isfinite(drift) or drift > energy_tolerance:
+        state[S_FAILED_ENERGY] = total
+        return samples, internal1, internal2, False
+    state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
+    return samples, internal1, internal2, True
+
+
+@kernel
 def advance(
     u1, v1, a1, u2, v2, a2, sync1, sync2,
     bands1, bands2, inverse_mass1, inverse_mass2, cholesky1, cholesky2, lumped,
@@ -322,24 +353,12 @@ def advance(
             kin1, str1, cor1 = rod_energies(u1, sync1, a1, bands1, mass_bands1, dt)
             kin2, str2, cor2 = rod_energies(u2, sync2, a2, bands2, mass_bands2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
-            total = kin1 + str1 + kin2 + str2 + pot - cor1 - cor2
-            kin1 -= cor1
-            kin2 -= cor2
-            internal1 = kin1 + str1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
-            internal2 = kin2 + str2 - 0.5 * state[S_MOMENTUM2] ** 2 / mass2
-            if samples < energy_time.size:
-                energy_time[samples] = time
-                energy_kinetic[samples] = kin1 + kin2
-                energy_strain[samples] = str1 + str2
-                energy_contact[samples] = pot
-                energy_internal1[samples] = internal1
-                energy_internal2[samples] = internal2
-                samples += 1
-            drift = abs(total - state[S_ENERGY0]) / state[S_ENERGY_SCALE]
-            if not math.isfinite(drift) or drift > energy_tolerance:
-                state[S_FAILED_ENERGY] = total
+            samples, internal1, internal2, within = _energy_check(
+                kin1 - cor1, str1, kin2 - cor2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
+                energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
+            )
+            if not within:
                 return 2, step + 1, samples
-            state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
             if vrel > 0.0 and gap > r_stop:
                 if time - state[S_LAST_IN_RANGE] >= period:
                     return 1, step + 1, samples
@@ -588,24 +607,14 @@ def advance_lattice(
             kin1, str1 = _staggered_energies(u1, w1, bands1, weights1, dt)
             kin2, str2 = _staggered_energies(u2, w2, bands2, weights2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
-            total = kin1 + str1 + kin2 + str2 + pot
-            internal1 = kin1 + str1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
-            internal2 = kin2 + str2 - 0.5 * state[S_MOMENTUM2] ** 2 / mass2
-            if samples < energy_time.size:
-                energy_time[samples] = time
-                energy_kinetic[samples] = kin1 + kin2
-                energy_strain[samples] = str1 + str2
-                energy_contact[samples] = pot
-                energy_internal1[samples] = internal1
-                energy_internal2[samples] = internal2
-                samples += 1
-            drift = abs(total - state[S_ENERGY0]) / state[S_ENERGY_SCALE]
-            if not math.isfinite(drift) or drift > energy_tolerance:
-                state[S_FAILED_ENERGY] = total
+            samples, internal1, internal2, within = _energy_check(
+                kin1, str1, kin2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
+                energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
+            )
+            if not within:
                 status = 2
                 done = step + 1
                 break
-            state[S_MAX_DRIFT] = max(state[S_MAX_DRIFT], drift)
             if vrel > 0.0 and gap > r_stop:
                 finished = time - state[S_LAST_IN_RANGE] >= period
                 if not finished:
