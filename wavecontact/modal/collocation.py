@@ -263,7 +263,7 @@ def _newton_lambert(free_gap, response, predicted, alpha, log_beta, compliance, 
     return False
 
 
-@kernel(fastmath={"reassoc", "contract", "arcp", "nsz"}, error_model="numpy")
+@kernel(error_model="numpy")
 def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
                   contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
                   node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled,

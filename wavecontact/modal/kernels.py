@@ -28,9 +28,6 @@ import numpy as np
 from .._jit import kernel
 
 TOE_MARGIN = 5.0
-# reassociation lets the compiler vectorise the modal sums; no flags that assume finite values
-# (the kernels compare with inf on purpose)
-_FAST = {"reassoc", "contract", "arcp", "nsz"}
 
 LAW_EXPONENTIAL = 0
 LAW_LINEAR = 1
@@ -119,7 +116,7 @@ def free_flight(q, v, omega, X, U, duration):
     for i in range(X.size):
         X[i] += U[i] * duration
 
-@kernel(fastmath=_FAST, error_model="numpy")
+@kernel(error_model="numpy")
 def end_sums(q, v, left, right, rod_first, sums):
     """Per rod: modal displacement and velocity of the left and right end.
 
@@ -165,7 +162,7 @@ def _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pendin
             sums[b, 3] += rod_products[b, 1] * f
 
 
-@kernel(fastmath=_FAST, error_model="numpy")
+@kernel(error_model="numpy")
 def _flush(v, left, right, rod_first, pending):
     """Apply the pending end impulses to the mode velocities."""
     for i in range(rod_first.size - 1):
@@ -189,7 +186,7 @@ def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
         gap_rate[k] = (U[b] + sums[b, 2]) - (U[a] + sums[a, 3])
 
 
-@kernel(fastmath=_FAST, error_model="numpy")
+@kernel(error_model="numpy")
 def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
             rigid_gap, rigid_rate, reach, speed_bound, accel_bound, amp_left, amp_right):
     """Rigorous bounds on the modal end motion under free flight.
@@ -231,7 +228,7 @@ def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair
         speed_bound[k] = abs(rigid_rate[k]) + amp_right[a, 1] + amp_left[b, 1]
         accel_bound[k] = amp_right[a, 2] + amp_left[b, 2]
 
-@kernel(fastmath=_FAST, error_model="numpy")
+@kernel(error_model="numpy")
 def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin_row, sums, pending):
     """Apply the pending end impulses to the mode velocities, rotate every oscillator exactly over
     one ladder step, and recompute the end sums (one pass over the modes)."""
