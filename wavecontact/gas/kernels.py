@@ -34,6 +34,7 @@ __all__ = [
     "RULE_FIXED",
     "RULE_TABLE",
     "STATUS_COLLAPSE",
+    "STATUS_COOLED",
     "STATUS_DONE",
     "STATUS_NEED_DRAW",
     "STATUS_NO_EVENTS",
@@ -44,10 +45,10 @@ __all__ = [
 ]
 
 RULE_FIXED, RULE_TABLE, RULE_EXTERNAL = 0, 1, 2
-STATUS_DONE, STATUS_TIME_LIMIT, STATUS_NEED_DRAW, STATUS_COLLAPSE, STATUS_NO_EVENTS = 0, 1, 2, 3, 4
+STATUS_DONE, STATUS_TIME_LIMIT, STATUS_NEED_DRAW, STATUS_COLLAPSE, STATUS_NO_EVENTS, STATUS_COOLED = 0, 1, 2, 3, 4, 5
 
 # indices into the float64 ``scalars`` array
-T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, TOTAL_MASS = 0, 1, 2, 3, 4, 5
+T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, ENERGY_FLOOR, KINETIC_CARRY, KINETIC_REFERENCE = range(8)
 # indices into the int64 ``counters`` array
 COLLISIONS, WALL_HITS, RATIO_CLAMPED, BATH_LIMITED = 0, 1, 2, 3
 
@@ -85,65 +86,78 @@ def event_time(k, now, x, v, local_time, reach, ring, box):
 
 
 @kernel
-def _sift_up(heap, slot, key, p):
+def _sift_up(heap, heap_time, slot, p):
     item = heap[p]
-    t = key[item]
+    t = heap_time[p]
     while p > 0:
         parent = (p - 1) >> 1
         other = heap[parent]
-        if key[other] < t or (key[other] == t and other < item):
+        tp = heap_time[parent]
+        if tp < t or (tp == t and other < item):
             break
         heap[p] = other
+        heap_time[p] = tp
         slot[other] = p
         p = parent
     heap[p] = item
+    heap_time[p] = t
     slot[item] = p
 
 
 @kernel
-def _sift_down(heap, slot, key, p):
+def _sift_down(heap, heap_time, slot, p):
     size = heap.size
     item = heap[p]
-    t = key[item]
+    t = heap_time[p]
     while True:
         child = 2 * p + 1
         if child >= size:
             break
         best = heap[child]
+        tb = heap_time[child]
         right = child + 1
         if right < size:
-            other = heap[right]
-            if key[other] < key[best] or (key[other] == key[best] and other < best):
+            tr = heap_time[right]
+            if tr < tb or (tr == tb and heap[right] < best):
                 child = right
-                best = other
-        if t < key[best] or (t == key[best] and item < best):
+                best = heap[right]
+                tb = tr
+        if t < tb or (t == tb and item < best):
             break
         heap[p] = best
+        heap_time[p] = tb
         slot[best] = p
         p = child
     heap[p] = item
+    heap_time[p] = t
     slot[item] = p
 
 
 @kernel
-def _rekey(heap, slot, key, k, t):
-    old = key[k]
-    key[k] = t
+def _rekey(heap, heap_time, slot, k, t):
+    p = slot[k]
+    old = heap_time[p]
+    heap_time[p] = t
     if t < old:
-        _sift_up(heap, slot, key, slot[k])
+        _sift_up(heap, heap_time, slot, p)
     elif t > old:
-        _sift_down(heap, slot, key, slot[k])
+        _sift_down(heap, heap_time, slot, p)
 
 
 @kernel
-def build_heap(key, heap, slot):
-    """Fill ``heap``/``slot`` with a min-heap of the event times ``key`` (ties by event index)."""
+def build_heap(key, heap, heap_time, slot):
+    """Fill ``heap``/``heap_time``/``slot`` with a min-heap of the event times ``key`` (ties by event index).
+
+    ``heap[p]`` is the event at heap position ``p``, ``heap_time[p]`` its
+    time (kept beside it for locality) and ``slot[k]`` the position of event ``k``.
+    """
     m = key.size
     for k in range(m):
         heap[k] = k
+        heap_time[k] = key[k]
         slot[k] = k
     for p in range(m // 2 - 1, -1, -1):
-        _sift_down(heap, slot, key, p)
+        _sift_down(heap, heap_time, slot, p)
 
 
 @kernel
@@ -180,18 +194,21 @@ def _lookup(table_ratio, ratio, counters):
 
 
 @kernel
-def _table_draw(u, ig, wg, ir, wr, probability, quantiles, share):
+def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share):
     """eps^2 at level ``u`` and the short rod's share, bilinear between the four corner quantile functions."""
     levels = probability.size
     lo = 0
     hi = levels - 1
+    if uniform_levels:
+        lo = min(int(u * hi), hi - 1)
+        hi = lo + 1
     while hi - lo > 1:
         mid = (lo + hi) >> 1
         if probability[mid] <= u:
             lo = mid
         else:
             hi = mid
-    wu = (u - probability[lo]) / (probability[lo + 1] - probability[lo])
+    wu = min(max((u - probability[lo]) / (probability[lo + 1] - probability[lo]), 0.0), 1.0)
     g1 = min(ig + 1, quantiles.shape[0] - 1)
     r1 = min(ir + 1, quantiles.shape[1] - 1)
     q00 = (1.0 - wu) * quantiles[ig, ir, lo] + wu * quantiles[ig, ir, lo + 1]
@@ -206,12 +223,33 @@ def _table_draw(u, ig, wg, ir, wr, probability, quantiles, share):
 
 
 @kernel
+def _recount_kinetic(v, mass, ring, scalars):
+    """Recompute the kinetic energy from the velocities (O(N)).
+
+    The running sum of the collision losses carries an error of about 1e-16
+    of the energy it started from, so once the energy has decayed a
+    millionfold it is recounted: each decay by 10^6 costs one pass over the rods.
+    """
+    kinetic = 0.0
+    momentum = 0.0
+    total = 0.0
+    for i in range(v.size):
+        kinetic += 0.5 * mass[i] * v[i] * v[i]
+        momentum += mass[i] * v[i]
+        total += mass[i]
+    scalars[KINETIC] = kinetic
+    scalars[KINETIC_CARRY] = 0.0
+    scalars[MOMENTUM_ENERGY] = momentum * momentum / (2.0 * total) if ring else 0.0
+    scalars[KINETIC_REFERENCE] = kinetic
+
+
+@kernel
 def run_events(
     x, v, local_time, temperature, mass, reach, pair_gamma_index, pair_gamma_weight, left_is_short,
-    heap, slot, key, ring, box,
-    rule, restitution_squared, table_ratio, probability, quantiles, share, bath_modes, decay_rate,
+    heap, heap_time, slot, ring, box,
+    rule, restitution_squared, table_ratio, probability, uniform_levels, quantiles, share, bath_modes, decay_rate,
     uniforms, pending, max_collisions, time_limit,
-    window, collapse_factor, mean_gap, scalars, counters,
+    window, collapse_factor, scalars, counters,
 ):
     """Process events until ``max_collisions`` rod-rod collisions, a stop condition, or a needed draw.
 
@@ -227,8 +265,8 @@ def run_events(
         length ratio (table rule).
     left_is_short : ndarray of bool
         Per event, whether the left rod of the pair is the shorter one.
-    heap, slot, key : ndarray
-        The indexed heap of event times (updated in place).
+    heap, heap_time, slot : ndarray
+        The indexed heap of event times (see :func:`build_heap`; updated in place).
     ring : bool
         Periodic ring (True) or box with elastic walls (False).
     box : float
@@ -239,6 +277,9 @@ def run_events(
         eps^2 of the fixed rule.
     table_ratio, probability, quantiles, share : ndarray
         The restitution table's arrays (:meth:`RestitutionTable.arrays`).
+    uniform_levels : bool
+        Whether ``probability`` is ``linspace(0, 1, P)`` exactly (then the
+        level is found by one multiplication instead of a search).
     bath_modes : float
         Modes per rod: a bath at temperature T holds ``bath_modes * T``.
     decay_rate : float
@@ -251,15 +292,15 @@ def run_events(
         Rod-rod collisions to process in this call.
     time_limit : float
         Stop before any event later than this.
-    window : ndarray
-        Times of the last ``window.size`` collisions (ring buffer).
+    window : ndarray, shape (2 W,)
+        Times of the last ``2 W`` collisions (ring buffer).
     collapse_factor : float
-        Collapse when ``window.size`` collisions took less than
-        ``collapse_factor * mean_gap / v_rms``.
-    mean_gap : float
-        Mean free length per rod.
+        Collapse when the last ``W`` collisions took less than
+        ``collapse_factor`` times the time the ``W`` before them took.
     scalars, counters : ndarray
         Running clock and energies, and counters (see the module constants).
+        The run stops (``STATUS_COOLED``) once the kinetic energy in the
+        centre-of-mass frame falls below ``scalars[ENERGY_FLOOR]``.
 
     Returns
     -------
@@ -271,12 +312,11 @@ def run_events(
         Rod-rod collisions processed in this call.
     """
     n = x.size
-    events = key.size
-    w = window.size
+    events = heap.size
     done = 0
     while done < max_collisions:
         k = heap[0]
-        t = key[k]
+        t = heap_time[0]
         if t == math.inf:
             return STATUS_NO_EVENTS, -1, done
         if t > time_limit:
@@ -287,9 +327,9 @@ def run_events(
             v[rod] = -v[rod]
             scalars[T_NOW] = t
             counters[WALL_HITS] += 1
-            _rekey(heap, slot, key, k, math.inf)
+            _rekey(heap, heap_time, slot, k, math.inf)
             neighbour = 1 if k == 0 else n - 1  # the rod's other event (a pair, or the far wall if N = 1)
-            _rekey(heap, slot, key, neighbour, event_time(neighbour, t, x, v, local_time, reach, ring, box))
+            _rekey(heap, heap_time, slot, neighbour, event_time(neighbour, t, x, v, local_time, reach, ring, box))
             continue
         if ring:
             i = k
@@ -321,7 +361,7 @@ def run_events(
             ratio = pair_temperature / e_tr if e_tr > 0.0 else math.inf
             ir, wr = _lookup(table_ratio, ratio, counters)
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr,
-                                  probability, quantiles, share)
+                                  probability, uniform_levels, quantiles, share)
         else:
             eps2 = pending[1]
             s = pending[2]
@@ -345,7 +385,12 @@ def run_events(
         else:
             temperature[short] += s * lost / bath_modes
             temperature[long] += (1.0 - s) * lost / bath_modes
-        scalars[KINETIC] -= lost
+        # compensated (Kahan) sum: the kinetic energy stays accurate relative to itself while it decays
+        # by many orders of magnitude (plain sums would keep an error of 1e-16 of the initial energy)
+        change = -lost - scalars[KINETIC_CARRY]
+        kinetic = scalars[KINETIC] + change
+        scalars[KINETIC_CARRY] = (kinetic - scalars[KINETIC]) - change
+        scalars[KINETIC] = kinetic
         centre = (mi * v[i] + mj * v[j]) / total
         after = math.sqrt(eps2) * approach
         v[i] = centre - mj / total * after
@@ -353,7 +398,7 @@ def run_events(
         scalars[T_NOW] = t
         counters[COLLISIONS] += 1
         done += 1
-        _rekey(heap, slot, key, k, math.inf)
+        _rekey(heap, heap_time, slot, k, math.inf)
         before = k - 1
         after_k = k + 1
         if ring:
@@ -362,19 +407,25 @@ def run_events(
             if after_k == events:
                 after_k = 0
         if before >= 0 and before != k:
-            _rekey(heap, slot, key, before, event_time(before, t, x, v, local_time, reach, ring, box))
+            _rekey(heap, heap_time, slot, before, event_time(before, t, x, v, local_time, reach, ring, box))
         if after_k < events and after_k != k and after_k != before:
-            _rekey(heap, slot, key, after_k, event_time(after_k, t, x, v, local_time, reach, ring, box))
-        # inelastic collapse: the last w collisions took a vanishing fraction of a free-flight time
-        position = (counters[COLLISIONS] - 1) % w
-        oldest = window[position]
-        window[position] = t
-        if counters[COLLISIONS] > w:
-            thermal = scalars[KINETIC] - scalars[MOMENTUM_ENERGY]
-            if thermal <= 0.0:
-                return STATUS_COLLAPSE, k, done
-            v_rms = math.sqrt(2.0 * thermal / scalars[TOTAL_MASS])
-            if t - oldest < collapse_factor * mean_gap / v_rms:
+            _rekey(heap, heap_time, slot, after_k, event_time(after_k, t, x, v, local_time, reach, ring, box))
+        # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite time).
+        # Compare the time taken by the last half of the window with the half before it; in floating
+        # point a collapsing cluster ends after a few dozen collisions with exactly equal velocities,
+        # which the half-window of 8..16 collisions still sees.
+        if scalars[KINETIC] < 1e-6 * scalars[KINETIC_REFERENCE]:
+            _recount_kinetic(v, mass, ring, scalars)
+        if scalars[KINETIC] - scalars[MOMENTUM_ENERGY] < scalars[ENERGY_FLOOR]:
+            return STATUS_COOLED, k, done
+        count = counters[COLLISIONS]
+        size = window.size
+        window[(count - 1) % size] = t
+        if count > size:
+            half = size // 2
+            recent = t - window[(count - 1 - half) % size]
+            earlier = window[(count - 1 - half) % size] - window[count % size]
+            if recent < collapse_factor * earlier:
                 return STATUS_COLLAPSE, k, done
     return STATUS_DONE, -1, done
 

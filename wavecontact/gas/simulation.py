@@ -34,6 +34,7 @@ _STATUS = {
     kernels.STATUS_TIME_LIMIT: "time_limit",
     kernels.STATUS_COLLAPSE: "collapsed",
     kernels.STATUS_NO_EVENTS: "no_events",
+    kernels.STATUS_COOLED: "cooled",
 }
 
 
@@ -44,7 +45,7 @@ class GasResult:
     Attributes
     ----------
     status : str
-        ``completed``, ``collapsed``, ``time_limit`` or ``no_events``.
+        ``completed``, ``collapsed``, ``cooled`` (below ``energy_floor``), ``time_limit`` or ``no_events``.
     message : str
         One line for a human (says why a run stopped early).
     collisions, wall_hits : int
@@ -172,13 +173,22 @@ class GasSimulation:
     frame_rods : int
         At most this many rods (evenly chosen) in each frame.
     collapse_window, collapse_factor : int, float
-        Inelastic collapse is declared when ``collapse_window`` consecutive
-        collisions took less than ``collapse_factor`` times the mean free
-        time ``mean_gap / v_rms``.
+        Inelastic collapse is declared when the last ``collapse_window``
+        collisions took less than ``collapse_factor`` times as long as the
+        ``collapse_window`` collisions before them: collisions accelerating
+        geometrically, as in a cluster that would collide infinitely often in
+        a finite time.  (A homogeneously cooling gas slows down instead, and
+        in a large gas the 16 collisions of a half-window are too many for
+        the shot noise of a steady rate to shrink a thousandfold.)
+    energy_floor : float
+        Stop (status ``cooled``) once the kinetic energy in the centre-of-mass
+        frame falls below this fraction of its initial value: velocities then
+        differ by less than their rounding (0: never).
     """
 
     def __init__(self, gas: RodGas, rule, *, damping=None, seed=0, record_every=1000, frame_every=1,
-                 max_frames=400, frame_rods=2000, collapse_window=1000, collapse_factor=1e-6):
+                 max_frames=400, frame_rods=2000, collapse_window=16, collapse_factor=1e-3,
+                 energy_floor=1e-20):
         if not isinstance(gas, RodGas):
             raise InvalidParameterError("gas must be a RodGas (see wavecontact.gas.random_gas)")
         if not isinstance(rule, (FixedRestitution, VibrationTable, VibrationSolve)):
@@ -190,8 +200,11 @@ class GasSimulation:
         self.frame_every = _count("frame_every", frame_every, 1, MAX_COLLISIONS)
         self.max_frames = _count("max_frames", max_frames, 0, 100_000)
         self.frame_rods = _count("frame_rods", frame_rods, 1, 100_000)
-        window = _count("collapse_window", collapse_window, 2, 10**7)
+        window = _count("collapse_window", collapse_window, 2, 10**6)
         self.collapse_factor = require_positive("collapse_factor", collapse_factor)
+        self.energy_floor = float(energy_floor)
+        if not 0.0 <= self.energy_floor < 1.0:
+            raise InvalidParameterError(f"energy_floor must lie in [0, 1), got {energy_floor!r}")
         sequence = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
         self.seed_entropy = sequence.entropy
         levels, self._solve_seeds = sequence.spawn(2)  # table levels; parent of the per-collision seeds
@@ -231,22 +244,24 @@ class GasSimulation:
             g = np.clip(self.pair_gamma, grid[0], grid[-1])
             self.gamma_index = np.clip(np.searchsorted(grid, g, side="right") - 1, 0, grid.size - 2).astype(np.int64)
             self.gamma_weight = (g - grid[self.gamma_index]) / (grid[self.gamma_index + 1] - grid[self.gamma_index])
-        self.key = np.array([kernels.event_time(k, 0.0, self.x, self.v, self.local_time, self.reach, ring,
-                                                gas.system_length) for k in range(left.size)])
+        key = np.array([kernels.event_time(k, 0.0, self.x, self.v, self.local_time, self.reach, ring,
+                                           gas.system_length) for k in range(left.size)])
         self.heap = np.empty(left.size, np.int64)
+        self.heap_time = np.empty(left.size)
         self.slot = np.empty(left.size, np.int64)
-        kernels.build_heap(self.key, self.heap, self.slot)
-        self.window = np.zeros(window)
+        kernels.build_heap(key, self.heap, self.heap_time, self.slot)
+        self.window = np.zeros(2 * window)
         momentum = float(np.sum(self.mass * self.v))
         total_mass = float(self.mass.sum())
-        self.scalars = np.zeros(6)
+        self.scalars = np.zeros(8)
         self.scalars[kernels.KINETIC] = gas.kinetic_energy()
+        self.scalars[kernels.KINETIC_REFERENCE] = gas.kinetic_energy()
         self.scalars[kernels.MOMENTUM_ENERGY] = momentum**2 / (2 * total_mass) if ring else 0.0
-        self.scalars[kernels.TOTAL_MASS] = total_mass
+        self.total_mass = total_mass
         self.counters = np.zeros(4, np.int64)
         self.pending = np.zeros(3)
-        self.mean_gap = gas.free_length / n
         self.initial_energy = self._energies()[4]
+        self.scalars[kernels.ENERGY_FLOOR] = self.energy_floor * self._energies()[0]
         self.history = {name: [] for name in _HISTORY}
         self.frame_times, self.frames = [], []
         self.records = 0
@@ -274,7 +289,7 @@ class GasSimulation:
         now = self.time
         kinetic = float(0.5 * np.sum(self.mass * self.v**2))
         if self.ring:
-            kinetic -= float(np.sum(self.mass * self.v)) ** 2 / (2.0 * self.scalars[kernels.TOTAL_MASS])
+            kinetic -= float(np.sum(self.mass * self.v)) ** 2 / (2.0 * self.total_mass)
         temperatures = self._synced_temperatures(now)
         modes = float(self.rule.bath_modes)
         bath = modes * float(temperatures.sum()) if self.rule.code != kernels.RULE_FIXED else 0.0
@@ -290,7 +305,7 @@ class GasSimulation:
         now = self.time
         x = self.x + self.v * (now - self.local_time)
         if self.ring:
-            drift = float(np.sum(self.mass * self.v)) / self.scalars[kernels.TOTAL_MASS]
+            drift = float(np.sum(self.mass * self.v)) / self.total_mass
             x = np.mod(x - drift * now, self.gas.system_length)
         return x
 
@@ -307,7 +322,7 @@ class GasSimulation:
     def _draw_external(self, event):
         n = self.gas.rods
         i, j = (event, (event + 1) % n) if self.ring else (event - 1, event)
-        now = float(self.key[event])
+        now = float(self.heap_time[self.slot[event]])
         temperatures = self._synced_temperatures(now)
         reduced = self.mass[i] * self.mass[j] / (self.mass[i] + self.mass[j])
         e_tr = 0.5 * reduced * (self.v[i] - self.v[j]) ** 2
@@ -346,6 +361,7 @@ class GasSimulation:
         target = self.collisions + collisions
         rule = self.rule
         ratio, probability, quantiles, share = rule.kernel_arrays()
+        uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
         no_uniforms = np.zeros(0)
         bar = None
@@ -367,11 +383,11 @@ class GasSimulation:
             while True:
                 status, event, _done = kernels.run_events(
                     self.x, self.v, self.local_time, self.temperature, self.mass, self.reach,
-                    self.gamma_index, self.gamma_weight, self.left_is_short, self.heap, self.slot, self.key,
-                    self.ring, self.gas.system_length, rule.code, restitution2, ratio, probability, quantiles,
+                    self.gamma_index, self.gamma_weight, self.left_is_short, self.heap, self.heap_time, self.slot,
+                    self.ring, self.gas.system_length, rule.code, restitution2, ratio, probability, uniform, quantiles,
                     share, float(rule.bath_modes), self._decay_rate(), uniforms[self.collisions - before:],
                     self.pending, chunk - (self.collisions - before), float(max_time), self.window,
-                    self.collapse_factor, self.mean_gap, self.scalars, self.counters)
+                    self.collapse_factor, self.scalars, self.counters)
                 if status != kernels.STATUS_NEED_DRAW:
                     break
                 self._draw_external(event)
@@ -384,7 +400,7 @@ class GasSimulation:
             if status == kernels.STATUS_DONE and self.collisions % self.record_every == 0:
                 self._record()
             if status != kernels.STATUS_DONE:
-                if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS):
+                if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS, kernels.STATUS_COOLED):
                     self._record()  # the final state of a run that cannot continue
                 break
         wall = time.perf_counter() - start
@@ -395,10 +411,14 @@ class GasSimulation:
 
     def _message(self):
         t, c = self.time, self.collisions
+        if self.status == "cooled":
+            return (f"the gas cooled below {self.energy_floor:g} of its initial kinetic energy after {c} collisions "
+                    f"(t = {t:.6g}); further collisions would be lost in the rounding of the velocities")
         if self.status == "collapsed":
-            w = self.window.size
+            w = self.window.size // 2
             return (f"inelastic collapse at t = {t:.6g} after {c} collisions: the last {w} collisions took "
-                    f"less than {self.collapse_factor:g} of a mean free time; the run was stopped")
+                    f"less than {self.collapse_factor:g} times as long as the {w} before them (collisions "
+                    f"accelerating towards infinitely many in a finite time); the run was stopped")
         if self.status == "time_limit":
             return f"stopped at the time limit after {c} collisions (t = {t:.6g})"
         if self.status == "no_events":
@@ -423,7 +443,7 @@ class GasSimulation:
         )
 
     # ------------------------------------------------------------ checkpoint
-    _STATE = ("x", "v", "local_time", "temperature", "key", "heap", "slot", "window", "scalars", "counters",
+    _STATE = ("x", "v", "local_time", "temperature", "heap", "heap_time", "slot", "window", "scalars", "counters",
               "pending")
 
     def _parameters(self) -> dict:
@@ -434,8 +454,9 @@ class GasSimulation:
             "frame_every": self.frame_every,
             "max_frames": self.max_frames,
             "frame_rods": self.frame_rods,
-            "collapse_window": int(self.window.size),
+            "collapse_window": int(self.window.size // 2),
             "collapse_factor": self.collapse_factor,
+            "energy_floor": self.energy_floor,
             "seed_entropy": str(self.seed_entropy),
             "boundary": self.gas.boundary,
             "system_length": self.gas.system_length,
@@ -481,7 +502,7 @@ class GasSimulation:
         sim = cls(gas, rule, damping=params["damping"], seed=np.random.SeedSequence(int(params["seed_entropy"])),
                   record_every=params["record_every"], frame_every=params["frame_every"],
                   max_frames=params["max_frames"], frame_rods=params["frame_rods"],
-                  collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"])
+                  collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"], energy_floor=params["energy_floor"])
         for name in cls._STATE:
             getattr(sim, name)[...] = arrays[name]
         sim._rng.bit_generator.state = json.loads(str(arrays["rng_state"]))
