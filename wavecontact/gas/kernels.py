@@ -416,17 +416,24 @@ def run_events(
         # which the half-window of 8..16 collisions still sees.
         if scalars[KINETIC] < 1e-6 * scalars[KINETIC_REFERENCE]:
             _recount_kinetic(v, mass, ring, scalars)
-        if scalars[KINETIC] - scalars[MOMENTUM_ENERGY] < scalars[ENERGY_FLOOR]:
-            return STATUS_COOLED, k, done
         count = counters[COLLISIONS]
         size = window.size
         window[(count - 1) % size] = t
-        if count > size:
-            half = size // 2
-            recent = t - window[(count - 1 - half) % size]
-            earlier = window[(count - 1 - half) % size] - window[count % size]
-            if recent < collapse_factor * earlier:
-                return STATUS_COLLAPSE, k, done
+        cooled = scalars[ENERGY_FLOOR] > 0.0 and scalars[KINETIC] - scalars[MOMENTUM_ENERGY] < scalars[ENERGY_FLOOR]
+        if count >= size or cooled:
+            # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite
+            # time).  Compare the time taken by the last half of the window with the half before it;
+            # in floating point a collapsing cluster ends after a few dozen collisions with exactly
+            # equal velocities, which a half-window of 16 collisions still sees.  When the energy
+            # floor is reached earlier (a small system whose whole thermal energy is the collapsing
+            # motion), the same test on the shorter history tells collapse from cooling.
+            half = (min(count, size) - 1) // 2  # window[(c - 1) % size] holds the time of collision c
+            if half >= 2:
+                middle = window[(count - half - 1) % size]
+                if t - middle < collapse_factor * (middle - window[(count - 2 * half - 1) % size]):
+                    return STATUS_COLLAPSE, k, done
+            if cooled:
+                return STATUS_COOLED, k, done
     return STATUS_DONE, -1, done
 
 
