@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, require_positive
 
-__all__ = ["EqualLengths", "RodGas", "UniformLengths", "random_gas"]
+__all__ = ["DEFAULT_LENGTHS", "EqualLengths", "RodGas", "UniformLengths", "random_gas"]
 
 MAX_RODS = 10_000_000
 
@@ -139,7 +139,10 @@ class RodGas:
         return float(0.5 * np.sum(self.masses * self.velocities**2))
 
 
-def random_gas(rods, *, seed, lengths=UniformLengths(), packing_fraction=0.1, temperature=1.0,
+DEFAULT_LENGTHS = UniformLengths(0.5, 1.0)
+
+
+def random_gas(rods, *, seed, lengths=DEFAULT_LENGTHS, packing_fraction=0.1, temperature=1.0,
                bath_temperature=0.0, boundary="ring") -> RodGas:
     """A homogeneous gas: random lengths, random free spaces, Maxwellian velocities with zero momentum.
 
