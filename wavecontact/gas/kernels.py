@@ -293,7 +293,7 @@ def run_events(
     time_limit : float
         Stop before any event later than this.
     window : ndarray, shape (2 W,)
-        Times of the last ``2 W`` collisions (ring buffer).
+        Times of the last ``2 W`` collisions (ring buffer; ``2 W`` a power of two).
     collapse_factor : float
         Collapse when the last ``W`` collisions took less than
         ``collapse_factor`` times the time the ``W`` before them took.
@@ -417,8 +417,9 @@ def run_events(
         if scalars[KINETIC] < 1e-6 * scalars[KINETIC_REFERENCE]:
             _recount_kinetic(v, mass, ring, scalars)
         count = counters[COLLISIONS]
-        size = window.size
-        window[(count - 1) % size] = t
+        size = window.size  # a power of two: positions by masking instead of a division
+        mask = size - 1
+        window[(count - 1) & mask] = t
         cooled = scalars[ENERGY_FLOOR] > 0.0 and scalars[KINETIC] - scalars[MOMENTUM_ENERGY] < scalars[ENERGY_FLOOR]
         if count >= size or cooled:
             # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite
@@ -427,10 +428,10 @@ def run_events(
             # equal velocities, which a half-window of 16 collisions still sees.  When the energy
             # floor is reached earlier (a small system whose whole thermal energy is the collapsing
             # motion), the same test on the shorter history tells collapse from cooling.
-            half = (min(count, size) - 1) // 2  # window[(c - 1) % size] holds the time of collision c
+            half = (min(count, size) - 1) // 2  # window[(c - 1) & mask] holds the time of collision c
             if half >= 2:
-                middle = window[(count - half - 1) % size]
-                if t - middle < collapse_factor * (middle - window[(count - 2 * half - 1) % size]):
+                middle = window[(count - half - 1) & mask]
+                if t - middle < collapse_factor * (middle - window[(count - 2 * half - 1) & mask]):
                     return STATUS_COLLAPSE, k, done
             if cooled:
                 return STATUS_COOLED, k, done

@@ -173,7 +173,7 @@ class GasSimulation:
     frame_rods : int
         At most this many rods (evenly chosen) in each frame.
     collapse_window, collapse_factor : int, float
-        Inelastic collapse is declared when the last ``collapse_window``
+        (``collapse_window`` a power of two.)  Inelastic collapse is declared when the last ``collapse_window``
         collisions took less than ``collapse_factor`` times as long as the
         ``collapse_window`` collisions before them: collisions accelerating
         geometrically, as in a cluster that would collide infinitely often in
@@ -200,7 +200,9 @@ class GasSimulation:
         self.frame_every = _count("frame_every", frame_every, 1, MAX_COLLISIONS)
         self.max_frames = _count("max_frames", max_frames, 0, 100_000)
         self.frame_rods = _count("frame_rods", frame_rods, 1, 100_000)
-        window = _count("collapse_window", collapse_window, 2, 10**6)
+        window = _count("collapse_window", collapse_window, 2, 2**20)
+        if window & (window - 1):
+            raise InvalidParameterError(f"collapse_window must be a power of two, got {window}")
         self.collapse_factor = require_positive("collapse_factor", collapse_factor)
         self.energy_floor = float(energy_floor)
         if not 0.0 <= self.energy_floor < 1.0:
