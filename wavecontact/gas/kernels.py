@@ -318,6 +318,16 @@ def run_events(
         k = heap[0]
         t = heap_time[0]
         if t == math.inf:
+            # on a ring this means all velocities are equal: the gas has merged into one block. If the
+            # collisions before were accelerating, that is the end of a collapse lost in the rounding.
+            count = counters[COLLISIONS]
+            size = window.size
+            half = (min(count, size) - 1) // 2
+            if ring and half >= 2:
+                last = window[(count - 1) & (size - 1)]
+                middle = window[(count - half - 1) & (size - 1)]
+                if last - middle < middle - window[(count - 2 * half - 1) & (size - 1)]:
+                    return STATUS_COLLAPSE, -1, done
             return STATUS_NO_EVENTS, -1, done
         if t > time_limit:
             return STATUS_TIME_LIMIT, -1, done
