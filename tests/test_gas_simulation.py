@@ -217,3 +217,27 @@ def test_vibration_rule_avoids_the_collapse_of_the_fixed_rule_with_the_same_mean
         result = vibrating.run(300 * rods)
         assert result.status == "completed", result.message
         assert result.final_energy > 1e-3 * result.history["kinetic_energy"][0]
+
+
+@pytest.mark.slow  # ~20 s: 18,000 collisions through Python; test_a_solve_per_collision_rule... covers the path fast
+def test_per_collision_draws_agree_statistically_with_the_table_kernel():
+    """The solve-per-collision path, drawing from the same table in Python with its own seed per
+    collision, gives the same energy statistics as the in-kernel table rule (independent streams)."""
+
+    def draw(gamma, temperature_ratio, seed):
+        ratio = min(temperature_ratio, TABLE.temperature_ratio[-1])
+        u = np.random.default_rng(seed).random()
+        return float(TABLE.quantile(gamma, ratio, u)), float(TABLE.share(gamma, ratio))
+
+    finals = {"table": [], "solve": []}
+    for seed in range(6):
+        gas = random_gas(60, seed=100 + seed, lengths=UniformLengths(0.6, 1.0), bath_temperature=0.02)
+        for name, rule in (("table", VibrationTable(TABLE)), ("solve", VibrationSolve(draw, TABLE.bath_modes))):
+            result = GasSimulation(gas, rule, seed=seed, record_every=500, max_frames=0).run(3000)
+            # translational share of the total energy, averaged over the second half of the run
+            h = result.history
+            share = h["kinetic_energy"] / (h["kinetic_energy"] + h["bath_energy"])
+            finals[name].append(np.mean(share[share.size // 2:]))
+    a, b = np.array(finals["table"]), np.array(finals["solve"])
+    spread = math.sqrt(np.var(a, ddof=1) / a.size + np.var(b, ddof=1) / b.size)
+    assert abs(a.mean() - b.mean()) < 4 * spread + 1e-3
