@@ -137,6 +137,8 @@ def test_corrupted_or_foreign_checkpoints_are_refused(tmp_path):
         (lambda: GasSimulation(random_gas(10, seed=0, lengths=UniformLengths(0.1, 1.0)), VibrationTable(TABLE)),
          "table covers gamma"),
         (lambda: GasSimulation(random_gas(10, seed=0), FixedRestitution(0.9)).run(0), "collisions"),
+        (lambda: GasSimulation(random_gas(10, seed=0), FixedRestitution(0.9), record_every=1).run(10**8),
+         "record_every must be >= collisions"),
         (lambda: RodGas([1, 1], [0.0, 0.5], [0, 0], [0, 0], 10.0), "not overlapping"),
     ],
 )

@@ -26,6 +26,7 @@ from .rules import FixedRestitution, VibrationSolve, VibrationTable, rule_from_d
 __all__ = ["MAX_COLLISIONS", "GasResult", "GasSimulation"]
 
 MAX_COLLISIONS = 10**11
+MAX_RECORDS = 10**7  # history rows one run may add (6 floats each)
 CHECKPOINT_SCHEMA = "wavecontact.gas"
 CHECKPOINT_VERSION = 1
 _HISTORY = ("time", "collisions", "kinetic_energy", "bath_energy", "lost_energy", "dissipated_energy")
@@ -356,6 +357,10 @@ class GasSimulation:
         collisions = _count("collisions", collisions, 1, MAX_COLLISIONS)
         if math.isnan(float(max_time)) or float(max_time) < 0:
             raise InvalidParameterError(f"max_time must be >= 0, got {max_time!r}")
+        if collisions // self.record_every > MAX_RECORDS:
+            raise InvalidParameterError(
+                f"record_every must be >= collisions / {MAX_RECORDS:.0e} (= {math.ceil(collisions / MAX_RECORDS)}) "
+                f"so that the history stays bounded, got {self.record_every}")
         if self.status not in ("completed", "time_limit"):
             raise InvalidParameterError(f"this simulation ended ({self.status}); it cannot be continued")
         if self.records == 0:
