@@ -4,7 +4,8 @@
 * :mod:`.rules`       -- collision rules as values (fixed restitution, restitution table, a solve per collision);
 * :mod:`.kernels`     -- the event loop (indexed heap of neighbour-pair collision times, numba);
 * :mod:`.simulation`  -- runs in chunks, histories, collapse detection, checkpoint and resume;
-* :mod:`.kick_table`  -- an analytic stand-in restitution table for demonstrations.
+* :mod:`.kick_table`  -- an analytic stand-in restitution table for demonstrations;
+* :mod:`.reference`   -- a plain-Python heapq event loop (test reference and benchmark baseline).
 """
 
 from .kick_table import thermal_kick_table
