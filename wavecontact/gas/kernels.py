@@ -39,9 +39,11 @@ __all__ = [
     "STATUS_NEED_DRAW",
     "STATUS_NO_EVENTS",
     "STATUS_TIME_LIMIT",
-    "build_heap",
+    "build_tree",
     "event_time",
+    "event_times",
     "run_events",
+    "tree_size",
 ]
 
 RULE_FIXED, RULE_TABLE, RULE_EXTERNAL = 0, 1, 2
@@ -86,78 +88,90 @@ def event_time(k, now, x, v, local_time, reach, ring, box):
 
 
 @kernel
-def _sift_up(heap, heap_time, slot, p):
-    item = heap[p]
-    t = heap_time[p]
-    while p > 0:
-        parent = (p - 1) >> 1
-        other = heap[parent]
-        tp = heap_time[parent]
-        if tp < t or (tp == t and other < item):
-            break
-        heap[p] = other
-        heap_time[p] = tp
-        slot[other] = p
-        p = parent
-    heap[p] = item
-    heap_time[p] = t
-    slot[item] = p
+def event_times(now, x, v, local_time, reach, ring, box, out):
+    """Fill ``out[k]`` with :func:`event_time` of every event ``k`` (the set-up of a run, one call)."""
+    for k in range(out.size):
+        out[k] = event_time(k, now, x, v, local_time, reach, ring, box)
+
+
+def tree_size(events):
+    """Length of the tree arrays for ``events`` events: twice the power of two at or above ``events``."""
+    leaves = 1
+    while leaves < events:
+        leaves *= 2
+    return 2 * leaves
 
 
 @kernel
-def _sift_down(heap, heap_time, slot, p):
-    size = heap.size
-    item = heap[p]
-    t = heap_time[p]
-    while True:
-        child = 2 * p + 1
-        if child >= size:
-            break
-        best = heap[child]
-        tb = heap_time[child]
-        right = child + 1
-        if right < size:
-            tr = heap_time[right]
-            if tr < tb or (tr == tb and heap[right] < best):
-                child = right
-                best = heap[right]
-                tb = tr
-        if t < tb or (t == tb and item < best):
-            break
-        heap[p] = best
-        heap_time[p] = tb
-        slot[best] = p
-        p = child
-    heap[p] = item
-    heap_time[p] = t
-    slot[item] = p
+def _pull(tree_time, tree_event, p):
+    """Node ``p`` takes the earlier of its two children (the left one on a tie: it holds the lower events)."""
+    left = 2 * p
+    t = tree_time[left]
+    e = tree_event[left]
+    right_time = tree_time[left + 1]
+    right_event = tree_event[left + 1]
+    e = right_event if right_time < t else e
+    t = min(t, right_time)
+    tree_time[p] = t
+    tree_event[p] = e
 
 
 @kernel
-def _rekey(heap, heap_time, slot, k, t):
-    p = slot[k]
-    old = heap_time[p]
-    heap_time[p] = t
-    if t < old:
-        _sift_up(heap, heap_time, slot, p)
-    elif t > old:
-        _sift_down(heap, heap_time, slot, p)
+def _climb(tree_time, tree_event, p):
+    """Re-evaluate the ancestors of node ``p`` (whose own entry is right), carrying the winner in registers.
 
-
-@kernel
-def build_heap(key, heap, heap_time, slot):
-    """Fill ``heap``/``heap_time``/``slot`` with a min-heap of the event times ``key`` (ties by event index).
-
-    ``heap[p]`` is the event at heap position ``p``, ``heap_time[p]`` its
-    time (kept beside it for locality) and ``slot[k]`` the position of event ``k``.
+    Each level compares the winner so far with the sibling subtree's, which
+    did not change, so the loads need not wait for the stores below them.
+    The choice is written as two selects (compiled to conditional moves, not
+    branches that the processor would mispredict half of the time): the
+    sibling wins if it is earlier, or equally early and on the left (lower events).
     """
-    m = key.size
-    for k in range(m):
-        heap[k] = k
-        heap_time[k] = key[k]
-        slot[k] = k
-    for p in range(m // 2 - 1, -1, -1):
-        _sift_down(heap, heap_time, slot, p)
+    t = tree_time[p]
+    e = tree_event[p]
+    while p > 1:
+        sibling_time = tree_time[p ^ 1]
+        sibling_event = tree_event[p ^ 1]
+        take = (sibling_time < t) | ((sibling_time == t) & ((p & 1) == 1))
+        e = sibling_event if take else e
+        t = min(t, sibling_time)
+        p >>= 1
+        tree_time[p] = t
+        tree_event[p] = e
+
+
+@kernel
+def _pull_range(tree_time, tree_event, lo, hi):
+    """Recompute every ancestor of the leaves of events ``lo..hi`` (their times already set), up to the root."""
+    leaves = tree_time.size >> 1
+    lo += leaves
+    hi += leaves
+    while lo != hi:
+        lo >>= 1
+        hi >>= 1
+        for p in range(lo, hi + 1):
+            _pull(tree_time, tree_event, p)
+    _climb(tree_time, tree_event, lo)
+
+
+@kernel
+def build_tree(key, tree_time, tree_event):
+    """Fill a tournament tree of the event times ``key``: the root holds the earliest (ties: the lowest event).
+
+    The arrays have length ``2 M`` (:func:`tree_size`); leaf ``M + k`` holds
+    the time of event ``k`` (``inf`` for the padding beyond ``key.size``),
+    node ``p < M`` the earlier of nodes ``2 p`` and ``2 p + 1`` (time in
+    ``tree_time``, event in ``tree_event``); node 0 is unused and node 1 is the root.
+    Changing the times of a few neighbouring events re-evaluates their common
+    path to the root once (:func:`_pull_range`), ``log2 M`` comparisons.
+    """
+    leaves = tree_time.size >> 1
+    for k in range(leaves):
+        tree_time[leaves + k] = key[k] if k < key.size else math.inf
+        tree_event[leaves + k] = k
+    tree_time[0] = math.inf
+    tree_event[0] = -1
+    for p in range(leaves - 1, 0, -1):
+        _pull(tree_time, tree_event, p)
 
 
 @kernel
@@ -246,7 +260,7 @@ def _recount_kinetic(v, mass, ring, scalars):
 @kernel
 def run_events(
     x, v, local_time, temperature, mass, reach, pair_gamma_index, pair_gamma_weight, left_is_short,
-    heap, heap_time, slot, ring, box,
+    tree_time, tree_event, ring, box,
     rule, restitution_squared, table_ratio, probability, uniform_levels, quantiles, share, bath_modes, decay_rate,
     uniforms, pending, max_collisions, time_limit,
     window, collapse_factor, scalars, counters,
@@ -265,8 +279,8 @@ def run_events(
         length ratio (table rule).
     left_is_short : ndarray of bool
         Per event, whether the left rod of the pair is the shorter one.
-    heap, heap_time, slot : ndarray
-        The indexed heap of event times (see :func:`build_heap`; updated in place).
+    tree_time, tree_event : ndarray
+        The tournament tree of event times (see :func:`build_tree`; updated in place).
     ring : bool
         Periodic ring (True) or box with elastic walls (False).
     box : float
@@ -312,11 +326,12 @@ def run_events(
         Rod-rod collisions processed in this call.
     """
     n = x.size
-    events = heap.size
+    events = reach.size
+    leaves = tree_time.size >> 1
     done = 0
     while done < max_collisions:
-        k = heap[0]
-        t = heap_time[0]
+        k = tree_event[1]
+        t = tree_time[1]
         if t == math.inf:
             # on a ring this means all velocities are equal: the gas has merged into one block. If the
             # collisions before were accelerating, that is the end of a collapse lost in the rounding.
@@ -337,9 +352,10 @@ def run_events(
             v[rod] = -v[rod]
             scalars[T_NOW] = t
             counters[WALL_HITS] += 1
-            _rekey(heap, heap_time, slot, k, math.inf)
             neighbour = 1 if k == 0 else n - 1  # the rod's other event (a pair, or the far wall if N = 1)
-            _rekey(heap, heap_time, slot, neighbour, event_time(neighbour, t, x, v, local_time, reach, ring, box))
+            tree_time[leaves + k] = math.inf
+            tree_time[leaves + neighbour] = event_time(neighbour, t, x, v, local_time, reach, ring, box)
+            _pull_range(tree_time, tree_event, min(k, neighbour), max(k, neighbour))
             continue
         if ring:
             i = k
@@ -408,7 +424,7 @@ def run_events(
         scalars[T_NOW] = t
         counters[COLLISIONS] += 1
         done += 1
-        _rekey(heap, heap_time, slot, k, math.inf)
+        tree_time[leaves + k] = math.inf
         before = k - 1
         after_k = k + 1
         if ring:
@@ -416,10 +432,20 @@ def run_events(
                 before = events - 1
             if after_k == events:
                 after_k = 0
-        if before >= 0 and before != k:
-            _rekey(heap, heap_time, slot, before, event_time(before, t, x, v, local_time, reach, ring, box))
-        if after_k < events and after_k != k and after_k != before:
-            _rekey(heap, heap_time, slot, after_k, event_time(after_k, t, x, v, local_time, reach, ring, box))
+        has_before = before >= 0 and before != k
+        has_after = after_k < events and after_k != k and after_k != before
+        if has_before:
+            tree_time[leaves + before] = event_time(before, t, x, v, local_time, reach, ring, box)
+        if has_after:
+            tree_time[leaves + after_k] = event_time(after_k, t, x, v, local_time, reach, ring, box)
+        if before == k - 1 and after_k == k + 1:
+            _pull_range(tree_time, tree_event, before, after_k)  # one shared path to the root
+        else:  # the ring's seam (or fewer than three events): separate paths
+            _pull_range(tree_time, tree_event, k, k)
+            if has_before:
+                _pull_range(tree_time, tree_event, before, before)
+            if has_after:
+                _pull_range(tree_time, tree_event, after_k, after_k)
         # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite time).
         # Compare the time taken by the last half of the window with the half before it; in floating
         # point a collapsing cluster ends after a few dozen collisions with exactly equal velocities,
