@@ -112,3 +112,16 @@ def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):
             outputs.append({k: data[k] for k in data.files})
     for name in outputs[0]:
         np.testing.assert_array_equal(outputs[0][name], outputs[1][name], err_msg=name)
+
+
+@pytest.mark.parametrize("jit", [True, False])
+def test_branch_free_bracket_agrees_with_searchsorted(jit):
+    """The select-based binary search finds the grid interval np.searchsorted finds (grid points, edges, outside)."""
+    bracket = kernels._bracket if jit else kernels._bracket.py_func
+    rng = np.random.default_rng(np.random.SeedSequence(11))
+    for size in (2, 3, 5, 32, 201):
+        grid = np.cumsum(rng.exponential(size=size))
+        values = np.concatenate([grid, rng.uniform(grid[0] - 1.0, grid[-1] + 1.0, 200), [grid[0] - 5.0]])
+        for value in values:
+            expected = int(np.clip(np.searchsorted(grid, value, side="right") - 1, 0, size - 2))
+            assert bracket(grid, value) == expected

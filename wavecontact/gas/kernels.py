@@ -81,10 +81,11 @@ def event_time(k, now, x, v, local_time, reach, ring, box):
         j = k
         offset = 0.0
     approach = v[i] - v[j]
-    if approach <= 0.0:
-        return math.inf
     gap = (x[j] + v[j] * (now - local_time[j]) + offset) - (x[i] + v[i] * (now - local_time[i])) - reach[k]
-    return now + max(gap, 0.0) / approach
+    # whether the pair closes in is random from one call to the next: selects instead of a branch
+    closing = approach > 0.0
+    when = now + max(gap, 0.0) / (approach if closing else 1.0)
+    return when if closing else math.inf
 
 
 @kernel
@@ -187,6 +188,23 @@ def _advance(i, t, x, v, local_time, temperature, decay_rate, bath_modes, scalar
 
 
 @kernel
+def _bracket(grid, value):
+    """Largest ``i`` in ``0 .. grid.size - 2`` with ``grid[i] <= value`` (0 if none), for an ascending ``grid``.
+
+    A binary search whose steps are selects rather than branches (the
+    outcome of each comparison is random from one collision to the next, so
+    a branch would be mispredicted half of the time).
+    """
+    base = 0
+    n = grid.size - 1
+    while n > 1:
+        half = n >> 1
+        base = base + half if grid[base + half] <= value else base
+        n -= half
+    return base
+
+
+@kernel
 def _lookup(table_ratio, ratio, counters):
     """Lower grid index and weight of ``ratio``; beyond the grid it is held at the last point (counted)."""
     r = table_ratio.size
@@ -196,32 +214,18 @@ def _lookup(table_ratio, ratio, counters):
         if ratio > table_ratio[r - 1]:
             counters[RATIO_CLAMPED] += 1
         return r - 2, 1.0
-    lo = 0
-    hi = r - 1
-    while hi - lo > 1:
-        mid = (lo + hi) >> 1
-        if table_ratio[mid] <= ratio:
-            lo = mid
-        else:
-            hi = mid
+    lo = _bracket(table_ratio, ratio)
     return lo, (ratio - table_ratio[lo]) / (table_ratio[lo + 1] - table_ratio[lo])
 
 
 @kernel
 def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share):
     """eps^2 at level ``u`` and the short rod's share, bilinear between the four corner quantile functions."""
-    levels = probability.size
-    lo = 0
-    hi = levels - 1
     if uniform_levels:
-        lo = min(int(u * hi), hi - 1)
-        hi = lo + 1
-    while hi - lo > 1:
-        mid = (lo + hi) >> 1
-        if probability[mid] <= u:
-            lo = mid
-        else:
-            hi = mid
+        top = probability.size - 1
+        lo = min(int(u * top), top - 1)
+    else:
+        lo = _bracket(probability, u)
     wu = min(max((u - probability[lo]) / (probability[lo + 1] - probability[lo]), 0.0), 1.0)
     g1 = min(ig + 1, quantiles.shape[0] - 1)
     r1 = min(ir + 1, quantiles.shape[1] - 1)
