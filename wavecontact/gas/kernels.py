@@ -1,10 +1,15 @@
-"""Event-driven kernels of the rod gas: an indexed binary heap of neighbour-pair collision times.
+"""Event-driven kernels of the rod gas: a tournament tree of neighbour-pair collision times.
 
 In one dimension only neighbours meet, so the gas has one event per
 neighbour pair (N on a ring; N + 1 between walls, the walls counting as
 fixed partners).  Each collision changes the velocities of two rods and
-therefore the predicted times of at most three events; they are re-keyed in
-the heap in ``O(log N)``.  Rods are advanced lazily: a rod's position,
+therefore the predicted times of at most three events, and these three are
+neighbours: they sit on neighbouring leaves of a binary tournament tree
+(each node holding the earlier of its two children, the root the next
+event), so their paths to the root join after a level or two and one path
+of ``log2 N`` comparisons is re-evaluated per collision.  (An indexed
+binary heap would re-key the three events separately, each with its own
+sift of unpredictable branches.)  Rods are advanced lazily: a rod's position,
 velocity and bath temperature refer to its own clock ``local_time`` and are
 brought forward only when it collides (free flight is exact).
 
