@@ -204,7 +204,7 @@ def _pulse_errors(elements, profile, long_rod=1.3733):
 def test_far_end_remainder_delays_the_echo_of_a_smooth_pulse_at_third_order():
     # rod 2 (1.3733 long) stops 0.33, 0.66, 0.32 of an element short of its far end at 100, 200, 400
     # elements; the pulse crosses that end (and rod 1's, on a node) within the run
-    gaussian = lambda x: 1e-3 * np.exp(-(((x - 0.5) / 0.05) ** 2))  # noqa: E731
+    gaussian = lambda x: 1e-3 * np.exp(-(((x - 0.5) / 0.05) ** 2))
     elements = np.array([100, 200, 400])
     far, short = [], []
     for n in elements:
@@ -221,7 +221,7 @@ def test_far_end_remainder_delays_the_echo_of_a_smooth_pulse_at_third_order():
 def test_far_end_remainder_reflects_a_piecewise_linear_wave_exactly():
     # a displacement profile with kinks on the lattice (a hard impact's fronts are such) comes back
     # from a far end 0.33 of an element beyond the last node exactly: the interpolation sees lines
-    tent = lambda x: 1e-3 * np.maximum(0.0, 1.0 - np.abs(x - 0.5) / 0.1)  # noqa: E731
+    tent = lambda x: 1e-3 * np.maximum(0.0, 1.0 - np.abs(x - 0.5) / 0.1)
     theta, errors = _pulse_errors(100, tent)
     assert 0.1 < theta[1] < 0.9
     assert max(errors) < 1e-12  # of a 1e-3 tent (a step late or early would be ~1e-5)
@@ -229,7 +229,7 @@ def test_far_end_remainder_reflects_a_piecewise_linear_wave_exactly():
 
 def test_momentum_with_a_remainder_is_conserved_while_a_wave_crosses_it():
     # the far node stands for half an element, the waves inside the remainder carry the rest
-    gaussian = lambda x: 1e-3 * np.exp(-(((x - 0.9) / 0.05) ** 2))  # noqa: E731
+    gaussian = lambda x: 1e-3 * np.exp(-(((x - 0.9) / 0.05) ** 2))
     setup, run = _free_rods_with_a_pulse(100, gaussian)
     start = run.momentum()
     exact, nodes_only = [], []

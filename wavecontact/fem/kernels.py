@@ -21,11 +21,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._jit import kernel
 from .contact_flows import (
-    LAW_EXPONENTIAL,
     contact_flow,
     contact_force,
     contact_potential,

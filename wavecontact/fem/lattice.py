@@ -60,9 +60,25 @@ from .kernels import (
 )
 
 __all__ = [
-    "C_ALPHA", "C_COMPLIANCE", "C_LAW", "C_M_INV", "C_OFFSET", "C_R_STOP", "C_STIFFNESS", "C_STRENGTH",
-    "CONTACT_SIZE", "R_BOUND", "R_CONTACT_COEFFICIENT", "R_CONTACT_INVERSE_MASS", "R_FAR_THETA", "R_MASK",
-    "ROD_SIZE", "advance_lattice", "buffer_mask", "far_end_weights", "split_rod",
+    "CONTACT_SIZE",
+    "C_ALPHA",
+    "C_COMPLIANCE",
+    "C_LAW",
+    "C_M_INV",
+    "C_OFFSET",
+    "C_R_STOP",
+    "C_STIFFNESS",
+    "C_STRENGTH",
+    "ROD_SIZE",
+    "R_BOUND",
+    "R_CONTACT_COEFFICIENT",
+    "R_CONTACT_INVERSE_MASS",
+    "R_FAR_THETA",
+    "R_MASK",
+    "advance_lattice",
+    "buffer_mask",
+    "far_end_weights",
+    "split_rod",
 ]
 
 # rod parameters (float array per rod)
