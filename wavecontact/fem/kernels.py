@@ -28,13 +28,13 @@ from .contact_flows import (
     contact_potential,
     interface_gap,
 )
+from .explicit_step import MASS_LUMPED, elastic_acceleration, step_rod
 
 __all__ = [
     "STATUS_FAILED",
     "STATUS_RUNNING",
     "STATUS_SEPARATED",
     "advance",
-    "elastic_acceleration",
     "rod_energies",
 ]
 
@@ -63,67 +63,6 @@ S_INCOMING = 11
 S_INCOMING_EARLIER = 12  # incoming rate one step before S_INCOMING
 S_LEVEL = 13  # time level of the exact lattice's waves, counted from the start of the run
 STATE_SIZE = 14
-
-
-@kernel(fastmath=False)
-def _forces_p1(u, bands, out):
-    """``out = -K u`` for a tridiagonal ``K`` (P1)."""
-    n = u.size
-    if n == 1:
-        out[0] = 0.0
-        return
-    out[0] = -bands[1, 0] * (u[1] - u[0])
-    for i in range(1, n - 1):
-        out[i] = -bands[1, i - 1] * (u[i - 1] - u[i]) - bands[1, i] * (u[i + 1] - u[i])
-    out[n - 1] = -bands[1, n - 2] * (u[n - 2] - u[n - 1])
-
-
-@kernel
-def _forces_banded(u, bands, out):
-    """``out = -K u`` for a banded symmetric ``K`` (upper bands)."""
-    width = bands.shape[0] - 1
-    n = u.size
-    for i in range(n):
-        total = 0.0
-        for d in range(1, width + 1):
-            if i + d < n:
-                total -= bands[d, i] * (u[i + d] - u[i])
-            if i - d >= 0:
-                total -= bands[d, i - d] * (u[i - d] - u[i])
-        out[i] = total
-
-
-@kernel
-def _cholesky_solve(lower, x):
-    """Solve ``L L^T x = b`` in place (``lower[d, j] = L[j + d, j]``)."""
-    width = lower.shape[0] - 1
-    n = x.size
-    for i in range(n):
-        value = x[i]
-        for d in range(1, width + 1):
-            if i - d >= 0:
-                value -= lower[d, i - d] * x[i - d]
-        x[i] = value / lower[0, i]
-    for i in range(n - 1, -1, -1):
-        value = x[i]
-        for d in range(1, width + 1):
-            if i + d < n:
-                value -= lower[d, i] * x[i + d]
-        x[i] = value / lower[0, i]
-
-
-@kernel
-def elastic_acceleration(u, bands, inverse_mass, cholesky, lumped, out):
-    """``out = M^-1 (-K u)`` (acceleration, length/time^2)."""
-    if bands.shape[0] == 2:
-        _forces_p1(u, bands, out)
-    else:
-        _forces_banded(u, bands, out)
-    if lumped:
-        for i in range(u.size):
-            out[i] *= inverse_mass[i]
-    else:
-        _cholesky_solve(cholesky, out)
 
 
 @kernel
@@ -190,19 +129,10 @@ def _leapfrog_p1(u, v, bands, inverse_mass, dt):
     u[n - 1] = current + dt * v[n - 1]
 
 
-@kernel
-def _leapfrog_general(u, v, a, bands, inverse_mass, cholesky, lumped, dt):
-    elastic_acceleration(u, bands, inverse_mass, cholesky, lumped, a)
-    for i in range(u.size):
-        velocity = v[i] + dt * a[i]
-        v[i] = velocity
-        u[i] += dt * velocity
-
-
-@kernel
-def _synchronize(u, v, a, sync, bands, inverse_mass, cholesky, lumped, dt):
+@kernel(fastmath=False)
+def _synchronize(u, v, a, sync, bands, kind, table, dt):
     """Velocity at the time of ``u`` from the half-step velocity ``v``: ``v + dt/2 a(u)``."""
-    elastic_acceleration(u, bands, inverse_mass, cholesky, lumped, a)
+    elastic_acceleration(u, bands, kind, table, a)
     for i in range(u.size):
         sync[i] = v[i] + 0.5 * dt * a[i]
 
@@ -238,33 +168,78 @@ def _energy_check(
     return samples, internal1, internal2, True
 
 
-@kernel
-def advance(
-    u1, v1, a1, u2, v2, a2, sync1, sync2,
-    bands1, bands2, inverse_mass1, inverse_mass2, cholesky1, cholesky2, lumped,
-    mass_bands1, mass_bands2, weights1, weights2,
-    column1, column2, m_inv, scheme,
-    offset, law, alpha, strength, stiffness,
-    dt, max_steps, r_stop, period, check_every, bound_factor1, bound_factor2,
-    energy_tolerance, state,
-    hist_time, hist_force, hist_vrel, hist_gap,
-    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
-):
-    """Run up to ``max_steps`` steps; return ``(status, steps_done, energy_samples)``.
+# entries of the general loop's control array (the contact array uses lattice.C_*)
+K_DT = 0
+K_PERIOD = 1  # stop once out of range for this long
+K_CHECK_EVERY = 2
+K_ENERGY_TOLERANCE = 3
+K_SCHEME = 4
+K_KIND1 = 5  # mass solve of each rod (explicit_step.MASS_*)
+K_KIND2 = 6
+K_BOUND1 = 7  # separation bound factor of each rod
+K_BOUND2 = 8
+CONTROL_SIZE = 9
+# contact array (the same layout as the lattice's C_*)
+_C_LAW, _C_ALPHA, _C_STRENGTH, _C_STIFFNESS, _C_OFFSET, _C_R_STOP, _C_M_INV = 0, 1, 2, 3, 4, 5, 6
 
-    On entry and exit ``u`` holds displacements at the current time and ``v``
-    the velocities half a step earlier (leapfrog); ``a`` and ``sync`` are
-    scratch arrays.  ``column1`` holds ``M1^-1 e_last`` for the last
-    ``column1.size`` nodes of rod 1, ``column2`` holds ``M2^-1 e_0`` for the
-    first nodes of rod 2.  The gap is ``offset + u2[0] - u1[-1]``.  ``state``
-    (see ``S_*``) carries time, centre-of-mass momenta and run control between
-    calls.  Histories get one entry per step (force = mean contact force over
-    the step); energies one entry per ``check_every`` steps.  The run stops
-    (status 1) once the rods are apart and provably stay apart: the end gap is
-    bounded below by the centre-of-mass gap minus ``bound_factor *
+
+@kernel
+def advance(rod1, rod2, tables, columns, contact, control, state, history, energies):
+    """Run up to ``history[0].size`` steps of central differences with the contact; return ``(status, steps, samples)``.
+
+    Parameters
+    ----------
+    rod1, rod2 : tuple of arrays
+        ``(u, v, a, sync, bands, mass_bands, weights)``: displacements now
+        (length) and velocities half a step earlier (leapfrog; length/time),
+        two scratch arrays, the stiffness bands, the mass in the same banded
+        layout and the lumped masses (weights of momentum and centre of mass).
+    tables : tuple of 2 arrays
+        Mass solves of :func:`~wavecontact.fem.explicit_step.prepare_mass`
+        (their kinds in ``control``).
+    columns : tuple of 2 arrays
+        ``M1^-1 e_last`` on the last ``columns[0].size`` nodes of rod 1 and
+        ``M2^-1 e_0`` on the first nodes of rod 2 (1/mass): how the contact
+        acts, so that momentum is exchanged exactly.
+    contact : ndarray
+        Law, its parameters, reference gap (``gap = offset + u2[0] - u1[-1]``),
+        stop gap and ``m_inv`` (layout of ``lattice.C_*``).
+    control : ndarray
+        ``K_*`` entries.
+    state : ndarray
+        ``S_*`` entries carried between calls (time, momenta, run control).
+    history : tuple of 4 arrays
+        Per step: time, mean contact force over the step, relative velocity
+        of the centres of mass, gap; their size is the number of steps asked.
+    energies : tuple of 6 arrays
+        Per check (every ``check_every`` steps): time, kinetic, strain and
+        contact energy, internal energy of each rod.
+
+    The run stops (status 1) once the rods are apart and provably stay apart:
+    the end gap is bounded below by the centre-of-mass gap minus ``bound *
     sqrt(internal energy)`` per rod, or it has stayed out of range for
     ``period`` (the longest free vibration period).
     """
+    u1, v1, a1, sync1, bands1, mass_bands1, weights1 = rod1
+    u2, v2, a2, sync2, bands2, mass_bands2, weights2 = rod2
+    table1, table2 = tables
+    column1, column2 = columns
+    hist_time, hist_force, hist_vrel, hist_gap = history
+    law = int(contact[_C_LAW])
+    alpha = contact[_C_ALPHA]
+    strength = contact[_C_STRENGTH]
+    stiffness = contact[_C_STIFFNESS]
+    offset = contact[_C_OFFSET]
+    r_stop = contact[_C_R_STOP]
+    m_inv = contact[_C_M_INV]
+    dt = control[K_DT]
+    period = control[K_PERIOD]
+    check_every = int(control[K_CHECK_EVERY])
+    energy_tolerance = control[K_ENERGY_TOLERANCE]
+    scheme = int(control[K_SCHEME])
+    kind1 = int(control[K_KIND1])
+    kind2 = int(control[K_KIND2])
+    max_steps = hist_time.size
     n1 = u1.size
     last = n1 - 1
     c1_start = n1 - column1.size
@@ -275,47 +250,33 @@ def advance(
     for i in range(u2.size):
         mass2 += weights2[i]
     samples = 0
-    fast = lumped and bands1.shape[0] == 2 and bands2.shape[0] == 2
+    fast = kind1 == MASS_LUMPED and kind2 == MASS_LUMPED and bands1.shape[0] == 2 and bands2.shape[0] == 2
     for step in range(max_steps):
         r_now = offset + u2[0] - u1[last]
-        if scheme == SCHEME_CHARACTERISTIC:
-            # Incoming characteristics: the lattice gives their mean rate over [t - dt, t + dt];
-            # the rate over [t, t + dt] follows by subtracting the one over [t - dt, t].
-            end1 = state[S_PREVIOUS_END1]
-            end2 = state[S_PREVIOUS_END2]
-            mean_rate = ((u2[1] - end2) - (u1[last - 1] - end1)) / dt
-            incoming = 2.0 * mean_rate - state[S_INCOMING]
-            state[S_INCOMING] = incoming
-            state[S_PREVIOUS_END1] = u1[last]
-            state[S_PREVIOUS_END2] = u2[0]
         # 1. kick with the elastic forces and drift (central differences)
         if fast:
-            _leapfrog_p1(u1, v1, bands1, inverse_mass1, dt)
-            _leapfrog_p1(u2, v2, bands2, inverse_mass2, dt)
+            _leapfrog_p1(u1, v1, bands1, table1[0], dt)
+            _leapfrog_p1(u2, v2, bands2, table2[0], dt)
         else:
-            _leapfrog_general(u1, v1, a1, bands1, inverse_mass1, cholesky1, lumped, dt)
-            _leapfrog_general(u2, v2, a2, bands2, inverse_mass2, cholesky2, lumped, dt)
-        # 2. contact: move the facing ends to the gap the contact law gives, spread along M^-1 e_end
+            step_rod(u1, v1, a1, bands1, kind1, table1, dt)
+            step_rod(u2, v2, a2, bands2, kind2, table2, dt)
+        # 2. contact, spread along M^-1 e_end
         r_free = offset + u2[0] - u1[last]
-        if scheme == SCHEME_CHARACTERISTIC:
-            r_after = interface_gap(law, r_now, incoming, dt, 0.5 * m_inv * dt, alpha, strength, stiffness)
-            shift = (r_after - r_free) / m_inv
-            impulse = shift / dt
-        elif scheme == SCHEME_FORCE:
+        if scheme == SCHEME_FORCE:
             # plain central differences: the force at the start of the step, as a kick
             impulse = contact_force(law, r_now, alpha, strength, stiffness) * dt
             shift = impulse * dt
-        elif scheme == SCHEME_INTERFACE:
-            # massless-end approximation: the ends close at their current relative velocity
-            w0 = v2[0] - v1[last]
-            r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
-            shift = (r_after - r_free) / m_inv
-            impulse = shift / dt
-        else:
+        elif scheme == SCHEME_SPLITTING:
             w0 = v2[0] - v1[last]
             r1, w1 = contact_flow(law, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv
             shift = (r1 - r_free) / m_inv
+        else:
+            # massless-end interface: the ends close at their current relative velocity
+            w0 = v2[0] - v1[last]
+            r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
+            shift = (r_after - r_free) / m_inv
+            impulse = shift / dt
         if impulse != 0.0 or shift != 0.0:
             for k in range(column1.size):
                 u1[c1_start + k] -= column1[k] * shift
@@ -339,27 +300,27 @@ def advance(
             state[S_LAST_IN_RANGE] = time
         if not (math.isfinite(gap) and math.isfinite(vrel)):
             state[S_FAILED_ENERGY] = math.nan
-            return 2, step + 1, samples
+            return STATUS_FAILED, step + 1, samples
 
         if (step + 1) % check_every == 0:
-            _synchronize(u1, v1, a1, sync1, bands1, inverse_mass1, cholesky1, lumped, dt)
-            _synchronize(u2, v2, a2, sync2, bands2, inverse_mass2, cholesky2, lumped, dt)
+            _synchronize(u1, v1, a1, sync1, bands1, kind1, table1, dt)
+            _synchronize(u2, v2, a2, sync2, bands2, kind2, table2, dt)
             kin1, str1, cor1 = rod_energies(u1, sync1, a1, bands1, mass_bands1, dt)
             kin2, str2, cor2 = rod_energies(u2, sync2, a2, bands2, mass_bands2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             samples, internal1, internal2, within = _energy_check(
                 kin1 - cor1, str1, kin2 - cor2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
-                energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
+                energies[0], energies[1], energies[2], energies[3], energies[4], energies[5],
             )
             if not within:
-                return 2, step + 1, samples
+                return STATUS_FAILED, step + 1, samples
             if vrel > 0.0 and gap > r_stop:
                 if time - state[S_LAST_IN_RANGE] >= period:
-                    return 1, step + 1, samples
-                spread = bound_factor1 * math.sqrt(max(internal1, 0.0)) + bound_factor2 * math.sqrt(
+                    return STATUS_SEPARATED, step + 1, samples
+                spread = control[K_BOUND1] * math.sqrt(max(internal1, 0.0)) + control[K_BOUND2] * math.sqrt(
                     max(internal2, 0.0)
                 )
                 centre_gap = offset + _mean_displacement(u2, weights2) - _mean_displacement(u1, weights1)
                 if centre_gap - spread > r_stop:
-                    return 1, step + 1, samples
-    return 0, max_steps, samples
+                    return STATUS_SEPARATED, step + 1, samples
+    return STATUS_RUNNING, max_steps, samples

@@ -19,6 +19,7 @@ from ..scene import Scene
 from . import kernels, lattice
 from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
 from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
+from .explicit_step import elastic_acceleration, prepare_mass
 from .schemes import choose_scheme, gap_treatment, wants_lattice_mesh
 from .stability import banded_mass, check_time_step, stable_step
 
@@ -222,7 +223,7 @@ def build_setup(
     exponential = law == LAW_EXPONENTIAL
     scheme, step = choose_scheme(
         scheme,
-        exact_lattice=_is_exact_lattice(rods, step),
+        exact_lattice=_is_exact_lattice(rods, step) and all(_uniform_interior(d, step) for d in rods),
         exponential=exponential,
         mesh_resolution=_end_travel_time(rods) * alpha * approach_speed,
         mesh_step=step,
@@ -354,11 +355,8 @@ class _Run:
         left, right = setup.rods
         self.u = [u.copy() for u in setup.u0]
         self.v = [v.copy() for v in setup.v0]
-        self.lumped = left.mass_kind == "lumped"
         self.inverse_mass = [1.0 / d.lumped_mass for d in setup.rods]
-        self.cholesky = [
-            d.mass_cholesky if d.mass_cholesky is not None else np.zeros((1, 1)) for d in setup.rods
-        ]
+        self.mass_solves = [prepare_mass(d) for d in setup.rods]
         self.mass_bands = [banded_mass(d) for d in setup.rods]
         column1 = left.inverse_mass_column(left.n_nodes - 1)
         column2 = right.inverse_mass_column(0)
@@ -368,9 +366,9 @@ class _Run:
         self.column2 = np.ascontiguousarray(column2[:stop])
         self.m_inv = column1[-1] + column2[0]
         self.a = []
-        for d, u, inv, chol in zip(setup.rods, self.u, self.inverse_mass, self.cholesky):
+        for d, u, (kind, table) in zip(setup.rods, self.u, self.mass_solves):
             a = np.zeros(d.n_nodes)
-            kernels.elastic_acceleration(u, d.stiffness_bands, inv, chol, self.lumped, a)
+            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
             self.a.append(a)
         masses = [float(d.lumped_mass.sum()) for d in setup.rods]
         self.masses = masses
@@ -403,9 +401,7 @@ class _Run:
             v -= 0.5 * dt * a
         self.sync = [np.zeros_like(v) for v in self.v]
         # the exact lattice runs on two time levels: u now, w = u one step earlier
-        self.lattice = setup.scheme == kernels.SCHEME_CHARACTERISTIC and all(
-            _uniform_interior(d, dt) for d in setup.rods
-        )
+        self.lattice = setup.scheme == kernels.SCHEME_CHARACTERISTIC
         if self.lattice:
             self.w = [u - dt * v for u, v in zip(self.u, self.v)]
         self.energy0 = energy
@@ -425,8 +421,34 @@ class _Run:
         massless_ends = setup.scheme in (kernels.SCHEME_CHARACTERISTIC, kernels.SCHEME_INTERFACE)
         self.energy_allowance = 2.0 * self.approach**2 / self.m_inv / scale if massless_ends else 0.0
         self.watchdog_tolerance = energy_tolerance + self.energy_allowance
+        self._pack_contact_and_control()
         if self.lattice:
             self._start_lattice()
+
+    def _pack_contact_and_control(self):
+        """The contact law and the general loop's run control as the kernels' plain arrays."""
+        s = self.setup
+        contact = np.zeros(lattice.CONTACT_SIZE)
+        contact[lattice.C_LAW] = s.law
+        contact[lattice.C_ALPHA] = s.alpha
+        contact[lattice.C_STRENGTH] = s.strength
+        contact[lattice.C_STIFFNESS] = s.stiffness
+        contact[lattice.C_OFFSET] = s.gap
+        contact[lattice.C_R_STOP] = s.r_stop
+        contact[lattice.C_M_INV] = self.m_inv
+        contact[lattice.C_COMPLIANCE] = 0.5 * self.m_inv * s.dt
+        self.contact = contact
+        control = np.zeros(kernels.CONTROL_SIZE)
+        control[kernels.K_DT] = s.dt
+        control[kernels.K_PERIOD] = self.period
+        control[kernels.K_CHECK_EVERY] = self.check_every
+        control[kernels.K_ENERGY_TOLERANCE] = self.watchdog_tolerance
+        control[kernels.K_SCHEME] = s.scheme
+        control[kernels.K_KIND1] = self.mass_solves[0][0]
+        control[kernels.K_KIND2] = self.mass_solves[1][0]
+        control[kernels.K_BOUND1] = self.bound[0]
+        control[kernels.K_BOUND2] = self.bound[1]
+        self.general_control = control
 
     def _start_lattice(self):
         """Split both rods into their waves and pack the lattice kernel's grouped arrays."""
@@ -447,16 +469,6 @@ class _Run:
             parameters[lattice.R_BOUND] = self.bound[index]
             self.waves.append((f, g, np.array([u[contact_node], w[contact_node]])))
             self.rod_parameters.append(parameters)
-        contact = np.zeros(lattice.CONTACT_SIZE)
-        contact[lattice.C_LAW] = s.law
-        contact[lattice.C_ALPHA] = s.alpha
-        contact[lattice.C_STRENGTH] = s.strength
-        contact[lattice.C_STIFFNESS] = s.stiffness
-        contact[lattice.C_OFFSET] = s.gap
-        contact[lattice.C_R_STOP] = s.r_stop
-        contact[lattice.C_M_INV] = self.m_inv
-        contact[lattice.C_COMPLIANCE] = 0.5 * self.m_inv * s.dt
-        self.contact = contact
         control = np.zeros(lattice.CONTROL_SIZE)
         control[lattice.K_DT] = s.dt
         control[lattice.K_PERIOD] = self.period
@@ -484,15 +496,12 @@ class _Run:
                 v[:] = (u - w) / s.dt
             return status, [h[:done] for h in hist], [e[:samples] for e in energies]
         status, done, samples = kernels.advance(
-            self.u[0], self.v[0], self.a[0], self.u[1], self.v[1], self.a[1], self.sync[0], self.sync[1],
-            left.stiffness_bands, right.stiffness_bands, self.inverse_mass[0], self.inverse_mass[1],
-            self.cholesky[0], self.cholesky[1], self.lumped,
-            self.mass_bands[0], self.mass_bands[1], left.lumped_mass, right.lumped_mass,
-            self.column1, self.column2, self.m_inv, s.scheme,
-            s.gap, s.law, s.alpha, s.strength, s.stiffness,
-            s.dt, max_steps, s.r_stop, self.period, self.check_every, self.bound[0], self.bound[1],
-            self.watchdog_tolerance, self.state,
-            hist[0], hist[1], hist[2], hist[3], *energies,
+            (self.u[0], self.v[0], self.a[0], self.sync[0], left.stiffness_bands, self.mass_bands[0],
+             left.lumped_mass),
+            (self.u[1], self.v[1], self.a[1], self.sync[1], right.stiffness_bands, self.mass_bands[1],
+             right.lumped_mass),
+            (self.mass_solves[0][1], self.mass_solves[1][1]), (self.column1, self.column2),
+            self.contact, self.general_control, self.state, hist, energies,
         )
         return status, [h[:done] for h in hist], [e[:samples] for e in energies]
 
@@ -523,9 +532,9 @@ class _Run:
     def synchronized_velocities(self):
         """Nodal velocities at the current time (the loop stores them half a step earlier)."""
         out = []
-        for d, u, v, inv, chol in zip(self.setup.rods, self.u, self.v, self.inverse_mass, self.cholesky):
+        for d, u, v, (kind, table) in zip(self.setup.rods, self.u, self.v, self.mass_solves):
             a = np.zeros_like(u)
-            kernels.elastic_acceleration(u, d.stiffness_bands, inv, chol, self.lumped, a)
+            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
             out.append(v + 0.5 * self.setup.dt * a)
         return out
 
