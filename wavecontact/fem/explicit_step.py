@@ -10,7 +10,9 @@ node:
   whose speed would be the latency of one multiply-add per node.  Unrolled
   four times (``y_i = r_i + a_i r_(i-1) + a_i a_(i-1) r_(i-2) + ... +
   (a_i ... a_(i-3)) y_(i-4)``, the products tabulated once) it runs four
-  independent recurrences at the price of three more multiply-adds per node;
+  independent recurrences at the price of a few more multiplications per node
+  (the products are formed on the fly and the last four values kept in
+  registers, so the sweep reads one coefficient and one value per node);
 * consistent P2 mass: the midpoint nodes couple only to their element's two
   vertices, so they are eliminated first (static condensation) and the
   vertices solve a tridiagonal system as above.
@@ -33,14 +35,14 @@ MASS_CONDENSED = 2  # P2 consistent: midpoints condensed, vertices tridiagonal
 
 UNROLL = 4  # independent recurrences per triangular sweep
 # rows of the table of a tridiagonal solve over m unknowns (L D L^T, L unit lower bidiagonal)
-T_FORWARD = 0  # rows 0..3: products a_i, a_i a_(i-1), ... of the forward sweep y_i = r_i + a_i y_(i-1)
-T_INVERSE_PIVOT = 4  # 1 / D_i
-T_BACKWARD = 5  # rows 5..8: products b_i, b_i b_(i+1), ... of x_i = y_i / D_i + b_i x_(i+1)
-T_MID_INVERSE = 9  # condensed P2 (over all n nodes, midpoint j = 2e + 1): 1 / M[j, j]
-T_MID_LEFT = 10  # M[j, j - 1]
-T_MID_RIGHT = 11  # M[j, j + 1]
-T_WORK = 12  # rows 12, 13: scratch of the sweeps (no allocation per step)
-T_ROWS = 14
+T_FORWARD = 0  # a_i of the forward sweep y_i = r_i + a_i y_(i-1) (a_0 = 0)
+T_INVERSE_PIVOT = 1  # 1 / D_i
+T_BACKWARD = 2  # b_i of x_i = y_i / D_i + b_i x_(i+1) (b_(m-1) = 0)
+T_MID_INVERSE = 3  # condensed P2 (over all n nodes, midpoint j = 2e + 1): 1 / M[j, j]
+T_MID_LEFT = 4  # M[j, j - 1]
+T_MID_RIGHT = 5  # M[j, j + 1]
+T_WORK = 6  # rows 6, 7: scratch (the vertex system of P2; no allocation per step)
+T_ROWS = 8
 
 
 def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> None:
@@ -56,17 +58,8 @@ def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> No
     backward = np.zeros(m)  # b_i = -L[i+1, i] = -off_i / D_i
     backward[: m - 1] = -off / pivot[: m - 1]
     table[T_INVERSE_PIVOT, :m] = 1.0 / pivot
-    product_forward = np.ones(m)
-    product_backward = np.ones(m)
-    for k in range(UNROLL):
-        earlier = np.zeros(m)  # a_(i-k)
-        earlier[k:] = forward[: max(m - k, 0)]
-        later = np.zeros(m)  # b_(i+k)
-        later[: max(m - k, 0)] = backward[k:]
-        product_forward = product_forward * earlier
-        product_backward = product_backward * later
-        table[T_FORWARD + k, :m] = product_forward
-        table[T_BACKWARD + k, :m] = product_backward
+    table[T_FORWARD, :m] = forward
+    table[T_BACKWARD, :m] = backward
 
 
 def prepare_mass(disc) -> tuple:
@@ -116,6 +109,8 @@ def _stiffness_forces(u, bands, out):
             out[i] = -bands[1, i - 1] * (u[i - 1] - u[i]) - bands[1, i] * (u[i + 1] - u[i])
         out[n - 1] = -bands[1, n - 2] * (u[n - 2] - u[n - 1])
         return
+    # pentadiagonal (P2).  The guarded form is kept on purpose: a branch-free interior loop
+    # (range(2, n - 2)) measured 14 times slower with numba 0.6x (negative-index wraparound checks)
     for i in range(n):
         total = 0.0
         if i >= 2:
@@ -130,34 +125,75 @@ def _stiffness_forces(u, bands, out):
 
 
 @kernel(fastmath=False)
-def _tridiagonal_solve(table, r, x, m):
-    """``x = T^-1 r`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns; ``r`` is overwritten)."""
-    y = r
+def _tridiagonal_solve(table, x, m):
+    """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place).
+
+    Each sweep is unrolled four times with the last four inputs and outputs
+    carried in registers: ``y_i = r_i + a_i r_(i-1) + a_i a_(i-1) r_(i-2) +
+    a_i a_(i-1) a_(i-2) r_(i-3) + (a_i ... a_(i-3)) y_(i-4)``, so four
+    independent recurrences are in flight.
+    """
+    a = table[T_FORWARD]
+    b = table[T_BACKWARD]
+    inverse = table[T_INVERSE_PIVOT]
     if m <= UNROLL:
         for i in range(1, m):
-            y[i] += table[T_FORWARD, i] * y[i - 1]
-        x[m - 1] = y[m - 1] * table[T_INVERSE_PIVOT, m - 1]
+            x[i] += a[i] * x[i - 1]
+        x[m - 1] *= inverse[m - 1]
         for i in range(m - 2, -1, -1):
-            x[i] = y[i] * table[T_INVERSE_PIVOT, i] + table[T_BACKWARD, i] * x[i + 1]
+            x[i] = x[i] * inverse[i] + b[i] * x[i + 1]
         return
-    # forward: four recurrences y_i = c_i + (a_i ... a_(i-3)) y_(i-4); c_i from the original r
-    work = table[T_WORK]
-    for i in range(m):
-        work[i] = r[i]
-    for i in range(1, UNROLL):
-        y[i] += table[T_FORWARD, i] * y[i - 1]
+    # forward sweep, y_i = r_i + a_i y_(i-1); o* are inputs r, y* outputs, a* coefficients before i
+    o3 = x[0]
+    y4 = o3
+    o2 = x[1]
+    y3 = o2 + a[1] * y4
+    x[1] = y3
+    o1 = x[2]
+    y2 = o1 + a[2] * y3
+    x[2] = y2
+    current = x[3]
+    y1 = current + a[3] * y2
+    x[3] = y1
+    o3, o2, o1 = o2, o1, current
+    a3, a2, a1 = a[1], a[2], a[3]
     for i in range(UNROLL, m):
-        y[i] = (work[i] + table[T_FORWARD, i] * work[i - 1] + table[T_FORWARD + 1, i] * work[i - 2]
-                + table[T_FORWARD + 2, i] * work[i - 3] + table[T_FORWARD + 3, i] * y[i - 4])
-    # backward: x_i = e_i + b_i x_(i+1), e_i = y_i / D_i
-    for i in range(m):
-        work[i] = y[i] * table[T_INVERSE_PIVOT, i]
-    x[m - 1] = work[m - 1]
-    for i in range(m - 2, m - 1 - UNROLL, -1):
-        x[i] = work[i] + table[T_BACKWARD, i] * x[i + 1]
+        current = x[i]
+        a0 = a[i]
+        p1 = a0 * a1
+        p2 = p1 * a2
+        p3 = p2 * a3
+        value = current + a0 * o1 + p1 * o2 + p2 * o3 + p3 * y4
+        x[i] = value
+        o3, o2, o1 = o2, o1, current
+        y4, y3, y2, y1 = y3, y2, y1, value
+        a3, a2, a1 = a2, a1, a0
+    # backward sweep, x_i = e_i + b_i x_(i+1) with e_i = y_i / D_i
+    e3 = x[m - 1] * inverse[m - 1]
+    z4 = e3
+    x[m - 1] = z4
+    e2 = x[m - 2] * inverse[m - 2]
+    z3 = e2 + b[m - 2] * z4
+    x[m - 2] = z3
+    e1 = x[m - 3] * inverse[m - 3]
+    z2 = e1 + b[m - 3] * z3
+    x[m - 3] = z2
+    current = x[m - 4] * inverse[m - 4]
+    z1 = current + b[m - 4] * z2
+    x[m - 4] = z1
+    e3, e2, e1 = e2, e1, current
+    b3, b2, b1 = b[m - 2], b[m - 3], b[m - 4]
     for i in range(m - 1 - UNROLL, -1, -1):
-        x[i] = (work[i] + table[T_BACKWARD, i] * work[i + 1] + table[T_BACKWARD + 1, i] * work[i + 2]
-                + table[T_BACKWARD + 2, i] * work[i + 3] + table[T_BACKWARD + 3, i] * x[i + 4])
+        current = x[i] * inverse[i]
+        b0 = b[i]
+        q1 = b0 * b1
+        q2 = q1 * b2
+        q3 = q2 * b3
+        value = current + b0 * e1 + q1 * e2 + q2 * e3 + q3 * z4
+        x[i] = value
+        e3, e2, e1 = e2, e1, current
+        z4, z3, z2, z1 = z3, z2, z1, value
+        b3, b2, b1 = b2, b1, b0
 
 
 @kernel(fastmath=False)
@@ -169,7 +205,7 @@ def mass_acceleration(kind, table, r):
             r[i] *= table[0, i]
         return
     if kind == MASS_TRIDIAGONAL:
-        _tridiagonal_solve(table, r, r, n)
+        _tridiagonal_solve(table, r, n)
         return
     # condensed P2: vertex right-hand sides lose the midpoints' share, then the midpoints follow
     m = (n + 1) // 2
@@ -180,7 +216,7 @@ def mass_acceleration(kind, table, r):
         share = r[2 * e + 1] * table[T_MID_INVERSE, 2 * e + 1]
         vertex[e] -= table[T_MID_LEFT, 2 * e + 1] * share
         vertex[e + 1] -= table[T_MID_RIGHT, 2 * e + 1] * share
-    _tridiagonal_solve(table, vertex, vertex, m)
+    _tridiagonal_solve(table, vertex, m)
     for e in range(m):
         r[2 * e] = vertex[e]
     for j in range(1, n, 2):
@@ -197,7 +233,15 @@ def elastic_acceleration(u, bands, kind, table, out):
 @kernel(fastmath=False)
 def step_rod(u, v, a, bands, kind, table, dt):
     """One leapfrog step of a free rod: ``v += dt M^-1 (-K u)``, ``u += dt v`` (``a``: scratch)."""
-    elastic_acceleration(u, bands, kind, table, a)
+    _stiffness_forces(u, bands, a)
+    if kind == MASS_LUMPED:  # the mass and the update in one pass
+        inverse = table[0]
+        for i in range(u.size):
+            velocity = v[i] + dt * (a[i] * inverse[i])
+            v[i] = velocity
+            u[i] += dt * velocity
+        return
+    mass_acceleration(kind, table, a)
     for i in range(u.size):
         velocity = v[i] + dt * a[i]
         v[i] = velocity
