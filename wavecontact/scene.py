@@ -248,8 +248,11 @@ def two_rods(
         The penalty law gets the stiffness ``k = kappa Z_eff c / l``
         (:func:`penalty_stiffness`, here ``kappa / 2``): the spring whose
         contact relaxes at the rate ``alpha V`` of the exponential law at its
-        plateau, so that both resolve the same collision time.  A ``Penalty``
-        passed in must have that stiffness or ``None`` (then it is set).
+        plateau, so that both resolve the same collision time; with ``kappa =
+        inf`` the stiffness is left to the solver (the FE solver ties it to
+        the mesh, so the run tends to hard contact as the mesh is refined).
+        A ``Penalty`` passed in must have the rule's stiffness or ``None``
+        (then it is set).
     gap : float or None
         Initial end-to-end gap (length); ``None`` lets the solver choose.
     initial_displacement, initial_velocity : sequences of two callables or None
@@ -280,8 +283,9 @@ def two_rods(
                     f"penalty stiffness ({law.stiffness:g}) must be kappa / 2 = {stiffness:g} in the units of "
                     "two_rods (or None); for another stiffness build the Scene directly"
                 )
-    elif contact == "penalty" and math.isfinite(k):
-        law = Penalty(penalty_stiffness(k, 0.5, 1.0, 1.0))
+    elif contact == "penalty":
+        # finite kappa: the rule's stiffness; kappa = inf: the solver ties it to the mesh (hard limit)
+        law = Penalty(penalty_stiffness(k, 0.5, 1.0, 1.0)) if math.isfinite(k) else Penalty()
     else:
         law = contact_from_name(contact, k, reduced_mass / (k * k) if math.isfinite(k) else 1.0)
     if isinstance(law, Hard) and math.isfinite(k) and contact == "hard":
