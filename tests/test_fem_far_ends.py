@@ -165,6 +165,7 @@ def test_penalty_contact_takes_its_stiffness_from_kappa():
     assert soft.restitution > 0.95  # a soft spring: nearly elastic, as the exponential law at kappa = 1
     assert stiff.restitution == pytest.approx(0.6, abs=1e-5)  # the hard limit
     assert wc.two_rods(0.6, 40.0, contact="penalty").contact.stiffness == 20.0
+    assert wc.two_rods(0.6, math.inf, contact="penalty").contact.stiffness is None  # tied to the mesh
     assert wc.two_rod_parameters(Scene(rods=(Rod(0.8), Rod(0.8 / 0.6)), velocities=(1.0, 0.0),
                                        contact=Penalty(stiffness=20.0))).kappa == pytest.approx(40.0)
     with pytest.raises(wc.errors.InvalidParameterError, match="penalty stiffness"):
