@@ -187,13 +187,21 @@ def test_unknown_option_and_bad_rtol_are_refused():
 def test_scenes_outside_the_delay_equation_are_refused():
     with pytest.raises(UnsupportedSceneError, match="penalty"):
         wavecontact.collide(0.6, 10, contact="penalty")
-    scene = wavecontact.Scene(
-        rods=(wavecontact.Rod(1.0), wavecontact.Rod(2.0, density=3.0)),
-        velocities=(1.0, 0.0),
-        contact=wavecontact.Exponential(10.0),
-    )
-    with pytest.raises(UnsupportedSceneError, match="material"):
-        wavecontact.solve(scene, "delay")
+    rods = (wavecontact.Rod(1.0), wavecontact.Rod(2.0, density=3.0), wavecontact.Rod(1.5, area=2.0))
+    three = wavecontact.Scene(rods=rods, velocities=(1.0, 0.0, -1.0), contact=wavecontact.Exponential(10.0))
+    with pytest.raises(UnsupportedSceneError, match="3 rods.*solver='fem'"):
+        wavecontact.solve(three, "delay")
+    ring = wavecontact.Scene(rods=rods[:2], velocities=(1.0, 0.0), contact=wavecontact.Exponential(10.0),
+                             ring_circumference=5.0)
+    with pytest.raises(UnsupportedSceneError, match="ring.*'modal'"):
+        wavecontact.solve(ring, "delay")
+    warm = wavecontact.Scene(rods=rods[:2], velocities=(1.0, 0.0), contact=wavecontact.Exponential(10.0),
+                             initial_velocity=(lambda s: 0.01 * s, None))
+    with pytest.raises(UnsupportedSceneError, match="solver='fem' or 'modal'"):
+        wavecontact.solve(warm, "delay")
+    receding = wavecontact.Scene(rods=rods[:2], velocities=(0.0, 1.0), contact=wavecontact.Hard())
+    with pytest.raises(InvalidParameterError, match=r"velocities\[0\] > velocities\[1\]"):
+        wavecontact.solve(receding, "delay")
 
 
 @pytest.mark.parametrize("gamma", [0.1, 0.6, 1.0])
