@@ -88,8 +88,10 @@ def two_material_impact(rod_left, rod_right, approach_speed: float, max_steps: i
     dict
         ``force`` (the first plateau ``F0``, force), ``duration`` (time),
         ``impulse`` (momentum), ``restitution`` (``(J (1/m1 + 1/m2) - V) / V``),
-        ``reflection`` ``R``, ``steps`` (list of ``(start, end, force)``) and
-        ``velocity_change`` (``(-J / m_left, +J / m_right)``, velocity units).
+        ``reflection`` ``R``, ``steps`` (list of ``(start, end, force)``),
+        ``velocity_change`` (``(-J / m_left, +J / m_right)``, velocity units)
+        and ``vibration_energy`` (per rod, energy; they add up to the
+        translational energy lost).
     """
     z1, z2 = rod_left.impedance, rod_right.impedance
     fast, slow = sorted((rod_left, rod_right), key=lambda rod: rod.round_trip_time)
@@ -107,6 +109,15 @@ def two_material_impact(rod_left, rod_right, approach_speed: float, max_steps: i
         steps = [(k * t_a, min((k + 1) * t_a, t_b), force * reflection**k) for k in range(min(whole + 1, max_steps))]
         steps = [step for step in steps if step[1] > step[0]]
     after = impulse * (1.0 / rod_left.mass + 1.0 / rod_right.mass) - approach_speed
+    # a constant force held for whole round trips leaves rod a rigid; only the last, shorter step
+    # (length d, force F) leaves it vibrating, with the work F^2 d / Z less the rigid part (F d)^2 / (2 m)
+    last_force = steps[-1][2] if reflection > 1e-12 else 0.0
+    last_length = steps[-1][1] - steps[-1][0]
+    vibration_fast = last_force**2 * last_length / fast.impedance * (1.0 - last_length / t_a)
+    lost = 0.5 * rod_left.mass * rod_right.mass / (rod_left.mass + rod_right.mass) * (
+        approach_speed**2 - after**2
+    )
+    vibration = (vibration_fast, lost - vibration_fast) if fast is rod_left else (lost - vibration_fast, vibration_fast)
     return {
         "force": force,
         "duration": duration,
@@ -115,6 +126,7 @@ def two_material_impact(rod_left, rod_right, approach_speed: float, max_steps: i
         "reflection": reflection,
         "steps": steps,
         "velocity_change": (-impulse / rod_left.mass, impulse / rod_right.mass),
+        "vibration_energy": vibration,
     }
 
 
