@@ -18,8 +18,10 @@ is ``w_inf s / Gamma_i`` plus a function of period ``Gamma_i``, and since
 ``sum_i beta_i / Gamma_i = 1`` the bracket is ``-epsilon s`` plus a bounded
 quasi-periodic part.  The ends may meet again (a second contact) only while
 ``-epsilon s`` plus the largest value of that part can still reach ``w_inf``;
-:func:`_next_contact` checks every kink up to that time from one period of
-each memory and restarts the recursion where the bracket comes back.
+The compiled kernel (:mod:`wavecontact.delay.hardcore_kernels`) checks every
+kink up to that time from one period of each memory and resumes the
+recursion where the bracket comes back.  The NumPy helpers here serve the
+diagnostics :func:`contact_intervals` and :func:`closest_return`.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import itertools
 import numpy as np
 
 from ..errors import InvalidParameterError, SolverFailure
+from .hardcore_kernels import STATUS_OK, max_plus_history
 
 __all__ = ["hard_core_history"]
 
@@ -95,22 +98,6 @@ def _future_bracket(knots_t, knots_w, delays, weights, tau_free, start):
     return kinks, bracket
 
 
-def _next_contact(knots_t, knots_w, delays, weights, tau_free, start):
-    """First kink after ``start`` where the bracket exceeds ``w_inf`` again, or ``None``.
-
-    Exact if ``w`` is constant after ``knots_t[-1]`` up to that kink (it is, since
-    nothing rose before it).
-    """
-    future = _future_bracket(knots_t, knots_w, delays, weights, tau_free, start)
-    if future is None:
-        return start
-    kinks, bracket = future
-    above = np.flatnonzero(bracket > knots_w[-1] + _MERGE * max(1.0, knots_w[-1]))
-    if above.size == 0:
-        return None
-    return float(kinks[max(above[0] - 1, 0)])
-
-
 def closest_return(knots_t, knots_w, delays, weights=(1.0, 1.0), tau_free: float = 0.0):
     """Smallest gap at which the ends come back towards each other after the contact.
 
@@ -164,8 +151,8 @@ def hard_core_history(delays, weights=(1.0, 1.0), tau_free: float = 0.0, max_win
         Kinks of the piecewise-linear ``w`` (``w = 0`` before the first one,
         constant after the last).  ``epsilon = w(inf) - 1``.
     """
-    delays = np.asarray(delays, dtype=float)
-    weights = np.asarray(weights, dtype=float)
+    delays = np.ascontiguousarray(delays, dtype=float)
+    weights = np.ascontiguousarray(weights, dtype=float)
     window = float(delays.min())
     # the contact lasts until the other rod's echo, or until the force steps R^k (1 - R is the short
     # rod's weight) fall below round-off: that many windows, at most
@@ -176,38 +163,11 @@ def hard_core_history(delays, weights=(1.0, 1.0), tau_free: float = 0.0, max_win
             f"the hard-core recursion would need about {needed:.3g} windows (limit max_windows = {max_windows}); "
             "the impedance and transit-time ratios are too extreme: use solver='fem'"
         )
-    knots_t = [tau_free]
-    knots_w = [0.0]
-    running_max = 0.0
-    last_rise = tau_free
-    start = tau_free
-    for _ in range(max_windows):
-        stop = start + window
-        kt = np.asarray(knots_t)
-        kw = np.asarray(knots_w)
-        points = _window_kinks(kt, delays, start, stop)
-        bracket = points - tau_free - _memory(points, kt, kw, delays, weights)
-        for p_a, p_b, h_a, h_b in zip(points[:-1], points[1:], bracket[:-1], bracket[1:]):
-            if h_b <= running_max + _ROUNDOFF * max(1.0, abs(h_b)):
-                continue  # not a rise: the bracket touches w (or exceeds it by round-off)
-            if h_a < running_max:
-                p_a = p_a + (running_max - h_a) * (p_b - p_a) / (h_b - h_a)
-            if p_a > knots_t[-1] + _MERGE * max(1.0, abs(p_a)):
-                knots_t.append(p_a)
-                knots_w.append(running_max)
-            knots_t.append(p_b)
-            knots_w.append(h_b)
-            running_max = h_b
-            last_rise = p_b
-        start = stop
-        if last_rise < start - window:  # nothing rose in this window: is the contact over?
-            kt = np.asarray(knots_t)
-            kw = np.asarray(knots_w)
-            again = _next_contact(kt, kw, delays, weights, tau_free, start)
-            if again is None:
-                return kt, kw
-            start = max(start, again)
-    raise SolverFailure("hard-core recursion did not settle; raise max_windows")
+    knots_t, knots_w, status = max_plus_history(delays, weights, float(tau_free), int(max_windows), _MERGE,
+                                                _ROUNDOFF)
+    if status != STATUS_OK:
+        raise SolverFailure("hard-core recursion did not settle; raise max_windows")
+    return knots_t, knots_w
 
 
 def contact_intervals(knots_t, knots_w, delays, weights=(1.0, 1.0), tau_free: float = 0.0, gap_tolerance=1e-9):
