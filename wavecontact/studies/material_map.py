@@ -103,8 +103,8 @@ class MaterialMap:
         columns = _thin(self.time_ratios.size, max_columns)
         kappa = "inf (hard core)" if math.isinf(self.kappa) else f"{self.kappa:g}"
         lines = [
-            f"epsilon for kappa = {kappa}: rows Z2/Z1, columns T1/T2 "
-            f"({self.restitution.size} points in {self.wall_time_s:.2f} s)",
+            (f"epsilon for kappa = {kappa}: rows Z2/Z1, columns T1/T2 "
+            f"({self.restitution.size} points in {self.wall_time_s:.2f} s)"),
             "",
             "| Z2/Z1 \\ T1/T2 | " + " | ".join(f"{self.time_ratios[j]:.3g}" for j in columns) + " |",
             "|---|" + "---|" * len(columns),
