@@ -60,9 +60,11 @@ def main(out_dir="."):
     fem = wavecontact.solve(scene, "fem", elements=120, record_fields=True)
     modal = wavecontact.solve(scene, "modal", modes=200)
     for result in (delay, fem, modal):
+        first = " (first call: includes loading the compiled kernels)" if result.diagnostics[
+            "includes_kernel_preparation"] else ""
         print(f"  {result.solver:<5}: epsilon = {result.restitution:.8f} (delay - this: "
               f"{delay.restitution - result.restitution:+.1e}), peak force {result.contact_force.max() / 1e3:.2f} kN, "
-              f"contact {1e6 * result.contact_duration:.1f} us, {1e3 * result.wall_time_s:.0f} ms")
+              f"contact {1e6 * result.contact_duration:.1f} us, {1e3 * result.wall_time_s:.0f} ms{first}")
     plot_xt_diagram(fem, out / "striker_xt.png")
 
     speeds = np.geomspace(0.1, 20.0, 25)

@@ -202,6 +202,7 @@ def material_map(impedance_ratios, time_ratios, kappa: float = math.inf, *, rtol
     if hard:
         one = _hard_point
         workers = 1
+        one(points[0])  # compile or load the kernel before the clock starts
     else:
         _soft_point(points[0], kappa, rtol)  # compile or load the kernel, refuse a bad rtol early
 
