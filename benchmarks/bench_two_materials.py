@@ -30,7 +30,7 @@ from timing import median_time
 import wavecontact
 from wavecontact.delay.hardcore import hard_core_history
 from wavecontact.delay.parameters import echoes_from_ratios
-from wavecontact.solvers.delay import solve_delay_equation
+from wavecontact.delay.solver import solve_delay_equation
 from wavecontact.studies.material_map import material_map
 
 TIME_RATIO = 0.6

@@ -23,7 +23,7 @@ import numpy as np
 
 from wavecontact.delay.hardcore import closest_return, contact_intervals, hard_core_history
 from wavecontact.delay.parameters import echoes_from_ratios
-from wavecontact.solvers.delay import solve_delay_equation
+from wavecontact.delay.solver import solve_delay_equation
 
 
 def hard_pairs(count, seed):

@@ -63,7 +63,8 @@ def test_hard_force_steps_down_at_each_echo():
     fem = wavecontact.solve(scene, "fem", elements=60)
     for start, end, force in theory["steps"]:  # four steps of 2, ratio 2/3
         middle = 0.5 * (start + end)
-        piece = np.searchsorted(delay.time - delay.contact_start, middle, side="right") - 1  # force is stepwise
+        # the hard-core force is stepwise: contact_force[i] holds on (time[i - 1], time[i]]
+        piece = np.searchsorted(delay.time - delay.contact_start, middle)
         assert delay.contact_force[piece] == pytest.approx(force, rel=1e-12)
         near = np.abs(fem.time - fem.contact_start - middle) < 0.25 * (end - start)
         assert np.allclose(fem.contact_force[near], force, rtol=1e-9)

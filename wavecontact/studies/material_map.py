@@ -30,7 +30,7 @@ import numpy as np
 from ..delay.hardcore import hard_core_history
 from ..delay.parameters import echoes_from_ratios
 from ..errors import InvalidParameterError
-from ..solvers.delay import solve_delay_equation
+from ..delay.solver import solve_delay_equation
 
 __all__ = ["MAX_POINTS", "MaterialMap", "material_map", "special_line_restitution"]
 
