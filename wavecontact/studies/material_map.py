@@ -29,8 +29,8 @@ import numpy as np
 
 from ..delay.hardcore import hard_core_history
 from ..delay.parameters import echoes_from_ratios
-from ..errors import InvalidParameterError
 from ..delay.solver import solve_delay_equation
+from ..errors import InvalidParameterError
 
 __all__ = ["MAX_POINTS", "MaterialMap", "material_map", "special_line_restitution"]
 
