@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from delay_reference import radau_method_of_steps
 
 import wavecontact
 from wavecontact.analytic import two_material_impact
@@ -81,37 +81,11 @@ def test_modal_hard_impact_converges_to_the_wave_theory(case):
     assert errors[-1] < 1e-3
 
 
-def _radau_method_of_steps(delays, weights, kappa, a0=40.0, rtol=1e-11):
-    """An independent reference: Radau on W' = exp(kappa tau - a0 - W - sum beta_i W(tau - n Gamma_i)),
-    window by window, delayed values from the dense output of earlier windows."""
-    pieces = []
-
-    def history(s):
-        if s <= 0.0:
-            return 0.0
-        for start, stop, sol in pieces:
-            if start <= s <= stop:
-                return sol.sol(s)[0]
-        raise AssertionError(s)
-
-    def memory(s):
-        return sum(b * history(s - n * g) for g, b in zip(delays, weights) for n in range(1, int(s // g) + 1))
-
-    t, w, end = 0.0, 0.0, a0 / kappa + 3.0 * sum(delays)
-    while t < end:
-        stop = min(t + 0.999 * min(delays), end)
-        rhs = lambda s, y: [math.exp(min(kappa * s - a0 - y[0] - memory(s), 700.0))]
-        sol = solve_ivp(rhs, (t, stop), [w], method="Radau", rtol=rtol, atol=1e-12, dense_output=True)
-        pieces.append((t, stop, sol))
-        t, w = stop, sol.y[0, -1]
-    return w / kappa - 1.0
-
-
 @pytest.mark.parametrize("case", ["soft-short", "stiff-short-right"])
 def test_delay_agrees_with_an_independent_integrator(case):
     scene = _kappa_scene(case, 20.0)
     params = delay_parameters(scene)
-    reference = _radau_method_of_steps(params.round_trip_times, params.echo_weights, params.kappa)
+    reference = radau_method_of_steps(params.round_trip_times, params.echo_weights, params.kappa)
     result = wavecontact.solve(scene, "delay")
     assert result.error_estimate < 1e-8
     assert abs(result.restitution - reference) < 1e-8
