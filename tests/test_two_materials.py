@@ -147,3 +147,17 @@ def test_a_constant_noise_only_shifts_the_start_for_two_materials():
     cold = wavecontact.solve(scene, "delay").restitution
     shifted = wavecontact.solve(scene, "delay", noise=FourierNoise([0.0], [5.0], [0.0])).restitution
     assert abs(shifted - cold) < 1e-10
+
+
+@pytest.mark.parametrize("case", ["soft-short", "stiff-short-4-steps"])
+@pytest.mark.parametrize("kappa", [0.3, 2.0])
+def test_comb_sums_carry_the_weights(monkeypatch, case, kappa):
+    """Soft contacts take old copies from per-rod comb sums, weighted afterwards;
+    the result must equal the one that interpolates every weighted copy."""
+    from wavecontact.delay import solver as delay
+
+    scene = _kappa_scene(case, kappa)
+    with_comb = wavecontact.solve(scene, "delay", rtol=1e-10).restitution
+    monkeypatch.setattr(delay, "COMB_BELOW_KAPPA", 0.0)
+    every_copy = wavecontact.solve(scene, "delay", rtol=1e-10).restitution
+    assert abs(with_comb - every_copy) < 1e-11
