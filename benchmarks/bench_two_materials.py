@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-from timing import median_time
+from timing import median_time, wall_times
 
 import wavecontact
 from wavecontact.delay.hardcore import hard_core_history
@@ -40,12 +40,8 @@ KAPPAS = (5.0, 20.0, 100.0, 1e3, 1e4, 1e6)
 
 
 def _times(function, repeats):
-    """Median and minimum wall time (s) of ``repeats`` calls (the minimum is robust to a busy machine)."""
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - started)
+    """Median and minimum wall time (s) (the minimum is robust to a busy machine)."""
+    times = wall_times(function, repeats)
     return float(np.median(times)), float(np.min(times))
 
 
