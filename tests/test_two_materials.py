@@ -161,3 +161,34 @@ def test_comb_sums_carry_the_weights(monkeypatch, case, kappa):
     monkeypatch.setattr(delay, "COMB_BELOW_KAPPA", 0.0)
     every_copy = wavecontact.solve(scene, "delay", rtol=1e-10).restitution
     assert abs(with_comb - every_copy) < 1e-11
+
+
+def test_initial_vibrations_enter_as_the_noise():
+    """A mode of each rod at the start, given to FE and modal as initial velocity
+    fields and to the delay solver as Q(tau) (frequencies in units of Z_s / mu),
+    from the same placed gap: the three agree."""
+    hard = _scene(*CASES["soft-short"], wavecontact.Hard())
+    params = delay_parameters(hard)
+    rod_1, rod_2 = hard.rods
+    alpha = 20.0 / params.time_unit
+    gap = (40.0 + math.log(alpha**2 * params.reduced_mass / params.series_impedance**2)) / alpha  # a0 = 40
+    amplitude_1, amplitude_2 = 0.03, 0.05  # velocity amplitudes of mode 2 of rod 1 and mode 1 of rod 2
+    omega_1 = 2.0 * math.pi * rod_1.wave_speed / rod_1.length
+    omega_2 = math.pi * rod_2.wave_speed / rod_2.length
+    warm = wavecontact.Scene(
+        rods=hard.rods, velocities=(1.0, 0.0), contact=wavecontact.Exponential(alpha), gaps=(gap,),
+        initial_velocity=(lambda s: amplitude_1 * np.cos(omega_1 * s / rod_1.wave_speed),
+                          lambda s: amplitude_2 * np.cos(omega_2 * s / rod_2.wave_speed)),
+    )
+    cold = wavecontact.Scene(rods=hard.rods, velocities=(1.0, 0.0), contact=wavecontact.Exponential(alpha),
+                             gaps=(gap,))
+    # the gap closes by u_1(l_1, t) - u_2(0, t): (+1) A_1 sin(w_1 t) / w_1 - A_2 sin(w_2 t) / w_2, times alpha
+    noise = FourierNoise([omega_1 * params.time_unit, omega_2 * params.time_unit], [0.0, 0.0],
+                         [alpha * amplitude_1 / omega_1, -alpha * amplitude_2 / omega_2])
+    delay = wavecontact.solve(cold, "delay", noise=noise).restitution
+    assert abs(delay - wavecontact.solve(cold, "delay").restitution) > 1e-3  # the vibration matters
+    elements = np.array([60, 120, 240])
+    fem_errors = [abs(wavecontact.solve(warm, "fem", elements=int(n)).restitution - delay) for n in elements]
+    assert 1.8 < -np.polyfit(np.log(elements), np.log(fem_errors), 1)[0] < 2.2
+    assert fem_errors[-1] < 1e-6
+    assert abs(wavecontact.solve(warm, "modal", modes=200).restitution - delay) < 1e-6
