@@ -432,15 +432,17 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             for k in range(n_pairs):
                 dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
         if episode[0] < 0:
-            # the collision begins with the first pair that closes in and cannot be proven free, or
-            # that is within reach of the force; a pair that has just separated but whose ends still
-            # vibrate within the bound only keeps the integrator stepping
+            # the collision begins with the closest pair whose centres of mass close in and that
+            # cannot be proven free (out of range) or is within reach of the force; a pair that is
+            # opening (it has just separated, or another pair pushes it apart) only keeps the
+            # integrator stepping, whatever its ends' vibration does to its gap
             best = -1
             if all_far:
                 best = candidate
             else:
                 for k in range(n_pairs):
-                    if gap[k] <= contact_range and (best < 0 or gap[k] < gap[best]):
+                    closing = U[pair_b[k]] - U[pair_a[k]] <= 0.0
+                    if closing and gap[k] <= contact_range and (best < 0 or gap[k] < gap[best]):
                         best = k
             if best >= 0:
                 episode[0] = best
@@ -519,9 +521,9 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         counters[0] += 1
         steps_here += 1
-        if recording:
+        if recording and episode[0] >= 0:  # only the episode's own pair is recorded
             n = counters[2]
-            ep = max(episode[0], 0)
+            ep = episode[0]
             history[n, 0] = clock[0]
             history[n, 1] = U[pair_b[ep]] - U[pair_a[ep]]
             history[n, 2] = force[ep]
