@@ -36,6 +36,7 @@ STATUS_RUNNING = 0  # max_steps reached: call again
 STATUS_SEPARATED = 1  # the episode's pair separated for good
 STATUS_FREE_FOREVER = 2  # no pair will ever meet again (line)
 STATUS_BUFFER_FULL = 3  # history buffer full: grow it and call again
+STATUS_RECORDS_FULL = 4  # step records (collocation with exact ends) full: grow them and call again
 STATUS_STEP_UNDERFLOW = -1
 STATUS_NOT_FINITE = -2
 
@@ -95,12 +96,16 @@ def contact_response_from(gap, law, alpha, strength, stiffness, compliance, gues
         energy = (y + 0.5 * y * y) * scale / alpha
         return force, energy, alpha * force / (1.0 + y), 1.0 + y
     # linear spring on overlap (penalty; hard = infinite stiffness, then only the compliance)
+    if gap >= 0.0:
+        return 0.0, 0.0, 0.0, 1.0
     if stiffness == math.inf:
+        if compliance <= 0.0:
+            # overlap of a hard contact without compliance (round-off: exact ends keep the gap at 0);
+            # the force is unbounded, the constraint stores no energy
+            return math.inf, 0.0, math.inf, 1.0
         series = 1.0 / compliance
     else:
         series = 1.0 / (1.0 / stiffness + compliance)
-    if gap >= 0.0:
-        return 0.0, 0.0, 0.0, 1.0
     return -series * gap, 0.5 * series * gap * gap, series, 1.0
 
 @kernel(error_model="numpy")

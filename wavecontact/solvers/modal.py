@@ -2,9 +2,11 @@
 
 Each rod keeps ``modes`` vibration modes (analytic for a uniform rod, or the
 eigenmodes of its finite-element model); the contact acts on the two facing
-ends through their modal displacements.  With ``static_correction=True`` the
-compliance of the omitted modes at the ends is put in series with the contact
-law, which turns the ~1/N truncation error into a much faster one.  The
+ends through their modal displacements.  The omitted modes are accounted for
+by the exact end response of uniform rods (``correction='end-response'``, the
+default for analytic modes) or by their static end compliance in series with
+the contact law (``'static'``), which turns the ~1/N truncation error into a
+faster one.  The
 collision is integrated by exponential Radau collocation
 (:mod:`wavecontact.modal.collocation`) or, on request, by the ring's
 kick-rotate-kick splitting.  See ``docs/modal.md``.
@@ -14,8 +16,13 @@ Options
 modes : int
     Modes kept per rod (default 100).
 static_correction : bool
-    Add the omitted modes' static end compliance (default True; needed for
-    hard contact).
+    Account for the omitted modes (default True; needed for hard contact);
+    False: plain truncation.
+correction : {None, 'end-response', 'static', 'none'}
+    How the omitted modes are accounted for: 'end-response' (the exact end
+    response of uniform rods, all modes; the default for analytic modes and
+    the collocation), 'static' (their static end compliance in series with
+    the contact; the default otherwise) or 'none' (= ``static_correction=False``).
 mode_source : {'analytic', 'fe'}
     Closed-form modes of uniform rods, or eigenmodes of the FE matrices.
 fe_elements : int or None
@@ -50,7 +57,7 @@ import numpy as np
 
 from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
-from ..modal import collocation, kernels
+from ..modal import collocation, end_response, kernels
 from ..modal.modes import rod_modes
 from ..modal.system import ModalSystem, StepControl
 from ..result import CollisionResult
@@ -62,6 +69,7 @@ NAME = "modal"
 OPTIONS = {
     "modes": 100,
     "static_correction": True,
+    "correction": None,
     "mode_source": "analytic",
     "fe_elements": None,
     "fe_order": 1,
@@ -74,6 +82,7 @@ OPTIONS = {
     "history": True,
 }
 _STEP_METHODS = ("collocation", "splitting")
+_CORRECTIONS = ("end-response", "static", "none")
 # largest change of alpha_eff * gap per collocation step where the force matters
 _EXPONENT_STEP = 2.0
 # collocation tables of recent systems (filling costs ~0.1 ms per step size; repeated collisions reuse them)
@@ -100,7 +109,29 @@ def _project_field(rod, modes, field):
     return mean, density * shapes @ (w * values)
 
 
-def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
+def _resolve_correction(correction, static_correction, mode_source, step_method) -> str:
+    """The correction actually used, from ``correction`` and the older ``static_correction`` flag."""
+    if not isinstance(static_correction, (bool, np.bool_)):
+        raise InvalidParameterError(f"static_correction must be True or False, got {static_correction!r}")
+    if correction is not None and correction not in _CORRECTIONS:
+        raise InvalidParameterError(f"correction must be one of {_CORRECTIONS} or None, got {correction!r}")
+    if not static_correction:
+        if correction not in (None, "none"):
+            raise InvalidParameterError(
+                f"static_correction=False means no correction; it contradicts correction={correction!r}"
+            )
+        return "none"
+    if correction is None:
+        return "end-response" if mode_source == "analytic" and step_method == "collocation" else "static"
+    if correction == "end-response" and (mode_source != "analytic" or step_method != "collocation"):
+        raise InvalidParameterError(
+            "correction='end-response' needs mode_source='analytic' (uniform rods) and "
+            "step_method='collocation'; use correction='static'"
+        )
+    return correction
+
+
+def _build(scene: Scene, modes, correction, mode_source, fe_elements, fe_order, step_accuracy,
            step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"]):
     if scene.is_ring:
         raise UnsupportedSceneError(
@@ -111,8 +142,6 @@ def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_
         raise UnsupportedSceneError(
             f"the modal solver computes the restitution of two rods on a line, got {len(scene.rods)} rods"
         )
-    if not isinstance(static_correction, (bool, np.bool_)):
-        raise InvalidParameterError(f"static_correction must be True or False, got {static_correction!r}")
     rod_a, rod_b = scene.rods
     basis = [rod_modes(r, modes, mode_source, elements=fe_elements, order=fe_order) for r in scene.rods]
     velocities = np.array(scene.velocities, dtype=float)
@@ -144,7 +173,7 @@ def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_
     force_scale = z_a * z_b / (z_a + z_b) * approach  # wave-theory force plateau
     control = StepControl(accuracy=step_accuracy, reach=step_reach, order=step_order)
     probe = ModalSystem(basis, (0.0, 1.0), velocities, [(0, 1, 0.0)], scene.contact, force_scale,
-                        static_correction, control)
+                        correction == "static", control, exact_ends=correction == "end-response")
     if scene.gaps is not None:
         gap = scene.gaps[0]
     elif isinstance(scene.contact, Exponential):
@@ -174,17 +203,31 @@ def _collocation_tables(system, coupling, stages):
 
 
 def _run_collocation(system, stages, tolerance, buffer, chunks):
-    """Advance ``system`` (two rods, one pair) through its collision by exponential collocation."""
+    """Advance ``system`` (two rods, one pair) through its collision by exponential collocation.
+
+    Returns the last history chunk, the work counters and the step records (exact ends; else empty).
+    """
     first = system.rod_first.astype(np.int64)
     coupling = np.concatenate([-system.right[first[0]:first[1]], system.left[first[1]:first[2]]])
     tables = _collocation_tables(system, coupling, stages)
-    counters = np.zeros(5, dtype=np.int64)
+    counters = np.zeros(6, dtype=np.int64)
+    if system.exact_ends:
+        gap_0 = float(system.X[1] - system.half[1] - system.X[0] - system.half[0])
+        ends = end_response.end_parameters(*system.rods, float(system.clock[0]), gap_0,
+                                           float(system.U[1] - system.U[0]), system.total_energy(),
+                                           float(system.omitted_compliance[0]))
+        free_q, free_v = system.q.copy(), system.v.copy()
+        records = np.empty((1024, 3 + stages))
+    else:
+        ends = np.zeros(end_response.ENDS_SIZE)
+        free_q, free_v = np.zeros_like(system.q), np.zeros_like(system.v)
+        records = np.empty((0, 3 + stages))
     while True:
         status = collocation.run_collision(
             system.q, system.v, system.omega, coupling, system.X, system.U, system.mass, system.half,
             float(system.pair_compliance[0]), system.law_code, system.alpha, system.strength, system.stiffness,
-            system.contact_range, system.force_scale, float(tolerance), _EXPONENT_STEP, *tables.arrays(), system.clock, counters,
-            buffer, 100_000_000,
+            system.contact_range, system.force_scale, float(tolerance), _EXPONENT_STEP, *tables.arrays(),
+            ends, free_q, free_v, records, system.clock, counters, buffer, 100_000_000,
         )
         system.check_status(status)
         if status == kernels.STATUS_BUFFER_FULL:
@@ -192,10 +235,33 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
             counters[2] = 0
             buffer = np.empty((2 * buffer.shape[0], 3))
             continue
+        if status == kernels.STATUS_RECORDS_FULL:
+            records = np.concatenate([records, np.empty_like(records)])
+            continue
         if status == kernels.STATUS_SEPARATED:
-            return buffer[: counters[2]], {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
-                                           "newton_iterations": int(counters[4]), "stages": int(stages)}
+            work = {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
+                    "newton_iterations": int(counters[4]), "stages": int(stages)}
+            return buffer[: counters[2]], work, (records[: counters[5]], free_q, free_v)
         raise SolverFailure(f"modal collocation stopped with status {status}")
+
+
+def _omitted_mode_energy(system, records, free_q, free_v) -> float:
+    """Energy the force left in the omitted modes, from its recorded history (exact ends).
+
+    Per rod: the energy the force puts into a rod at rest (end response, see
+    :func:`~wavecontact.modal.end_response.forced_energy`) minus its rigid part ``I^2 / (2 m)``
+    and minus the kept modes' forced energy (their motion less their free motion).
+    """
+    if records.shape[0] == 0:
+        return 0.0
+    last = records[-1]
+    impulse = last[2] + last[1] * float(np.sum(last[3:] / np.arange(1, last.size - 2)))
+    forced = 0.5 * ((system.v - free_v) ** 2 + (system.omega * (system.q - free_q)) ** 2)
+    total = 0.0
+    for i, rod in enumerate(system.rods):
+        kept = float(np.sum(forced[system.rod_first[i]:system.rod_first[i + 1]]))
+        total += end_response.forced_energy(records, rod) - impulse**2 / (2.0 * rod.mass) - kept
+    return total
 
 
 def _run_splitting(system, buffer, chunks):
@@ -214,7 +280,7 @@ def _run_splitting(system, buffer, chunks):
                                                   "free_flights": int(system.counters[1])}
 
 
-def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_source="analytic",
+def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, correction=None, mode_source="analytic",
           fe_elements=None, fe_order=1, step_accuracy=OPTIONS["step_accuracy"],
           step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"], step_method=OPTIONS["step_method"],
           collocation_stages=OPTIONS["collocation_stages"], collocation_tolerance=OPTIONS["collocation_tolerance"],
@@ -228,8 +294,10 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
         ``stages`` for collocation, ``free_flights`` for splitting);
         ``diagnostics``: ``energy_drift`` (relative), ``momentum_drift``;
         ``extra``: ``modal_energies`` (2, modes) after the collision,
-        ``vibration_energy`` per rod, ``translational_energy_before/after``,
-        ``residual_compliance``.
+        ``vibration_energy`` per rod (kept modes), ``translational_energy_before/after``,
+        ``residual_compliance``, ``correction`` and, with the end-response
+        correction, ``omitted_mode_energy`` (what the force left in the modes
+        above ``modes``, from its history; ``energy_drift`` includes it).
     """
     if step_method not in _STEP_METHODS:
         raise InvalidParameterError(f"step_method must be one of {_STEP_METHODS}, got {step_method!r}")
@@ -239,7 +307,8 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
             raise InvalidParameterError(f"collocation_stages must be an integer in [1, 8], got {collocation_stages!r}")
         if not (isinstance(collocation_tolerance, (int, float)) and 0.0 < collocation_tolerance <= 1.0):
             raise InvalidParameterError(f"collocation_tolerance must lie in (0, 1], got {collocation_tolerance!r}")
-    system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
+    correction = _resolve_correction(correction, static_correction, mode_source, step_method)
+    system, gap = _build(scene, modes, correction, mode_source, fe_elements, fe_order, step_accuracy,
                          step_reach, step_order)
     energy_before = system.total_energy()
     momentum_before = system.momentum()
@@ -247,13 +316,19 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
     e_tr_before = 0.5 * float(np.sum(system.mass * system.U**2))
     buffer = np.empty((4096 if history else 0, 3))
     chunks = []
+    omitted_energy = None
     if step_method == "collocation":
         try:
-            tail, work = _run_collocation(system, collocation_stages, collocation_tolerance, buffer, chunks)
+            tail, work, (steps, free_q, free_v) = _run_collocation(system, collocation_stages,
+                                                                   collocation_tolerance, buffer, chunks)
+            if system.exact_ends:
+                omitted_energy = _omitted_mode_energy(system, steps, free_q, free_v)
         except SolverFailure as failure:
             # the collocation's Newton solve can stall on a stiff contact seen by few modes; the
             # splitting takes any contact (its step follows the force), so start over with it
-            system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order,
+            if correction == "end-response":
+                correction = "static"  # the splitting knows only the static correction
+            system, gap = _build(scene, modes, correction, mode_source, fe_elements, fe_order,
                                  step_accuracy, step_reach, step_order)
             chunks = []
             tail, work = _run_splitting(system, buffer, chunks)
@@ -269,7 +344,7 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
     start = np.array([[0.0, w_before, 0.0]])
     records = np.concatenate([start, records])
     w_after = float(system.U[1] - system.U[0])
-    energy_after = system.total_energy()
+    energy_after = system.total_energy() + (omitted_energy or 0.0)
     times, velocity, force = records[:, 0], records[:, 1], records[:, 2]
     contact_start = contact_duration = None
     if history and force.max() > 0.0:
@@ -301,6 +376,8 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
             "translational_energy_after": system.translational_energy(),
             "residual_compliance": float(system.pair_compliance[0]),
             "static_correction": bool(static_correction),
+            "correction": correction,
+            **({} if omitted_energy is None else {"omitted_mode_energy": omitted_energy}),
             "initial_gap": float(gap),
         },
     )
