@@ -340,23 +340,81 @@ def _history_at(t, records, count):
 
 
 @kernel(error_model="numpy")
-def _echoes(t, ends, records, count):
-    """Echo part of the exact end response at time ``t``: ``sum_rods w sum_{n>=1} (I, F)(t - n T)``.
+def _impulse_increment(a, span, records, count):
+    """``I(a + span) - I(a)`` from the recorded step polynomials, summed from small pieces.
 
-    ``ends = (zeta, w_a, w_b, T_a, T_b, t_start, ...)``, ``w = 2 / Z`` (see :func:`run_collision`).
+    Never the difference of two running totals: in a hard contact the gap is the small remainder of
+    O(1) terms, and a round-off of 1e-16 in it divided by a step's compliance becomes a force error.
     """
-    impulse = 0.0
+    if count == 0 or span <= 0.0:
+        return 0.0
+    first = records[0, 0]
+    if a + span <= first:
+        return 0.0
+    if a < first:
+        span -= first - a
+        a = first
+    low = 0
+    high = count - 1
+    while low < high:  # last step that begins at or before a
+        middle = (low + high + 1) // 2
+        if records[middle, 0] <= a:
+            low = middle
+        else:
+            high = middle - 1
+    k = low
+    s = records.shape[1] - 3
+    x = (a - records[k, 0]) / records[k, 1]
+    total = 0.0
+    remaining = span
+    while True:
+        h = records[k, 1]
+        room = (1.0 - x) * h
+        last = remaining <= room or k == count - 1
+        x_end = min(x + remaining / h, 1.0) if last else 1.0
+        upper = 0.0
+        lower = 0.0
+        for j in range(s - 1, -1, -1):
+            upper = upper * x_end + records[k, 3 + j] / (j + 1)
+            lower = lower * x + records[k, 3 + j] / (j + 1)
+        total += h * (x_end * upper - x * lower)
+        if last:
+            return total
+        remaining -= room
+        k += 1
+        x = 0.0
+
+
+@kernel(error_model="numpy")
+def _echo_increment(t0, offset, ends, records, count):
+    """Change of the echo part of the end response over ``[t0, t0 + offset]``.
+
+    ``sum_rods w sum_{n>=1} [I(t0 + offset - n T) - I(t0 - n T)]``, ``ends = (zeta, w_a, w_b, T_a,
+    T_b, t_start, ...)``, ``w = 2 / Z`` (see :func:`run_collision`).
+    """
+    total = 0.0
+    for rod in range(2):
+        trip = ends[3 + rod]
+        delayed = t0 - trip
+        part = 0.0
+        while delayed + offset > ends[5]:
+            part += _impulse_increment(delayed, offset, records, count)
+            delayed -= trip
+        total += ends[1 + rod] * part
+    return total
+
+
+@kernel(error_model="numpy")
+def _echo_force(t, ends, records, count):
+    """Echo part of the end velocity response at ``t``: ``sum_rods w sum_{n>=1} F(t - n T)``."""
     force = 0.0
     for rod in range(2):
-        weight = ends[1 + rod]
-        trip = ends[3 + rod]
-        delayed = t - trip
+        delayed = t - ends[3 + rod]
         while delayed > ends[5]:
-            i_n, f_n = _history_at(delayed, records, count)
-            impulse += weight * i_n
-            force += weight * f_n
-            delayed -= trip
-    return impulse, force
+            _, f_n = _history_at(delayed, records, count)
+            force += ends[1 + rod] * f_n
+            delayed -= ends[3 + rod]
+    return force
 
 
 @kernel(error_model="numpy")
@@ -389,17 +447,18 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     nodes, vinv : arrays (s,), (s, s)
         Collocation nodes and the inverse Vandermonde matrix (node forces -> monomial coefficients).
     node_cos ... filled : tables filled on first use by ``_fill_level``.
-    ends : float array (10,)
+    ends : float array (11,)
         Exact end response of uniform rods (the end-response correction):
-        ``(zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance)`` with
+        ``(zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap)`` with
         ``zeta = 1/Z_a + 1/Z_b`` (time/mass), ``w = 2/Z`` per rod, ``T = 2 l / c`` its round
         trip, ``t_start`` the time the force history begins, ``gap_0`` and ``rate_0`` the rigid
         gap and approach rate then, ``energy_0`` the total energy then and ``tail_compliance``
-        the static compliance of the omitted modes (bounds their end excursion).  The gap is
-        then ``gap_0 + rate_0 (t - t_start) + (kept modes' free motion) + zeta I(t) +
-        sum_n w I(t - n T)`` with ``I = int F`` (every mode of a uniform rod, omitted ones
-        included); the kept modes are only driven by the force.  ``zeta = 0``: the gap of the
-        kept modes and the rigid motion (plain or statically corrected truncation).
+        the static compliance of the omitted modes (bounds their end excursion) and ``gap``
+        the true gap now (updated in place).  The gap is ``gap_0 + rate_0 (t - t_start) +
+        (kept modes' free motion) + zeta I(t) + sum_n w I(t - n T)`` with ``I = int F`` (every
+        mode of a uniform rod, omitted ones included), advanced step by step by its increments;
+        the kept modes are only driven by the force.  ``zeta = 0``: the gap of the kept modes
+        and the rigid motion (plain or statically corrected truncation).
     free_q, free_v : float arrays (M,)
         The kept modes' free motion from the start (exact ends only; rotated in place).
     records : float array (K, 3 + s)
@@ -466,8 +525,10 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         n_rec = counters[5]
         if n_rec > 0:
             impulse_total, _ = _history_at(records[n_rec - 1, 0] + records[n_rec - 1, 1], records, n_rec)
-        sq, sv = _exact_gap(clock[0], ends, impulse_total, coupling, free_q, free_v, warm, records, n_rec,
-                            rigid_gap, rigid_rate)
+        else:
+            ends[10] = rigid_gap + sq  # no force yet: the kept modes' gap is the true one
+        sq = ends[10] - rigid_gap
+        sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, n_rec) - rigid_rate
     if exact and counters[5] > 0:
         _, force_now = _history_at(clock[0], records, counters[5])
         k_now = 0.0
@@ -507,10 +568,15 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             counters[3] += 1
         # free gap at the nodes (no force over the step) and its response to the node forces
         if exact:
+            # increments from the gap now (small terms only, see _impulse_increment)
+            kept_now = 0.0
+            if warm:
+                for j in range(n_modes):
+                    kept_now += coupling[j] * free_q[j]
             for i in range(s):
-                t_i = clock[0] + nodes[i] * h
-                echo, _ = _echoes(t_i, ends, records, counters[5])
-                free_gap[i] = ends[6] + ends[7] * (t_i - ends[5]) + zeta * impulse_total + echo
+                offset = nodes[i] * h
+                free_gap[i] = ends[10] - kept_now + ends[7] * offset + _echo_increment(clock[0], offset, ends,
+                                                                                        records, counters[5])
                 for m in range(s):
                     step_response[i, m] = zeta * h * integral[i, m]
             mode_q = free_q
@@ -566,8 +632,10 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         error *= (FLOOR + 1.0) / tolerance
         if error > 1.0 and level < n_levels - 1:
             shrink = math.log(1.1 * error ** (1.0 / s)) / log_ratio
-            # a jump of the force (hard contact) never passes the test: it is taken at the smallest step
-            level = min(level + max(1, int(math.ceil(shrink))), n_levels - 1)  # noqa: RUF046
+            level += max(1, int(math.ceil(shrink)))  # noqa: RUF046
+            if hard:
+                # a jump of the hard contact's force never passes the test: take it at the smallest step
+                level = min(level, n_levels - 1)
             counters[1] += 1
             continue
         # accept: monomial coefficients of the force polynomial in tau / h
@@ -651,8 +719,12 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         rigid_rate = U[1] - U[0]
         if exact:
             # the true end motion (all modes) instead of the kept ones
-            sq, sv = _exact_gap(clock[0], ends, impulse_total, coupling, free_q, free_v, warm, records,
-                                counters[5], rigid_gap, rigid_rate)
+            gap_end = free_gap[s - 1]
+            for m in range(s):
+                gap_end += step_response[s - 1, m] * forces[m]
+            ends[10] = gap_end
+            sq = gap_end - rigid_gap
+            sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, counters[5]) - rigid_rate
             sv += zeta * force_now
         # separated for good: the pair opens and the ends' largest excursion cannot reach the force
         if rigid_rate > 0.0 and rigid_gap + sq > contact_range:
@@ -675,24 +747,19 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             room = exponent_step + max(0.0, -math.log(force_now / force_scale) - 30.0)
             if rate * h_wanted > room:
                 h_wanted = room / rate
-        level = min(max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9))), n_levels - 1)  # noqa: RUF046
+        level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
+        if hard:
+            level = min(level, n_levels - 1)
 
 
 @kernel(error_model="numpy")
-def _exact_gap(t, ends, impulse_total, coupling, free_q, free_v, warm, records, count, rigid_gap, rigid_rate):
-    """True end displacement and velocity sums at the step boundary ``t`` with exact ends.
-
-    Returns ``(gap - rigid_gap, d gap/dt - rigid_rate - zeta F(t))``: the gap of every mode (kept
-    and omitted) from the end response, relative to the rigid gap of the centres of mass.
-    """
-    echo_impulse, echo_force = _echoes(t, ends, records, count)
-    gap = ends[6] + ends[7] * (t - ends[5]) + ends[0] * impulse_total + echo_impulse
-    rate = ends[7] + echo_force
+def _exact_rate(t, ends, coupling, free_v, warm, records, count):
+    """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``."""
+    rate = ends[7] + _echo_force(t, ends, records, count)
     if warm:
-        for j in range(free_q.size):
-            gap += coupling[j] * free_q[j]
+        for j in range(free_v.size):
             rate += coupling[j] * free_v[j]
-    return gap - rigid_gap, rate - rigid_rate
+    return rate
 
 
 @kernel(error_model="numpy")

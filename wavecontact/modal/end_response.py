@@ -18,8 +18,8 @@ import numpy as np
 
 __all__ = ["ENDS_SIZE", "end_parameters", "forced_energy"]
 
-# (zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance)
-ENDS_SIZE = 10
+# (zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap now)
+ENDS_SIZE = 11
 
 
 def end_parameters(rod_a, rod_b, t_start, gap_0, rate_0, energy_0, tail_compliance) -> np.ndarray:
@@ -42,7 +42,7 @@ def end_parameters(rod_a, rod_b, t_start, gap_0, rate_0, energy_0, tail_complian
     return np.array([
         1.0 / z_a + 1.0 / z_b, 2.0 / z_a, 2.0 / z_b,
         2.0 * rod_a.length / rod_a.wave_speed, 2.0 * rod_b.length / rod_b.wave_speed,
-        t_start, gap_0, rate_0, energy_0, tail_compliance,
+        t_start, gap_0, rate_0, energy_0, tail_compliance, gap_0,
     ], dtype=float)
 
 
@@ -59,12 +59,14 @@ def _force_at(times, starts, records):
     return np.where(inside, force, 0.0)
 
 
-def forced_energy(records, rod, points=12) -> float:
+def forced_energy(records, rod, points=6) -> float:
     """Energy (rigid motion and all modes) that the recorded force puts into ``rod`` from rest.
 
     ``int F v dt = (1 / Z) [R(0) + 2 sum_n R(n T)]`` with the force's autocorrelation
-    ``R(tau) = int F(t) F(t + tau) dt``, by Gauss-Legendre quadrature (``points`` per step) over
-    the step polynomials ``records[k] = (t0, h, I(t0), a_0 .. a_{s-1})``.
+    ``R(tau) = int F(t) F(t + tau) dt``.  The force is a polynomial of degree ``s - 1`` on each
+    recorded step ``records[k] = (t0, h, I(t0), a_0 .. a_{s-1})``; each lag is integrated between
+    the union of the step boundaries and the shifted ones, where the product is one polynomial of
+    degree ``2 s - 2``, by Gauss-Legendre with ``points >= s`` nodes: exact up to round-off.
 
     Parameters
     ----------
@@ -80,14 +82,22 @@ def forced_energy(records, rod, points=12) -> float:
     """
     if records.shape[0] == 0:
         return 0.0
+    points = max(points, records.shape[1] - 3)
     nodes, weights = np.polynomial.legendre.leggauss(points)
     starts = records[:, 0]
-    times = (starts[:, None] + records[:, 1:2] * 0.5 * (nodes + 1.0)).ravel()
-    quadrature = (records[:, 1:2] * 0.5 * weights).ravel()
-    force = _force_at(times, starts, records)
+    bounds = np.append(starts, starts[-1] + records[-1, 1])
     trip = 2.0 * rod.length / rod.wave_speed
-    lags = int((starts[-1] + records[-1, 1] - starts[0]) // trip)
-    total = float(np.sum(quadrature * force * force))
-    for n in range(1, lags + 1):
-        total += 2.0 * float(np.sum(quadrature * force * _force_at(times + n * trip, starts, records)))
+    lags = int((bounds[-1] - bounds[0]) // trip)
+    total = 0.0
+    for n in range(lags + 1):
+        shift = n * trip
+        edges = np.union1d(bounds, bounds[(bounds - shift > bounds[0]) & (bounds - shift < bounds[-1])] - shift)
+        edges = edges[edges <= bounds[-1] - shift]
+        if edges.size < 2:
+            continue
+        left, width = edges[:-1], np.diff(edges)
+        times = (left[:, None] + width[:, None] * 0.5 * (nodes + 1.0)).ravel()
+        quadrature = (width[:, None] * 0.5 * weights).ravel()
+        product = _force_at(times, starts, records) * _force_at(times + shift, starts, records)
+        total += (1.0 if n == 0 else 2.0) * float(np.sum(quadrature * product))
     return total / rod.impedance
