@@ -18,7 +18,17 @@ end_time : float or None
     solver stop by itself once ``W`` has settled.
 noise : FourierNoise or None
     Initial vibrations of the rods as the noise ``Q(tau)`` (Eq. 17); ``None``
-    is a cold bath.
+    is a cold bath.  A scene with ``vibrations`` (a thermal-bath realisation,
+    :mod:`wavecontact.bath`) brings its own noise instead.
+noise_resolution : int
+    Table nodes per period of the fastest bath mode for the noise of a scene
+    with vibrations (cubic Hermite between nodes), in [4, 1024]; default 32.
+hard_core_resolution : int
+    Grid points per period of the fastest bath mode of the short rod in the
+    stochastic hard-core mode (kappa = inf with vibrations), in [2, 4096];
+    default 8.  The error estimate comes from a second run at twice it.
+energy_split : bool
+    Also compute each rod's vibrational energy gain (``extra['vibration_energy_gain']``); default True.
 max_steps : int
     Safety limit on accepted steps.
 """
@@ -31,14 +41,19 @@ import numpy as np
 
 from ..contact import Exponential, Hard
 from ..delay import kernels
+from ..bath.noise import NoiseTables
+from ..bath.scene import scene_noise
+from ..delay.energy_split import NODES, WEIGHTS, vibration_energy_gain
 from ..delay.hardcore import hard_core_history
 from ..delay.noise import COLD, FourierNoise
+from ..delay.stochastic_hardcore import hard_core_noise
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import CollisionResult
 from ..scene import Scene, two_rod_parameters
 
 NAME = "delay"
-OPTIONS = {"rtol": 1e-11, "initial_gap": None, "end_time": None, "noise": None, "max_steps": 2_000_000}
+OPTIONS = {"rtol": 1e-11, "initial_gap": None, "end_time": None, "noise": None, "max_steps": 2_000_000,
+           "noise_resolution": 32, "hard_core_resolution": 8, "energy_split": True}
 ORDER = 6  # Gauss-Kronrod (3, 7) on the smooth remainder, quintic Hermite history
 
 GAP_MARGIN = 40.0  # exp(-40) ~ 4e-18: the force at the start is below round-off
@@ -68,7 +83,7 @@ def _check_scene(scene: Scene):
             f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
             "use solver='fem' for penalty contact"
         )
-    if not scene.is_cold:
+    if not scene.is_cold and scene.vibrations is None:
         raise UnsupportedSceneError(
             "initial fields enter the delay equation as the noise Q(tau): pass noise=FourierNoise(...)"
         )
@@ -102,13 +117,22 @@ def _check_options(rtol, initial_gap, end_time, noise, max_steps):
     return rtol, initial_gap, end_time, noise, int(max_steps)
 
 
-def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000):
+def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000,
+                         tables=None):
     """Integrate Eq. 16 for length ratio ``gamma`` and softness ``kappa``.
 
-    Returns ``(t, W, W', error_estimate, work)`` with ``W`` on the adaptive
-    grid ``t`` (dimensionless time, ``tau = 0`` at the start, scaled gap ``a0``).
+    ``tables`` (:class:`wavecontact.bath.noise.NoiseTables`) adds tabulated
+    noise to ``noise``.  Returns ``(t, W, W', error_estimate, work, a0)`` with
+    ``W`` on the adaptive grid ``t`` (dimensionless time, ``tau = 0`` at the
+    start, scaled gap ``a0``).
     """
+    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables)
+    return t, w, d1, error, work, a0
+
+
+def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables):
     rtol, a0, end_time, noise, max_steps = _check_options(rtol, initial_gap, end_time, noise, max_steps)
+    tables = NoiseTables.empty() if tables is None else tables
     if a0 is None:
         a0 = GAP_MARGIN + noise.amplitude_bound
     delays = np.array([1.0 + gamma, 1.0 + 1.0 / gamma])
@@ -117,8 +141,9 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     t_end_min = free_time if end_time is None else max(free_time, end_time)
     # the collision lasts about Gamma_1 for kappa >> 1 and ~ (|ln rtol| + a0) / (kappa gamma) when soft
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(gamma, 0.5))
-    t, w, d1, _d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
+    t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
+        tables.periods, tables.values, tables.slopes, float(tables.slope_bound),
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
@@ -126,7 +151,7 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     if status != kernels.STATUS_OK:
         raise SolverFailure(f"delay solver (gamma={gamma:g}, kappa={kappa:g}): {_STATUS[status]}")
     work = {"steps": int(t.size - 1), "rejected_steps": int(rejected), "evaluations": int(evaluations)}
-    return t, w, d1, float(error), work, a0
+    return t, w, d1, d2, float(error), work, a0
 
 
 def _contact_window(time, force, fraction=0.01):
@@ -137,13 +162,27 @@ def _contact_window(time, force, fraction=0.01):
     return float(time[above[0]]), float(time[above[-1]] - time[above[0]])
 
 
-def solve(scene: Scene, *, rtol, initial_gap, end_time, noise, max_steps) -> CollisionResult:
+def _check_resolution(name, value, low, high):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+        raise InvalidParameterError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    return int(value)
+
+
+def solve(scene: Scene, *, rtol, initial_gap, end_time, noise, max_steps, noise_resolution=32,
+          hard_core_resolution=8, energy_split=True) -> CollisionResult:
     """One collision of a two-rod scene by the delay equation (see module docstring)."""
     params = _check_scene(scene)
+    noise_resolution = _check_resolution("noise_resolution", noise_resolution, 4, 1024)
+    hard_core_resolution = _check_resolution("hard_core_resolution", hard_core_resolution, 2, 4096)
     gamma, kappa = params.gamma, params.kappa
+    vibrations = scene.vibrations
+    if vibrations is not None and noise is not None:
+        raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
     if isinstance(scene.contact, Hard) or math.isinf(kappa):
         if noise is not None:
-            raise UnsupportedSceneError("the hard-core delay solver handles a cold bath only (noise=None)")
+            raise UnsupportedSceneError("the hard-core delay solver takes thermal vibrations on the scene, not noise=")
+        if vibrations is not None:
+            return _solve_hard_stochastic(scene, gamma, hard_core_resolution, energy_split)
         return _solve_hard(gamma)
     if scene.gaps is not None and initial_gap is None:
         # a user-placed start: alpha * gap, shifted by ln(B alpha^2 / mu) for B != mu / alpha^2
@@ -152,12 +191,24 @@ def solve(scene: Scene, *, rtol, initial_gap, end_time, noise, max_steps) -> Col
         initial_gap = alpha * scene.gaps[0] - math.log(
             scene.contact.strength * alpha**2 * params.effective_length**2 / (reduced_mass * params.wave_speed**2)
         )
-    t, w, d1, error, work, a0 = solve_delay_equation(
-        gamma, kappa, rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps
-    )
+    tables = None
+    if vibrations is not None:
+        if initial_gap is None:
+            raise UnsupportedSceneError("a scene with vibrations needs its start gap (two_rods(..., vibrations=) sets it)")
+        tables = scene_noise(scene, kappa, float(initial_gap), noise_resolution)
+    t, w, d1, d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables)
     restitution = w[-1] / kappa - 1.0
     force = 0.5 * d1 / kappa  # mu dv_rel/dt = W' / (2 kappa) in units of Z V = rho c A V
     start, duration = _contact_window(t, force)
+    extra = {"initial_gap": a0, "free_flight_time": a0 / kappa, "velocity_increase_slope": d1}
+    if energy_split and noise is None:
+        tab = tables if tables is not None else NoiseTables.empty()
+        gain = vibration_energy_gain(float(kappa), t, w, d1, d2, np.array([1.0 + gamma, 1.0 + 1.0 / gamma]),
+                                     tab.periods, tab.values, tab.slopes, NODES, WEIGHTS, 2)
+        extra["vibration_energy_gain"] = gain
+    if vibrations is not None:
+        extra["vibration_energy_before"] = vibrations.vibration_energy()
+        extra["bath_modes"] = vibrations.modes
     return CollisionResult(
         restitution=float(restitution),
         solver=NAME,
@@ -171,7 +222,65 @@ def solve(scene: Scene, *, rtol, initial_gap, end_time, noise, max_steps) -> Col
         contact_duration=duration,
         error_estimate=error,
         work=work,
-        extra={"initial_gap": a0, "free_flight_time": a0 / kappa, "velocity_increase_slope": d1},
+        extra=extra,
+    )
+
+
+def _hard_energy_split(gamma, t, w, vibrations, tau_free):
+    """Per-rod vibrational gain of a hard-core grid solution (energy units, E_tr = 1/4).
+
+    The discrete form of :mod:`wavecontact.delay.energy_split` with ``W = kappa w``:
+    ``Delta E_i = 1/2 int w' (w'/2 + c_i' - w / Gamma_i - q_i') dtau``.
+    """
+    h = t[1] - t[0]
+    gains = []
+    for i, period in enumerate((1.0 + gamma, 1.0 + 1.0 / gamma)):
+        memory = np.zeros_like(w)
+        shift = period / h
+        n = 1
+        while n * shift < w.size:
+            memory += np.interp(np.arange(w.size) - n * shift, np.arange(w.size), w, left=0.0)
+            n += 1
+        noise = np.zeros_like(w)
+        if vibrations is not None:
+            omega, a, b = vibrations.noise_coefficients(1.0)[i]
+            for start in range(0, omega.size, 64):
+                phase = np.outer(t - tau_free, omega[start:start + 64])
+                noise += np.cos(phase) @ a[start:start + 64] + np.sin(phase) @ b[start:start + 64]
+        mean_motion = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * h)]) / period
+        end = 0.5 * w + memory - mean_motion - noise
+        gains.append(0.5 * float(np.sum(np.diff(w) * np.diff(end)) / h))
+    return np.array(gains)
+
+
+def _solve_hard_stochastic(scene, gamma, resolution, energy_split):
+    """The hard-core limit with the scene's vibrations (max-plus recursion on a grid)."""
+    vibrations = scene.vibrations
+    tau_free = float(scene.gaps[0])  # V = 1, l = 1: the gap is the free-flight time
+    t, w = hard_core_noise(gamma, vibrations, tau_free, resolution)
+    fine_t, fine_w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
+    restitution = float(w[-1] - 1.0)
+    slopes = np.diff(w) / np.diff(t)
+    force = np.concatenate([0.5 * slopes, [0.0]])
+    start, duration = _contact_window(t, force)
+    extra = {"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
+             "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])}
+    if energy_split:
+        extra["vibration_energy_gain"] = _hard_energy_split(gamma, t, w, vibrations, tau_free)
+    return CollisionResult(
+        restitution=restitution,
+        solver=NAME,
+        wall_time_s=0.0,
+        time=t,
+        relative_velocity=w - 1.0,
+        gamma=gamma,
+        kappa=math.inf,
+        contact_force=force,
+        contact_start=start,
+        contact_duration=duration,
+        error_estimate=abs(float(fine_w[-1]) - float(w[-1])),
+        work={"steps": int(t.size), "refinement_steps": int(fine_t.size)},
+        extra=extra,
     )
 
 
