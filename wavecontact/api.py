@@ -74,8 +74,9 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     CollisionResult
         ``.restitution`` is the coefficient of restitution epsilon.  With a
         bath, ``extra['vibration_energy_gain']`` holds the energy each rod's
-        vibrations gained (units with ``E_tr = 1/4``) and ``extra['bath']``
-        the bath's parameters and the seed.
+        vibrations gained (units with ``E_tr = 1/4``; not in the hard-core
+        mode, ``kappa = inf``, whose grid gives only the total) and
+        ``extra['bath']`` the bath's parameters and the seed.
 
     Examples
     --------
@@ -94,7 +95,9 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     bath = ThermalBath(bath_temperature, bath_modes)
     scene = thermal_scene(gamma, kappa, bath, seed, contact=contact)
     result = solve(scene, solver, **options)
-    result.extra["vibration_energy_gain"] = vibration_energy_gain(result, scene)
+    gain = vibration_energy_gain(result, scene)
+    if gain is not None:
+        result.extra["vibration_energy_gain"] = gain
     result.extra["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
                             "seed": seed if isinstance(seed, int) else repr(seed)}
     return result

@@ -22,14 +22,17 @@ def thermal_scene(gamma, kappa, bath: ThermalBath, seed, *, contact="exponential
     return two_rods(gamma, kappa, contact=contact, vibrations=vibrations)
 
 
-def vibration_energy_gain(result, scene) -> np.ndarray:
+def vibration_energy_gain(result, scene):
     """Energy each rod's vibrations gained in the collision (units with ``E_tr = 1/4``).
 
     delay: from the per-rod memory and noise terms
     (:mod:`wavecontact.delay.energy_split`); modal: modal energies after minus
     the realisation's energy in the modes the solver keeps; fem: the rods'
     internal energy after minus the realisation's (continuous) energy.
+    ``None`` in the stochastic hard-core mode, which gives only the total.
     """
+    if result.extra.get("hard_core"):
+        return None  # the max-plus grid does not resolve the split (see solvers/delay.py)
     if "vibration_energy_gain" in result.extra:
         return np.asarray(result.extra["vibration_energy_gain"], dtype=float)
     vibrations = scene.vibrations

@@ -153,8 +153,10 @@ def hard_core_noise(gamma: float, vibrations, tau_free: float, points_per_period
         q1, (p2, q2, s2), reach = np.zeros(n1), (g2, np.zeros(1), np.zeros(1)), 0.0
         t0 = tau_free - h
     else:
-        q1, (p2, q2, s2), reach = _grid_noise(vibrations, gamma, tau_free, 0.0, n1, 4 * points_per_period)
-        t0 = tau_free - reach - h
+        # node 0 before the earliest possible contact (the coefficients bound |q|); whole steps
+        # from tau_free, so refining the grid keeps its nodes
+        bound = sum(float(np.sum(np.hypot(a, b))) for _o, a, b in vibrations.noise_coefficients(1.0))
+        t0 = tau_free - h * (math.ceil(bound / h) + 1)
         q1, (p2, q2, s2), reach = _grid_noise(vibrations, gamma, tau_free, t0, n1, 4 * points_per_period)
     capacity = int(min(max_points, max(4 * n1, (2.0 * reach + 8.0 * (g1 + g2)) / h)))
     while True:
