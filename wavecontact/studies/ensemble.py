@@ -113,14 +113,17 @@ def sample_restitution(spec: EnsembleSpec, index: int) -> float:
     """epsilon of sample ``index`` of ``spec`` (one collision)."""
     from ..api import solve
     from ..bath.collide import thermal_scene
+    from ..bath.scene import start_gap
+    from ..contact import Hard
     from ..delay.stochastic_hardcore import hard_core_noise
 
     seed = sample_seed(spec.seed, index)
     if spec.solver == "delay" and math.isinf(spec.kappa):
-        # the hard-core mode without the scene and result objects around it
-        scene = thermal_scene(spec.gamma, math.inf, spec.bath, seed, contact="hard")
+        # the hard-core mode without the scene and result objects around it (same draw, same gap)
+        lengths = (0.5 * (1.0 + spec.gamma), 0.5 * (1.0 + spec.gamma) / spec.gamma)
+        vibrations = spec.bath.draw(lengths, seed)
         resolution = int(spec.options.get("hard_core_resolution", 8))
-        _t, w = hard_core_noise(spec.gamma, scene.vibrations, float(scene.gaps[0]), resolution)
+        _t, w = hard_core_noise(spec.gamma, vibrations, start_gap(vibrations, Hard()), resolution)
         return float(w[-1] - 1.0)
     scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, seed)
     options = dict(spec.options)
