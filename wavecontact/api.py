@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from ._jit import prepared_kernel_count
+import dataclasses
+
 from .contact import ContactLaw
 from .errors import InvalidParameterError
 from .result import CollisionResult
 from .scene import Scene, two_rods
 from .solvers import get_solver
-from .solvers.base import Stopwatch, check_options
 
 __all__ = ["collide", "solve"]
 
@@ -23,7 +23,8 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
     solver : {'delay', 'fem', 'modal'}
         How to simulate it.
     **options
-        Solver options; unknown names are refused (see each solver's ``OPTIONS``).
+        Solver options; unknown names are refused (each solver's ``Options``
+        dataclass lists them: ``get_solver(name).Options``).
 
     Returns
     -------
@@ -32,15 +33,7 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
         ``diagnostics["includes_kernel_preparation"]`` True when numba compiled or
         loaded kernels during it (a first call: that time is not the solver's cost).
     """
-    module = get_solver(solver)
-    merged = check_options(solver, module.OPTIONS, options)
-    prepared = prepared_kernel_count()
-    with Stopwatch() as watch:
-        result = module.solve(scene, **merged)
-    result.wall_time_s = watch.seconds
-    # numba compiled or loaded kernels during this call: its wall time is not the solver's cost
-    result.diagnostics["includes_kernel_preparation"] = prepared_kernel_count() > prepared
-    return result
+    return get_solver(solver).solve(scene, options)
 
 
 def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="exponential", bath_temperature=None,
@@ -95,9 +88,10 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     bath = ThermalBath(bath_temperature, bath_modes)
     scene = thermal_scene(gamma, kappa, bath, seed, contact=contact)
     result = solve(scene, solver, **options)
+    extra = dict(result.extra)
     gain = vibration_energy_gain(result, scene)
     if gain is not None:
-        result.extra["vibration_energy_gain"] = gain
-    result.extra["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
-                            "seed": seed if isinstance(seed, int) else repr(seed)}
-    return result
+        extra["vibration_energy_gain"] = gain
+    extra["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
+                     "seed": seed if isinstance(seed, int) else repr(seed)}
+    return dataclasses.replace(result, extra=extra)

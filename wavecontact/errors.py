@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 __all__ = [
+    "CheckpointError",
     "InvalidParameterError",
     "SolverFailure",
     "UnsupportedSceneError",
@@ -30,9 +31,21 @@ class UnsupportedSceneError(WavecontactError, ValueError):
     """The scene is valid but the chosen solver cannot model it."""
 
 
+class CheckpointError(InvalidParameterError):
+    """A checkpoint file failed a check (readable, schema, checksum, build, parameters)."""
+
+
 class SolverFailure(WavecontactError, RuntimeError):
     """A solver detected that its result would be wrong (energy drift,
-    unresolved contact, non-finite state) and refuses to return it."""
+    unresolved contact, non-finite state) and refuses to return it.
+
+    ``outcome`` is the :class:`wavecontact.result.Outcome` that says how the
+    solve ended (None where no single one applies).
+    """
+
+    def __init__(self, message: str, outcome=None):
+        super().__init__(message)
+        self.outcome = outcome
 
 
 def require_finite(name: str, value) -> float:

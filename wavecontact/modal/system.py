@@ -3,7 +3,7 @@
 :class:`ModalSystem` packs everything the compiled integrator needs into flat
 arrays once, and offers the bookkeeping around it (energies, modal energies,
 state snapshots).  Both the single-collision solver
-(:mod:`wavecontact.solvers.modal`) and the ring (:mod:`.ring`) are built on it.
+(:mod:`wavecontact.modal.solver`) and the ring (:mod:`.ring`) are built on it.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 
 from ..contact import ContactLaw, Exponential, Hard, Penalty
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..result import Outcome
 from . import kernels
 
 __all__ = ["ModalSystem", "StepControl", "contact_parameters"]
@@ -62,10 +63,15 @@ class StepControl:
 
 
 def contact_parameters(law: ContactLaw, force_scale: float, static_correction: bool):
-    """Kernel encoding ``(code, alpha, strength, stiffness, contact_range)`` of a contact law."""
+    """Kernel encoding ``(code, alpha, strength, stiffness, contact_range)`` of a contact law.
+
+    The first four numbers are the law's own :meth:`~wavecontact.contact.ContactLaw.kernel_parameters`
+    (a hard law is a penalty spring of infinite stiffness to these kernels).
+    """
+    code, alpha, strength, stiffness = law.kernel_parameters()
     if isinstance(law, Exponential):
         shift = max(0.0, math.log(law.alpha * law.strength / force_scale))
-        return kernels.LAW_EXPONENTIAL, law.alpha, law.strength, 0.0, (NEGLIGIBLE_EXPONENT + shift) / law.alpha
+        return code, alpha, strength, stiffness, (NEGLIGIBLE_EXPONENT + shift) / law.alpha
     if isinstance(law, Hard):
         if not static_correction:
             raise UnsupportedSceneError(
@@ -73,14 +79,14 @@ def contact_parameters(law: ContactLaw, force_scale: float, static_correction: b
                 "omitted modes' compliance a truncated rod end has a finite mass and a hard impact on it is "
                 "instantaneous and undefined; with it the limit is a contact spring of that compliance"
             )
-        return kernels.LAW_LINEAR, 1.0, 0.0, math.inf, 0.0
+        return kernels.LAW_LINEAR, 1.0, 0.0, stiffness, 0.0
     if isinstance(law, Penalty):
         if law.stiffness is None:
             raise UnsupportedSceneError(
                 "the modal solver needs an explicit penalty stiffness (Penalty(stiffness=k)); "
                 "it has no mesh to choose one from"
             )
-        return kernels.LAW_LINEAR, 1.0, 0.0, float(law.stiffness), 0.0
+        return code, 1.0, 0.0, stiffness, 0.0
     raise UnsupportedSceneError(f"the modal solver does not know the contact law {law!r}")
 
 
@@ -187,11 +193,12 @@ class ModalSystem:
         if status == kernels.STATUS_STEP_UNDERFLOW:
             raise SolverFailure(
                 "modal integrator: the contact step fell below the smallest ladder step; the contact is "
-                "too stiff for this resolution (try more modes, static_correction=True or step_method='splitting')"
+                "too stiff for this resolution (try more modes, static_correction=True or step_method='splitting')",
+                Outcome.STEP_UNDERFLOW,
             )
         if status == kernels.STATUS_NOT_FINITE:
             raise SolverFailure("modal integrator: the contact force overflowed (overlap far beyond the "
-                                "force's range); reduce step_accuracy")
+                                "force's range); reduce step_accuracy", Outcome.NON_FINITE)
 
     # ------------------------------------------------------------- bookkeeping
     def gaps(self) -> np.ndarray:
