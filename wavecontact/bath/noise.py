@@ -53,16 +53,17 @@ class NoiseTables:
         return math.sqrt(8.0 * NOISE_EXCURSION / self.curvature_bound) if self.curvature_bound > 0.0 else 0.0
 
 
-def _harmonic_series(a, b, period, shift, n):
+def _harmonic_series(a, b, period, shift, n, slopes=True):
     """Values and slopes of ``sum_nu a cos(2 pi nu (t - t_c)/P) + b sin(...)`` at ``t_c + shift + j P / n``."""
     nu = np.arange(1, a.size + 1)
     coefficients = (a - 1j * b) * np.exp(2j * math.pi * nu * shift / period)
     spectrum = np.zeros(n // 2 + 1, dtype=complex)
     spectrum[1:a.size + 1] = 0.5 * n * coefficients
     values = np.fft.irfft(spectrum, n)
+    if not slopes:
+        return values, None
     spectrum[1:a.size + 1] *= 2j * math.pi * nu / period
-    slopes = np.fft.irfft(spectrum, n)
-    return values, slopes
+    return values, np.fft.irfft(spectrum, n)
 
 
 def _curvature_peak(a, b, period, n):

@@ -37,8 +37,8 @@ __all__ = ["STATUS_MAX_POINTS", "STATUS_OK", "max_plus_recursion"]
 STATUS_OK = 0
 STATUS_MAX_POINTS = 1
 # rod 2's table: nodes per period of its fastest mode (cubic Hermite: relative error of that
-# mode's amplitude ~ (2 pi / 16)^4 / 384 = 6e-5, and its amplitude is the smallest)
-ROD2_TABLE_POINTS = 16
+# mode's amplitude ~ (2 pi / 8)^4 / 384 = 1e-3, and that amplitude is 1/nu_max of the first's)
+ROD2_TABLE_POINTS = 8
 
 
 @kernel
@@ -123,12 +123,12 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
     return max_points, STATUS_MAX_POINTS
 
 
-def _grid_noise(vibrations, gamma, tau_free, t0, n1, points_per_period):
+def _grid_noise(coefficients, gamma, tau_free, t0, n1, points_per_period):
     from ..bath.noise import _harmonic_series, table_points
 
-    (_o1, a1, b1), (_o2, a2, b2) = vibrations.noise_coefficients(1.0)  # q = Q / kappa
+    (_o1, a1, b1), (_o2, a2, b2) = coefficients
     g1, g2 = 1.0 + gamma, 1.0 + 1.0 / gamma
-    q1, _s1 = _harmonic_series(a1, b1, g1, t0 - tau_free, n1)
+    q1 = _harmonic_series(a1, b1, g1, t0 - tau_free, n1, slopes=False)[0]
     n2 = table_points(a2.size, points_per_period)
     q2, s2 = _harmonic_series(a2, b2, g2, t0 - tau_free, n2)
     # a cubic Hermite piece exceeds its end values by at most 8/27 h max|slope| < 0.3 h max|slope|
@@ -173,9 +173,10 @@ def hard_core_noise(gamma: float, vibrations, tau_free: float, points_per_period
     else:
         # node 0 before the earliest possible contact (the coefficients bound |q|); whole steps
         # from tau_free, so refining the grid keeps its nodes
-        bound = sum(float(np.sum(np.hypot(a, b))) for _o, a, b in vibrations.noise_coefficients(1.0))
+        coefficients = vibrations.noise_coefficients(1.0)  # q = Q / kappa
+        bound = sum(float(np.sum(np.hypot(a, b))) for _o, a, b in coefficients)
         t0 = tau_free - h * (math.ceil(bound / h) + 1)
-        q1, (p2, q2, s2), reach = _grid_noise(vibrations, gamma, tau_free, t0, n1, ROD2_TABLE_POINTS)
+        q1, (p2, q2, s2), reach = _grid_noise(coefficients, gamma, tau_free, t0, n1, ROD2_TABLE_POINTS)
     capacity = int(min(max_points, max(4 * n1, (2.0 * reach + 8.0 * (g1 + g2)) / h)))
     while True:
         w = np.empty(capacity)
