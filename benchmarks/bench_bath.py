@@ -27,20 +27,18 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from timing import median_time  # noqa: E402
+from timing import median_time
 
-import wavecontact  # noqa: E402
-from wavecontact.api import solve  # noqa: E402
-from wavecontact.bath import ThermalBath  # noqa: E402
-from wavecontact.bath.collide import thermal_scene  # noqa: E402
-from wavecontact.bath.scene import scene_noise  # noqa: E402
-from wavecontact.studies.bath_figures import FIG8_TEMPERATURES  # noqa: E402
-from wavecontact.studies.ensemble import ensemble  # noqa: E402
+import wavecontact
+from wavecontact.api import solve
+from wavecontact.bath import ThermalBath
+from wavecontact.bath.collide import thermal_scene
+from wavecontact.bath.scene import scene_noise
+from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
+from wavecontact.studies.ensemble import ensemble
 
 GAMMA = 0.6173
 

@@ -18,8 +18,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from wavecontact.modal import kernels
-from wavecontact.scene import two_rods
 from wavecontact.modal.solver import _build
+from wavecontact.scene import two_rods
 
 __all__ = ["modal_equations", "restitution"]
 
