@@ -110,9 +110,10 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
                 running = value
                 last_rise = k
             quiet = 0
-        elif k - last_rise > settle:
-            # finished: no rise for a full memory period, and even the largest noise
-            # could not reach w again during another one
+        elif running > 0.0:
+            # finished once, for a full memory period, even the largest noise could not have
+            # lifted f to w (the memory of the last rise has arrived by then: only it can
+            # push the bracket that far below w)
             quiet += 1
             if quiet > settle:
                 w[k] = running
