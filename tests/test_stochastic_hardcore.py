@@ -67,15 +67,25 @@ def test_stated_error_has_the_size_of_the_actual_error():
     assert np.median(ratios) < 1.0
 
 
+def test_a_stiff_contact_does_not_step_over_a_short_rise_of_the_noise():
+    # this realisation first touches on a narrow bump of the noise; a step that strode over it
+    # missed that contact and ended 0.05 away from the hard-core limit at kappa = 3200
+    warm = {"bath_temperature": 0.5, "bath_modes": 10, "seed": 1}
+    hard = wavecontact.collide(0.6, math.inf, "delay", hard_core_resolution=128, **warm).restitution
+    stiff = wavecontact.collide(0.6, 800.0, "delay", rtol=1e-6, energy_split=False, **warm).restitution
+    assert abs(stiff - hard) < 0.003
+
+
+@pytest.mark.slow
 def test_finite_kappa_approaches_the_hard_core_mode():
     # the same realisations at growing kappa: |eps(kappa) - eps(inf)| falls roughly like ln(kappa)/kappa
-    kappas = np.array([50.0, 200.0, 800.0])
+    kappas = np.array([40.0, 400.0])
     differences = []
-    for seed in range(4):
+    for seed in range(3):
         warm = {"bath_temperature": 0.5, "bath_modes": 10, "seed": seed}
         hard = wavecontact.collide(0.6, math.inf, "delay", hard_core_resolution=256, **warm).restitution
-        differences.append([abs(wavecontact.collide(0.6, k, "delay", rtol=1e-8, **warm).restitution - hard)
-                            for k in kappas])
+        differences.append([abs(wavecontact.collide(0.6, k, "delay", rtol=1e-7, energy_split=False,
+                                                    **warm).restitution - hard) for k in kappas])
     median = np.median(np.array(differences), axis=0)
     assert median[-1] < median[0] / 4
-    assert median[-1] < 0.02
+    assert median[-1] < 0.01

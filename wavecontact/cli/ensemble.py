@@ -57,7 +57,7 @@ def executor_from(workers: int, scheduler):
         except ImportError:  # pragma: no cover
             raise InvalidParameterError("--scheduler needs dask.distributed installed") from None
         try:
-            client = Client(scheduler, timeout="5s")
+            client = Client(scheduler, timeout="3s")
         except (OSError, TimeoutError, ValueError) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise InvalidParameterError(f"cannot reach the Dask scheduler at {scheduler!r}: {reason}") from None
