@@ -13,7 +13,8 @@ import sys
 
 from ..errors import WavecontactError
 
-COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "ensemble", "bath-figure", "restitution-table")
+COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "ensemble", "bath-figure",
+            "restitution-table")
 
 
 class _Parser(argparse.ArgumentParser):
