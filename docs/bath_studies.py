@@ -28,7 +28,7 @@ from wavecontact.studies.ensemble import ensemble, sample_seed  # noqa: E402
 GAMMA = 0.6173
 
 
-def kappa_independence(pool, samples=400, temperature=1.0, seed=50):
+def kappa_independence(pool, samples=300, temperature=1.0, seed=50):
     hard = ensemble(GAMMA, math.inf, temperature, samples, seed, executor=pool, batch_size=50)
     print(f"\n### kappa-independence (gamma {GAMMA}, T_B/E_tr {temperature}, nu_max 250, {samples} paired samples)\n")
     print("| kappa | mean eps (SE) | std eps | mean of eps(kappa) - eps(inf) (SE) | median abs difference |")
@@ -41,7 +41,7 @@ def kappa_independence(pool, samples=400, temperature=1.0, seed=50):
     print(f"| inf (hard-core mode) | {hard.mean:.4f} ({hard.standard_error:.4f}) | {hard.std:.4f} | 0 | 0 |")
 
 
-def modes_dependence(pool, samples=4000, temperature=1.0, seed=60):
+def modes_dependence(pool, samples=3000, temperature=1.0, seed=60):
     print(f"\n### nu_max dependence (hard-core mode, gamma {GAMMA}, T_B/E_tr {temperature}, {samples} samples each)\n")
     print("| nu_max | mean eps (SE) | std eps (SE) | mean eps^2 |")
     print("|---|---|---|---|")
