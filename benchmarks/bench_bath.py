@@ -124,6 +124,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="fewer samples")
     args = parser.parse_args(argv)
     quick = args.quick
+    logging.getLogger("distributed").setLevel(logging.ERROR)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; wavecontact {wavecontact.__version__}")
     print("| quantity | value | note")
     rate = hard_core_rate(500 if quick else 4000)
