@@ -13,7 +13,7 @@ import sys
 
 from ..errors import WavecontactError
 
-COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "ensemble", "bath-figure",
+COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "map", "ensemble", "bath-figure",
             "restitution-table")
 
 
