@@ -94,7 +94,7 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
                 running = value
                 last_rise = k
             quiet = 0
-        elif k - last_rise > settle:
+        elif running > 0.0 and k - last_rise > settle:
             # finished: no rise for a full memory period, and even the largest noise
             # could not reach w again during another one
             quiet += 1
