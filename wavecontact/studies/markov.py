@@ -220,7 +220,8 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
         Any solver; collisions other than the hard-core delay mode go through
         :func:`wavecontact.collide`.
     options : dict or None
-        Solver options.
+        Solver options; the hard-core delay mode takes only ``hard_core_resolution``
+        (grid points per period of the fastest bath mode, in [2, 4096], default 8).
 
     Returns
     -------
@@ -236,7 +237,12 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
 
         lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (MODEL.md section 2)
         vibrations = ThermalBath(float(temperature_ratio), bath_modes).draw(lengths, seed)
-        resolution = int(options.get("hard_core_resolution", 8))
+        unknown = set(options) - {"hard_core_resolution"}
+        if unknown:
+            raise InvalidParameterError(
+                f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
+            )
+        resolution = _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
         # the nominal contact time only shifts the recursion; epsilon = w(inf) - 1
         _t, w = hard_core_noise(gamma, vibrations, 0.0, resolution)
         return float(w[-1] - 1.0)
@@ -352,7 +358,8 @@ class MarkovResult:
     temperature : ndarray (chains, steps + 1)
         ``T_B(j) / T_B^0``.
     eps2 : ndarray (chains, steps)
-        ``epsilon_j^2``.
+        ``epsilon_j^2``; ``inf`` where ``E_tr(j)`` was 0 (only Glauber's rule after its
+        total loss from a cold bath, Eq. 36: the new energy is then finite, the ratio is not).
     """
 
     spec: MarkovSpec
@@ -394,6 +401,7 @@ class MarkovResult:
         thinned = states[:, ::stride].ravel()
         ks = ks_exponential(thinned, 1.0)
         chain_means = states.mean(axis=1)
+        finite = self.eps2[:, burn_in:]
         spread = float(np.std(chain_means, ddof=1) / math.sqrt(chain_means.size)) if chain_means.size > 1 else None
         spec = self.spec
         return {
@@ -406,7 +414,7 @@ class MarkovResult:
             "ks_samples": int(thinned.size),
             "ks_stride": int(stride),
             "burn_in": burn_in,
-            "mean_eps2": float(self.eps2[:, burn_in:].mean()),
+            "mean_eps2": float(np.mean(finite[np.isfinite(finite)])) if np.isfinite(finite).any() else None,
             "steps": spec.steps,
             "chains": spec.chains,
             "gamma": spec.gamma,
