@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from .contact import ContactLaw
 from .errors import InvalidParameterError
 from .result import CollisionResult
@@ -86,9 +88,10 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     bath = ThermalBath(bath_temperature, bath_modes)
     scene = thermal_scene(gamma, kappa, bath, seed, contact=contact)
     result = solve(scene, solver, **options)
+    extra = dict(result.extra)
     gain = vibration_energy_gain(result, scene)
     if gain is not None:
-        result.extra["vibration_energy_gain"] = gain
-    result.extra["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
-                            "seed": seed if isinstance(seed, int) else repr(seed)}
-    return result
+        extra["vibration_energy_gain"] = gain
+    extra["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
+                     "seed": seed if isinstance(seed, int) else repr(seed)}
+    return dataclasses.replace(result, extra=extra)

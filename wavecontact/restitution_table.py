@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InvalidParameterError
+from .io.files import atomic_write
 
 __all__ = ["SCHEMA_NAME", "SCHEMA_VERSION", "RestitutionTable", "load"]
 
@@ -269,28 +270,31 @@ class RestitutionTable:
             "seed": self.seed,
         }
 
+    def _write_csv(self, handle):
+        handle.write(f"# {SCHEMA_NAME} v{SCHEMA_VERSION}; kappa={self.metadata()['kappa']}, "
+                     f"bath_modes={self.bath_modes}, solver={self.solver}; all columns dimensionless\n")
+        writer = csv.writer(handle)
+        writer.writerow(["gamma", "temperature_ratio", "probability", "eps2_quantile"])
+        for i, g in enumerate(self.gamma):
+            for j, r in enumerate(self.temperature_ratio):
+                for k, u in enumerate(self.probability):
+                    writer.writerow([repr(float(g)), repr(float(r)), repr(float(u)),
+                                     repr(float(self.eps2_quantiles[i, j, k]))])
+
     def save(self, path):
         """Write ``.npz``, ``.json`` or ``.csv`` (chosen by the suffix); returns the path."""
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix == ".npz":
-            with open(path, "wb") as handle:
-                np.savez(handle, schema=np.array(json.dumps(self.metadata())),
-                         **{name: getattr(self, name) for name in _ARRAYS})
+            arrays = {name: getattr(self, name) for name in _ARRAYS}
+            schema = np.array(json.dumps(self.metadata()))
+            atomic_write(path, lambda handle: np.savez(handle, schema=schema, **arrays))
         elif suffix == ".json":
             document = dict(self.metadata(), **{name: getattr(self, name).tolist() for name in _ARRAYS})
-            path.write_text(json.dumps(document, indent=1) + "\n")
+            text = json.dumps(document, indent=1) + "\n"
+            atomic_write(path, lambda handle: handle.write(text), binary=False)
         elif suffix == ".csv":
-            with open(path, "w", newline="") as handle:
-                handle.write(f"# {SCHEMA_NAME} v{SCHEMA_VERSION}; kappa={self.metadata()['kappa']}, "
-                             f"bath_modes={self.bath_modes}, solver={self.solver}; all columns dimensionless\n")
-                writer = csv.writer(handle)
-                writer.writerow(["gamma", "temperature_ratio", "probability", "eps2_quantile"])
-                for i, g in enumerate(self.gamma):
-                    for j, r in enumerate(self.temperature_ratio):
-                        for k, u in enumerate(self.probability):
-                            writer.writerow([repr(float(g)), repr(float(r)), repr(float(u)),
-                                             repr(float(self.eps2_quantiles[i, j, k]))])
+            atomic_write(path, self._write_csv, binary=False)
         else:
             raise InvalidParameterError(f"restitution table path must end in .npz, .json or .csv, got {path.name!r}")
         return path

@@ -29,12 +29,15 @@ def vibration_energy_gain(result, scene):
     (:mod:`wavecontact.delay.energy_split`); modal: modal energies after minus
     the realisation's energy in the modes the solver keeps; fem: the rods'
     internal energy after minus the realisation's (continuous) energy.
-    ``None`` in the stochastic hard-core mode, which gives only the total.
+    ``None`` in the stochastic hard-core mode, which gives only the total,
+    and for the delay solver run with ``energy_split=False``.
     """
     if result.extra.get("hard_core"):
         return None  # the max-plus grid does not resolve the split (see solvers/delay.py)
     if "vibration_energy_gain" in result.extra:
         return np.asarray(result.extra["vibration_energy_gain"], dtype=float)
+    if result.solver == "delay":
+        return None  # the split was not asked for (energy_split=False)
     vibrations = scene.vibrations
     energies = vibrations.modal_energies() if vibrations is not None else [np.zeros(0), np.zeros(0)]
     if result.solver == "modal":

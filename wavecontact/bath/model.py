@@ -114,8 +114,9 @@ class ThermalBath:
         masses = lengths if masses is None else tuple(float(m) for m in masses)
         q, r = [], []
         nu = np.arange(1, self.modes + 1)
+        draws = rng.standard_normal((2, 2, self.modes))  # the same numbers as two (2, modes) draws, rod 1 first
         for i in range(2):
-            normals = rng.standard_normal((2, self.modes))
+            normals = draws[i]
             omega = wave_speeds[i] * math.pi * nu / lengths[i]
             spread = np.sqrt(self.temperature[i] * translational_energy / masses[i]) / omega
             q.append(normals[0] * spread)

@@ -19,6 +19,7 @@ from ..errors import InvalidParameterError
 
 __all__ = ["POINTS_PER_PERIOD", "NoiseTables", "covariance_eq19", "covariance_series", "noise_tables", "table_points"]
 
+NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
 POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
 
 
@@ -40,22 +41,37 @@ class NoiseTables:
     values: np.ndarray
     slopes: np.ndarray
     slope_bound: float
+    curvature_bound: float = 0.0
 
     @classmethod
     def empty(cls) -> NoiseTables:
         return cls(np.zeros(0), np.zeros((0, 1)), np.zeros((0, 1)), 0.0)
 
+    @property
+    def step_limit(self) -> float:
+        """Step over which ``Q`` departs from its secant by at most 1 (``max|Q''| h^2 / 8 <= 1``); 0 if no noise."""
+        return math.sqrt(8.0 * NOISE_EXCURSION / self.curvature_bound) if self.curvature_bound > 0.0 else 0.0
 
-def _harmonic_series(a, b, period, shift, n):
+
+def _harmonic_series(a, b, period, shift, n, slopes=True):
     """Values and slopes of ``sum_nu a cos(2 pi nu (t - t_c)/P) + b sin(...)`` at ``t_c + shift + j P / n``."""
     nu = np.arange(1, a.size + 1)
     coefficients = (a - 1j * b) * np.exp(2j * math.pi * nu * shift / period)
     spectrum = np.zeros(n // 2 + 1, dtype=complex)
     spectrum[1:a.size + 1] = 0.5 * n * coefficients
     values = np.fft.irfft(spectrum, n)
+    if not slopes:
+        return values, None
     spectrum[1:a.size + 1] *= 2j * math.pi * nu / period
-    slopes = np.fft.irfft(spectrum, n)
-    return values, slopes
+    return values, np.fft.irfft(spectrum, n)
+
+
+def _curvature_peak(a, b, period, n):
+    """Largest ``|q''|`` over ``n`` nodes of a period (the nodes are dense: ``n >= 16 x`` modes)."""
+    nu = np.arange(1, a.size + 1)
+    spectrum = np.zeros(n // 2 + 1, dtype=complex)
+    spectrum[1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
+    return float(np.max(np.abs(np.fft.irfft(spectrum, n)))) if a.size else 0.0
 
 
 def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0,
@@ -78,6 +94,7 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
     """
     rows_v, rows_s = [], []
     bound = 0.0
+    curvature = 0.0
     modes = max(a.size for _omega, a, _b in coefficients)
     n = table_points(modes, points_per_period)
     for (omega, a, b), period in zip(coefficients, periods):
@@ -88,7 +105,10 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
         rows_v.append(values)
         rows_s.append(slopes)
         bound += float(np.sum(omega * np.hypot(a, b)))
-    return NoiseTables(np.asarray(periods, dtype=float), np.array(rows_v), np.array(rows_s), bound)
+        # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
+        # denser by default), with 10 % for what falls between them
+        curvature += 1.1 * _curvature_peak(np.asarray(a, float), np.asarray(b, float), float(period), n)
+    return NoiseTables(np.asarray(periods, dtype=float), np.array(rows_v), np.array(rows_s), bound, curvature)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:

@@ -253,6 +253,7 @@ def integrate_delay_equation(
     tables,
     table_slopes,
     noise_rate,
+    noise_step,
     t_end_min,
     t_limit,
     settle_time,
@@ -279,6 +280,11 @@ def integrate_delay_equation(
         ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
     noise_rate : float
         An upper bound of ``|Q'|`` from the tables (0 without tables).
+    noise_step : float
+        Longest step wherever the force may become appreciable (0: no
+        limit): short enough that ``Q`` departs from its secant by less than
+        one unit of the exponent, so that no narrow rise of the noise slips
+        between the quadrature nodes of a step that looked force-free.
     t_end_min : float
         Never stop before this time.
     t_limit : float
@@ -370,6 +376,8 @@ def integrate_delay_equation(
                     n += 1
         if h_free > h:
             h = min(h_wanted, h_free)
+        elif noise_step > 0.0:
+            h = min(h, noise_step)
         h = min(h, h_max)
         if h < 1e-14 * max(1.0, abs(t0)):
             status = STATUS_STEP_UNDERFLOW

@@ -16,14 +16,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bath.noise import NoiseTables
+from ..bath.scene import scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from ..scene import Scene, two_rod_parameters
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
+from .energy_split import NODES, WEIGHTS, vibration_energy_gain
 from .hardcore import hard_core_history
 from .noise import COLD, FourierNoise
+from .stochastic_hardcore import hard_core_noise
 
 __all__ = ["ORDER", "SOLVER", "DelayOptions", "DelaySolver", "solve_delay_equation"]
 
@@ -62,9 +66,19 @@ class DelayOptions(SolverOptions):
     end_time: float | None = option(
         None, "integrate at least until this time tau; None: stop once W has settled", low=0.0, allow_none=True)
     noise: FourierNoise | None = option(
-        None, "initial vibrations as the noise Q(tau) (Eq. 17); None: a cold bath",
+        None, "initial vibrations as the noise Q(tau) (Eq. 17); None: a cold bath, or the scene's vibrations",
         kind="object", allow_none=True, check=_noise)
     max_steps: int = option(2_000_000, "safety limit on accepted steps", kind="int", low=10, high=10**9)
+    noise_resolution: int = option(
+        32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
+        kind="int", low=4, high=1024)
+    hard_core_resolution: int = option(
+        8, "kappa = inf with vibrations: grid points per period of the short rod's fastest bath mode; the result "
+        "comes from twice that, its error estimate from the changes over half and the given resolution",
+        kind="int", low=2, high=4096)
+    energy_split: bool = option(
+        True, "also compute each rod's vibrational energy gain (extra['vibration_energy_gain'], E_tr = 1/4)",
+        kind="bool")
 
 
 def _check_scene(scene: Scene):
@@ -79,7 +93,7 @@ def _check_scene(scene: Scene):
             f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
             "use solver='fem' for penalty contact"
         )
-    if not scene.is_cold:
+    if not scene.is_cold and scene.vibrations is None:
         raise UnsupportedSceneError(
             "initial fields enter the delay equation as the noise Q(tau): pass noise=FourierNoise(...)"
         )
@@ -91,15 +105,24 @@ def _check_scene(scene: Scene):
 
 
 
-def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000):
+def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000,
+                         tables=None):
     """Integrate Eq. 16 for length ratio ``gamma`` and softness ``kappa``.
 
-    Returns ``(t, W, W', error_estimate, work)`` with ``W`` on the adaptive
-    grid ``t`` (dimensionless time, ``tau = 0`` at the start, scaled gap ``a0``).
+    ``tables`` (:class:`wavecontact.bath.noise.NoiseTables`) adds tabulated
+    noise to ``noise``.  Returns ``(t, W, W', error_estimate, work, a0)`` with
+    ``W`` on the adaptive grid ``t`` (dimensionless time, ``tau = 0`` at the
+    start, scaled gap ``a0``).
     """
+    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables)
+    return t, w, d1, error, work, a0
+
+
+def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables):
     options = DelayOptions(rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps)
     rtol, a0, end_time, max_steps = options.rtol, options.initial_gap, options.end_time, options.max_steps
     noise = COLD if options.noise is None else options.noise
+    tables = NoiseTables.empty() if tables is None else tables
     if a0 is None:
         a0 = GAP_MARGIN + noise.amplitude_bound
     delays = np.array([1.0 + gamma, 1.0 + 1.0 / gamma])
@@ -108,8 +131,9 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     t_end_min = free_time if end_time is None else max(free_time, end_time)
     # the collision lasts about Gamma_1 for kappa >> 1 and ~ (|ln rtol| + a0) / (kappa gamma) when soft
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(gamma, 0.5))
-    t, w, d1, _d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
+    t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
+        tables.periods, tables.values, tables.slopes, float(tables.slope_bound), float(tables.step_limit),
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
@@ -118,9 +142,7 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
         outcome, advice = _OUTCOMES[status]
         raise SolverFailure(f"delay solver (gamma={gamma:g}, kappa={kappa:g}): {outcome.message}; {advice}", outcome)
     work = {"steps": int(t.size - 1), "rejected_steps": int(rejected), "evaluations": int(evaluations)}
-    return t, w, d1, float(error), work, a0
-
-
+    return t, w, d1, d2, float(error), work, a0
 
 
 class DelaySolver(SolverBase):
@@ -138,9 +160,15 @@ class DelaySolver(SolverBase):
     def _collide(self, scene: Scene, options: DelayOptions) -> dict:
         params = _check_scene(scene)
         gamma, kappa = params.gamma, params.kappa
+        vibrations = scene.vibrations
+        if vibrations is not None and options.noise is not None:
+            raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
         if isinstance(scene.contact, Hard) or math.isinf(kappa):
             if options.noise is not None:
-                raise UnsupportedSceneError("the hard-core delay solver handles a cold bath only (noise=None)")
+                raise UnsupportedSceneError("the hard-core delay solver takes thermal vibrations on the scene "
+                                            "(two_rods(..., vibrations=)), not the option noise")
+            if vibrations is not None:
+                return _collide_hard_stochastic(scene, gamma, options.hard_core_resolution)
             return _collide_hard(gamma)
         initial_gap = options.initial_gap
         if scene.gaps is not None and initial_gap is None:
@@ -151,10 +179,23 @@ class DelaySolver(SolverBase):
                 scene.contact.strength * alpha**2 * params.effective_length**2
                 / (reduced_mass * params.wave_speed**2)
             )
-        t, w, d1, error, work, a0 = solve_delay_equation(
-            gamma, kappa, rtol=options.rtol, initial_gap=initial_gap, end_time=options.end_time,
-            noise=options.noise, max_steps=options.max_steps,
-        )
+        tables = None
+        if vibrations is not None:
+            if initial_gap is None:
+                raise UnsupportedSceneError("a scene with vibrations needs its start gap "
+                                            "(two_rods(..., vibrations=) sets it)")
+            tables = scene_noise(scene, kappa, float(initial_gap), options.noise_resolution)
+        t, w, d1, d2, error, work, a0 = _integrate(gamma, kappa, options.rtol, initial_gap, options.end_time,
+                                                   options.noise, options.max_steps, tables)
+        extra = {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa, "velocity_increase_slope": d1}
+        if options.energy_split and options.noise is None:
+            tab = tables if tables is not None else NoiseTables.empty()
+            extra["vibration_energy_gain"] = vibration_energy_gain(
+                float(kappa), t, w, d1, d2, np.array([1.0 + gamma, 1.0 + 1.0 / gamma]), tab.periods, tab.values,
+                tab.slopes, NODES, WEIGHTS, 2)
+        if vibrations is not None:
+            extra["vibration_energy_before"] = vibrations.vibration_energy()
+            extra["bath_modes"] = vibrations.modes
         return {
             "restitution": w[-1] / kappa - 1.0,
             "time": t,
@@ -163,8 +204,37 @@ class DelaySolver(SolverBase):
             "contact_force": 0.5 * d1 / kappa,
             "error_estimate": error,
             "work": work,
-            "extra": {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa, "velocity_increase_slope": d1},
+            "extra": extra,
         }
+
+
+def _collide_hard_stochastic(scene, gamma, resolution) -> dict:
+    """The hard-core limit with the scene's vibrations (max-plus recursion on a grid).
+
+    The answer comes from the grid at 2 x resolution; the grid converges at
+    first order but unevenly (f often peaks at a kink of the memory terms,
+    between nodes), so the error is estimated by the larger change over the
+    two coarser grids.  The per-rod split needs ``W'`` times the noise's
+    slope, which the max-plus grid resolves too slowly: only the total
+    ``(1 - epsilon^2) / 4`` is implied; use a finite kappa for the split.
+    """
+    vibrations = scene.vibrations
+    tau_free = float(scene.gaps[0])  # V = 1, l = 1: the gap is the free-flight time
+    coarser = [hard_core_noise(gamma, vibrations, tau_free, r)[1][-1] for r in (max(resolution // 2, 1), resolution)]
+    t, w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
+    slopes = np.diff(w) / np.diff(t)
+    return {
+        "restitution": float(w[-1] - 1.0),
+        "time": t,
+        "relative_velocity": w - 1.0,
+        # the force is constant between grid points: force[i] is its value on (time[i-1], time[i]]
+        "contact_force": np.concatenate([[0.0], 0.5 * slopes]),
+        "force_sampling": "interval",
+        "error_estimate": max(abs(float(coarser[1] - w[-1])), abs(float(coarser[0] - coarser[1]))),
+        "work": {"steps": int(t.size)},
+        "extra": {"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
+                  "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])},
+    }
 
 
 def _collide_hard(gamma: float) -> dict:

@@ -25,8 +25,8 @@ from ..bath.model import ThermalBath
 from ..errors import InvalidParameterError, WavecontactError
 from ..scene import validate_gamma_kappa
 
-__all__ = ["MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "ensemble", "run_batch", "sample_restitution",
-           "sample_seed"]
+__all__ = ["MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "ensemble", "run_batch", "sample_collision",
+           "sample_restitution", "sample_seed"]
 
 MAX_SAMPLES = 10_000_000
 _SCHEMA = "wavecontact.ensemble"
@@ -61,6 +61,9 @@ class EnsembleSpec:
         Solver options (JSON values only).
     batch_size : int
         Samples per task, in [1, 100000].
+    energy_split : bool
+        Also keep each rod's vibrational energy gain per sample (delay
+        solver at finite kappa, modal, fem).
     """
 
     gamma: float
@@ -72,6 +75,7 @@ class EnsembleSpec:
     solver: str = "delay"
     options: dict = field(default_factory=dict)
     batch_size: int = 256
+    energy_split: bool = False
 
     def __post_init__(self):
         gamma, kappa = validate_gamma_kappa(self.gamma, self.kappa)
@@ -89,6 +93,10 @@ class EnsembleSpec:
         object.__setattr__(self, "seed", int(self.seed))
         if self.solver not in _SOLVERS:
             raise InvalidParameterError(f"solver must be one of {', '.join(_SOLVERS)}, got {self.solver!r}")
+        if self.energy_split and math.isinf(kappa):
+            raise InvalidParameterError(
+                "energy_split needs a finite kappa (the hard-core grid gives only the total); kappa >= 50 is "
+                "in the kappa-independent regime")
         try:
             json.dumps(self.options)
         except TypeError:
@@ -109,30 +117,46 @@ class EnsembleSpec:
         return out
 
 
-def sample_restitution(spec: EnsembleSpec, index: int) -> float:
-    """epsilon of sample ``index`` of ``spec`` (one collision)."""
+def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
+    """``(epsilon, (Delta E_1, Delta E_2))`` of sample ``index`` (the gains are zero unless ``spec.energy_split``)."""
     from ..api import solve
-    from ..bath.collide import thermal_scene
+    from ..bath.collide import thermal_scene, vibration_energy_gain
+    from ..bath.scene import start_gap
+    from ..contact import Hard
     from ..delay.stochastic_hardcore import hard_core_noise
 
     seed = sample_seed(spec.seed, index)
     if spec.solver == "delay" and math.isinf(spec.kappa):
-        # the hard-core mode without the scene and result objects around it
-        scene = thermal_scene(spec.gamma, math.inf, spec.bath, seed, contact="hard")
+        # the hard-core mode without the scene and result objects around it (same draw, same gap)
+        lengths = (0.5 * (1.0 + spec.gamma), 0.5 * (1.0 + spec.gamma) / spec.gamma)
+        vibrations = spec.bath.draw(lengths, seed)
         resolution = int(spec.options.get("hard_core_resolution", 8))
-        _t, w = hard_core_noise(spec.gamma, scene.vibrations, float(scene.gaps[0]), resolution)
-        return float(w[-1] - 1.0)
+        _t, w = hard_core_noise(spec.gamma, vibrations, start_gap(vibrations, Hard()), resolution)
+        return float(w[-1] - 1.0), (0.0, 0.0)
     scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, seed)
     options = dict(spec.options)
     if spec.solver == "delay":
-        options.setdefault("energy_split", False)
-    return float(solve(scene, spec.solver, **options).restitution)
+        options.setdefault("energy_split", spec.energy_split)
+    result = solve(scene, spec.solver, **options)
+    gain = (0.0, 0.0)
+    if spec.energy_split:
+        gain = tuple(float(x) for x in vibration_energy_gain(result, scene))
+    return float(result.restitution), gain
+
+
+def sample_restitution(spec: EnsembleSpec, index: int) -> float:
+    """epsilon of sample ``index`` of ``spec`` (one collision)."""
+    return sample_collision(spec, index)[0]
 
 
 def run_batch(spec_fields: dict, start: int, stop: int) -> tuple:
-    """Samples ``start .. stop - 1`` (a task: plain arguments, plain results)."""
+    """Samples ``start .. stop - 1`` (a task: plain arguments, plain results).
+
+    Returns ``(start, epsilon (n,), gains (n, 2))``.
+    """
     spec = EnsembleSpec(**spec_fields)
-    return start, np.array([sample_restitution(spec, j) for j in range(start, stop)])
+    pairs = [sample_collision(spec, j) for j in range(start, stop)]
+    return start, np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs], dtype=float).reshape(-1, 2)
 
 
 @dataclass
@@ -144,10 +168,25 @@ class EnsembleResult:
     spec : EnsembleSpec
     restitution : ndarray
         epsilon of every sample, in sample order.
+    vibration_energy_gain : ndarray (n, 2)
+        Each rod's vibrational gain per sample (units with ``E_tr = 1/4``;
+        zeros unless ``spec.energy_split``).
     """
 
     spec: EnsembleSpec
     restitution: np.ndarray
+    vibration_energy_gain: np.ndarray | None = None
+
+    @property
+    def rod1_share(self) -> float:
+        """Share of the lost translational energy that went into rod 1's vibrations,
+        ``sum Delta E_1 / sum (Delta E_1 + Delta E_2)`` over the samples (ratio of means)."""
+        if not self.spec.energy_split:
+            raise InvalidParameterError("rod1_share needs an ensemble run with energy_split=True")
+        total = float(np.sum(self.vibration_energy_gain))
+        if total == 0.0:
+            raise InvalidParameterError("the samples lost no translational energy on balance: rod1_share is undefined")
+        return float(np.sum(self.vibration_energy_gain[:, 0])) / total
 
     @property
     def mean(self) -> float:
@@ -206,6 +245,17 @@ class EnsembleResult:
         band = math.sqrt(math.log(2.0 / (1.0 - confidence)) / (2.0 * n))
         return x, d, np.clip(d - band, 0.0, 1.0), np.clip(d + band, 0.0, 1.0)
 
+    def save(self, out) -> Path:
+        """Write ``samples.npz`` (every epsilon, in sample order) and ``summary.json`` into ``out``."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        _atomic_savez(out / "samples.npz", restitution=self.restitution,
+                      vibration_energy_gain=self.vibration_energy_gain)
+        tmp = out / "summary.json.part"
+        tmp.write_text(json.dumps(self.summary(), indent=1))
+        os.replace(tmp, out / "summary.json")
+        return out
+
     def summary(self) -> dict:
         spec = self.spec
         return {
@@ -262,11 +312,15 @@ def _prepare_output(out, spec: EnsembleSpec) -> dict:
     for start, stop in spec.batches():
         batch = _batch_path(out, start)
         if batch.exists():
-            with np.load(batch, allow_pickle=False) as data:
-                values = np.asarray(data["restitution"])
-            if values.shape != (stop - start,):
+            try:
+                with np.load(batch, allow_pickle=False) as data:
+                    values = np.asarray(data["restitution"], dtype=float)
+                    gains = np.asarray(data["vibration_energy_gain"], dtype=float)
+            except (OSError, ValueError, KeyError):
+                raise InvalidParameterError(f"{batch} is not a finished batch; delete it to recompute that batch") from None
+            if values.shape != (stop - start,) or gains.shape != (stop - start, 2):
                 raise InvalidParameterError(f"{batch} has the wrong size; delete it to recompute that batch")
-            done[start] = values
+            done[start] = (values, gains)
     return done
 
 
@@ -282,7 +336,7 @@ def _executor_for(executor):
 
 
 def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", bath_modes=250, executor=None,
-             batch_size=256, out=None, progress=False, **options) -> EnsembleResult:
+             batch_size=256, out=None, progress=False, energy_split=False, **options) -> EnsembleResult:
     """Collide ``samples`` independent realisations of the thermal bath.
 
     Parameters
@@ -308,6 +362,8 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         Directory for the description and the finished batches (resume).
     progress : bool
         Show a progress bar (tqdm) on stderr.
+    energy_split : bool
+        Keep each rod's vibrational gain per sample (finite kappa only).
     **options
         Solver options (e.g. ``rtol=1e-6``).
 
@@ -315,7 +371,8 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
     -------
     EnsembleResult
     """
-    spec = EnsembleSpec(gamma, kappa, bath_temperature, samples, seed, bath_modes, solver, dict(options), batch_size)
+    spec = EnsembleSpec(gamma, kappa, bath_temperature, samples, seed, bath_modes, solver, dict(options), batch_size,
+                        energy_split)
     done = {} if out is None else _prepare_output(out, spec)
     todo = [(a, b) for a, b in spec.batches() if a not in done]
     fields = asdict(spec)
@@ -324,10 +381,10 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
     bar = tqdm(total=spec.samples, initial=spec.samples - sum(b - a for a, b in todo), disable=not progress,
                unit="sample", desc="ensemble")
 
-    def finish(start, values):
-        done[start] = values
+    def finish(start, values, gains):
+        done[start] = (values, gains)
         if out is not None:
-            _atomic_savez(_batch_path(Path(out), start), restitution=values)
+            _atomic_savez(_batch_path(Path(out), start), restitution=values, vibration_energy_gain=gains)
         bar.update(values.size)
 
     pool = _executor_for(executor)
@@ -350,5 +407,6 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         raise InvalidParameterError(f"ensemble could not reach its workers: {exc}") from None
     finally:
         bar.close()
-    values = np.concatenate([done[a] for a, _b in spec.batches()])
-    return EnsembleResult(spec, values)
+    values = np.concatenate([done[a][0] for a, _b in spec.batches()])
+    gains = np.concatenate([done[a][1] for a, _b in spec.batches()])
+    return EnsembleResult(spec, values, gains)
