@@ -74,8 +74,7 @@ def _errors(gamma, kappa, counts, correction):
 @pytest.mark.parametrize("gamma", [0.2, 0.6, 0.95])
 def test_convergence_in_the_number_of_modes(gamma):
     """Log-log fits over N = 10 ... 80 at kappa = 20: plain truncation like 1/N, the static correction
-    like N^-3 (the first neglected term of the omitted modes' response, sum nu^-4; measured 2.4-3.0 over
-    gamma = 0.2 ... 0.95); the end-response correction does not depend on N at all for rods that start
+    like N^-3 (the first neglected term of the omitted modes' response, sum nu^-4); the end-response correction does not depend on N at all for rods that start
     at rest (every mode is in the end response; the kept ones only ride along)."""
     counts = np.array([10, 20, 40, 80])
     plain = _errors(gamma, 20, counts, "none")
