@@ -72,7 +72,8 @@ def methods_for(quick):
     for correction in (True, False):
         name = "static correction" if correction else "plain truncation"
         families.append([
-            Method("modal", {"modes": n, "static_correction": correction}, f"{n} modes, {name}", "modes")
+            Method("modal", {"modes": n, "static_correction": correction, "correction": "static" if correction
+                             else "none"}, f"{n} modes, {name}", "modes")
             for n in modes
         ])
     return families

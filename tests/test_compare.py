@@ -13,9 +13,9 @@ SMALL = [
     Method("delay", {"rtol": 1e-9}),
     Method("fem", {"elements": 50, "order": 1, "mass": "lumped"}, work_unit="element_steps"),
     Method("fem", {"elements": 200, "order": 1, "mass": "lumped"}, work_unit="element_steps"),
-    Method("modal", {"modes": 20, "static_correction": True}),
-    Method("modal", {"modes": 80, "static_correction": True}),
-    Method("modal", {"modes": 80, "static_correction": False}),
+    Method("modal", {"modes": 20, "correction": "static"}),
+    Method("modal", {"modes": 80, "correction": "static"}),
+    Method("modal", {"modes": 80, "correction": "none", "static_correction": False}),
 ]
 
 
@@ -34,7 +34,7 @@ def test_every_solver_agrees_with_the_reference(table):
     by_label = {(row.solver, row.resolution): row for row in table.rows}
     assert by_label[("delay", "rtol=1e-09")].error < 1e-10
     assert by_label[("fem", "elements=200, order=1, mass=lumped")].error < 1e-4
-    assert by_label[("modal", "modes=80, static_correction=True")].error < 1e-4
+    assert by_label[("modal", "modes=80, correction=static")].error < 1e-4
 
 
 def test_errors_shrink_with_resolution(table):

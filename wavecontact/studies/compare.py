@@ -108,11 +108,11 @@ def default_methods(kappa: float) -> list:
                 Method("fem", {"elements": elements, "order": order, "mass": mass},
                        f"P{order} {mass}, {elements} elements", "element_steps")
             )
-    for correction in (True, False):
+    names = {"end-response": "end-response correction", "static": "static correction", "none": "plain truncation"}
+    for correction, name in names.items():
         for modes in (25, 100):
-            name = "static correction" if correction else "plain truncation"
             methods.append(
-                Method("modal", {"modes": modes, "static_correction": correction},
+                Method("modal", {"modes": modes, "correction": correction, "static_correction": correction != "none"},
                        f"{modes} modes, {name}", "steps")
             )
     return methods
