@@ -19,7 +19,7 @@ import os
 from itertools import chain
 from pathlib import Path
 
-__all__ = ["NUMBA_ENABLED", "kernel", "prepared_kernel_count", "refresh_kernel_cache"]
+__all__ = ["NUMBA_ENABLED", "kernel", "kernel_digest", "prepared_kernel_count", "refresh_kernel_cache"]
 
 _STAMP_NAME = "wavecontact-sources.sha1"
 
@@ -41,6 +41,23 @@ def _sources_digest(root: Path) -> str:
     for path in sorted(root.rglob("*.py")):
         digest.update(path.relative_to(root).as_posix().encode())
         digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def kernel_digest() -> str:
+    """SHA-256 of the source of every module of the package that defines a compiled kernel.
+
+    Two builds with the same digest run the same kernels, so a checkpoint
+    written by one resumes bit for bit in the other; a different digest means
+    the arithmetic may differ (:mod:`wavecontact.io.checkpoint` refuses it).
+    """
+    root = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        text = path.read_bytes()
+        if b"@kernel" in text and path.name != "_jit.py":
+            digest.update(path.relative_to(root).as_posix().encode())
+            digest.update(text)
     return digest.hexdigest()
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 __all__ = [
+    "CheckpointError",
     "InvalidParameterError",
     "SolverFailure",
     "UnsupportedSceneError",
@@ -28,6 +29,10 @@ class InvalidParameterError(WavecontactError, ValueError):
 
 class UnsupportedSceneError(WavecontactError, ValueError):
     """The scene is valid but the chosen solver cannot model it."""
+
+
+class CheckpointError(InvalidParameterError):
+    """A checkpoint file failed a check (readable, schema, checksum, build, parameters)."""
 
 
 class SolverFailure(WavecontactError, RuntimeError):

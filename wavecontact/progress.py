@@ -1,0 +1,64 @@
+"""Progress reporting for long runs: one object, a tqdm bar on stderr or nothing."""
+
+from __future__ import annotations
+
+import sys
+
+__all__ = ["Progress"]
+
+
+class Progress:
+    """A progress bar that studies update without knowing whether one is shown.
+
+    Parameters
+    ----------
+    total : int
+        Number of units of work (collisions, runs, samples).
+    description : str
+        Label shown before the bar.
+    unit : str
+        Name of one unit.
+    enabled : bool or None
+        Show a tqdm bar on stderr; ``None`` shows it when stderr is a terminal.
+    initial : int
+        Units already done (a resumed run).
+
+    Examples
+    --------
+    >>> with Progress(3, "demo", enabled=False) as progress:
+    ...     for _ in range(3):
+    ...         progress.advance()
+    >>> progress.done
+    3
+    """
+
+    def __init__(self, total: int, description: str, unit: str = "it", enabled: bool | None = None,
+                 initial: int = 0):
+        self.total = int(total)
+        self.done = int(initial)
+        if enabled is None:
+            enabled = sys.stderr.isatty()
+        self._bar = None
+        if enabled:
+            from tqdm.auto import tqdm
+
+            self._bar = tqdm(total=self.total, initial=self.done, desc=description, unit=unit,
+                             file=sys.stderr, dynamic_ncols=True, leave=False)
+
+    def advance(self, count: int = 1) -> None:
+        """Record ``count`` more units of work."""
+        self.done += int(count)
+        if self._bar is not None:
+            self._bar.update(int(count))
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
