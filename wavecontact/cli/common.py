@@ -44,3 +44,61 @@ def add_ring_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     parser.add_argument("--no-static-correction", dest="static_correction", action="store_false",
                         help="plain modal truncation (no residual flexibility)")
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Help that states every option's default (``--json`` flags and required options have none)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or action.required
+            or default is None
+            or default is argparse.SUPPRESS
+            or isinstance(default, bool)
+            or not action.option_strings
+        ):
+            return text
+        if isinstance(default, (list, tuple)):
+            default = " ".join(map(str, default))
+        return f"{text} (default: {default})"
+
+
+def solver_defaults(solver: str) -> dict:
+    """The default of every option of ``solver``, read from the solver itself (never restated here)."""
+    from ..solvers import get_solver
+
+    return dict(get_solver(solver).OPTIONS)
+
+
+def default_note(solver: str, name: str) -> str:
+    """``(default: X)`` for a solver option whose CLI default is "the solver's"."""
+    value = solver_defaults(solver)[name]
+    if isinstance(value, bool):
+        value = "on" if value else "off"
+    return f"(default: {value:g})" if isinstance(value, float) else f"(default: {value})"
+
+
+def report_written(paths) -> list:
+    """List files written on stderr, one line each; return them as strings (for JSON output)."""
+    import sys
+
+    names = [str(p) for p in paths]
+    for name in names:
+        print(f"wavecontact: wrote {name}", file=sys.stderr)
+    return names
+
+
+def contact_law(kappa: float, contact: str | None) -> str:
+    """The contact law to use; refuse combinations whose printed kappa would not be the one computed."""
+    if contact is None:
+        return "hard" if math.isinf(kappa) else "exponential"
+    if math.isinf(kappa) and contact != "hard":
+        raise ValueError(f"--contact {contact} needs a finite --kappa; --kappa inf is the hard-core limit "
+                         "(use --contact hard or leave --contact out)")
+    if contact == "hard" and math.isfinite(kappa):
+        raise ValueError(f"--contact hard is the limit kappa -> inf; --kappa {kappa:g} would not be used "
+                         "(pass --kappa inf)")
+    return contact
