@@ -5,21 +5,20 @@ from __future__ import annotations
 import json
 import math
 
-from .common import contact_law, default_note, gamma_value, kappa_value, positive_int, report_written
+from .common import (
+    contact_law,
+    default_note,
+    gamma_value,
+    kappa_value,
+    number_type,
+    positive_int,
+    report_written,
+)
 
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
-def _positive_float(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a finite positive number, got {text!r}")
-    return value
+_positive_float = number_type(lambda v: math.isfinite(v) and v > 0, "a finite positive number")
 
 
 def add_parser(subparsers):

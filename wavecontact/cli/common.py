@@ -81,6 +81,30 @@ def default_note(solver: str, name: str) -> str:
     return f"(default: {value:g})" if isinstance(value, float) else f"(default: {value})"
 
 
+def print_outcome(record: dict, text: str, written, as_json: bool) -> int:
+    """List the files ``written`` on stderr, then print ``record`` (with them) as JSON or ``text``."""
+    import json
+
+    files = report_written(written)
+    print(json.dumps({**record, "files_written": files}) if as_json else text)
+    return 0
+
+
+def number_type(accept, requirement: str):
+    """An argparse type: a float for which ``accept(value)`` holds, else "``requirement``, got ..."."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {requirement}, got {text!r}") from None
+        if not accept(value):
+            raise argparse.ArgumentTypeError(f"expected {requirement}, got {text!r}")
+        return value
+
+    return parse
+
+
 def report_written(paths) -> list:
     """List files written on stderr, one line each; return them as strings (for JSON output)."""
     import sys

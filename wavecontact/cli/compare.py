@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import json
-
-from .common import gamma_value, kappa_value, positive_int, report_written
+from .common import gamma_value, kappa_value, positive_int, print_outcome
 
 
 def add_parser(subparsers):
@@ -42,11 +40,4 @@ def run(args) -> int:
         from ..plotting.compare import plot_comparison
 
         written.append(plot_comparison(table, args.plot))
-    files = report_written(written)
-    if args.json:
-        record = table.to_dict()
-        record["files_written"] = files
-        print(json.dumps(record))
-    else:
-        print(table.format())
-    return 0
+    return print_outcome(table.to_dict(), table.format(), written, args.json)

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import json
-
-from .common import contact_law, gamma_value, kappa_value, positive_int, report_written
+from .common import contact_law, gamma_value, kappa_value, positive_int, print_outcome
 
 
 def add_parser(subparsers):
@@ -102,11 +100,4 @@ def run(args) -> int:
         from ..plotting.convergence import plot_convergence
 
         written.append(plot_convergence(table, args.plot))
-    files = report_written(written)
-    if args.json:
-        record = table.to_dict()
-        record["files_written"] = files
-        print(json.dumps(record))
-    else:
-        print(table.format_text())
-    return 0
+    return print_outcome(table.to_dict(), table.format_text(), written, args.json)

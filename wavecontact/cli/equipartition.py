@@ -6,23 +6,14 @@ import json
 import math
 from pathlib import Path
 
-from .common import add_ring_options, gamma_value, kappa_value, positive_int, report_written
+from .common import add_ring_options, gamma_value, kappa_value, number_type, positive_int, report_written
 
 ENTROPY_NAME = "entropy.csv"
 SUMMARY_NAME = "equipartition.json"
 FIGURE_NAME = "fig2_equipartition_vs_modes.png"
 
 
-def _threshold(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"threshold must be a number > 1, got {text!r}") from None
-    if not (math.isfinite(value) and value > 1.0):
-        raise argparse.ArgumentTypeError(f"threshold must be a finite number > 1, got {text!r}")
-    return value
+_threshold = number_type(lambda v: math.isfinite(v) and v > 1.0, "a finite number > 1")
 
 
 def add_parser(subparsers):
