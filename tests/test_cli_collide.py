@@ -113,3 +113,16 @@ def test_the_step_limit_the_solver_advises_to_raise_is_an_option(capsys):
     assert main(["collide", "--gamma", "0.6", "--kappa", "1", "--max-steps", "3"]) == 2
     err = capsys.readouterr().err
     assert "max_steps" in err and "Traceback" not in err
+
+
+def test_fields_are_written_with_units_and_listed(tmp_path, capsys):
+    from wavecontact.io.fields import read_fields
+
+    out = tmp_path / "fields"
+    assert main(["collide", "--solver", "fem", "--gamma", "0.6", "--kappa", "20", "--elements", "20",
+                 "--fields", str(out), "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["files_written"][0] == str(out / "fields.pvd")
+    assert len(record["files_written"]) == 1 + len(read_fields(out)["time"])
+    back = read_fields(out)
+    assert back["units"]["stress"] == "rho c V" and back["parameters"]["gamma"] == 0.6

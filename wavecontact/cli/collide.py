@@ -57,9 +57,8 @@ def add_parser(subparsers):
     fem.add_argument("--order", type=int, choices=ELEMENT_ORDERS,
                      help=f"Lagrange element order {default_note('fem', 'order')}")
     fem.add_argument("--mass", choices=MASS_KINDS, help=f"mass matrix {default_note('fem', 'mass')}")
-    fem.add_argument("--fields", metavar="DIR", help="write stress/velocity fields for ParaView into DIR")
-    fem.add_argument("--fields-format", choices=("vtu", "xdmf"), default="vtu",
-                     help="VTU files with a PVD index, or one XDMF file with its data in HDF5")
+    fem.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress for ParaView into DIR (fields.pvd and one "
+                     "VTU file per sample; units and parameters in each file's field data)")
     fem.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
     modal = p.add_argument_group("modal solver")
     modal.add_argument("--modes", type=positive_int, metavar="N", help=f"modes per rod {default_note('modal', 'modes')}")
@@ -141,7 +140,7 @@ def run(args) -> int:
     if args.fields:
         from ..io.fields import write_fields
 
-        written += write_fields(result, args.fields, format=args.fields_format).files
+        written += write_fields(result, args.fields, units="dimensionless").files
     if args.xt_plot:
         from ..plotting.xt import plot_xt_diagram
 
