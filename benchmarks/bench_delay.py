@@ -27,7 +27,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from timing import median_time
 
 import wavecontact
-from wavecontact.solvers.delay import solve_delay_equation
+from wavecontact.delay.solver import solve_delay_equation
 from wavecontact.studies.sweep import restitution_map
 
 TARGET = 1e-9

@@ -31,7 +31,7 @@ import modal_solve_ivp
 import wavecontact
 from wavecontact.modal import RingSimulation
 from wavecontact.scene import two_rods
-from wavecontact.solvers import modal as modal_solver
+from wavecontact.modal import solver as modal_solver
 
 GAMMA = 0.6173
 MODES = 75

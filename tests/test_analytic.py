@@ -19,7 +19,7 @@ from wavecontact.analytic import (
     noise_covariance,
     two_material_impact,
 )
-from wavecontact.solvers.delay import solve_delay_equation
+from wavecontact.delay.solver import solve_delay_equation
 
 
 def test_hard_core_restitution_is_the_length_ratio():

@@ -7,6 +7,7 @@ import sys
 import pytest
 
 from wavecontact.cli import main
+from wavecontact.result import CollisionResult
 
 MODEL_KAPPA_100 = 0.646697087
 
@@ -41,13 +42,12 @@ def test_plot_writes_a_png(tmp_path, capsys):
 
 
 def test_save_writes_histories(tmp_path):
-    import numpy as np
 
     path = tmp_path / "run.npz"
     assert main(["collide", "--gamma", "0.6", "--kappa", "20", "--save", str(path)]) == 0
-    data = np.load(path)
-    assert data["relative_velocity"][0] == pytest.approx(-1.0)
-    assert json.loads(str(data["summary"]))["solver"] == "delay"
+    loaded = CollisionResult.load_npz(path)
+    assert loaded.relative_velocity[0] == pytest.approx(-1.0)
+    assert loaded.solver == "delay" and loaded.gamma == 0.6 and loaded.kappa == 20
 
 
 @pytest.mark.parametrize(

@@ -309,12 +309,12 @@ def test_default_reference_is_the_delay_solver_and_matches_model_md():
     assert reference_restitution(0.6, math.inf)[0] == 0.6
 
 
-FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
+FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.fem.solver") is not None
 
 
 @pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")
 def test_real_study_p1_lumped_converges_at_its_declared_order():
-    from wavecontact.solvers import fem
+    from wavecontact.fem import solver as fem
 
     # the solver declares its expected order per discretization; second order is the theory
     # of central differences on lumped P1 when the contact is resolved

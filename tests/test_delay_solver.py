@@ -10,8 +10,8 @@ from scipy.integrate import solve_ivp
 import wavecontact
 from wavecontact.analytic import asymptotic_restitution
 from wavecontact.delay.noise import FourierNoise
+from wavecontact.delay.solver import ORDER, solve_delay_equation
 from wavecontact.errors import InvalidParameterError, UnsupportedSceneError
-from wavecontact.solvers.delay import ORDER, solve_delay_equation
 
 # MODEL.md section 5 (computed independently), gamma = 0.6
 MODEL_REFERENCE = {5: 0.93176899, 100: 0.646697087, 250: 0.622343998, 1000: 0.606972294, 10000: 0.600927488}
@@ -201,7 +201,7 @@ def test_scenes_outside_the_delay_equation_are_refused():
 def test_comb_sums_agree_with_every_copy(monkeypatch, gamma, kappa):
     """Soft contacts sum old delayed copies through running comb sums; the
     result must equal the one that interpolates every copy on its own."""
-    from wavecontact.solvers import delay
+    from wavecontact.delay import solver as delay
 
     with_comb = wavecontact.collide(gamma, kappa, rtol=1e-10).restitution
     monkeypatch.setattr(delay, "COMB_BELOW_KAPPA", 0.0)

@@ -9,7 +9,7 @@ import pytest
 
 import wavecontact as wc
 from wavecontact import Exponential, Hard, Rod, Scene
-from wavecontact.solvers.fem import EXPECTED_ORDER
+from wavecontact.fem.solver import EXPECTED_ORDER
 
 
 def delay_reference(gamma, kappa):

@@ -263,7 +263,7 @@ def test_elements_of_any_order_become_sorted_two_node_segments():
     np.testing.assert_array_equal(segments, [[0, 3], [3, 1], [1, 4], [4, 2]])
 
 
-FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.solvers.fem") is not None
+FEM_IMPORTABLE = importlib.util.find_spec("wavecontact.fem.solver") is not None
 
 
 @pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")

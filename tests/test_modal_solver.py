@@ -146,7 +146,7 @@ def test_penalty_contact_with_a_given_stiffness():
         (two_rods(0.6, math.inf), {"static_correction": False}, "static_correction"),
         (two_rods(0.6, 100, contact=Penalty()), {}, "penalty stiffness"),
         (Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(0.5, -0.5), contact=Hard(), ring_circumference=5.0),
-         {}, "RingSimulation"),
+         {}, "simulate"),
         (Scene(rods=(Rod(1.0),) * 3, velocities=(1.0, 0.0, -1.0), contact=Hard()), {}, "two rods"),
         (Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(-0.5, 0.5), contact=Hard()), {}, "approach"),
     ],

@@ -13,13 +13,16 @@ import math
 
 import numpy as np
 
+from .errors import InvalidParameterError, require_positive
 from .scene import validate_gamma_kappa
 
 __all__ = [
+    "ENTROPY_CONSTANT",
     "asymptotic_restitution",
     "asymptotic_velocity_increase",
     "boltzmann_density",
     "equilibrium_spectral_entropy",
+    "equilibrium_spectral_entropy_finite",
     "equilibrium_translational_energy",
     "force_plateau",
     "hard_core_contact_duration",
@@ -191,9 +194,29 @@ def noise_covariance(tau, gamma: float, kappa: float, bath_temperature: float, t
 
 
 def equilibrium_translational_energy(modes: int, reduced_mass: float = 0.5, approach_speed: float = 1.0) -> float:
-    """Eq. 8: mean translational energy ``mu V^2 / (2 (2 N_mod + 1))`` after
-    equipartition over ``2 N_mod`` modes and the relative motion."""
-    return reduced_mass * approach_speed**2 / (2.0 * (2 * modes + 1))
+    """Mean translational energy at equipartition, Eq. 8.
+
+    ``<E_tr> = mu V^2 / (2 (2 N + 1))``: the initial energy ``mu V^2 / 2``
+    shared equally among the relative motion and the ``2 N`` oscillators.
+
+    Parameters
+    ----------
+    modes : int
+        Modes per rod ``N`` (>= 1).
+    reduced_mass : float
+        ``mu`` (mass); ``1/2`` in the units of ``two_rods``.
+    approach_speed : float
+        Initial approach speed ``V`` (velocity); 1 in those units.
+
+    Returns
+    -------
+    float
+        Energy (units of ``mu V^2`` when ``mu = V = 1``).
+    """
+    n = _require_modes(modes)
+    mu = require_positive("reduced_mass", reduced_mass)
+    v = require_positive("approach_speed", approach_speed)
+    return mu * v * v / (2.0 * (2 * n + 1))
 
 
 def boltzmann_density(energy, mean_energy: float):
@@ -202,6 +225,46 @@ def boltzmann_density(energy, mean_energy: float):
     return np.where(energy >= 0, np.exp(-energy / mean_energy) / mean_energy, 0.0)
 
 
+#: ``1 - Euler's gamma``: the mean of ``x ln x`` for an exponential variable of mean 1, where
+#: the paper's 0.423 in Eq. 11 comes from.
+ENTROPY_CONSTANT = 1.0 - 0.5772156649015329
+
+
 def equilibrium_spectral_entropy(modes: int) -> float:
-    """Eq. 11: mean normalized spectral entropy ``0.423 / ln(2 N_mod)`` at equipartition."""
-    return 0.423 / math.log(2 * modes)
+    """Mean normalised spectral entropy at equipartition, Eq. 11: ``0.423 / ln(2 N)``.
+
+    ``0.423 = 1 - C_Euler`` is the large-``N`` value for modal energies that
+    are independent and exponentially (Boltzmann) distributed.
+
+    Parameters
+    ----------
+    modes : int
+        Modes per rod ``N`` (>= 1).
+    """
+    n = _require_modes(modes)
+    return 0.423 / math.log(2 * n)
+
+
+def equilibrium_spectral_entropy_finite(modes: int) -> float:
+    """Exact mean of ``eta`` for ``2 N`` independent exponential modal energies.
+
+    Then ``w`` is uniform on the simplex and the mean of ``h`` is
+    ``psi(2N + 1) - psi(2) = H_(2N) - 1`` (``psi`` the digamma function,
+    ``H`` the harmonic number), so ``<eta> = 1 - (H_(2N) - 1) / ln(2N)
+    = (1 - C_Euler - 1/(4N) + O(N^-2)) / ln(2N)``; Eq. 11 is its leading term.
+
+    Parameters
+    ----------
+    modes : int
+        Modes per rod ``N`` (>= 1).
+    """
+    from scipy.special import digamma
+
+    n = _require_modes(modes)
+    return 1.0 - float(digamma(2 * n + 1) - digamma(2)) / math.log(2 * n)
+
+
+def _require_modes(modes) -> int:
+    if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or modes < 1:
+        raise InvalidParameterError(f"modes must be an integer >= 1, got {modes!r}")
+    return int(modes)

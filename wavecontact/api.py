@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from ._jit import prepared_kernel_count
 from .contact import ContactLaw
 from .errors import InvalidParameterError
 from .result import CollisionResult
 from .scene import Scene, two_rods
 from .solvers import get_solver
-from .solvers.base import Stopwatch, check_options
 
 __all__ = ["collide", "solve"]
 
@@ -23,7 +21,8 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
     solver : {'delay', 'fem', 'modal'}
         How to simulate it.
     **options
-        Solver options; unknown names are refused (see each solver's ``OPTIONS``).
+        Solver options; unknown names are refused (each solver's ``Options``
+        dataclass lists them: ``get_solver(name).Options``).
 
     Returns
     -------
@@ -32,15 +31,7 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
         ``diagnostics["includes_kernel_preparation"]`` True when numba compiled or
         loaded kernels during it (a first call: that time is not the solver's cost).
     """
-    module = get_solver(solver)
-    merged = check_options(solver, module.OPTIONS, options)
-    prepared = prepared_kernel_count()
-    with Stopwatch() as watch:
-        result = module.solve(scene, **merged)
-    result.wall_time_s = watch.seconds
-    # numba compiled or loaded kernels during this call: its wall time is not the solver's cost
-    result.diagnostics["includes_kernel_preparation"] = prepared_kernel_count() > prepared
-    return result
+    return get_solver(solver).solve(scene, options)
 
 
 def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="exponential", **options) -> CollisionResult:

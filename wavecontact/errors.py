@@ -37,7 +37,15 @@ class CheckpointError(InvalidParameterError):
 
 class SolverFailure(WavecontactError, RuntimeError):
     """A solver detected that its result would be wrong (energy drift,
-    unresolved contact, non-finite state) and refuses to return it."""
+    unresolved contact, non-finite state) and refuses to return it.
+
+    ``outcome`` is the :class:`wavecontact.result.Outcome` that says how the
+    solve ended (None where no single one applies).
+    """
+
+    def __init__(self, message: str, outcome=None):
+        super().__init__(message)
+        self.outcome = outcome
 
 
 def require_finite(name: str, value) -> float:

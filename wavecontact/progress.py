@@ -43,7 +43,7 @@ class Progress:
             from tqdm.auto import tqdm
 
             self._bar = tqdm(total=self.total, initial=self.done, desc=description, unit=unit,
-                             file=sys.stderr, dynamic_ncols=True, leave=False)
+                             file=sys.stderr, dynamic_ncols=True)
 
     def advance(self, count: int = 1) -> None:
         """Record ``count`` more units of work."""

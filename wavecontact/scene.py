@@ -17,7 +17,7 @@ import numpy as np
 from .contact import ContactLaw, Exponential, Hard, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_positive
 
-__all__ = ["Rod", "Scene", "TwoRodParameters", "two_rod_parameters", "two_rods"]
+__all__ = ["Rod", "Scene", "TwoRodParameters", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
 
 FieldFunction = Callable[[np.ndarray], np.ndarray]
 
@@ -284,12 +284,44 @@ def two_rods(
     )
 
 
+def two_rods_on_a_ring(gamma: float, kappa: float, circumference: float | None = None) -> Scene:
+    """The paper's two rods on a ring (Sec. III), started maximally far apart with a cold bath.
+
+    Units and contact law as :func:`two_rods`.  Going round the ring, rod 1's
+    right end faces rod 2's left end (the *near* pair, gap ``gaps[0]``) and
+    rod 2's right end faces rod 1's left end across the seam (the *far* pair,
+    ``gaps[1]``); both gaps are equal.
+
+    Parameters
+    ----------
+    gamma, kappa : float
+        As :func:`two_rods`.
+    circumference : float or None
+        Ring circumference ``L`` (in ``l``); default: the two rods plus two free
+        stretches, each at least 1 and at least ``100 / kappa`` long, so that the
+        rods start out of range of the force.
+    """
+    line = two_rods(gamma, kappa)
+    rod1, rod2 = line.rods
+    total = rod1.length + rod2.length
+    if circumference is None:
+        k = line.metadata["two_rods"].kappa
+        free = max(1.0, 100.0 / k) if math.isfinite(k) else 1.0
+        circumference = total + 2.0 * free
+    circumference = require_positive("circumference", circumference)
+    if circumference <= total:
+        raise InvalidParameterError(f"circumference must exceed l1 + l2 = {total:g}, got {circumference:g}")
+    gap = 0.5 * (circumference - total)
+    return Scene(rods=line.rods, velocities=line.velocities, contact=line.contact, gaps=(gap, gap),
+                 ring_circumference=circumference, metadata=dict(line.metadata))
+
+
 def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     """Recover ``(gamma, kappa, ...)`` of a two-rod scene on a line.
 
-    Works for scenes built by :func:`two_rods` and for any line scene of two
-    rods of one material; the contact law fixes ``kappa`` (``inf`` for hard
-    and penalty contact, which have no range).
+    Works for scenes built by :func:`two_rods` (or :func:`two_rods_on_a_ring`)
+    and for any line scene of two rods of one material; the contact law fixes
+    ``kappa`` (``inf`` for hard and penalty contact, which have no range).
     """
     if "two_rods" in scene.metadata:
         return scene.metadata["two_rods"]

@@ -1,7 +1,7 @@
 """Peer for the modal solver: the same modal equations handed to scipy's ``solve_ivp``.
 
 The rods, modes, residual compliance, contact law and starting gap are those
-of ``wavecontact.solvers.modal`` (built by its own set-up code), so the only
+of ``wavecontact.modal.solver`` (built by its own set-up code), so the only
 difference is the time integrator: a general-purpose one (DOP853 explicit
 Runge-Kutta or Radau implicit), which must follow every mode's oscillation
 and the contact at once, over the same time span, instead of rotating the
@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 
 from wavecontact.modal import kernels
 from wavecontact.scene import two_rods
-from wavecontact.solvers.modal import _build
+from wavecontact.modal.solver import _build
 
 __all__ = ["modal_equations", "restitution"]
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..contact import Exponential, Hard, Penalty
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..result import Outcome
 from ..scene import Scene
 from . import kernels
 from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
@@ -531,13 +532,14 @@ def run_collision(setup: FemSetup, energy_tolerance: float = 0.05, max_time=None
         if run.state[kernels.S_STEPS] >= max_steps:
             raise SolverFailure(
                 f"the rods did not separate within t = {max_time:.4g}; the contact may keep "
-                f"re-engaging (check the scene's velocities) or the run needs max_time"
+                f"re-engaging (check the scene's velocities) or the run needs max_time",
+                Outcome.TIME_LIMIT,
             )
         status, hist, energies = run.advance(_CHUNK)
         pieces_hist.append(hist)
         pieces_energy.append(energies)
     if status == kernels.STATUS_FAILED:
-        raise SolverFailure(_failure_message(run, setup))
+        raise SolverFailure(_failure_message(run, setup), Outcome.ENERGY_DRIFT)
     hist = [np.concatenate([p[i] for p in pieces_hist]) for i in range(4)]
     energies = [np.concatenate([p[i] for p in pieces_energy]) for i in range(6)]
     out = {
@@ -578,7 +580,7 @@ def _replay_fields(setup: FemSetup, energy_tolerance, times, force, samples: int
             status, _, _ = run.advance(int(target - done))
             done = target
             if status == kernels.STATUS_FAILED:
-                raise SolverFailure(_failure_message(run, setup))
+                raise SolverFailure(_failure_message(run, setup), Outcome.ENERGY_DRIFT)
         sample_times.append(run.state[kernels.S_TIME])
         for record, u, v, stress in zip(records, run.u, run.synchronized_velocities(), run.stresses()):
             record["displacement"].append(u.copy())

@@ -3,7 +3,7 @@
 :class:`ModalSystem` packs everything the compiled integrator needs into flat
 arrays once, and offers the bookkeeping around it (energies, modal energies,
 state snapshots).  Both the single-collision solver
-(:mod:`wavecontact.solvers.modal`) and the ring (:mod:`.ring`) are built on it.
+(:mod:`wavecontact.modal.solver`) and the ring (:mod:`.ring`) are built on it.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 
 from ..contact import ContactLaw, Exponential, Hard, Penalty
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..result import Outcome
 from . import kernels
 
 __all__ = ["ModalSystem", "StepControl", "contact_parameters"]
@@ -187,11 +188,12 @@ class ModalSystem:
         if status == kernels.STATUS_STEP_UNDERFLOW:
             raise SolverFailure(
                 "modal integrator: the contact step fell below the smallest ladder step; the contact is "
-                "too stiff for this resolution (try more modes, static_correction=True or step_method='splitting')"
+                "too stiff for this resolution (try more modes, static_correction=True or step_method='splitting')",
+                Outcome.STEP_UNDERFLOW,
             )
         if status == kernels.STATUS_NOT_FINITE:
             raise SolverFailure("modal integrator: the contact force overflowed (overlap far beyond the "
-                                "force's range); reduce step_accuracy")
+                                "force's range); reduce step_accuracy", Outcome.NON_FINITE)
 
     # ------------------------------------------------------------- bookkeeping
     def gaps(self) -> np.ndarray:

@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..studies.ring import RingRun, RingStatistics, equilibrium_spectral_entropy
+from ..analytic import equilibrium_spectral_entropy
+from ..studies.ring import RingRun
+from ..studies.ring_statistics import RingStatistics
 
 __all__ = [
     "FIGURE_NAMES",

@@ -30,8 +30,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analytic import equilibrium_spectral_entropy, equilibrium_spectral_entropy_finite
 from ..errors import InvalidParameterError, require_positive
-from .ring import equilibrium_spectral_entropy, equilibrium_spectral_entropy_finite, spectral_entropy
+from ..progress import Progress
+from ..scene import two_rods_on_a_ring
+from ..solvers import get_solver
+from .ring_statistics import spectral_entropy
 
 __all__ = ["EquipartitionStudy", "equipartition_by_modes", "settling_collision"]
 
@@ -160,8 +164,6 @@ def equipartition_by_modes(
     """
     import time
 
-    from ..modal.ring import RingSimulation
-
     mode_counts = _mode_counts(modes)
     collisions = _count("collisions", collisions)
     realisations = _count("realisations", realisations)
@@ -170,29 +172,25 @@ def equipartition_by_modes(
         raise InvalidParameterError(f"threshold must exceed 1 (a multiple of the equilibrium mean), got {threshold!r}")
     study = EquipartitionStudy(float(gamma), float(kappa), threshold)
     started = time.perf_counter()
-    bar = _progress(len(mode_counts) * realisations * collisions, progress)
-    try:
+    engine = get_solver("modal")
+    base = two_rods_on_a_ring(gamma, kappa).ring_circumference
+    with Progress(len(mode_counts) * realisations * collisions, "equipartition", unit="collision",
+                  enabled=progress) as bar:
         for n in mode_counts:
-            base = None
+            options = engine.options({"modes": n, "static_correction": static_correction})
             series, lengths = [], []
             for r in range(realisations):
-                if base is None:
-                    simulation = RingSimulation(gamma, kappa, n, static_correction=static_correction)
-                    base = simulation.circumference
-                else:
-                    simulation = RingSimulation(gamma, kappa, n, static_correction=static_correction,
-                                                circumference=base * (1.0 + CIRCUMFERENCE_STEP * r))
+                scene = two_rods_on_a_ring(gamma, kappa, base * (1.0 + CIRCUMFERENCE_STEP * r))
+                simulation = engine.simulate(scene, options)
                 eta = np.empty(collisions)
                 for k in range(collisions):
                     record = simulation.next_collision()
-                    eta[k] = spectral_entropy(record["modal_energies"] / record["E_bath"])
-                    bar.update(1)
+                    eta[k] = spectral_entropy(record.modal_energies / record.bath_energy)
+                    bar.advance()
                 series.append(eta)
-                lengths.append(simulation.circumference)
+                lengths.append(scene.ring_circumference)
             study.entropy[n] = np.array(series)
             study.circumferences[n] = np.array(lengths)
-    finally:
-        bar.close()
     study.wall_time_s = time.perf_counter() - started
     return study
 
@@ -217,10 +215,3 @@ def _count(name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise InvalidParameterError(f"{name} must be an integer >= 1, got {value!r}")
     return int(value)
-
-
-def _progress(total: int, enabled: bool):
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, disable=not enabled, unit="collision", desc="equipartition", leave=False)
-

@@ -12,30 +12,52 @@ contact stiffness (docs/fem.md).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..fem.simulation import build_setup, run_collision
-from ..result import CollisionResult
-from ..scene import Scene, two_rod_parameters
+from ..scene import Scene
+from ..solvers.base import SolverBase, SolverOptions, option
+from .simulation import build_setup, run_collision
 
-NAME = "fem"
-OPTIONS = {
-    "elements": 800,
-    "order": 1,
-    "mass": "lumped",
-    "nodes": None,
-    "dt": None,
-    "courant": None,
-    "hard_scheme": "plastic",
-    "scheme": "auto",
-    "gap_quadrature": "substeps",
-    "record_fields": False,
-    "field_samples": 300,
-    "energy_tolerance": 0.05,
-    "max_time": None,
-}
+__all__ = ["EXPECTED_ORDER", "SOLVER", "FemOptions", "FemSolver"]
+
+
+def _nodes(value):
+    if not (isinstance(value, (tuple, list)) and len(value) == 2):
+        raise InvalidParameterError("fem option nodes must be a pair (rod 1 vertices, rod 2 vertices) or None")
+    return tuple(np.asarray(v, dtype=float) for v in value)
+
+
+@dataclass(frozen=True)
+class FemOptions(SolverOptions):
+    """Options of the finite-element solver (times in the scene's time units)."""
+
+    solver_name = "fem"
+    elements: int = option(800, "elements on the shorter rod (the other rod: same element travel time h/c)",
+                           kind="int", low=1, high=10**6)
+    order: int = option(1, "Lagrange order of the elements", kind="choice", choices=(1, 2))
+    mass: str = option("lumped", "mass matrix", kind="choice", choices=("lumped", "consistent"))
+    nodes: tuple | None = option(None, "element end points per rod (rod coordinate 0..length); overrides elements",
+                                 kind="object", allow_none=True, check=_nodes)
+    dt: float | None = option(None, "time step (time units), at most the stable step; None: chosen",
+                              low=0.0, allow_none=True)
+    courant: float | None = option(None, "fraction of the stable step when dt is None; None: chosen",
+                                   low=1e-6, high=1.0, allow_none=True)
+    hard_scheme: str = option("plastic", "end-node impact rule of hard contact in the 'splitting' scheme",
+                              kind="choice", choices=("plastic", "elastic"))
+    scheme: str = option("auto", "contact treatment (docs/fem.md)", kind="choice",
+                         choices=("auto", "characteristic", "force", "interface", "splitting"))
+    gap_quadrature: str = option("substeps", "integration of the gap equation inside a step",
+                                 kind="choice", choices=("substeps", "gauss"))
+    record_fields: bool = option(False, "sample displacement, velocity and stress fields (a second run)",
+                                 kind="bool")
+    field_samples: int = option(300, "number of field samples", kind="int", low=2, high=100_000)
+    energy_tolerance: float = option(0.05, "relative energy error that stops the run with SolverFailure",
+                                     low=1e-15, high=1e3)
+    max_time: float | None = option(None, "give up if the rods have not separated by then (time units)",
+                                    low=0.0, allow_none=True)
 
 # Convergence order of epsilon where the contact is resolved (alpha V h / c <= 1), per discretization
 # with scheme='auto': P1 lumped on matched meshes at Courant number 1 uses the characteristic
@@ -47,51 +69,31 @@ OPTIONS = {
 # fit with these.
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 2, (2, "lumped"): 2, (2, "consistent"): 2}
 
-_FORCE_THRESHOLD = 1e-2  # of the peak: contact start and end (as the delay solver)
+
+class FemSolver(SolverBase):
+    """Finite elements (scikit-fem) in space, explicit central differences in time."""
+
+    name = "fem"
+    Options = FemOptions
+    resolution = "elements"
+    refines = 1
+
+    def expected_order(self, options: FemOptions) -> float:
+        """Order of epsilon in ``h`` where the contact is resolved (:data:`EXPECTED_ORDER`)."""
+        return float(EXPECTED_ORDER[(options.order, options.mass)])
+
+    def _collide(self, scene: Scene, options: FemOptions) -> dict:
+        return _collide(scene, options.as_dict())
 
 
-def solve(scene: Scene, **options) -> CollisionResult:
-    """One collision of two rods with the finite-element solver.
-
-    Parameters
-    ----------
-    scene : Scene
-        Two rods on a line, any materials; cold or with initial fields.
-    elements : int
-        Elements on the shorter rod (the other rod: same element travel time ``h/c``).
-    order : {1, 2}
-        Lagrange order of the elements.
-    mass : {'lumped', 'consistent'}
-        Mass matrix.
-    nodes : pair of arrays or None
-        Element end points per rod (rod coordinate from 0 to its length); overrides ``elements``.
-    dt : float or None
-        Time step (time units); refused above the stable step ``2/sqrt(lambda_max(M^-1 K))``.
-    courant : float or None
-        Fraction of the stable step when ``dt`` is None (default: see :func:`build_setup`).
-    hard_scheme : {'plastic', 'elastic'}
-        End-node impact rule for hard contact in the 'splitting' scheme.
-    scheme : {'auto', 'characteristic', 'force', 'interface', 'splitting'}
-        Contact treatment (see :func:`wavecontact.fem.simulation.build_setup`).
-    gap_quadrature : {'substeps', 'gauss'}
-        Integration of the gap equation inside a step where the characteristic
-        scheme reconstructs the incoming rate (see :func:`build_setup`).
-    record_fields : bool
-        Sample displacement, velocity and stress fields over the collision
-        into ``result.extra['fields']`` (runs the collision a second time).
-    field_samples : int
-        Number of field samples (about 200-400 is plenty for a picture).
-    energy_tolerance : float
-        Relative energy error (of the energy in the centre-of-mass frame)
-        above which the run is stopped with :class:`~wavecontact.errors.SolverFailure`.
-    max_time : float or None
-        Give up (SolverFailure) if the rods have not separated by then.
+def _collide(scene: Scene, options: dict) -> dict:
+    """One collision of two rods with the finite-element solver (options: :class:`FemOptions`).
 
     Returns
     -------
-    CollisionResult
+    dict
+        The fields of the result (see :class:`wavecontact.solvers.base.SolverBase`).
     """
-    _check_options(options)
     setup = build_setup(
         scene,
         elements=options["elements"],
@@ -121,18 +123,12 @@ def solve(scene: Scene, **options) -> CollisionResult:
     relative_velocity = -approach + impulse * (1.0 / masses[0] + 1.0 / masses[1])
     restitution = abs(relative_velocity[-1]) / abs(approach)
     time = out["time"]
-    start, duration = _contact_window(time, force, setup.dt)
     total_energy = out["kinetic"] + out["strain"] + out["contact"]
     energy_drift = abs(total_energy[-1] - run.energy0) / run.energy_scale if total_energy.size else 0.0
     max_drift = float(np.max(np.abs(total_energy - run.energy0))) / run.energy_scale if total_energy.size else 0.0
     momentum_end = sum(float(d.lumped_mass @ v) for d, v in zip(setup.rods, run.v))
     momentum_drift = abs(momentum_end - run.momentum0) / abs(run.momentum_scale)
     elements = [d.n_elements for d in setup.rods]
-    try:
-        params = two_rod_parameters(scene)
-        gamma, kappa = params.gamma, params.kappa
-    except InvalidParameterError:
-        gamma = kappa = None
     extra = {
         "energies": {
             "time": out["energy_time"],
@@ -151,43 +147,22 @@ def solve(scene: Scene, **options) -> CollisionResult:
     }
     if "fields" in out:
         extra["fields"] = out["fields"]
-    return CollisionResult(
-        restitution=float(restitution),
-        solver=NAME,
-        wall_time_s=0.0,
-        time=time,
-        relative_velocity=relative_velocity,
-        gamma=gamma,
-        kappa=kappa,
-        contact_force=force,
-        contact_start=start,
-        contact_duration=duration,
-        error_estimate=None,
-        work={
+    return {
+        "restitution": restitution,
+        "time": time,
+        "relative_velocity": relative_velocity,
+        "contact_force": force,
+        "force_sampling": "interval",  # force[i] is the mean over the step ending at time[i]
+        "energy_drift": energy_drift,
+        "momentum_drift": momentum_drift,
+        "work": {
             "steps": out["steps"],
             "element_steps": out["steps"] * sum(elements),
             "elements": elements,
             "dt": setup.dt,
-            "order": options["order"],
-            "mass": options["mass"],
         },
-        diagnostics={
-            "energy_drift": float(energy_drift),
-            "max_energy_drift": float(max_drift),
-            "momentum_drift": float(momentum_drift),
-        },
-        extra=extra,
-    )
-
-
-def _contact_window(time, force, dt):
-    if force.size == 0 or force.max() <= 0.0:
-        return None, None
-    active = np.flatnonzero(force > _FORCE_THRESHOLD * force.max())
-    # force[i] is the mean over the step ending at time[i]
-    begin = time[active[0]] - dt
-    end = time[active[-1]]
-    return float(begin), float(end - begin)
+        "extra": {**extra, "max_energy_drift": float(max_drift)},
+    }
 
 
 def _scheme_name(setup, options) -> str:
@@ -202,12 +177,4 @@ def _scheme_name(setup, options) -> str:
     return base + " through the impulse splitting (exact flow of the end-node pair)"
 
 
-def _check_options(options):
-    if not isinstance(options["record_fields"], (bool, np.bool_)):
-        raise InvalidParameterError(f"record_fields must be True or False, got {options['record_fields']!r}")
-    samples = options["field_samples"]
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 2 <= samples <= 100000:
-        raise InvalidParameterError(f"field_samples must be an integer in [2, 100000], got {samples!r}")
-    tol = options["energy_tolerance"]
-    if not (isinstance(tol, (int, float)) and 0.0 < tol < math.inf):
-        raise InvalidParameterError(f"energy_tolerance must be a positive number, got {tol!r}")
+SOLVER = FemSolver()

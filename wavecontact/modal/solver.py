@@ -9,71 +9,56 @@ collision is integrated by exponential Radau collocation
 (:mod:`wavecontact.modal.collocation`) or, on request, by the ring's
 kick-rotate-kick splitting.  See ``docs/modal.md``.
 
-Options
--------
-modes : int
-    Modes kept per rod (default 100).
-static_correction : bool
-    Add the omitted modes' static end compliance (default True; needed for
-    hard contact).
-mode_source : {'analytic', 'fe'}
-    Closed-form modes of uniform rods, or eigenmodes of the FE matrices.
-fe_elements : int or None
-    Elements per rod for ``mode_source='fe'`` (default ``max(8 modes, 64)``).
-fe_order : {1, 2}
-    Element order for ``mode_source='fe'``.
-step_accuracy, step_reach, step_order
-    Step control of the splitting only (see ``StepControl`` and docs/modal.md):
-    ``eta`` of the contact step (error ~ eta^2), the largest change of
-    ``alpha * gap`` per step in the force's toe, and the order (2 or 4).
-step_method : {'collocation', 'splitting'}
-    'collocation': adaptive exponential Radau collocation (oscillators
-    integrated exactly against a polynomial contact force; high order, the
-    fast and accurate choice for one collision); 'splitting': kicks and exact
-    rotations (the ring's integrator; ``step_accuracy``, ``step_reach`` and
-    ``step_order`` apply to it only).
-collocation_stages : int
-    Radau IIA stages ``s`` of the collocation (order up to ``2 s - 1``).
-collocation_tolerance : float
-    Accepted step-to-step change of the predicted node forces, relative to
-    the force scale ``Z V / 2`` (the restitution error is far smaller).
-history : bool
-    Record the relative velocity and contact force at every step.
+Its options are :class:`ModalOptions`.
 """
 
 from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
-from ..modal import collocation, kernels
-from ..modal.modes import rod_modes
-from ..modal.system import ModalSystem, StepControl
-from ..result import CollisionResult
+from ..result import Outcome
 from ..scene import Scene
+from ..solvers.base import SolverBase, SolverOptions, option
+from . import collocation, kernels
+from .modes import rod_modes
+from .system import ModalSystem, StepControl
 
-__all__ = ["NAME", "OPTIONS", "solve"]
+__all__ = ["SOLVER", "ModalOptions", "ModalSolver"]
 
-NAME = "modal"
-OPTIONS = {
-    "modes": 100,
-    "static_correction": True,
-    "mode_source": "analytic",
-    "fe_elements": None,
-    "fe_order": 1,
-    "step_accuracy": StepControl.accuracy,
-    "step_reach": StepControl.reach,
-    "step_order": StepControl.order,
-    "step_method": "collocation",
-    "collocation_stages": 6,
-    "collocation_tolerance": 1e-2,
-    "history": True,
-}
-_STEP_METHODS = ("collocation", "splitting")
+
+@dataclass(frozen=True)
+class ModalOptions(SolverOptions):
+    """Options of the modal solver."""
+
+    solver_name = "modal"
+    modes: int = option(100, "modes kept per rod", kind="int", low=1, high=20_000)
+    static_correction: bool = option(True, "add the omitted modes' static end compliance (needed for hard "
+                                     "contact)", kind="bool")
+    mode_source: str = option("analytic", "closed-form modes of uniform rods, or eigenmodes of FE matrices",
+                              kind="choice", choices=("analytic", "fe"))
+    fe_elements: int | None = option(None, "elements per rod for mode_source='fe'; None: max(8 modes, 64)",
+                                     kind="int", low=2, high=200_000, allow_none=True)
+    fe_order: int = option(1, "element order for mode_source='fe'", kind="choice", choices=(1, 2))
+    step_method: str = option("collocation", "exponential Radau collocation (one collision) or the ring's "
+                              "kick-rotate-kick splitting", kind="choice", choices=("collocation", "splitting"))
+    step_accuracy: float = option(StepControl.accuracy, "splitting: eta of the contact step (error ~ eta^2)",
+                                  low=1e-6, high=10.0)
+    step_reach: float = option(StepControl.reach, "splitting: largest change of alpha * gap per step in the "
+                               "force's toe", low=1e-3, high=100.0)
+    step_order: int = option(StepControl.order, "splitting: order of the step control", kind="choice",
+                             choices=(2, 4))
+    collocation_stages: int = option(6, "Radau IIA stages s of the collocation (order up to 2 s - 1)",
+                                     kind="int", low=1, high=8)
+    collocation_tolerance: float = option(1e-2, "accepted step-to-step change of the predicted node forces, "
+                                          "relative to Z V / 2", low=1e-12, high=1.0)
+    history: bool = option(True, "record the relative velocity and contact force at every step", kind="bool")
+
 # largest change of alpha_eff * gap per collocation step where the force matters
 _EXPONENT_STEP = 2.0
 # collocation tables of recent systems (filling costs ~0.1 ms per step size; repeated collisions reuse them)
@@ -101,18 +86,16 @@ def _project_field(rod, modes, field):
 
 
 def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
-           step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"]):
+           step_reach=StepControl.reach, step_order=StepControl.order):
     if scene.is_ring:
         raise UnsupportedSceneError(
             "the modal solver's single-collision mode takes two rods on a line; for rods on a ring "
-            "use wavecontact.modal.RingSimulation"
+            "use wavecontact.solvers.get_solver('modal').simulate(scene)"
         )
     if len(scene.rods) != 2:
         raise UnsupportedSceneError(
             f"the modal solver computes the restitution of two rods on a line, got {len(scene.rods)} rods"
         )
-    if not isinstance(static_correction, (bool, np.bool_)):
-        raise InvalidParameterError(f"static_correction must be True or False, got {static_correction!r}")
     rod_a, rod_b = scene.rods
     basis = [rod_modes(r, modes, mode_source, elements=fe_elements, order=fe_order) for r in scene.rods]
     velocities = np.array(scene.velocities, dtype=float)
@@ -195,7 +178,7 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
         if status == kernels.STATUS_SEPARATED:
             return buffer[: counters[2]], {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
                                            "newton_iterations": int(counters[4]), "stages": int(stages)}
-        raise SolverFailure(f"modal collocation stopped with status {status}")
+        raise SolverFailure(f"modal collocation stopped with kernel status {status}", Outcome.NOT_CONVERGED)
 
 
 def _run_splitting(system, buffer, chunks):
@@ -214,31 +197,40 @@ def _run_splitting(system, buffer, chunks):
                                                   "free_flights": int(system.counters[1])}
 
 
-def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_source="analytic",
-          fe_elements=None, fe_order=1, step_accuracy=OPTIONS["step_accuracy"],
-          step_reach=OPTIONS["step_reach"], step_order=OPTIONS["step_order"], step_method=OPTIONS["step_method"],
-          collocation_stages=OPTIONS["collocation_stages"], collocation_tolerance=OPTIONS["collocation_tolerance"],
-          history=True) -> CollisionResult:
+class ModalSolver(SolverBase):
+    """The rods' free-free modes with exact free flight (Eq. 7, 14) and the static correction."""
+
+    name = "modal"
+    Options = ModalOptions
+    resolution = "modes"
+    refines = 1
+
+    def expected_order(self, options: ModalOptions) -> float:
+        """Order of epsilon in ``1/N``: 1 for plain truncation, 3 with the static correction (docs/modal.md)."""
+        return 3.0 if options.static_correction else 1.0
+
+    def _collide(self, scene: Scene, options: ModalOptions) -> dict:
+        return _collide(scene, **options.as_dict())
+
+    def simulate(self, scene: Scene, options=None):
+        """Many collisions of a ring scene (:class:`wavecontact.modal.ring.RingSimulation`)."""
+        from .ring import RingSimulation
+
+        options = self.options(options)
+        return RingSimulation(scene, modes=options.modes, static_correction=options.static_correction,
+                              step_accuracy=options.step_accuracy, step_reach=options.step_reach,
+                              step_order=options.step_order, mode_source=options.mode_source)
+
+
+def _collide(scene: Scene, *, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
+             step_reach, step_order, step_method, collocation_stages, collocation_tolerance, history) -> dict:
     """One collision of two rods on a line with the modal expansion.
 
-    Returns
-    -------
-    CollisionResult
-        ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
-        ``stages`` for collocation, ``free_flights`` for splitting);
-        ``diagnostics``: ``energy_drift`` (relative), ``momentum_drift``;
-        ``extra``: ``modal_energies`` (2, modes) after the collision,
-        ``vibration_energy`` per rod, ``translational_energy_before/after``,
-        ``residual_compliance``.
+    ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
+    ``stages`` for collocation, ``free_flights`` for splitting); ``extra``:
+    ``modal_energies`` (2, modes) after the collision, ``vibration_energy`` per
+    rod, ``translational_energy_before/after``, ``residual_compliance``.
     """
-    if step_method not in _STEP_METHODS:
-        raise InvalidParameterError(f"step_method must be one of {_STEP_METHODS}, got {step_method!r}")
-    if step_method == "collocation":
-        if isinstance(collocation_stages, bool) or not isinstance(collocation_stages, (int, np.integer)) \
-                or not 1 <= collocation_stages <= 8:
-            raise InvalidParameterError(f"collocation_stages must be an integer in [1, 8], got {collocation_stages!r}")
-        if not (isinstance(collocation_tolerance, (int, float)) and 0.0 < collocation_tolerance <= 1.0):
-            raise InvalidParameterError(f"collocation_tolerance must lie in (0, 1], got {collocation_tolerance!r}")
     system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
                          step_reach, step_order)
     energy_before = system.total_energy()
@@ -271,30 +263,17 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
     w_after = float(system.U[1] - system.U[0])
     energy_after = system.total_energy()
     times, velocity, force = records[:, 0], records[:, 1], records[:, 2]
-    contact_start = contact_duration = None
-    if history and force.max() > 0.0:
-        active = np.nonzero(force > 0.01 * force.max())[0]  # as the delay solver: 1 % of the peak
-        contact_start = float(times[active[0]])
-        contact_duration = float(times[active[-1]] - times[active[0]])
     energies = system.modal_energies()
-    params = scene.metadata.get("two_rods")
-    return CollisionResult(
-        restitution=abs(w_after) / abs(w_before),
-        solver=NAME,
-        wall_time_s=0.0,
-        time=times,
-        relative_velocity=velocity,
-        gamma=None if params is None else params.gamma,
-        kappa=None if params is None else params.kappa,
-        contact_force=force,
-        contact_start=contact_start,
-        contact_duration=contact_duration,
-        work={"modes": int(modes), "mode_source": mode_source, "step_method": step_method, **work},
-        diagnostics={
-            "energy_drift": abs(energy_after - energy_before) / energy_before,
-            "momentum_drift": abs(system.momentum() - momentum_before),
-        },
-        extra={
+    reduced_mass = 1.0 / (1.0 / system.mass[0] + 1.0 / system.mass[1])
+    return {
+        "restitution": abs(w_after) / abs(w_before),
+        "time": times,
+        "relative_velocity": velocity,
+        "contact_force": force if history else None,
+        "energy_drift": abs(energy_after - energy_before) / energy_before,
+        "momentum_drift": abs(system.momentum() - momentum_before) / (reduced_mass * abs(w_before)),
+        "work": {"modes": int(modes), "mode_source": mode_source, "step_method": step_method, **work},
+        "extra": {
             "modal_energies": np.array(energies) if energies[0].size == energies[1].size else energies,
             "vibration_energy": [float(np.sum(e)) for e in energies],
             "translational_energy_before": e_tr_before,
@@ -303,4 +282,7 @@ def solve(scene: Scene, *, modes=OPTIONS["modes"], static_correction=True, mode_
             "static_correction": bool(static_correction),
             "initial_gap": float(gap),
         },
-    )
+    }
+
+
+SOLVER = ModalSolver()
