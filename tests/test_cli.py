@@ -57,12 +57,19 @@ def test_help_explains_every_option_and_its_default(name):
             assert value in " ".join(text.split()), f"{name} {flag}: default {value} not shown"
 
 
-def test_help_defaults_come_from_the_solvers(capsys):
+def test_help_of_solver_options_is_the_solvers_own(capsys):
+    """Meaning, allowed values and default as each solver's Options dataclass declares them."""
     from wavecontact.solvers import get_solver
+    from wavecontact.solvers.base import option_help
 
     with pytest.raises(SystemExit):
         main(["collide", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    assert f"elements on the shorter rod (default: {get_solver('fem').OPTIONS['elements']})" in text
-    assert f"modes per rod (default: {get_solver('modal').OPTIONS['modes']})" in text
-    assert f"(default: {get_solver('delay').OPTIONS['rtol']:g})" in text
+    for solver, names in (("delay", ("rtol", "max_steps")), ("fem", ("elements", "order", "mass")),
+                          ("modal", ("modes",))):
+        rows = {row[0]: row for row in option_help(get_solver(solver).Options)}
+        for name in names:
+            _, default, allowed, meaning = rows[name]
+            assert meaning in text and allowed in text, (solver, name)
+            shown = f"{default:g}" if isinstance(default, float) else str(default)
+            assert f"{meaning}; {allowed} (default: {shown})" in text

@@ -7,10 +7,11 @@ import math
 
 from .common import (
     contact_law,
-    default_note,
     gamma_value,
     kappa_value,
     number_type,
+    option_choices,
+    option_text,
     positive_int,
     report_written,
 )
@@ -22,8 +23,6 @@ _positive_float = number_type(lambda v: math.isfinite(v) and v > 0, "a finite po
 
 
 def add_parser(subparsers):
-    from ..fem import ELEMENT_ORDERS, MASS_KINDS
-
     p = subparsers.add_parser(
         "collide",
         help="one collision: print the coefficient of restitution",
@@ -46,26 +45,20 @@ def add_parser(subparsers):
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="solve once only; the time printed then includes numba's kernel preparation")
     delay = p.add_argument_group("delay solver")
-    delay.add_argument("--rtol", type=_positive_float,
-                       help=f"local error tolerance, in (0, 1) {default_note('delay', 'rtol')}")
-    delay.add_argument("--max-steps", type=positive_int, metavar="N",
-                       help=f"refuse the run after this many steps {default_note('delay', 'max_steps')}; "
-                       "small kappa needs more (contact lasts about 1/kappa round trips)")
+    delay.add_argument("--rtol", type=_positive_float, help=option_text("delay", "rtol"))
+    delay.add_argument("--max-steps", type=positive_int, metavar="N", help=option_text("delay", "max_steps"))
     fem = p.add_argument_group("finite-element solver")
-    fem.add_argument("--elements", type=positive_int, metavar="N",
-                     help=f"elements on the shorter rod {default_note('fem', 'elements')}")
-    fem.add_argument("--order", type=int, choices=ELEMENT_ORDERS,
-                     help=f"Lagrange element order {default_note('fem', 'order')}")
-    fem.add_argument("--mass", choices=MASS_KINDS, help=f"mass matrix {default_note('fem', 'mass')}")
+    fem.add_argument("--elements", type=positive_int, metavar="N", help=option_text("fem", "elements"))
+    fem.add_argument("--order", type=int, choices=option_choices("fem", "order"), help=option_text("fem", "order"))
+    fem.add_argument("--mass", choices=option_choices("fem", "mass"), help=option_text("fem", "mass"))
     fem.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress for ParaView into DIR (fields.pvd and one "
                      "VTU file per sample; units and parameters in each file's field data)")
     fem.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
     modal = p.add_argument_group("modal solver")
-    modal.add_argument("--modes", type=positive_int, metavar="N", help=f"modes per rod {default_note('modal', 'modes')}")
+    modal.add_argument("--modes", type=positive_int, metavar="N", help=option_text("modal", "modes"))
     modal.add_argument(
         "--no-static-correction", dest="static_correction", action="store_false", default=None,
-        help=f"switch off the static correction (residual flexibility of the missing modes) "
-        f"{default_note('modal', 'static_correction')}",
+        help="switch off: " + option_text("modal", "static_correction"),
     )
     p.set_defaults(run=run)
     return p

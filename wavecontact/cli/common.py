@@ -66,19 +66,39 @@ class HelpFormatter(argparse.HelpFormatter):
         return f"{text} (default: {default})"
 
 
-def solver_defaults(solver: str) -> dict:
-    """The default of every option of ``solver``, read from the solver itself (never restated here)."""
+def solver_option(solver: str, name: str) -> tuple:
+    """``(default, spec)`` of one option, read from the solver's ``Options`` dataclass (never restated here)."""
+    import dataclasses
+
     from ..solvers import get_solver
 
-    return dict(get_solver(solver).OPTIONS)
+    for f in dataclasses.fields(get_solver(solver).Options):
+        if f.name == name:
+            return f.default, f.metadata["option"]
+    raise KeyError(f"solver {solver!r} has no option {name!r}")
 
 
-def default_note(solver: str, name: str) -> str:
-    """``(default: X)`` for a solver option whose CLI default is "the solver's"."""
-    value = solver_defaults(solver)[name]
-    if isinstance(value, bool):
-        value = "on" if value else "off"
-    return f"(default: {value:g})" if isinstance(value, float) else f"(default: {value})"
+def option_text(solver: str, name: str) -> str:
+    """Help of a solver option as the solver declares it: meaning, allowed values, default."""
+    from ..solvers.base import option_help
+
+    (row,) = [r for r in option_help(_options_class(solver)) if r[0] == name]
+    _, default, allowed, text = row
+    if isinstance(default, bool):
+        return f"{text} (default: {'on' if default else 'off'})"
+    shown = f"{default:g}" if isinstance(default, float) else str(default)
+    return f"{text}; {allowed} (default: {shown})"
+
+
+def option_choices(solver: str, name: str) -> tuple:
+    """The allowed values of a solver option of kind 'choice'."""
+    return tuple(solver_option(solver, name)[1]["choices"])
+
+
+def _options_class(solver: str):
+    from ..solvers import get_solver
+
+    return get_solver(solver).Options
 
 
 def print_outcome(record: dict, text: str, written, as_json: bool) -> int:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from .common import contact_law, gamma_value, kappa_value, positive_int, print_outcome
+from .common import contact_law, gamma_value, kappa_value, option_choices, positive_int, print_outcome
 
 
 def add_parser(subparsers):
-    from ..fem import ELEMENT_ORDERS, MASS_KINDS
-
+    orders, masses = option_choices("fem", "order"), option_choices("fem", "mass")
     p = subparsers.add_parser(
         "converge",
         help="mesh-convergence study of the fem solver against the delay equation",
@@ -21,16 +20,16 @@ def add_parser(subparsers):
         "--order",
         type=int,
         nargs="+",
-        choices=ELEMENT_ORDERS,
-        default=list(ELEMENT_ORDERS),
+        choices=orders,
+        default=list(orders),
         metavar="P",
-        help=f"Lagrange element orders, each one of {', '.join(map(str, ELEMENT_ORDERS))}",
+        help=f"Lagrange element orders, each one of {', '.join(map(str, orders))}",
     )
     p.add_argument(
         "--mass",
         nargs="+",
-        choices=MASS_KINDS,
-        default=list(MASS_KINDS),
+        choices=masses,
+        default=list(masses),
         help="mass treatments",
     )
     p.add_argument(
