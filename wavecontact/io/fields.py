@@ -248,7 +248,7 @@ def run_parameters(result) -> dict:
     out = {"solver": str(getattr(result, "solver", "?")), "version": __version__}
     for name in ("gamma", "kappa", "restitution", "contact_start", "contact_duration"):
         value = getattr(result, name, None)
-        if value is not None:
+        if value is not None and not math.isnan(value):  # NaN: not a two-rod scene, or no force history
             out[name] = float(value)
     work = getattr(result, "work", None) or {}
     for name in ("order", "mass", "dt"):
