@@ -8,7 +8,7 @@ both rods, the remainder of the long rod lumped on its far node), start gap as
 ``wavecontact``'s FE solver and a step of 0.99 h / c (at exactly h / c the contact
 stiffness pushes this scheme over its stability limit), so the cost per
 element-step is directly comparable.  This is the scheme that is accurate
-where the contact is resolved and blows up where it is not (MODEL.md 5).
+where the contact is resolved and blows up where it is not (docs/fem.md).
 
 Usage from other benchmarks::
 
