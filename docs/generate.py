@@ -39,9 +39,13 @@ TIME = re.compile(r"\d[\d.]*(e[+-]?\d+)? (ms|s)\b")
 CONVERGE_ROW = re.compile(r"^(\s+\d+\s+\S+\s+\S+\s+\S+\s+)\S+(\s+\d+)$", re.MULTILINE)
 
 
+# the time column of `wavecontact compare`: ... error, TIME, work unit
+COMPARE_ROW = re.compile(r"^(.*\s)[\d.]+(\s+\S+ (?:steps|element_steps|modes))$", re.MULTILINE)
+
+
 def mask_times(text: str) -> str:
     """The text with every wall time replaced by ``#`` (what may differ between two runs)."""
-    return CONVERGE_ROW.sub(r"\1#\2", TIME.sub("# \\2", text))
+    return COMPARE_ROW.sub(r"\1#\2", CONVERGE_ROW.sub(r"\1#\2", TIME.sub("# \\2", text)))
 
 
 @dataclass(frozen=True)
@@ -85,7 +89,8 @@ BLOCKS = [
           tuple(("--help",) if c is None else (c, "--help")
                 for c in (None, "collide", "converge", "compare", "ring", "equipartition")),
           cheap=True),
-    Block("usage-compare", "docs/usage.md", (("compare", "--gamma", "0.6", "--kappa", "100", "--no-progress"),)),
+    Block("usage-compare", "docs/usage.md",
+          (("compare", "--gamma", "0.6", "--kappa", "100", "--repeats", "3", "--no-progress"),)),
     Block("convergence-kappa-20", "docs/convergence.md", (CONVERGE[:3] + ("--kappa", "20") + CONVERGE[3:],)),
     Block("convergence-kappa-inf", "docs/convergence.md", (CONVERGE[:3] + ("--kappa", "inf") + CONVERGE[3:],)),
     Block("ring-equipartition", "docs/ring.md",

@@ -73,3 +73,17 @@ def test_help_of_solver_options_is_the_solvers_own(capsys):
             assert meaning in text and allowed in text, (solver, name)
             shown = f"{default:g}" if isinstance(default, float) else str(default)
             assert f"{meaning}; {allowed} (default: {shown})" in text
+
+
+def test_ring_json_lists_its_files(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "ring"
+    assert main(["ring", "--gamma", "0.6", "--kappa", "400", "--modes", "4", "--collisions", "8",
+                 "--out", str(out), "--json", "--no-progress"]) == 0
+    captured = capsys.readouterr()
+    record = json.loads(captured.out)
+    assert record["gamma"] == 0.6 and record["files_written"]
+    for name in record["files_written"]:
+        assert Path(name).exists() and f"wrote {name}" in captured.err
+    assert str(out / "summary.json") in record["files_written"]

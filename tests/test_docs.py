@@ -60,9 +60,11 @@ def test_cheap_blocks_are_what_their_commands_print(name):
 
 def test_masking_hides_wall_times_only():
     row = "      400   0.753013243099  1.827e-09    2.03          28.235      3320"
-    masked = generate.mask_times(row + "\nsolve 3.11 ms, numba kernel preparation 560 ms (23.4 s)")
+    compare = "fem     P1 lumped, 100 elements              0.64669776105   6.7e-07     13.243 1.2e+05 element_steps"
+    masked = generate.mask_times(row + "\nsolve 3.11 ms, numba kernel preparation 560 ms (23.4 s)\n" + compare)
     assert "0.753013243099  1.827e-09    2.03" in masked and "3320" in masked
     assert "28.235" not in masked and "3.11" not in masked and "560" not in masked and "23.4" not in masked
+    assert "0.64669776105   6.7e-07" in masked and "13.243" not in masked and "1.2e+05 element_steps" in masked
 
 
 def _converge_rows(text: str) -> dict:
