@@ -387,7 +387,7 @@ def section_growth(repeats, quick, figure_dir):
     for solver, marker in (("delay", "o-"), ("fem", "s-"), ("modal", "^-")):
         ax_kappa.loglog(kappas, series[solver], marker, label=solver)
     ax_kappa.set_xlabel(r"$\kappa = \alpha V l / c$")
-    ax_kappa.set_title(r"$\gamma$ = 0.6: delay (rtol 1e-11), fem P1 lumped 800 el., modal 80 modes", fontsize=9)
+    ax_kappa.set_title(r"$\gamma$ = 0.6; delay rtol 1e-11, fem 800 el., modal 80", fontsize=9)
     ax_kappa.legend()
     for ax in (ax_el, ax_modes, ax_kappa):
         ax.set_ylabel("wall time per collision (s)")
@@ -414,6 +414,8 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smaller resolutions and repeats")
     parser.add_argument("--repeats", type=int, default=None, help="median over this many runs (default 3, quick 1)")
     parser.add_argument("--out", default=str(ROOT / "docs"), help="directory of performance.md (default docs/)")
+    parser.add_argument("--growth-only", action="store_true",
+                        help="re-measure only the last section (how the cost grows) and its figure")
     parser.add_argument("--pareto-figures-only", action="store_true",
                         help="redraw the error-against-time figures from figures/performance_data.json, no runs")
     args = parser.parse_args(argv)
@@ -421,12 +423,27 @@ def main(argv=None):
     out_dir = Path(args.out)
     figure_dir = out_dir / "figures"
     figure_dir.mkdir(parents=True, exist_ok=True)
+    command = "python benchmarks/performance.py" + (" --quick" if args.quick else "") + (
+        f" --repeats {args.repeats}" if args.repeats else "")
+    if args.growth_only:
+        report = out_dir / "performance.md"
+        head, marker, _ = report.read_text().partition("## How the cost grows")
+        if not marker:
+            parser.error(f"{report} has no section 'How the cost grows'")
+        for solver, options in (("delay", {}), ("fem", {"elements": 50}), ("modal", {"modes": 10})):
+            wavecontact.collide(0.6, 100.0, solver=solver, **options)  # compile the kernels before timing
+        stamp = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}"
+        note = (f"Re-measured {stamp} by `{command} --growth-only` (the sections above are from the run named at "
+                "the top).")
+        growth = section_growth(repeats, args.quick, figure_dir).replace(
+            "## How the cost grows\n", f"## How the cost grows\n\n{note}\n", 1)
+        report.write_text(head + growth + "\n")
+        print(f"wrote {report} (last section) and {figure_dir / 'cost_growth.png'}", file=sys.stderr)
+        return
     if args.pareto_figures_only:
         for name in draw_pareto_figures(tables_from_json(figure_dir / "performance_data.json"), figure_dir):
             print(f"wrote {figure_dir / name}", file=sys.stderr)
         return
-    command = "python benchmarks/performance.py" + (" --quick" if args.quick else "") + (
-        f" --repeats {args.repeats}" if args.repeats else "")
 
     for solver, options in (("delay", {}), ("fem", {"elements": 50}), ("modal", {"modes": 10})):
         wavecontact.collide(0.6, 100.0, solver=solver, **options)  # compile the kernels before timing
