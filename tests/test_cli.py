@@ -53,7 +53,7 @@ def test_help_explains_every_option_and_its_default(name):
             assert "default" in shown, f"{name} {flag}: no default in its help {shown!r}"
         if action.default not in (None, False, True, argparse.SUPPRESS) and not action.required:
             value = action.default
-            value = " ".join(map(str, value)) if isinstance(value, list) else str(value)
+            value = " ".join(map(str, value)) if isinstance(value, (list, tuple)) else str(value)
             assert value in " ".join(text.split()), f"{name} {flag}: default {value} not shown"
 
 
