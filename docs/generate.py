@@ -110,8 +110,32 @@ def display(argv) -> str:
     return "wavecontact " + " ".join(words)
 
 
+def _help_text(argv) -> str:
+    """``wavecontact ... --help`` in this process (what the console prints, 100 columns wide)."""
+    import contextlib
+    import io
+
+    sys.path.insert(0, str(ROOT))
+    from wavecontact.cli import main
+
+    saved = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "100"  # argparse reads the width from here
+    out = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(out), contextlib.suppress(SystemExit):
+            main(list(argv))
+    finally:
+        if saved is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = saved
+    return out.getvalue()
+
+
 def run_command(argv, scratch: str, env: dict | None = None) -> str:
     """Run one command from this checkout and return its standard output."""
+    if argv[-1] == "--help" and argv[0] != "python":
+        return _help_text(argv)  # no output files, nothing to time: a subprocess per page would be slow
     words = [w.replace("{tmp}", scratch) for w in argv]
     command = [sys.executable, *words[1:]] if words[0] == "python" else [sys.executable, "-m", "wavecontact", *words]
     environment = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100", "MPLBACKEND": "Agg", **(env or {})}
