@@ -153,3 +153,21 @@ def test_examples_page_shows_every_example_and_its_figure():
         assert figures, f"docs/examples.md shows no figure of {script.name}"
         for figure in figures:
             assert (ROOT / "docs" / "figures" / "examples" / figure).exists()
+
+
+@pytest.mark.slow
+def test_every_command_shown_in_the_docs_runs(tmp_path):
+    """A fresh user's walk through README.md and docs/: each command shown ends with status 0
+    (run in an empty directory, so the files it writes land there)."""
+    import os
+    import subprocess
+
+    seen = set()
+    for page, line in _shown_commands():
+        if line in seen:
+            continue
+        seen.add(line)
+        done = subprocess.run([sys.executable, "-m", "wavecontact", *shlex.split(line)[1:]], cwd=tmp_path,
+                              env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True,
+                              timeout=1800, check=False)
+        assert done.returncode == 0, f"{page}: `{line}` failed:\n{done.stderr[-2000:]}"
