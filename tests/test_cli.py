@@ -51,9 +51,10 @@ def test_help_explains_every_option_and_its_default(name):
         takes_value = action.nargs != 0
         if takes_value and not action.required and action.metavar not in OUTPUT_METAVARS:
             assert "default" in shown, f"{name} {flag}: no default in its help {shown!r}"
-        if action.default not in (None, False, True, argparse.SUPPRESS) and not action.required:
-            value = action.default
-            value = " ".join(map(str, value)) if isinstance(value, (list, tuple)) else str(value)
+        default = action.default
+        if isinstance(default, (int, float, str, list, tuple)) and not isinstance(default, bool) \
+                and default != argparse.SUPPRESS and not action.required:
+            value = " ".join(map(str, default)) if isinstance(default, (list, tuple)) else str(default)
             assert value in " ".join(text.split()), f"{name} {flag}: default {value} not shown"
 
 

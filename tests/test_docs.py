@@ -147,9 +147,10 @@ def test_every_command_shown_in_the_docs_parses():
 
 def test_examples_page_shows_every_example_and_its_figure():
     text = (ROOT / "docs" / "examples.md").read_text()
+    sections = re.split(r"^## ", text, flags=re.MULTILINE)
     for script in sorted((ROOT / "examples").glob("[!_]*.py")):
-        assert f"examples/{script.name}" in text
-        figures = re.findall(rf"\(figures/examples/({script.stem}[\w.-]*\.png)\)", text)
+        (section,) = [s for s in sections if f"examples/{script.name}" in s]
+        figures = re.findall(r"\(figures/examples/([\w.-]+\.png)\)", section)
         assert figures, f"docs/examples.md shows no figure of {script.name}"
         for figure in figures:
             assert (ROOT / "docs" / "figures" / "examples" / figure).exists()

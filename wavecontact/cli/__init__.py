@@ -13,7 +13,7 @@ import sys
 
 from ..errors import WavecontactError
 
-COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas")
+COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "map")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -3,7 +3,7 @@
 The equation ``W' = exp(g(tau) - W)`` with
 
     g(tau) = kappa tau - a0 - S(tau) + Q(tau),
-    S(tau) = sum_{i=1,2} sum_{n>=1} W(tau - n Gamma_i)
+    S(tau) = sum_{i=1,2} beta_i sum_{n>=1} W(tau - n Gamma_i)
 
 has the property ``(e^W)' = e^g``, and ``g`` only involves *delayed* values
 of ``W``.  As long as a step is shorter than the smallest delay ``Gamma_1``,
@@ -11,7 +11,9 @@ of ``W``.  As long as a step is shorter than the smallest delay ``Gamma_1``,
 
     e^{W(t + h)} = e^{W(t)} + integral_t^{t+h} e^{g(s)} ds
 
-is a plain quadrature: there is nothing implicit and nothing stiff.  The
+is a plain quadrature: there is nothing implicit and nothing stiff.  The echo
+weights ``beta_i`` are 1 for rods of one material (Eq. 16) and ``2 Z_s / Z_i``
+for two materials (:mod:`wavecontact.delay.parameters`).  The
 integrand grows like ``e^{kappa s}`` during contact, so the quadrature is done
 on ``e^{g(s)} = e^{g(t) + a s + r(s)}`` with the secant slope ``a`` taken out
 exactly (a change of variable that makes ``e^{a s}`` uniform) and only the
@@ -145,8 +147,8 @@ def noise_value(s, freq, cos_amp, sin_amp):
 
 
 @kernel
-def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, direct_copies):
-    """``S(s) = sum_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
+def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb, direct_copies):
+    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
     round-off) are skipped.  With ``direct_copies = K > 0`` the copies older
@@ -158,6 +160,8 @@ def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, d
     slope = 0.0
     for i in range(delays.shape[0]):
         gamma_i = delays[i]
+        rod_total = 0.0
+        rod_slope = 0.0
         n = 1
         while True:
             u = s - n * gamma_i
@@ -166,15 +170,17 @@ def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, d
             if direct_copies > 0 and n > direct_copies:
                 value, derivative, _c = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
                                                  u + gamma_i)
-                total += value
+                rod_total += value
                 if want_slope:
-                    slope += derivative
+                    rod_slope += derivative
                 break
             value, derivative, _c = hermite5(t, w, d1, d2, last, u)
-            total += value
+            rod_total += value
             if want_slope:
-                slope += derivative
+                rod_slope += derivative
             n += 1
+        total += weights[i] * rod_total
+        slope += weights[i] * rod_slope
     return total, slope
 
 
@@ -188,9 +194,9 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
 
 
 @kernel
-def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, want_slope,
-              comb, direct_copies):
-    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb,
+def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
+              want_slope, comb, direct_copies):
+    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb,
                                       direct_copies)
     q, dq = noise_value(s, freq, cos_amp, sin_amp)
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq
@@ -212,6 +218,7 @@ def integrate_delay_equation(
     kappa,
     a0,
     delays,
+    weights,
     rtol,
     freq,
     cos_amp,
@@ -233,6 +240,8 @@ def integrate_delay_equation(
         ``alpha V l / c`` and the scaled initial gap ``alpha R0``.
     delays : ndarray
         ``(Gamma_1, Gamma_2)``, the round-trip times of the two rods.
+    weights : ndarray
+        ``(beta_1, beta_2)``, the echo weights ``2 Z_s / Z_i`` (1 for one material).
     rtol : float
         Target absolute accuracy of ``W / kappa`` (hence of epsilon).
     freq, cos_amp, sin_amp : ndarray
@@ -282,7 +291,8 @@ def integrate_delay_equation(
     t[0] = 0.0
     w[0] = 0.0
     g_now, gp_now = _exponent(
-        0.0, kappa, a0, t, w, d1, d2, 0, delays, math.inf, freq, cos_amp, sin_amp, True, comb, direct_copies
+        0.0, kappa, a0, t, w, d1, d2, 0, delays, weights, math.inf, freq, cos_amp, sin_amp, True, comb,
+        direct_copies,
     )
     d1[0] = math.exp(g_now)
     d2[0] = d1[0] * (gp_now - d1[0])
@@ -334,7 +344,7 @@ def integrate_delay_equation(
 
         t1 = t0 + h
         g1, gp1 = _exponent(
-            t1, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, True, comb,
+            t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, True, comb,
             direct_copies,
         )
         a = (g1 - g_now) / h
@@ -356,8 +366,8 @@ def integrate_delay_equation(
             else:
                 s = h * x
             gs, _unused = _exponent(
-                t0 + s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, False, comb,
-                direct_copies,
+                t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
+                False, comb, direct_copies,
             )
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)
