@@ -105,23 +105,96 @@ def _stiffness_forces(u, bands, out):
             out[0] = 0.0
             return
         out[0] = -bands[1, 0] * (u[1] - u[0])
-        for i in range(1, n - 1):
-            out[i] = -bands[1, i - 1] * (u[i - 1] - u[i]) - bands[1, i] * (u[i + 1] - u[i])
+        near = bands[1]
+        for j in range(n - 2):  # node i = j + 1
+            current = u[j + 1]
+            out[j + 1] = -near[j] * (u[j] - current) - near[j + 1] * (u[j + 2] - current)
         out[n - 1] = -bands[1, n - 2] * (u[n - 2] - u[n - 1])
         return
-    # pentadiagonal (P2).  The guarded form is kept on purpose: a branch-free interior loop
-    # (range(2, n - 2)) measured 14 times slower with numba 0.6x (negative-index wraparound checks)
-    for i in range(n):
+    # pentadiagonal (P2): the four edge nodes guarded, the interior branch-free
+    if n < 5:
+        for i in range(n):
+            out[i] = _pentadiagonal_force(u, bands, i, n)
+        return
+    for i in (0, 1):
+        out[i] = _pentadiagonal_force(u, bands, i, n)
+    near = bands[1]
+    far = bands[2]
+    for j in range(n - 4):  # node i = j + 2; indices written as j + k >= 0 (no wraparound checks)
+        current = u[j + 2]
         total = 0.0
-        if i >= 2:
-            total -= bands[2, i - 2] * (u[i - 2] - u[i])
-        if i >= 1:
-            total -= bands[1, i - 1] * (u[i - 1] - u[i])
-        if i + 1 < n:
-            total -= bands[1, i] * (u[i + 1] - u[i])
-        if i + 2 < n:
-            total -= bands[2, i] * (u[i + 2] - u[i])
-        out[i] = total
+        total -= far[j] * (u[j] - current)
+        total -= near[j + 1] * (u[j + 1] - current)
+        total -= near[j + 2] * (u[j + 3] - current)
+        total -= far[j + 2] * (u[j + 4] - current)
+        out[j + 2] = total
+    for i in (n - 2, n - 1):
+        out[i] = _pentadiagonal_force(u, bands, i, n)
+
+
+@kernel(fastmath=False)
+def _pentadiagonal_force(u, bands, i, n):
+    """``-(K u)_i`` of a pentadiagonal ``K`` at any node (the guarded form, for the edges)."""
+    total = 0.0
+    if i >= 2:
+        total -= bands[2, i - 2] * (u[i - 2] - u[i])
+    if i >= 1:
+        total -= bands[1, i - 1] * (u[i - 1] - u[i])
+    if i + 1 < n:
+        total -= bands[1, i] * (u[i + 1] - u[i])
+    if i + 2 < n:
+        total -= bands[2, i] * (u[i + 2] - u[i])
+    return total
+
+
+@kernel(fastmath=False)
+def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
+    """P2 lumped step in one sweep: ``v += dt M^-1 (-K u)``, ``u += dt v`` (at least 5 nodes).
+
+    The two previous nodes' old displacements are kept in registers, so each
+    node is updated right after its force is known, without a scratch array.
+    """
+    n = u.size
+    older = u[0]
+    old = u[1]
+    force0 = _pentadiagonal_force(u, bands, 0, n)
+    force1 = _pentadiagonal_force(u, bands, 1, n)
+    velocity = v[0] + dt * (force0 * inverse[0])
+    v[0] = velocity
+    u[0] = older + dt * velocity
+    velocity = v[1] + dt * (force1 * inverse[1])
+    v[1] = velocity
+    u[1] = old + dt * velocity
+    near = bands[1]
+    far = bands[2]
+    for j in range(n - 4):  # node i = j + 2; indices written as j + k >= 0 (no wraparound checks)
+        current = u[j + 2]
+        total = 0.0
+        total -= far[j] * (older - current)
+        total -= near[j + 1] * (old - current)
+        total -= near[j + 2] * (u[j + 3] - current)
+        total -= far[j + 2] * (u[j + 4] - current)
+        velocity = v[j + 2] + dt * (total * inverse[j + 2])
+        v[j + 2] = velocity
+        u[j + 2] = current + dt * velocity
+        older = old
+        old = current
+    # the last two nodes see the old values of their left neighbours
+    last1 = u[n - 2]
+    last0 = u[n - 1]
+    total = 0.0
+    total -= bands[2, n - 4] * (older - last1)
+    total -= bands[1, n - 3] * (old - last1)
+    total -= bands[1, n - 2] * (last0 - last1)
+    velocity = v[n - 2] + dt * (total * inverse[n - 2])
+    v[n - 2] = velocity
+    u[n - 2] = last1 + dt * velocity
+    total = 0.0
+    total -= bands[2, n - 3] * (old - last0)
+    total -= bands[1, n - 2] * (last1 - last0)
+    velocity = v[n - 1] + dt * (total * inverse[n - 1])
+    v[n - 1] = velocity
+    u[n - 1] = last0 + dt * velocity
 
 
 @kernel(fastmath=False)
@@ -208,19 +281,39 @@ def mass_acceleration(kind, table, r):
         _tridiagonal_solve(table, r, n)
         return
     # condensed P2: vertex right-hand sides lose the midpoints' share, then the midpoints follow
-    m = (n + 1) // 2
+    vertex = _condensed_vertex_solve(table, r)
+    for e in range((n - 1) // 2):
+        j = 2 * e + 1
+        r[j - 1] = vertex[e]
+        r[j] = (r[j] - table[T_MID_LEFT, j] * vertex[e] - table[T_MID_RIGHT, j] * vertex[e + 1]) * table[
+            T_MID_INVERSE, j
+        ]
+    r[n - 1] = vertex[(n - 1) // 2]
+
+
+@kernel(fastmath=False)
+def _condensed_vertex_solve(table, r):
+    """Vertex accelerations of the condensed P2 mass for the forces ``r`` (a row of ``table``).
+
+    One pass forms every vertex's right-hand side, its force less the shares of
+    its two midpoints (in the order of the assembly: the left element's, then
+    the right one's), then the tridiagonal vertex system is solved.
+    """
+    m = (r.size + 1) // 2
     vertex = table[T_WORK + 1]
+    carried = 0.0  # the right-hand midpoint's share of the previous vertex's element
     for e in range(m):
-        vertex[e] = r[2 * e]
-    for e in range(m - 1):
-        share = r[2 * e + 1] * table[T_MID_INVERSE, 2 * e + 1]
-        vertex[e] -= table[T_MID_LEFT, 2 * e + 1] * share
-        vertex[e + 1] -= table[T_MID_RIGHT, 2 * e + 1] * share
+        value = r[2 * e]
+        if e > 0:
+            value -= carried
+        if e < m - 1:
+            j = 2 * e + 1
+            share = r[j] * table[T_MID_INVERSE, j]
+            value -= table[T_MID_LEFT, j] * share
+            carried = table[T_MID_RIGHT, j] * share
+        vertex[e] = value
     _tridiagonal_solve(table, vertex, m)
-    for e in range(m):
-        r[2 * e] = vertex[e]
-    for j in range(1, n, 2):
-        r[j] = (r[j] - table[T_MID_LEFT, j] * r[j - 1] - table[T_MID_RIGHT, j] * r[j + 1]) * table[T_MID_INVERSE, j]
+    return vertex
 
 
 @kernel(fastmath=False)
@@ -233,6 +326,9 @@ def elastic_acceleration(u, bands, kind, table, out):
 @kernel(fastmath=False)
 def step_rod(u, v, a, bands, kind, table, dt):
     """One leapfrog step of a free rod: ``v += dt M^-1 (-K u)``, ``u += dt v`` (``a``: scratch)."""
+    if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
+        _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
+        return
     _stiffness_forces(u, bands, a)
     if kind == MASS_LUMPED:  # the mass and the update in one pass
         inverse = table[0]
@@ -240,6 +336,25 @@ def step_rod(u, v, a, bands, kind, table, dt):
             velocity = v[i] + dt * (a[i] * inverse[i])
             v[i] = velocity
             u[i] += dt * velocity
+        return
+    if kind == MASS_CONDENSED:  # the midpoints' accelerations and the update in one pass
+        vertex = _condensed_vertex_solve(table, a)
+        for e in range((u.size - 1) // 2):
+            j = 2 * e + 1
+            left = vertex[e]
+            middle = (a[j] - table[T_MID_LEFT, j] * left - table[T_MID_RIGHT, j] * vertex[e + 1]) * table[
+                T_MID_INVERSE, j
+            ]
+            velocity = v[j - 1] + dt * left
+            v[j - 1] = velocity
+            u[j - 1] += dt * velocity
+            velocity = v[j] + dt * middle
+            v[j] = velocity
+            u[j] += dt * velocity
+        last = u.size - 1
+        velocity = v[last] + dt * vertex[last // 2]
+        v[last] = velocity
+        u[last] += dt * velocity
         return
     mass_acceleration(kind, table, a)
     for i in range(u.size):
