@@ -4,18 +4,20 @@ The mass solve is prepared once per run (:func:`prepare_mass`) as a few plain
 arrays, so that a step allocates nothing and runs a handful of operations per
 node:
 
-* lumped mass: a multiplication by the inverse masses;
-* consistent P1 mass (tridiagonal): ``L D L^T`` factorized once; each of the
-  two triangular sweeps is a first-order recurrence ``y_i = r_i + a_i y_(i-1)``,
-  whose speed would be the latency of one multiply-add per node.  Unrolled
-  four times (``y_i = r_i + a_i r_(i-1) + a_i a_(i-1) r_(i-2) + ... +
-  (a_i ... a_(i-3)) y_(i-4)``, the products tabulated once) it runs four
-  independent recurrences at the price of a few more multiplications per node
-  (the products are formed on the fly and the last four values kept in
-  registers, so the sweep reads one coefficient and one value per node);
+* lumped mass: a multiplication by the inverse masses, fused with the
+  stiffness stencil and the update into one sweep (P2: the two left
+  neighbours' old displacements kept in registers);
+* consistent P1 mass (tridiagonal): a twisted factorization about the middle
+  unknown, done once.  A triangular sweep is a first-order recurrence ``y_i =
+  r_i + a_i y_(i-1)`` whose speed is the latency of a multiply and an add per
+  node; the twisted solve eliminates the upper half downwards and the lower
+  half upwards at the same time, and unrolls each twice (``y_i = r_i + a_i
+  r_(i-1) + (a_i a_(i-1)) y_(i-2)``), so four independent chains are in
+  flight in every phase;
 * consistent P2 mass: the midpoint nodes couple only to their element's two
-  vertices, so they are eliminated first (static condensation) and the
-  vertices solve a tridiagonal system as above.
+  vertices, so they are eliminated first (static condensation, one pass) and
+  the vertices solve a tridiagonal system as above; the midpoints' back
+  substitution is fused with the update.
 
 ``prepare_mass`` returns ``(kind, table)``: ``table`` a 2D float array whose
 rows are listed at ``T_*``; the kernels read it by row.
