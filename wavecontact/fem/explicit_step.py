@@ -4,18 +4,20 @@ The mass solve is prepared once per run (:func:`prepare_mass`) as a few plain
 arrays, so that a step allocates nothing and runs a handful of operations per
 node:
 
-* lumped mass: a multiplication by the inverse masses;
-* consistent P1 mass (tridiagonal): ``L D L^T`` factorized once; each of the
-  two triangular sweeps is a first-order recurrence ``y_i = r_i + a_i y_(i-1)``,
-  whose speed would be the latency of one multiply-add per node.  Unrolled
-  four times (``y_i = r_i + a_i r_(i-1) + a_i a_(i-1) r_(i-2) + ... +
-  (a_i ... a_(i-3)) y_(i-4)``, the products tabulated once) it runs four
-  independent recurrences at the price of a few more multiplications per node
-  (the products are formed on the fly and the last four values kept in
-  registers, so the sweep reads one coefficient and one value per node);
+* lumped mass: a multiplication by the inverse masses, fused with the
+  stiffness stencil and the update into one sweep (P2: the two left
+  neighbours' old displacements kept in registers);
+* consistent P1 mass (tridiagonal): a twisted factorization about the middle
+  unknown, done once.  A triangular sweep is a first-order recurrence ``y_i =
+  r_i + a_i y_(i-1)`` whose speed is the latency of a multiply and an add per
+  node; the twisted solve eliminates the upper half downwards and the lower
+  half upwards at the same time, and unrolls each twice (``y_i = r_i + a_i
+  r_(i-1) + (a_i a_(i-1)) y_(i-2)``), so four independent chains are in
+  flight in every phase;
 * consistent P2 mass: the midpoint nodes couple only to their element's two
-  vertices, so they are eliminated first (static condensation) and the
-  vertices solve a tridiagonal system as above.
+  vertices, so they are eliminated first (static condensation, one pass) and
+  the vertices solve a tridiagonal system as above; the midpoints' back
+  substitution is fused with the update.
 
 ``prepare_mass`` returns ``(kind, table)``: ``table`` a 2D float array whose
 rows are listed at ``T_*``; the kernels read it by row.
@@ -33,33 +35,57 @@ MASS_LUMPED = 0
 MASS_TRIDIAGONAL = 1  # P1 consistent
 MASS_CONDENSED = 2  # P2 consistent: midpoints condensed, vertices tridiagonal
 
-UNROLL = 4  # independent recurrences per triangular sweep
-# rows of the table of a tridiagonal solve over m unknowns (L D L^T, L unit lower bidiagonal)
-T_FORWARD = 0  # a_i of the forward sweep y_i = r_i + a_i y_(i-1) (a_0 = 0)
-T_INVERSE_PIVOT = 1  # 1 / D_i
-T_BACKWARD = 2  # b_i of x_i = y_i / D_i + b_i x_(i+1) (b_(m-1) = 0)
-T_MID_INVERSE = 3  # condensed P2 (over all n nodes, midpoint j = 2e + 1): 1 / M[j, j]
+# rows of the table of a tridiagonal solve over m unknowns: a twisted factorization about the middle
+# unknown k = m // 2 (rows above k eliminated downwards, rows below upwards; both sweeps run at once)
+T_FORWARD = 0  # above k: a_i of y_i = r_i + a_i y_(i-1) (a_0 = 0); a_k also at the twist
+T_INVERSE_PIVOT = 1  # 1 / pivot: D_i above k, the twist's gamma_k at k, E_i below k
+T_BACKWARD = 2  # outward sweeps: x_i = y_i / D_i + b_i x_(i+1) above k, x_i = z_i / E_i + b_i x_(i-1) below
+T_MID_INVERSE = 3  # condensed P2, per element e (its midpoint j = 2e + 1): 1 / M[j, j]
 T_MID_LEFT = 4  # M[j, j - 1]
 T_MID_RIGHT = 5  # M[j, j + 1]
 T_WORK = 6  # rows 6, 7: scratch (the vertex system of P2; no allocation per step)
-T_ROWS = 8
+T_UPWARD = 8  # k and below: c_i of z_i = r_i + c_i z_(i+1) (c_(m-1) = 0); c_k also at the twist
+T_ROWS = 9
+TWISTED_MIN = 8  # smaller systems take the plain sweeps (same table)
 
 
 def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> None:
-    """``L D L^T`` of the symmetric tridiagonal ``(diagonal, off)`` as the unrolled sweeps' products."""
+    """Twisted factorization of the symmetric tridiagonal ``(diagonal, off)`` about ``k = m // 2``.
+
+    Pivots ``D_i`` from the top (``L D L^T``) for ``i < k``, ``E_i`` from the
+    bottom (``U E U^T``) for ``i > k``, and at the twist ``gamma_k = d_k -
+    off_(k-1)^2 / D_(k-1) - off_k^2 / E_(k+1)``.
+    """
     m = diagonal.size
-    pivot = np.empty(m)
-    forward = np.zeros(m)  # a_i = -L[i, i-1]
-    pivot[0] = diagonal[0]
-    for i in range(1, m):
-        multiplier = off[i - 1] / pivot[i - 1]
-        forward[i] = -multiplier
-        pivot[i] = diagonal[i] - multiplier * off[i - 1]
-    backward = np.zeros(m)  # b_i = -L[i+1, i] = -off_i / D_i
-    backward[: m - 1] = -off / pivot[: m - 1]
-    table[T_INVERSE_PIVOT, :m] = 1.0 / pivot
+    k = m // 2
+    top = np.empty(m)  # D_i
+    top[0] = diagonal[0]
+    for i in range(1, k):
+        top[i] = diagonal[i] - off[i - 1] * off[i - 1] / top[i - 1]
+    bottom = np.empty(m)  # E_i
+    bottom[m - 1] = diagonal[m - 1]
+    for i in range(m - 2, k, -1):
+        bottom[i] = diagonal[i] - off[i] * off[i] / bottom[i + 1]
+    forward = np.zeros(m)
+    upward = np.zeros(m)
+    backward = np.zeros(m)
+    inverse = np.empty(m)
+    twist = diagonal[k]
+    if k > 0:
+        forward[1 : k + 1] = -off[:k] / top[:k]
+        twist -= off[k - 1] * off[k - 1] / top[k - 1]
+        backward[:k] = -off[:k] / top[:k]
+        inverse[:k] = 1.0 / top[:k]
+    if k < m - 1:
+        upward[k : m - 1] = -off[k:] / bottom[k + 1 :]
+        twist -= off[k] * off[k] / bottom[k + 1]
+        backward[k + 1 :] = -off[k:] / bottom[k + 1 :]
+        inverse[k + 1 :] = 1.0 / bottom[k + 1 :]
+    inverse[k] = 1.0 / twist
     table[T_FORWARD, :m] = forward
+    table[T_UPWARD, :m] = upward
     table[T_BACKWARD, :m] = backward
+    table[T_INVERSE_PIVOT, :m] = inverse
 
 
 def prepare_mass(disc) -> tuple:
@@ -90,9 +116,9 @@ def prepare_mass(disc) -> tuple:
     diagonal[1:] -= right * right * inverse  # vertex 2e + 2 through M[2e + 1, 2e + 2]
     off = np.asarray(matrix[vertices[:-1], vertices[1:]]).ravel() - right * inverse * left
     _tridiagonal(diagonal, off, table)
-    table[T_MID_INVERSE, mids] = inverse
-    table[T_MID_LEFT, mids] = left
-    table[T_MID_RIGHT, mids] = right
+    table[T_MID_INVERSE, : mids.size] = inverse
+    table[T_MID_LEFT, : mids.size] = left
+    table[T_MID_RIGHT, : mids.size] = right
     return MASS_CONDENSED, table
 
 
@@ -105,95 +131,211 @@ def _stiffness_forces(u, bands, out):
             out[0] = 0.0
             return
         out[0] = -bands[1, 0] * (u[1] - u[0])
-        for i in range(1, n - 1):
-            out[i] = -bands[1, i - 1] * (u[i - 1] - u[i]) - bands[1, i] * (u[i + 1] - u[i])
+        near = bands[1]
+        for j in range(n - 2):  # node i = j + 1
+            current = u[j + 1]
+            out[j + 1] = -near[j] * (u[j] - current) - near[j + 1] * (u[j + 2] - current)
         out[n - 1] = -bands[1, n - 2] * (u[n - 2] - u[n - 1])
         return
-    # pentadiagonal (P2).  The guarded form is kept on purpose: a branch-free interior loop
-    # (range(2, n - 2)) measured 14 times slower with numba 0.6x (negative-index wraparound checks)
-    for i in range(n):
+    # pentadiagonal (P2): the four edge nodes guarded, the interior branch-free
+    if n < 5:
+        for i in range(n):
+            out[i] = _pentadiagonal_force(u, bands, i, n)
+        return
+    for i in (0, 1):
+        out[i] = _pentadiagonal_force(u, bands, i, n)
+    near = bands[1]
+    far = bands[2]
+    for j in range(n - 4):  # node i = j + 2; indices written as j + k >= 0 (no wraparound checks)
+        current = u[j + 2]
         total = 0.0
-        if i >= 2:
-            total -= bands[2, i - 2] * (u[i - 2] - u[i])
-        if i >= 1:
-            total -= bands[1, i - 1] * (u[i - 1] - u[i])
-        if i + 1 < n:
-            total -= bands[1, i] * (u[i + 1] - u[i])
-        if i + 2 < n:
-            total -= bands[2, i] * (u[i + 2] - u[i])
-        out[i] = total
+        total -= far[j] * (u[j] - current)
+        total -= near[j + 1] * (u[j + 1] - current)
+        total -= near[j + 2] * (u[j + 3] - current)
+        total -= far[j + 2] * (u[j + 4] - current)
+        out[j + 2] = total
+    for i in (n - 2, n - 1):
+        out[i] = _pentadiagonal_force(u, bands, i, n)
+
+
+@kernel(fastmath=False)
+def _pentadiagonal_force(u, bands, i, n):
+    """``-(K u)_i`` of a pentadiagonal ``K`` at any node (the guarded form, for the edges)."""
+    total = 0.0
+    if i >= 2:
+        total -= bands[2, i - 2] * (u[i - 2] - u[i])
+    if i >= 1:
+        total -= bands[1, i - 1] * (u[i - 1] - u[i])
+    if i + 1 < n:
+        total -= bands[1, i] * (u[i + 1] - u[i])
+    if i + 2 < n:
+        total -= bands[2, i] * (u[i + 2] - u[i])
+    return total
+
+
+@kernel(fastmath=False)
+def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
+    """P2 lumped step in one sweep: ``v += dt M^-1 (-K u)``, ``u += dt v`` (at least 5 nodes).
+
+    The two previous nodes' old displacements are kept in registers, so each
+    node is updated right after its force is known, without a scratch array.
+    """
+    n = u.size
+    older = u[0]
+    old = u[1]
+    force0 = _pentadiagonal_force(u, bands, 0, n)
+    force1 = _pentadiagonal_force(u, bands, 1, n)
+    velocity = v[0] + dt * (force0 * inverse[0])
+    v[0] = velocity
+    u[0] = older + dt * velocity
+    velocity = v[1] + dt * (force1 * inverse[1])
+    v[1] = velocity
+    u[1] = old + dt * velocity
+    near = bands[1]
+    far = bands[2]
+    for j in range(n - 4):  # node i = j + 2; indices written as j + k >= 0 (no wraparound checks)
+        current = u[j + 2]
+        total = 0.0
+        total -= far[j] * (older - current)
+        total -= near[j + 1] * (old - current)
+        total -= near[j + 2] * (u[j + 3] - current)
+        total -= far[j + 2] * (u[j + 4] - current)
+        velocity = v[j + 2] + dt * (total * inverse[j + 2])
+        v[j + 2] = velocity
+        u[j + 2] = current + dt * velocity
+        older = old
+        old = current
+    # the last two nodes see the old values of their left neighbours
+    last1 = u[n - 2]
+    last0 = u[n - 1]
+    total = 0.0
+    total -= bands[2, n - 4] * (older - last1)
+    total -= bands[1, n - 3] * (old - last1)
+    total -= bands[1, n - 2] * (last0 - last1)
+    velocity = v[n - 2] + dt * (total * inverse[n - 2])
+    v[n - 2] = velocity
+    u[n - 2] = last1 + dt * velocity
+    total = 0.0
+    total -= bands[2, n - 3] * (old - last0)
+    total -= bands[1, n - 2] * (last1 - last0)
+    velocity = v[n - 1] + dt * (total * inverse[n - 1])
+    v[n - 1] = velocity
+    u[n - 1] = last0 + dt * velocity
 
 
 @kernel(fastmath=False)
 def _tridiagonal_solve(table, x, m):
     """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place).
 
-    Each sweep is unrolled four times with the last four inputs and outputs
-    carried in registers: ``y_i = r_i + a_i r_(i-1) + a_i a_(i-1) r_(i-2) +
-    a_i a_(i-1) a_(i-2) r_(i-3) + (a_i ... a_(i-3)) y_(i-4)``, so four
-    independent recurrences are in flight.
+    Twisted: the upper half is eliminated downwards while the lower half is
+    eliminated upwards, then both halves are back-substituted outwards from
+    the middle, so two recurrences run side by side in every phase.  Each is
+    also unrolled twice (``y_i = r_i + a_i r_(i-1) + (a_i a_(i-1)) y_(i-2)``),
+    four independent dependency chains in all.
     """
+    if m < TWISTED_MIN:
+        _tridiagonal_solve_plain(table, x, m)
+        return
     a = table[T_FORWARD]
+    c = table[T_UPWARD]
     b = table[T_BACKWARD]
     inverse = table[T_INVERSE_PIVOT]
-    if m <= UNROLL:
-        for i in range(1, m):
-            x[i] += a[i] * x[i - 1]
-        x[m - 1] *= inverse[m - 1]
-        for i in range(m - 2, -1, -1):
-            x[i] = x[i] * inverse[i] + b[i] * x[i + 1]
-        return
-    # forward sweep, y_i = r_i + a_i y_(i-1); o* are inputs r, y* outputs, a* coefficients before i
-    o3 = x[0]
-    y4 = o3
-    o2 = x[1]
-    y3 = o2 + a[1] * y4
-    x[1] = y3
-    o1 = x[2]
-    y2 = o1 + a[2] * y3
-    x[2] = y2
-    current = x[3]
-    y1 = current + a[3] * y2
-    x[3] = y1
-    o3, o2, o1 = o2, o1, current
-    a3, a2, a1 = a[1], a[2], a[3]
-    for i in range(UNROLL, m):
+    k = m // 2
+    # inward: top i = 2 .. k - 1 (k - 2 steps), bottom j = m - 3 .. k + 1 (m - k - 3 steps)
+    top_old = x[1]  # r_(i-1)
+    top_older = x[0]  # y_(i-2)
+    top_last = top_old + a[1] * top_older  # y_(i-1)
+    x[1] = top_last
+    bottom_old = x[m - 2]
+    bottom_older = x[m - 1]
+    bottom_last = bottom_old + c[m - 2] * bottom_older
+    x[m - 2] = bottom_last
+    a_prev = a[1]
+    c_prev = c[m - 2]
+    for t in range(m - k - 3):
+        i = t + 2
         current = x[i]
-        a0 = a[i]
-        p1 = a0 * a1
-        p2 = p1 * a2
-        p3 = p2 * a3
-        value = current + a0 * o1 + p1 * o2 + p2 * o3 + p3 * y4
+        a_now = a[i]
+        value = current + a_now * top_old + (a_now * a_prev) * top_older
         x[i] = value
-        o3, o2, o1 = o2, o1, current
-        y4, y3, y2, y1 = y3, y2, y1, value
-        a3, a2, a1 = a2, a1, a0
-    # backward sweep, x_i = e_i + b_i x_(i+1) with e_i = y_i / D_i
-    e3 = x[m - 1] * inverse[m - 1]
-    z4 = e3
-    x[m - 1] = z4
-    e2 = x[m - 2] * inverse[m - 2]
-    z3 = e2 + b[m - 2] * z4
-    x[m - 2] = z3
-    e1 = x[m - 3] * inverse[m - 3]
-    z2 = e1 + b[m - 3] * z3
-    x[m - 3] = z2
-    current = x[m - 4] * inverse[m - 4]
-    z1 = current + b[m - 4] * z2
-    x[m - 4] = z1
-    e3, e2, e1 = e2, e1, current
-    b3, b2, b1 = b[m - 2], b[m - 3], b[m - 4]
-    for i in range(m - 1 - UNROLL, -1, -1):
+        top_old = current
+        top_older = top_last
+        top_last = value
+        a_prev = a_now
+        j = m - 3 - t
+        current = x[j]
+        c_now = c[j]
+        value = current + c_now * bottom_old + (c_now * c_prev) * bottom_older
+        x[j] = value
+        bottom_old = current
+        bottom_older = bottom_last
+        bottom_last = value
+        c_prev = c_now
+    if k - 2 > m - k - 3:  # even m: the top half has one more step
+        i = k - 1
+        current = x[i]
+        value = current + a[i] * top_old + (a[i] * a_prev) * top_older
+        x[i] = value
+        top_last = value
+    middle = (x[k] + a[k] * top_last + c[k] * bottom_last) * inverse[k]
+    x[k] = middle
+    # outward: top i = k - 1 .. 0, bottom i = k + 1 .. m - 1; x_i = e_i + b_i e_(i+-1) + (b_i b_(i+-1)) x_(i+-2)
+    top_old = x[k - 1] * inverse[k - 1]  # e_(i+1)
+    top_older = middle  # x_(i+2)
+    top_last = top_old + b[k - 1] * middle
+    x[k - 1] = top_last
+    bottom_old = x[k + 1] * inverse[k + 1]
+    bottom_older = middle
+    bottom_last = bottom_old + b[k + 1] * middle
+    x[k + 1] = bottom_last
+    b_top = b[k - 1]
+    b_bottom = b[k + 1]
+    for t in range(m - k - 2):
+        i = k - 2 - t
         current = x[i] * inverse[i]
-        b0 = b[i]
-        q1 = b0 * b1
-        q2 = q1 * b2
-        q3 = q2 * b3
-        value = current + b0 * e1 + q1 * e2 + q2 * e3 + q3 * z4
+        b_now = b[i]
+        value = current + b_now * top_old + (b_now * b_top) * top_older
         x[i] = value
-        e3, e2, e1 = e2, e1, current
-        z4, z3, z2, z1 = z3, z2, z1, value
-        b3, b2, b1 = b2, b1, b0
+        top_old = current
+        top_older = top_last
+        top_last = value
+        b_top = b_now
+        j = k + 2 + t
+        current = x[j] * inverse[j]
+        b_now = b[j]
+        value = current + b_now * bottom_old + (b_now * b_bottom) * bottom_older
+        x[j] = value
+        bottom_old = current
+        bottom_older = bottom_last
+        bottom_last = value
+        b_bottom = b_now
+    if k - 1 > m - k - 2:  # even m: the top half has one more step (i = 0)
+        current = x[0] * inverse[0]
+        x[0] = current + b[0] * top_old + (b[0] * b_top) * top_older
+
+
+@kernel(fastmath=False)
+def _tridiagonal_solve_plain(table, x, m):
+    """The twisted solve of :func:`_tridiagonal_solve` with plain (not unrolled) sweeps, for any ``m``."""
+    a = table[T_FORWARD]
+    c = table[T_UPWARD]
+    b = table[T_BACKWARD]
+    inverse = table[T_INVERSE_PIVOT]
+    k = m // 2
+    for i in range(1, k):
+        x[i] += a[i] * x[i - 1]
+    for i in range(m - 2, k, -1):
+        x[i] += c[i] * x[i + 1]
+    middle = x[k]
+    if k > 0:
+        middle += a[k] * x[k - 1]
+    if k < m - 1:
+        middle += c[k] * x[k + 1]
+    x[k] = middle * inverse[k]
+    for i in range(k - 1, -1, -1):
+        x[i] = x[i] * inverse[i] + b[i] * x[i + 1]
+    for i in range(k + 1, m):
+        x[i] = x[i] * inverse[i] + b[i] * x[i - 1]
 
 
 @kernel(fastmath=False)
@@ -208,19 +350,41 @@ def mass_acceleration(kind, table, r):
         _tridiagonal_solve(table, r, n)
         return
     # condensed P2: vertex right-hand sides lose the midpoints' share, then the midpoints follow
-    m = (n + 1) // 2
+    vertex = _condensed_vertex_solve(table, r)
+    mid_inverse = table[T_MID_INVERSE]
+    mid_left = table[T_MID_LEFT]
+    mid_right = table[T_MID_RIGHT]
+    for e in range((n - 1) // 2):
+        j = 2 * e + 1
+        r[j - 1] = vertex[e]
+        r[j] = (r[j] - mid_left[e] * vertex[e] - mid_right[e] * vertex[e + 1]) * mid_inverse[e]
+    r[n - 1] = vertex[(n - 1) // 2]
+
+
+@kernel(fastmath=False)
+def _condensed_vertex_solve(table, r):
+    """Vertex accelerations of the condensed P2 mass for the forces ``r`` (a row of ``table``).
+
+    One pass forms every vertex's right-hand side, its force less the shares of
+    its two midpoints (in the order of the assembly: the left element's, then
+    the right one's), then the tridiagonal vertex system is solved.
+    """
+    m = (r.size + 1) // 2
     vertex = table[T_WORK + 1]
-    for e in range(m):
-        vertex[e] = r[2 * e]
-    for e in range(m - 1):
-        share = r[2 * e + 1] * table[T_MID_INVERSE, 2 * e + 1]
-        vertex[e] -= table[T_MID_LEFT, 2 * e + 1] * share
-        vertex[e + 1] -= table[T_MID_RIGHT, 2 * e + 1] * share
+    mid_inverse = table[T_MID_INVERSE]
+    mid_left = table[T_MID_LEFT]
+    mid_right = table[T_MID_RIGHT]
+    share = r[1] * mid_inverse[0]
+    vertex[0] = r[0] - mid_left[0] * share
+    carried = mid_right[0] * share  # the right-hand midpoint's share of the previous vertex's element
+    for e in range(1, m - 1):
+        value = r[2 * e] - carried
+        share = r[2 * e + 1] * mid_inverse[e]
+        vertex[e] = value - mid_left[e] * share
+        carried = mid_right[e] * share
+    vertex[m - 1] = r[2 * m - 2] - carried
     _tridiagonal_solve(table, vertex, m)
-    for e in range(m):
-        r[2 * e] = vertex[e]
-    for j in range(1, n, 2):
-        r[j] = (r[j] - table[T_MID_LEFT, j] * r[j - 1] - table[T_MID_RIGHT, j] * r[j + 1]) * table[T_MID_INVERSE, j]
+    return vertex
 
 
 @kernel(fastmath=False)
@@ -233,6 +397,9 @@ def elastic_acceleration(u, bands, kind, table, out):
 @kernel(fastmath=False)
 def step_rod(u, v, a, bands, kind, table, dt):
     """One leapfrog step of a free rod: ``v += dt M^-1 (-K u)``, ``u += dt v`` (``a``: scratch)."""
+    if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
+        _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
+        return
     _stiffness_forces(u, bands, a)
     if kind == MASS_LUMPED:  # the mass and the update in one pass
         inverse = table[0]
@@ -240,6 +407,26 @@ def step_rod(u, v, a, bands, kind, table, dt):
             velocity = v[i] + dt * (a[i] * inverse[i])
             v[i] = velocity
             u[i] += dt * velocity
+        return
+    if kind == MASS_CONDENSED:  # the midpoints' accelerations and the update in one pass
+        vertex = _condensed_vertex_solve(table, a)
+        mid_inverse = table[T_MID_INVERSE]
+        mid_left = table[T_MID_LEFT]
+        mid_right = table[T_MID_RIGHT]
+        for e in range((u.size - 1) // 2):
+            j = 2 * e + 1
+            left = vertex[e]
+            middle = (a[j] - mid_left[e] * left - mid_right[e] * vertex[e + 1]) * mid_inverse[e]
+            velocity = v[j - 1] + dt * left
+            v[j - 1] = velocity
+            u[j - 1] += dt * velocity
+            velocity = v[j] + dt * middle
+            v[j] = velocity
+            u[j] += dt * velocity
+        last = u.size - 1
+        velocity = v[last] + dt * vertex[last // 2]
+        v[last] = velocity
+        u[last] += dt * velocity
         return
     mass_acceleration(kind, table, a)
     for i in range(u.size):

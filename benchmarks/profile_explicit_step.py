@@ -1,0 +1,65 @@
+"""Where the general explicit step spends its time, one command:
+
+    python benchmarks/profile_explicit_step.py [--repeats 7]
+
+Prints a Markdown table: CPU time (``time.process_time``, so that other jobs on a
+shared machine do not count) per element of one rod's step (``step_rod``) and of
+its parts, the stiffness stencil alone and the mass solve alone, for each
+discretization of the general path at 800 and 12800 elements (the long rod of the
+gamma = 0.6 pair, 1333 and 21333 elements).  The step fuses these parts
+(fem/explicit_step.py), so it can cost less than their sum.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import wavecontact
+from wavecontact.fem import explicit_step
+from wavecontact.fem.simulation import _Run, build_setup
+
+DISCRETIZATIONS = (("P1 consistent", 1, "consistent"), ("P2 lumped", 2, "lumped"), ("P2 consistent", 2, "consistent"))
+
+
+def cpu_per_call(function, repeats, calls=300):
+    """Median over ``repeats`` of the CPU seconds per call of ``function()``."""
+    samples = []
+    for _ in range(repeats):
+        started = time.process_time()
+        for _ in range(calls):
+            function()
+        samples.append((time.process_time() - started) / calls)
+    return float(np.median(samples))
+
+
+def profile_row(name, order, mass, elements, repeats):
+    """One table row: CPU ns per element of the long rod's step and of its parts."""
+    setup = build_setup(wavecontact.two_rods(0.6, 100), elements=elements, order=order, mass=mass)
+    run = _Run(setup, 0.05)
+    disc = setup.rods[1]
+    u, v, a = run.u[1].copy(), run.v[1].copy(), np.zeros(disc.n_nodes)
+    kind, table = run.mass_solves[1]
+    bands, dt, per = disc.stiffness_bands, setup.dt, 1e9 / disc.n_elements
+    explicit_step.step_rod(u, v, a, bands, kind, table, dt)  # compile / load
+    step = cpu_per_call(lambda: explicit_step.step_rod(u, v, a, bands, kind, table, dt), repeats)
+    stiffness = cpu_per_call(lambda: explicit_step._stiffness_forces(u, bands, a), repeats)
+    solve = cpu_per_call(lambda: explicit_step.mass_acceleration(kind, table, a), repeats)
+    return f"| {name} | {disc.n_elements} | {step * per:.2f} | {stiffness * per:.2f} | {solve * per:.2f} |"
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args(argv)
+    print("| discretization | elements (long rod) | step: ns/element | stiffness alone | mass solve alone |")
+    print("|---|---:|---:|---:|---:|")
+    for name, order, mass in DISCRETIZATIONS:
+        for elements in (800, 12800):
+            print(profile_row(name, order, mass, elements, args.repeats))
+
+
+if __name__ == "__main__":
+    main()
