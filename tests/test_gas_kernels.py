@@ -70,7 +70,8 @@ def test_kernel_draw_matches_the_table_quantile_function():
         eps2, s = kernels._table_draw(u, ig, wg, ir, wr, probability, True, quantiles, share)
         assert eps2 == pytest.approx(float(table.quantile(g, r, u)), rel=1e-12, abs=1e-14)
         assert s == pytest.approx(table.share(g, r), rel=1e-12)
-    assert kernels._lookup(ratio, 2e3)[0] == -1  # beyond the grid: refused, never clipped
+    assert kernels._lookup(ratio, 2 * ratio[-1])[0] == -1  # beyond the grid: refused, never clipped
+    assert kernels._lookup(ratio[1:], 0.5 * ratio[1])[0] == -1  # below a grid that starts above 0
 
 
 def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):

@@ -408,6 +408,9 @@ def run_events(
         else:
             temperature[short] += s * lost / bath_modes
             temperature[long] += (1.0 - s) * lost / bath_modes
+            # a bath emptied by the cap above can end a rounding error below zero: it is empty
+            temperature[short] = max(temperature[short], 0.0)
+            temperature[long] = max(temperature[long], 0.0)
         # compensated (Kahan) sum: the kinetic energy stays accurate relative to itself while it decays
         # by many orders of magnitude (plain sums would keep an error of 1e-16 of the initial energy)
         change = -lost - scalars[KINETIC_CARRY]
