@@ -85,20 +85,30 @@ def test_a_solved_gas_conserves_energy_and_repeats_bit_for_bit():
     np.testing.assert_array_equal(runs[0].bath_temperatures, runs[1].bath_temperatures)
 
 
-@pytest.mark.slow  # a few minutes: ~1,000 delay solves
+@pytest.mark.slow  # ~1-3 min: ~250 delay solves
 def test_solving_each_collision_agrees_statistically_with_the_table_rule():
     """Same small gases, one run with a solve per collision and one with the shipped table (independent
-    streams); the mean over realisations of the translational share of the energy must agree within the
-    realisations' spread plus the table's own sampling error (120 collisions per point, 41 levels)."""
+    streams); the mean over realisations of the translational share of the energy after 25 collisions must
+    agree within the realisations' spread.  A realisation in which either run meets a pair outside the
+    table's range (or the solve's accepted range, the same [0, 100]) is left out of both (at most 4 of 12)."""
     finals = {"table": [], "solve": []}
-    for seed in range(8):
-        gas = random_gas(8, seed=200 + seed, lengths=UniformLengths(0.6, 1.0), bath_temperature=0.5)
+    for seed in range(12):
+        gas = random_gas(8, seed=200 + seed, lengths=UniformLengths(0.6, 1.0), bath_temperature=0.05)
+        pair = {}
         for name, rule in (("table", VibrationTable(TABLE)), ("solve", VibrationSolve(collision_draw(100.0)))):
-            result = GasSimulation(gas, rule, seed=seed, record_every=10, max_frames=0).run(60)
-            assert result.status == "completed", result.message
+            try:
+                result = GasSimulation(gas, rule, seed=seed, record_every=25, max_frames=0).run(25)
+            except InvalidParameterError:
+                break  # the solve refused a ratio beyond 100
+            if result.status != "completed":
+                assert result.status == "off_table", result.message
+                break
             h = result.history
-            share = h["kinetic_energy"] / (h["kinetic_energy"] + h["bath_energy"])
-            finals[name].append(np.mean(share[share.size // 2:]))
+            pair[name] = h["kinetic_energy"][-1] / (h["kinetic_energy"][-1] + h["bath_energy"][-1])
+        if len(pair) == 2:
+            for name, value in pair.items():
+                finals[name].append(value)
     a, b = np.array(finals["table"]), np.array(finals["solve"])
+    assert a.size >= 8
     spread = math.sqrt(np.var(a, ddof=1) / a.size + np.var(b, ddof=1) / b.size)
     assert abs(a.mean() - b.mean()) < 4 * spread
