@@ -2,7 +2,7 @@
 
 * :mod:`.model`       -- the rods' state (:class:`RodGas`, :func:`random_gas`, length distributions);
 * :mod:`.rules`       -- collision rules as values (fixed restitution, restitution table, a solve per collision);
-* :mod:`.kernels`     -- the event loop (indexed heap of neighbour-pair collision times, numba);
+* :mod:`.kernels`     -- the event loop (tournament tree of neighbour-pair collision times, numba);
 * :mod:`.simulation`  -- runs in chunks, histories, collapse detection, checkpoint and resume;
 * :mod:`.rod_table`   -- the restitution table computed from rod collisions that the gas uses by default,
   and the per-collision draw of :class:`VibrationSolve` from :func:`wavecontact.collide`;
