@@ -87,7 +87,8 @@ BLOCKS = [
     Block("readme-collide", "README.md", (("collide", "--gamma", "0.6", "--kappa", "100"),), cheap=True),
     Block("usage-help", "docs/usage.md",
           tuple(("--help",) if c is None else (c, "--help")
-                for c in (None, "collide", "converge", "compare", "ring", "equipartition", "map", "gas")),
+                for c in (None, "collide", "converge", "compare", "ring", "equipartition", "map", "gas", "ensemble",
+                          "bath-figure", "restitution-table", "markov")),
           cheap=True),
     Block("usage-compare", "docs/usage.md",
           (("compare", "--gamma", "0.6", "--kappa", "100", "--repeats", "3", "--no-progress"),)),

@@ -65,12 +65,13 @@ def test_hard_core_tables_are_refused():
         restitution_table([0.6], [0.5], 4, 0, kappa=math.inf)
 
 
-def test_dem_example_runs():
+def test_dem_example_callback_draws_and_refuses_states_off_the_table(tmp_path):
     path = Path(__file__).resolve().parent.parent / "examples" / "restitution_table_dem.py"
     spec = importlib.util.spec_from_file_location("restitution_table_dem", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    table = module.main()
-    assert table.eps2_quantiles.shape == (2, 3, 21)
+    table = restitution_table([0.5, 0.7], [0.0, 1.0], 6, 3, kappa=100.0, bath_modes=10, levels=5, rtol=1e-6)
     rule = module.restitution_callback(table, np.random.default_rng(2))
-    assert 0.0 < rule(0.6173, 0.5, 1.0, 0.125) < 3.0
+    assert 0.0 < rule(0.6, 0.5, 1.0, 0.125) < 3.0
+    with pytest.raises(InvalidParameterError, match="temperature_ratio"):
+        rule(0.6, 0.5, 1.0, 10.0)  # T_B / E_tr = 40: outside the table, refused rather than clipped

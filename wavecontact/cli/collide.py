@@ -9,9 +9,9 @@ from .common import (
     contact_law,
     gamma_value,
     kappa_value,
-    number_type,
     option_choices,
     option_text,
+    positive_float,
     positive_int,
     report_written,
 )
@@ -19,7 +19,6 @@ from .common import (
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
-_positive_float = number_type(lambda v: math.isfinite(v) and v > 0, "a finite positive number")
 
 
 def add_parser(subparsers):
@@ -45,7 +44,7 @@ def add_parser(subparsers):
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="solve once only; the time printed then includes numba's kernel preparation")
     delay = p.add_argument_group("delay solver")
-    delay.add_argument("--rtol", type=_positive_float, help=option_text("delay", "rtol"))
+    delay.add_argument("--rtol", type=positive_float, help=option_text("delay", "rtol"))
     delay.add_argument("--max-steps", type=positive_int, metavar="N", help=option_text("delay", "max_steps"))
     fem = p.add_argument_group("finite-element solver")
     fem.add_argument("--elements", type=positive_int, metavar="N", help=option_text("fem", "elements"))

@@ -157,3 +157,7 @@ def contact_law(kappa: float, contact: str | None) -> str:
         raise ValueError(f"--contact hard is the limit kappa -> inf; --kappa {kappa:g} would not be used "
                          "(pass --kappa inf)")
     return contact
+
+
+#: ``--rtol``, ``--initial-energy`` ...: a finite number > 0.
+positive_float = number_type(lambda v: math.isfinite(v) and v > 0, "a finite positive number")

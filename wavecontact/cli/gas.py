@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from .common import positive_int
+from .common import nonnegative_int, positive_int
 
 CHECKPOINT_NAME = "gas_checkpoint.npz"
 FIGURE_NAME = "gas.png"
@@ -41,15 +41,6 @@ def _positive(name):
     return parse
 
 
-def _seed(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0, got {text!r}")
-    return value
-
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
@@ -71,7 +62,7 @@ def add_parser(subparsers):
                    "stops the run with a message)")
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
-    p.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
+    p.add_argument("--seed", type=nonnegative_int, default=0, help="root seed (default 0)")
     p.add_argument("--lengths", type=_positive("lengths"), nargs=2, metavar=("SHORTEST", "LONGEST"),
                    default=(0.6, 1.0), help="rod lengths uniform in [SHORTEST, LONGEST] (default 0.6 1.0)")
     p.add_argument("--packing", type=_fraction("packing"), default=0.2,

@@ -7,17 +7,7 @@ import json
 import math
 from pathlib import Path
 
-from .common import gamma_value, kappa_value, nonnegative_int, positive_int
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"expected a finite positive number, got {text!r}")
-    return value
+from .common import gamma_value, kappa_value, nonnegative_int, positive_float, positive_int
 
 
 def add_parser(subparsers):
@@ -41,8 +31,8 @@ def add_parser(subparsers):
     p.add_argument("--bath", choices=("fixed", "conserved"), default="fixed",
                    help="bath temperature held at T_B^0 (Eq. 30) or updated by energy conservation (Eq. 28)")
     p.add_argument("--modes-per-rod", type=positive_int, default=250, help="N_mod of Eq. 28/31 (default 250)")
-    p.add_argument("--initial-energy", type=_positive_float, default=1.0,
-                   help="E_tr(0)/T_B^0 (default 1; with --bath conserved at most 2 N_mod + 1)")
+    p.add_argument("--initial-energy", type=positive_float, default=1.0,
+                   help="E_tr(0)/T_B^0 (default 1.0; with --bath conserved at most 2 N_mod + 1)")
     p.add_argument("--bath-modes", type=positive_int, default=250,
                    help="excited modes per rod nu_max in each solved collision (default 250)")
     p.add_argument("--solver", choices=("delay", "modal", "fem"), default="delay",
@@ -51,7 +41,7 @@ def add_parser(subparsers):
                    help="steps discarded before the stationary statistics (default: from the relaxation)")
     p.add_argument("--workers", type=nonnegative_int, default=0,
                    help="worker processes (default 0: run here)")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="run the chains on a dask.distributed scheduler")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run the chains on a dask.distributed scheduler (default: none, local processes)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write Fig. 10 (distribution of E_tr/T_B^0) to FILE")
     p.add_argument("--out", metavar="DIR", help="write markov.npz and summary.json into DIR")

@@ -8,22 +8,11 @@ import math
 import sys
 from pathlib import Path
 
-from .common import add_ring_options, gamma_value, kappa_value, positive_int, report_written
+from .common import add_ring_options, gamma_value, kappa_value, nonnegative_int, positive_int, report_written
 
 SUMMARY_NAME = "summary.json"
 SPECTRUM_NAME = "modal_spectrum.csv"
 
-
-def _nonnegative_int(text: str) -> int:
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
 
 
 def add_parser(subparsers):
@@ -42,7 +31,7 @@ def add_parser(subparsers):
     add_ring_options(p)
     p.add_argument("--checkpoint-every", type=positive_int, default=100, metavar="K",
                    help="write a checkpoint every K collisions")
-    p.add_argument("--transient", type=_nonnegative_int, default=None,
+    p.add_argument("--transient", type=nonnegative_int, default=None,
                    help="collisions discarded before stationary averages (default: chosen from the relaxation)")
     p.add_argument("--max-lag", type=positive_int, default=20, help="largest lag k of C_eps(k)")
     p.add_argument("--json", action="store_true", help="print the summary (summary.json) as one JSON object")
