@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from analytic_kick_table import analytic_kick_table
 
 from wavecontact.cli import main
 
@@ -15,14 +16,27 @@ def _json(capsys, argv):
 
 def test_json_summary_and_outputs(tmp_path, capsys):
     out = tmp_path / "run"
-    summary = _json(capsys, ["gas", "--rods", "200", "--collisions", "4000", "--rule", "vibration",
-                             "--damping", "30", "--seed", "2", "--out", str(out), "--json", "--no-progress"])
+    table = tmp_path / "kick.npz"
+    analytic_kick_table(levels=51).save(table)  # a wide analytic table: this run stays inside its grid
+    summary = _json(capsys, ["gas", "--rods", "200", "--collisions", "4000", "--rule", "vibration", "--table",
+                             str(table), "--damping", "30", "--seed", "2", "--out", str(out), "--json",
+                             "--no-progress"])
     for key in ("collisions", "simulated_time", "collapsed", "collisions_per_second", "final_energy"):
         assert key in summary
     assert summary["collisions"] == 4000 and summary["collapsed"] is False
     assert {p.name for p in out.iterdir()} >= {"gas.png", "gas_summary.json", "gas_history.npz", "gas_checkpoint.npz"}
     with np.load(out / "gas_history.npz", allow_pickle=False) as data:
         assert data["history_kinetic_energy"][-1] == pytest.approx(summary["final_energy"])
+
+
+def test_the_default_vibration_table_is_the_one_computed_from_rods(capsys):
+    summary = _json(capsys, ["gas", "--rods", "100", "--collisions", "3000", "--rule", "vibration", "--seed", "2",
+                             "--json", "--no-progress"])
+    assert summary["rule"]["solver"] == "delay" and summary["rule"]["samples_per_point"] >= 50
+    assert summary["status"] in ("completed", "off_table")
+    if summary["status"] == "off_table":  # a slow pair in warm baths: refused with a message, never clipped
+        assert "outside the restitution table's range" in summary["message"]
+        assert summary["collisions"] < 3000
 
 
 def test_resume_continues_the_same_run(tmp_path, capsys):

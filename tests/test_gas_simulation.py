@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from analytic_kick_table import analytic_kick_table
 from scipy.optimize import curve_fit
 
 from wavecontact.errors import CheckpointError, InvalidParameterError
@@ -17,11 +18,10 @@ from wavecontact.gas import (
     VibrationSolve,
     VibrationTable,
     random_gas,
-    thermal_kick_table,
 )
 from wavecontact.gas.reference import heapq_ring_gas
 
-TABLE = thermal_kick_table(levels=101)
+TABLE = analytic_kick_table(levels=101)
 
 
 def _state(sim):

@@ -57,8 +57,9 @@ def add_parser(subparsers):
     p.add_argument("--restitution", type=_fraction("restitution", low_open=False),
                    help="eps of the fixed rule, in [0, 1] (no default: required with --rule fixed)")
     p.add_argument("--table", metavar="FILE",
-                   help="restitution table (.npz/.json) of the vibration rule (default: the analytic "
-                   "thermal-kick stand-in, wavecontact.gas.thermal_kick_table)")
+                   help="restitution table (.npz/.json) of the vibration rule (default: the table computed "
+                   "from rod collisions shipped in wavecontact/data, kappa 100; a gas state outside its grid "
+                   "stops the run with a message)")
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="root seed (default 0)")
@@ -78,7 +79,7 @@ def add_parser(subparsers):
 
 def _rule(args):
     from ..errors import InvalidParameterError
-    from ..gas import FixedRestitution, VibrationTable, thermal_kick_table
+    from ..gas import FixedRestitution, VibrationTable, rod_table
 
     if args.rule == "fixed":
         if args.restitution is None:
@@ -90,7 +91,7 @@ def _rule(args):
         from ..restitution_table import load
 
         return VibrationTable(load(args.table))
-    return VibrationTable(thermal_kick_table())
+    return VibrationTable(rod_table())
 
 
 def run(args) -> int:

@@ -4,16 +4,18 @@
 * :mod:`.rules`       -- collision rules as values (fixed restitution, restitution table, a solve per collision);
 * :mod:`.kernels`     -- the event loop (tournament tree of neighbour-pair collision times, numba);
 * :mod:`.simulation`  -- runs in chunks, histories, collapse detection, checkpoint and resume;
-* :mod:`.kick_table`  -- an analytic stand-in restitution table for demonstrations;
+* :mod:`.rod_table`   -- the restitution table computed from rod collisions that the gas uses by default,
+  and the per-collision draw of :class:`VibrationSolve` from :func:`wavecontact.collide`;
 * :mod:`.reference`   -- a plain-Python heapq event loop (test reference and benchmark baseline).
 """
 
-from .kick_table import thermal_kick_table
 from .model import EqualLengths, RodGas, UniformLengths, random_gas
+from .rod_table import DEFAULT_TABLE_FILE, collision_draw, rod_table
 from .rules import FixedRestitution, VibrationSolve, VibrationTable
 from .simulation import GasResult, GasSimulation
 
 __all__ = [
+    "DEFAULT_TABLE_FILE",
     "EqualLengths",
     "FixedRestitution",
     "GasResult",
@@ -22,6 +24,7 @@ __all__ = [
     "UniformLengths",
     "VibrationSolve",
     "VibrationTable",
+    "collision_draw",
     "random_gas",
-    "thermal_kick_table",
+    "rod_table",
 ]

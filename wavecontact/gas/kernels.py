@@ -43,6 +43,7 @@ __all__ = [
     "STATUS_DONE",
     "STATUS_NEED_DRAW",
     "STATUS_NO_EVENTS",
+    "STATUS_OFF_TABLE",
     "STATUS_TIME_LIMIT",
     "build_tree",
     "event_time",
@@ -53,11 +54,12 @@ __all__ = [
 
 RULE_FIXED, RULE_TABLE, RULE_EXTERNAL = 0, 1, 2
 STATUS_DONE, STATUS_TIME_LIMIT, STATUS_NEED_DRAW, STATUS_COLLAPSE, STATUS_NO_EVENTS, STATUS_COOLED = 0, 1, 2, 3, 4, 5
+STATUS_OFF_TABLE = 6  # a pair met at a temperature ratio outside the table: the run stops (never clipped)
 
 # indices into the float64 ``scalars`` array
 T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, ENERGY_FLOOR, KINETIC_CARRY, KINETIC_REFERENCE = range(8)
 # indices into the int64 ``counters`` array
-COLLISIONS, WALL_HITS, RATIO_CLAMPED, BATH_LIMITED = 0, 1, 2, 3
+COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED = 0, 1, 2, 3
 
 
 @kernel
@@ -210,14 +212,14 @@ def _bracket(grid, value):
 
 
 @kernel
-def _lookup(table_ratio, ratio, counters):
-    """Lower grid index and weight of ``ratio``; beyond the grid it is held at the last point (counted)."""
+def _lookup(table_ratio, ratio):
+    """Lower grid index and weight of ``ratio``; index -1 when it lies outside the grid (refused)."""
     r = table_ratio.size
+    if not (table_ratio[0] <= ratio <= table_ratio[r - 1]):
+        return -1, 0.0
     if r == 1:
         return 0, 0.0
-    if ratio >= table_ratio[r - 1]:
-        if ratio > table_ratio[r - 1]:
-            counters[RATIO_CLAMPED] += 1
+    if ratio == table_ratio[r - 1]:
         return r - 2, 1.0
     lo = _bracket(table_ratio, ratio)
     return lo, (ratio - table_ratio[lo]) / (table_ratio[lo + 1] - table_ratio[lo])
@@ -330,7 +332,8 @@ def run_events(
     status : int
         One of the ``STATUS_*`` constants.
     event : int
-        The event awaiting an external draw (``STATUS_NEED_DRAW``), else -1.
+        The event awaiting an external draw (``STATUS_NEED_DRAW``) or refused
+        by the table (``STATUS_OFF_TABLE``), else -1.
     done : int
         Rod-rod collisions processed in this call.
     """
@@ -394,7 +397,10 @@ def run_events(
         elif rule == RULE_TABLE:
             pair_temperature = 0.5 * (temperature[i] + temperature[j])
             ratio = pair_temperature / e_tr if e_tr > 0.0 else math.inf
-            ir, wr = _lookup(table_ratio, ratio, counters)
+            ir, wr = _lookup(table_ratio, ratio)
+            if ir < 0:
+                counters[OFF_TABLE] += 1
+                return STATUS_OFF_TABLE, k, done
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr,
                                   probability, uniform_levels, quantiles, share)
         else:
@@ -415,11 +421,21 @@ def run_events(
                 lost = floor
                 eps2 = 1.0 - lost / e_tr
                 counters[BATH_LIMITED] += 1
+        elif rule != RULE_FIXED and (s < 0.0 or s > 1.0):
+            # a per-collision split may take energy from one bath while filling the other
+            ceiling = bath_modes * temperature[short] / -s if s < 0.0 else bath_modes * temperature[long] / (s - 1.0)
+            if lost > ceiling:
+                lost = ceiling
+                eps2 = 1.0 - lost / e_tr
+                counters[BATH_LIMITED] += 1
         if rule == RULE_FIXED:
             scalars[LOST] += lost
         else:
             temperature[short] += s * lost / bath_modes
             temperature[long] += (1.0 - s) * lost / bath_modes
+            # a bath emptied by the cap above can end a rounding error below zero: it is empty
+            temperature[short] = max(temperature[short], 0.0)
+            temperature[long] = max(temperature[long], 0.0)
         # compensated (Kahan) sum: the kinetic energy stays accurate relative to itself while it decays
         # by many orders of magnitude (plain sums would keep an error of 1e-16 of the initial energy)
         change = -lost - scalars[KINETIC_CARRY]

@@ -36,6 +36,7 @@ _STATUS = {
     kernels.STATUS_COLLAPSE: "collapsed",
     kernels.STATUS_NO_EVENTS: "no_events",
     kernels.STATUS_COOLED: "cooled",
+    kernels.STATUS_OFF_TABLE: "off_table",
 }
 
 
@@ -46,7 +47,9 @@ class GasResult:
     Attributes
     ----------
     status : str
-        ``completed``, ``collapsed``, ``cooled`` (below ``energy_floor``), ``time_limit`` or ``no_events``.
+        ``completed``, ``collapsed``, ``cooled`` (below ``energy_floor``), ``time_limit``, ``no_events``
+        or ``off_table`` (a pair met at a temperature ratio outside the restitution table; the run stops
+        there rather than extrapolate or clip the table).
     message : str
         One line for a human (says why a run stopped early).
     collisions, wall_hits : int
@@ -67,9 +70,8 @@ class GasResult:
         the ring) at ``frame_times``; shape (F, rods shown).
     velocities, bath_temperatures : ndarray
         The final state.
-    ratio_clamped, bath_limited : int
-        Table draws whose temperature ratio lay beyond the table (held at its
-        edge), and draws capped so that no bath went below zero.
+    bath_limited : int
+        Draws capped so that no bath went below zero.
     energy_drift : float
         Relative change of kinetic + bath + lost + dissipated energy since the start.
     """
@@ -86,7 +88,6 @@ class GasResult:
     frames: np.ndarray
     velocities: np.ndarray
     bath_temperatures: np.ndarray
-    ratio_clamped: int
     bath_limited: int
     energy_drift: float
     rule: dict = field(default_factory=dict)
@@ -122,7 +123,6 @@ class GasResult:
             "final_energy": self.final_energy,
             "final_bath_energy": float(self.history["bath_energy"][-1]) if self.history["bath_energy"].size else 0.0,
             "energy_drift": self.energy_drift,
-            "ratio_clamped": self.ratio_clamped,
             "bath_limited": self.bath_limited,
             "rule": self.rule,
         }
@@ -268,6 +268,7 @@ class GasSimulation:
         self.frame_times, self.frames = [], []
         self.records = 0
         self.status = "completed"
+        self.off_table = None  # (gamma, T_B/E_tr) of the pair the table refused
         self.drawn = 0  # collision seeds spawned (external rule)
 
     # ---------------------------------------------------------------- helpers
@@ -327,7 +328,8 @@ class GasSimulation:
             self.frames.append(self.positions()[::stride].astype(np.float32))
         self.records += 1
 
-    def _draw_external(self, event):
+    def _pair_state(self, event):
+        """``(gamma, T_B/E_tr)`` of the pair of ``event`` at its collision time (mean bath temperature)."""
         n = self.gas.rods
         i, j = (event, (event + 1) % n) if self.ring else (event - 1, event)
         now = float(self.event_times[event])
@@ -335,14 +337,18 @@ class GasSimulation:
         reduced = self.mass[i] * self.mass[j] / (self.mass[i] + self.mass[j])
         e_tr = 0.5 * reduced * (self.v[i] - self.v[j]) ** 2
         ratio = 0.5 * (temperatures[i] + temperatures[j]) / e_tr if e_tr > 0 else math.inf
+        return float(self.pair_gamma[event]), ratio
+
+    def _draw_external(self, event):
+        gamma, ratio = self._pair_state(event)
         # the drawn-th child of _solve_seeds, as _solve_seeds.spawn() would give it (but stateless)
         parent = self._solve_seeds
         seed = np.random.SeedSequence(parent.entropy, spawn_key=parent.spawn_key + (self.drawn,))
         self.drawn += 1
-        eps2, share = self.rule.draw(float(self.pair_gamma[event]), ratio, seed)
+        eps2, share = self.rule.draw(gamma, ratio, seed)
         eps2, share = float(eps2), float(share)
-        if not (math.isfinite(eps2) and eps2 >= 0 and 0.0 <= share <= 1.0):
-            raise InvalidParameterError(f"the rule's draw must return eps2 >= 0 and a share in [0, 1], "
+        if not (math.isfinite(eps2) and eps2 >= 0 and math.isfinite(share)):
+            raise InvalidParameterError(f"the rule's draw must return a finite eps2 >= 0 and a finite share, "
                                         f"got ({eps2!r}, {share!r})")
         self.pending[:] = (1.0, eps2, share)
 
@@ -400,6 +406,8 @@ class GasSimulation:
                     share, float(rule.bath_modes), self._decay_rate(), uniforms[self.collisions - before:],
                     self.pending, chunk - (self.collisions - before), float(max_time), self.window,
                     self.collapse_factor, self.scalars, self.counters)
+                if status == kernels.STATUS_OFF_TABLE:
+                    self.off_table = self._pair_state(event)
                 if status != kernels.STATUS_NEED_DRAW:
                     break
                 self._draw_external(event)
@@ -412,7 +420,8 @@ class GasSimulation:
             if status == kernels.STATUS_DONE and self.collisions % self.record_every == 0:
                 self._record()
             if status != kernels.STATUS_DONE:
-                if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS, kernels.STATUS_COOLED):
+                if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS, kernels.STATUS_COOLED,
+                              kernels.STATUS_OFF_TABLE):
                     self._record()  # the final state of a run that cannot continue
                 break
         wall = time.perf_counter() - start
@@ -431,6 +440,12 @@ class GasSimulation:
             return (f"inelastic collapse at t = {t:.6g} after {c} collisions: the last {w} collisions took "
                     f"less than {self.collapse_factor:g} times as long as the {w} before them (collisions "
                     f"accelerating towards infinitely many in a finite time); the run was stopped")
+        if self.status == "off_table":
+            gamma, ratio = self.off_table
+            grid = self.rule.table.temperature_ratio
+            return (f"stopped at collision {c + 1} (t = {t:.6g}): a pair with gamma = {gamma:.4g} met at "
+                    f"T_B/E_tr = {ratio:.6g}, outside the restitution table's range [{grid[0]:g}, {grid[-1]:g}]; "
+                    f"the table is not extrapolated: pass a table covering this ratio (wavecontact restitution-table)")
         if self.status == "time_limit":
             return f"stopped at the time limit after {c} collisions (t = {t:.6g})"
         if self.status == "no_events":
@@ -448,7 +463,6 @@ class GasSimulation:
             collisions_per_second=done / wall if wall > 0 else math.inf, history=history,
             frame_times=np.asarray(self.frame_times), frames=frames, velocities=self.v.copy(),
             bath_temperatures=self._synced_temperatures(self.time).copy(),
-            ratio_clamped=int(self.counters[kernels.RATIO_CLAMPED]),
             bath_limited=int(self.counters[kernels.BATH_LIMITED]),
             energy_drift=(total - self.initial_energy) / self.initial_energy if self.initial_energy > 0 else 0.0,
             rule=self.rule.describe(),

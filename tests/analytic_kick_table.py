@@ -1,8 +1,12 @@
-"""A stand-in restitution table from a simple analytic model (not computed from rods).
+"""TEST FIXTURE: a restitution table with a known analytic law (not computed from rods).
 
-Until tables computed from stochastic rod collisions are at hand (the
-thermal-bath study exports them), the gas can be exercised with this model:
-the relative velocity leaves the collision as
+Tests of the gas machinery (the kernel's table lookup against
+:meth:`RestitutionTable.quantile`, conservation, checkpoints, ensembles) use
+it because its law is known in closed form and its grid is wide.  It is not
+physics of rods and is not part of the package: the gas's default vibration
+rule uses the table computed from stochastic rod collisions
+(``wavecontact/data/``, see docs/gas.md).  The model: the relative velocity
+leaves the collision as
 
     V' = -(gamma V + sqrt(1 - gamma^2) eta),   eta ~ Normal(0, T_B / mu),
 
@@ -20,9 +24,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import ndtr
 
-from ..restitution_table import RestitutionTable
+from wavecontact.restitution_table import RestitutionTable
 
-__all__ = ["thermal_kick_table"]
+__all__ = ["analytic_kick_table"]
 
 
 def _eps_quantiles(gamma, ratio, levels, points=4001):
@@ -39,7 +43,7 @@ def _eps_quantiles(gamma, ratio, levels, points=4001):
     return np.interp(levels, cdf[keep], e[keep])
 
 
-def thermal_kick_table(gamma=None, temperature_ratio=None, levels=201, bath_modes=250) -> RestitutionTable:
+def analytic_kick_table(gamma=None, temperature_ratio=None, levels=201, bath_modes=250) -> RestitutionTable:
     """The model table (see the module docstring) on a ``(gamma, T_B/E_tr)`` grid.
 
     Parameters
@@ -47,7 +51,8 @@ def thermal_kick_table(gamma=None, temperature_ratio=None, levels=201, bath_mode
     gamma : array_like, optional
         Length ratios (default 0.3 ... 1 in steps of 0.05).
     temperature_ratio : array_like, optional
-        ``T_B/E_tr`` (default 0 and 31 points from 1e-3 to 1e3, geometric).
+        ``T_B/E_tr`` (default 0 and 49 points from 1e-3 to 1e9, geometric: slow pairs in hot baths
+        reach huge ratios, and the gas refuses ratios outside the table).
     levels : int
         Probability levels (equally spaced from 0 to 1; the quantile at level
         1 is the model's value 9 standard deviations out).
@@ -55,7 +60,7 @@ def thermal_kick_table(gamma=None, temperature_ratio=None, levels=201, bath_mode
         Heat capacity of each rod's bath in modes.
     """
     gamma = np.linspace(0.3, 1.0, 15) if gamma is None else np.asarray(gamma, dtype=float)
-    ratio = (np.concatenate([[0.0], np.geomspace(1e-3, 1e3, 31)]) if temperature_ratio is None
+    ratio = (np.concatenate([[0.0], np.geomspace(1e-3, 1e9, 49)]) if temperature_ratio is None
              else np.asarray(temperature_ratio, dtype=float))
     probability = np.linspace(0.0, 1.0, int(levels))
     quantiles = np.empty((gamma.size, ratio.size, probability.size))
@@ -64,4 +69,4 @@ def thermal_kick_table(gamma=None, temperature_ratio=None, levels=201, bath_mode
             quantiles[i, j] = _eps_quantiles(g, r, probability) ** 2
     return RestitutionTable(gamma, ratio, probability, quantiles, np.full((gamma.size, ratio.size), 0.5),
                             kappa=np.inf, bath_modes=bath_modes, samples_per_point=0,
-                            solver="thermal-kick model (analytic stand-in)", seed=0)
+                            solver="analytic thermal-kick test fixture", seed=0)
