@@ -96,6 +96,11 @@ class Scene:
     initial_displacement, initial_velocity : sequence of callables or None
         Optional fields ``u_i(s)`` (length) and ``du_i/dt(s)`` (length/time)
         of the rod coordinate ``s`` in ``[0, l_i]``, added to the rigid motion.
+    vibrations : wavecontact.bath.BathRealisation or None
+        A thermal-bath realisation (modal amplitudes at the nominal contact
+        time).  The fields above are then that realisation's mode sums at the
+        start; solvers that work with modes or with the noise ``Q(tau)`` use
+        the amplitudes directly (see :func:`two_rods`).
     """
 
     rods: tuple
@@ -106,6 +111,7 @@ class Scene:
     initial_displacement: tuple | None = None
     initial_velocity: tuple | None = None
     metadata: dict = field(default_factory=dict, compare=False)
+    vibrations: object = None
 
     def __post_init__(self):
         rods = tuple(self.rods)
@@ -226,6 +232,7 @@ def two_rods(
     gap: float | None = None,
     initial_displacement: Sequence | None = None,
     initial_velocity: Sequence | None = None,
+    vibrations=None,
 ) -> Scene:
     """The paper's head-on collision of two rods of one material, dimensionless.
 
@@ -249,6 +256,12 @@ def two_rods(
         Initial end-to-end gap (length); ``None`` lets the solver choose.
     initial_displacement, initial_velocity : sequences of two callables or None
         Optional internal fields, see :class:`Scene`.
+    vibrations : wavecontact.bath.BathRealisation or None
+        Thermal vibrations (for example ``ThermalBath(...).draw(...)``), given
+        at the nominal contact time ``t_c = gap / V``.  ``gap=None`` then
+        chooses a gap beyond the vibrations' reach
+        (:func:`wavecontact.bath.scene.start_gap`), and the initial fields
+        are the realisation evolved back to ``t = 0``.
 
     Returns
     -------
@@ -273,6 +286,12 @@ def two_rods(
     m1, m2 = rods[0].mass, rods[1].mass
     velocities = (m2 / (m1 + m2), -m1 / (m1 + m2))
     params = TwoRodParameters(gamma=g, kappa=k, effective_length=1.0, approach_speed=1.0, wave_speed=1.0)
+    if vibrations is not None:
+        from .bath.scene import vibration_fields
+
+        if initial_displacement is not None or initial_velocity is not None:
+            raise InvalidParameterError("give either vibrations or initial fields, not both")
+        gap, initial_displacement, initial_velocity = vibration_fields(vibrations, rods, law, gap)
     return Scene(
         rods=rods,
         velocities=velocities,
@@ -281,6 +300,7 @@ def two_rods(
         initial_displacement=initial_displacement,
         initial_velocity=initial_velocity,
         metadata={"two_rods": params},
+        vibrations=vibrations,
     )
 
 

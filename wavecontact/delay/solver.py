@@ -23,15 +23,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bath.noise import NoiseTables
+from ..bath.scene import scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
+from .energy_split import NODES, WEIGHTS, vibration_energy_gain
 from .hardcore import contact_intervals, hard_core_history
 from .noise import COLD, FourierNoise
 from .parameters import DelayParameters, delay_parameters, echoes_from_ratios
+from .stochastic_hardcore import hard_core_noise
 
 __all__ = ["ORDER", "SOLVER", "DelayOptions", "DelaySolver", "solve_delay_equation"]
 
@@ -71,9 +75,20 @@ class DelayOptions(SolverOptions):
     end_time: float | None = option(
         None, "integrate at least until this time tau; None: stop once W has settled", low=0.0, allow_none=True)
     noise: FourierNoise | None = option(
-        None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath",
+        None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath, "
+        "or the scene's vibrations",
         kind="object", allow_none=True, check=_noise)
     max_steps: int = option(2_000_000, "safety limit on accepted steps", kind="int", low=10, high=10**9)
+    noise_resolution: int = option(
+        32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
+        kind="int", low=4, high=1024)
+    hard_core_resolution: int = option(
+        8, "kappa = inf with vibrations: grid points per period of the short rod's fastest bath mode; the result "
+        "comes from twice that, its error estimate from the changes over half and the given resolution",
+        kind="int", low=2, high=4096)
+    energy_split: bool = option(
+        True, "also compute each rod's vibrational energy gain (extra['vibration_energy_gain'], E_tr = 1/4)",
+        kind="bool")
 
 
 def _check_scene(scene: Scene) -> DelayParameters:
@@ -83,7 +98,7 @@ def _check_scene(scene: Scene) -> DelayParameters:
             f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
             "use solver='fem' (or 'modal') for penalty contact"
         )
-    if not scene.is_cold:
+    if not scene.is_cold and scene.vibrations is None:
         raise UnsupportedSceneError(
             "the delay solver takes initial vibrations only as a modal sum, the noise Q(tau): pass "
             "noise=FourierNoise(...) on a cold scene, or use solver='fem' or 'modal' for initial fields"
@@ -92,19 +107,28 @@ def _check_scene(scene: Scene) -> DelayParameters:
 
 
 def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000,
-                         impedance_ratio=1.0):
+                         impedance_ratio=1.0, tables=None):
     """Integrate the delay equation for transit-time ratio ``gamma`` and softness ``kappa``.
 
     ``gamma = T_1 / T_2`` is the ratio of the round-trip times ``2 l_i / c_i``
     (``l_1 / l_2`` for one material, Eq. 16) and ``impedance_ratio = Z_2 / Z_1``
     (1: one material); see :mod:`wavecontact.delay.parameters`.
 
-    Returns ``(t, W, W', error_estimate, work, a0)`` with ``W`` on the adaptive
-    grid ``t`` (dimensionless time, ``tau = 0`` at the start, scaled gap ``a0``).
+    ``tables`` (:class:`wavecontact.bath.noise.NoiseTables`) adds tabulated
+    noise to ``noise``.  Returns ``(t, W, W', error_estimate, work, a0)`` with
+    ``W`` on the adaptive grid ``t`` (dimensionless time, ``tau = 0`` at the
+    start, scaled gap ``a0``).
     """
+    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables,
+                                                impedance_ratio)
+    return t, w, d1, error, work, a0
+
+
+def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables, impedance_ratio=1.0):
     options = DelayOptions(rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps)
     rtol, a0, end_time, max_steps = options.rtol, options.initial_gap, options.end_time, options.max_steps
     noise = COLD if options.noise is None else options.noise
+    tables = NoiseTables.empty() if tables is None else tables
     if a0 is None:
         a0 = GAP_MARGIN + noise.amplitude_bound
     delays, weights = (np.array(x) for x in echoes_from_ratios(impedance_ratio, gamma))
@@ -114,8 +138,9 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     # the collision lasts about Gamma_1 for kappa >> 1 and ~ (|ln rtol| + a0) / (kappa gamma) when soft
     ratio = min(delays) / max(delays)
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
-    t, w, d1, _d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
+    t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
+        tables.periods, tables.values, tables.slopes, float(tables.slope_bound), float(tables.step_limit),
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
@@ -126,9 +151,7 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
             f"delay solver (gamma={gamma:g}, impedance_ratio={impedance_ratio:g}, kappa={kappa:g}): "
             f"{outcome.message}; {advice}", outcome)
     work = {"steps": int(t.size - 1), "rejected_steps": int(rejected), "evaluations": int(evaluations)}
-    return t, w, d1, float(error), work, a0
-
-
+    return t, w, d1, d2, float(error), work, a0
 
 
 class DelaySolver(SolverBase):
@@ -145,10 +168,19 @@ class DelaySolver(SolverBase):
 
     def _collide(self, scene: Scene, options: DelayOptions) -> dict:
         params = _check_scene(scene)
-        kappa = params.kappa
+        gamma, kappa = params.time_ratio, params.kappa
+        vibrations = scene.vibrations
+        if vibrations is not None and options.noise is not None:
+            raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
+        if vibrations is not None and not params.equal_impedances:
+            raise UnsupportedSceneError("thermal vibrations on the scene need rods of one material and section; "
+                                        "use solver='fem' or 'modal' for unequal impedances")
         if isinstance(scene.contact, Hard) or math.isinf(kappa):
             if options.noise is not None:
-                raise UnsupportedSceneError("the hard-core delay solver handles a cold bath only (noise=None)")
+                raise UnsupportedSceneError("the hard-core delay solver takes thermal vibrations on the scene "
+                                            "(two_rods(..., vibrations=)), not the option noise")
+            if vibrations is not None:
+                return _collide_hard_stochastic(scene, gamma, options.hard_core_resolution)
             return _collide_hard(params)
         initial_gap = options.initial_gap
         if scene.gaps is not None and initial_gap is None:
@@ -157,11 +189,25 @@ class DelaySolver(SolverBase):
             initial_gap = alpha * scene.gaps[0] - math.log(
                 scene.contact.strength * alpha**2 * params.reduced_mass / params.series_impedance**2
             )
-        t, w, d1, error, work, a0 = solve_delay_equation(
-            params.time_ratio, kappa, rtol=options.rtol, initial_gap=initial_gap, end_time=options.end_time,
-            noise=options.noise, max_steps=options.max_steps, impedance_ratio=params.impedance_ratio,
-        )
+        tables = None
+        if vibrations is not None:
+            if initial_gap is None:
+                raise UnsupportedSceneError("a scene with vibrations needs its start gap "
+                                            "(two_rods(..., vibrations=) sets it)")
+            tables = scene_noise(scene, kappa, float(initial_gap), options.noise_resolution)
+        t, w, d1, d2, error, work, a0 = _integrate(gamma, kappa, options.rtol, initial_gap, options.end_time,
+                                                   options.noise, options.max_steps, tables, params.impedance_ratio)
         unit = params.time_unit
+        extra = {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa * unit, "velocity_increase_slope": d1,
+                 "delay_parameters": _as_dict(params)}
+        if options.energy_split and options.noise is None and params.equal_impedances:
+            tab = tables if tables is not None else NoiseTables.empty()
+            extra["vibration_energy_gain"] = vibration_energy_gain(
+                float(kappa), t, w, d1, d2, np.array([1.0 + gamma, 1.0 + 1.0 / gamma]), tab.periods, tab.values,
+                tab.slopes, NODES, WEIGHTS, 2)
+        if vibrations is not None:
+            extra["vibration_energy_before"] = vibrations.vibration_energy()
+            extra["bath_modes"] = vibrations.modes
         return {
             "restitution": w[-1] / kappa - 1.0,
             "time": t * unit,
@@ -170,13 +216,41 @@ class DelaySolver(SolverBase):
             "contact_force": params.force_unit * d1 / kappa,
             "error_estimate": error,
             "work": work,
-            "extra": {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa * unit, "velocity_increase_slope": d1,
-                      "delay_parameters": _as_dict(params)},
+            "extra": extra,
         }
 
 
 def _as_dict(params: DelayParameters) -> dict:
     return {**dataclasses.asdict(params), "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
+
+
+def _collide_hard_stochastic(scene, gamma, resolution) -> dict:
+    """The hard-core limit with the scene's vibrations (max-plus recursion on a grid).
+
+    The answer comes from the grid at 2 x resolution; the grid converges at
+    first order but unevenly (f often peaks at a kink of the memory terms,
+    between nodes), so the error is estimated by the larger change over the
+    two coarser grids.  The per-rod split needs ``W'`` times the noise's
+    slope, which the max-plus grid resolves too slowly: only the total
+    ``(1 - epsilon^2) / 4`` is implied; use a finite kappa for the split.
+    """
+    vibrations = scene.vibrations
+    tau_free = float(scene.gaps[0])  # V = 1, l = 1: the gap is the free-flight time
+    coarser = [hard_core_noise(gamma, vibrations, tau_free, r)[1][-1] for r in (max(resolution // 2, 1), resolution)]
+    t, w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
+    slopes = np.diff(w) / np.diff(t)
+    return {
+        "restitution": float(w[-1] - 1.0),
+        "time": t,
+        "relative_velocity": w - 1.0,
+        # the force is constant between grid points: force[i] is its value on (time[i-1], time[i]]
+        "contact_force": np.concatenate([[0.0], 0.5 * slopes]),
+        "force_sampling": "interval",
+        "error_estimate": max(abs(float(coarser[1] - w[-1])), abs(float(coarser[0] - coarser[1]))),
+        "work": {"steps": int(t.size)},
+        "extra": {"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
+                  "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])},
+    }
 
 
 def _collide_hard(params: DelayParameters) -> dict:
