@@ -20,6 +20,7 @@ numbers vary from run to run (the load average is printed).
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 import os
 import sys
@@ -102,7 +103,8 @@ def dask_scaling(samples):
 
     rates = {}
     for workers in (1, 2):
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                          silence_logs=logging.ERROR) as cluster, \
                 Client(cluster) as client:
             ensemble(GAMMA, math.inf, 1.0, 2 * workers, 0, executor=client, batch_size=1)  # warm workers
             started = time.perf_counter()
@@ -122,6 +124,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="fewer samples")
     args = parser.parse_args(argv)
     quick = args.quick
+    logging.getLogger("distributed").setLevel(logging.ERROR)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; wavecontact {wavecontact.__version__}")
     print("| quantity | value | note")
     rate = hard_core_rate(500 if quick else 4000)

@@ -19,11 +19,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from wavecontact.bath import ThermalBath  # noqa: E402
-from wavecontact.bath.scene import start_gap  # noqa: E402
-from wavecontact.contact import Hard  # noqa: E402
-from wavecontact.delay.stochastic_hardcore import hard_core_noise  # noqa: E402
-from wavecontact.studies.ensemble import ensemble, sample_seed  # noqa: E402
+from wavecontact.bath import ThermalBath
+from wavecontact.bath.scene import start_gap
+from wavecontact.contact import Hard
+from wavecontact.delay.stochastic_hardcore import hard_core_noise
+from wavecontact.studies.ensemble import ensemble, sample_seed
 
 GAMMA = 0.6173
 

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .contact import ContactLaw, Exponential, Hard, contact_from_name
+from .contact import ContactLaw, Exponential, Hard, Penalty, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_positive
 
-__all__ = ["Rod", "Scene", "TwoRodParameters", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
+__all__ = ["Rod", "Scene", "TwoRodParameters", "penalty_stiffness", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
 
 FieldFunction = Callable[[np.ndarray], np.ndarray]
 
@@ -252,6 +252,14 @@ def two_rods(
     contact : {'exponential', 'penalty', 'hard'} or ContactLaw
         The contact law.  The exponential law gets ``B = mu c^2 / (alpha l)^2``,
         the value for which the delay equation (Eq. 16) holds without a shift.
+        The penalty law gets the stiffness ``k = kappa Z_eff c / l``
+        (:func:`penalty_stiffness`, here ``kappa / 2``): the spring whose
+        contact relaxes at the rate ``alpha V`` of the exponential law at its
+        plateau, so that both resolve the same collision time; with ``kappa =
+        inf`` the stiffness is left to the solver (the FE solver ties it to
+        the mesh, so the run tends to hard contact as the mesh is refined).
+        A ``Penalty`` passed in must have the rule's stiffness or ``None``
+        (then it is set).
     gap : float or None
         Initial end-to-end gap (length); ``None`` lets the solver choose.
     initial_displacement, initial_velocity : sequences of two callables or None
@@ -279,6 +287,18 @@ def two_rods(
             raise InvalidParameterError(
                 f"contact alpha ({law.alpha:g}) must equal kappa ({k:g}) in the units of two_rods"
             )
+        if isinstance(law, Penalty) and math.isfinite(k):
+            stiffness = penalty_stiffness(k, 0.5, 1.0, 1.0)
+            if law.stiffness is None:
+                law = Penalty(stiffness)
+            elif not math.isclose(law.stiffness, stiffness):
+                raise InvalidParameterError(
+                    f"penalty stiffness ({law.stiffness:g}) must be kappa / 2 = {stiffness:g} in the units of "
+                    "two_rods (or None); for another stiffness build the Scene directly"
+                )
+    elif contact == "penalty":
+        # finite kappa: the rule's stiffness; kappa = inf: the solver ties it to the mesh (hard limit)
+        law = Penalty(penalty_stiffness(k, 0.5, 1.0, 1.0)) if math.isfinite(k) else Penalty()
     else:
         law = contact_from_name(contact, k, reduced_mass / (k * k) if math.isfinite(k) else 1.0)
     if isinstance(law, Hard) and math.isfinite(k) and contact == "hard":
@@ -336,12 +356,32 @@ def two_rods_on_a_ring(gamma: float, kappa: float, circumference: float | None =
                  ring_circumference=circumference, metadata=dict(line.metadata))
 
 
+def penalty_stiffness(kappa: float, impedance: float, wave_speed: float, length: float) -> float:
+    """Penalty stiffness ``k = kappa Z_eff c / l`` (force/length) that stands for ``kappa``.
+
+    At the plateau of the exponential law (force ``Z_eff V``) the gap of two
+    massless ends relaxes at the rate ``alpha V``; a spring ``k`` relaxes it at
+    ``k / Z_eff``.  Equal rates give ``k = alpha V Z_eff = kappa Z_eff c / l``.
+
+    Parameters
+    ----------
+    kappa : float
+        ``alpha V l / c`` (dimensionless), finite.
+    impedance : float
+        ``Z_eff = 1 / (1/Z_1 + 1/Z_2)`` (mass/time).
+    wave_speed, length : float
+        ``c`` (length/time) and the effective length ``l`` (length).
+    """
+    return kappa * impedance * wave_speed / length
+
+
 def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     """Recover ``(gamma, kappa, ...)`` of a two-rod scene on a line.
 
     Works for scenes built by :func:`two_rods` (or :func:`two_rods_on_a_ring`)
     and for any line scene of two rods of one material; the contact law fixes
-    ``kappa`` (``inf`` for hard and penalty contact, which have no range).
+    ``kappa`` (``inf`` for hard contact; for a penalty law the inverse of
+    :func:`penalty_stiffness`, NaN if the solver is to choose the stiffness).
     """
     if "two_rods" in scene.metadata:
         return scene.metadata["two_rods"]
@@ -357,6 +397,9 @@ def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     c = r1.wave_speed
     if isinstance(scene.contact, Exponential):
         kappa = scene.contact.alpha * speed * ell / c
+    elif isinstance(scene.contact, Penalty):
+        stiffness = scene.contact.stiffness
+        kappa = math.nan if stiffness is None else stiffness / penalty_stiffness(1.0, 0.5 * r1.impedance, c, ell)
     else:
         kappa = math.inf
     return TwoRodParameters(gamma=gamma, kappa=kappa, effective_length=ell, approach_speed=speed, wave_speed=c)

@@ -75,9 +75,8 @@ class DelayOptions(SolverOptions):
     end_time: float | None = option(
         None, "integrate at least until this time tau; None: stop once W has settled", low=0.0, allow_none=True)
     noise: FourierNoise | None = option(
-        None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath, "
-        "or the scene's vibrations",
-        kind="object", allow_none=True, check=_noise)
+        None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath "
+        "or the scene's thermal vibrations", kind="object", allow_none=True, check=_noise)
     max_steps: int = option(2_000_000, "safety limit on accepted steps", kind="int", low=10, high=10**9)
     noise_resolution: int = option(
         32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
@@ -87,8 +86,8 @@ class DelayOptions(SolverOptions):
         "comes from twice that, its error estimate from the changes over half and the given resolution",
         kind="int", low=2, high=4096)
     energy_split: bool = option(
-        True, "also compute each rod's vibrational energy gain (extra['vibration_energy_gain'], E_tr = 1/4)",
-        kind="bool")
+        True, "also compute each rod's vibrational energy gain (extra['vibration_energy_gain'], E_tr = 1/4; one "
+        "material)", kind="bool")
 
 
 def _check_scene(scene: Scene) -> DelayParameters:
@@ -98,6 +97,8 @@ def _check_scene(scene: Scene) -> DelayParameters:
             f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
             "use solver='fem' (or 'modal') for penalty contact"
         )
+    if scene.vibrations is not None and "two_rods" not in scene.metadata:
+        raise UnsupportedSceneError("thermal vibrations need the paper's two rods (two_rods(..., vibrations=))")
     if not scene.is_cold and scene.vibrations is None:
         raise UnsupportedSceneError(
             "the delay solver takes initial vibrations only as a modal sum, the noise Q(tau): pass "
@@ -115,16 +116,17 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     (1: one material); see :mod:`wavecontact.delay.parameters`.
 
     ``tables`` (:class:`wavecontact.bath.noise.NoiseTables`) adds tabulated
-    noise to ``noise``.  Returns ``(t, W, W', error_estimate, work, a0)`` with
-    ``W`` on the adaptive grid ``t`` (dimensionless time, ``tau = 0`` at the
-    start, scaled gap ``a0``).
+    noise (a thermal bath) to ``noise``.
+
+    Returns ``(t, W, W', error_estimate, work, a0)`` with ``W`` on the adaptive
+    grid ``t`` (dimensionless time, ``tau = 0`` at the start, scaled gap ``a0``).
     """
-    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables,
-                                                impedance_ratio)
+    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps,
+                                                impedance_ratio, tables)
     return t, w, d1, error, work, a0
 
 
-def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tables, impedance_ratio=1.0):
+def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, impedance_ratio, tables):
     options = DelayOptions(rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps)
     rtol, a0, end_time, max_steps = options.rtol, options.initial_gap, options.end_time, options.max_steps
     noise = COLD if options.noise is None else options.noise
@@ -154,6 +156,8 @@ def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, tabl
     return t, w, d1, d2, float(error), work, a0
 
 
+
+
 class DelaySolver(SolverBase):
     """The delay equation (Eq. 16) and its hard-core limit (Eq. 26): the reference solver."""
 
@@ -168,19 +172,16 @@ class DelaySolver(SolverBase):
 
     def _collide(self, scene: Scene, options: DelayOptions) -> dict:
         params = _check_scene(scene)
-        gamma, kappa = params.time_ratio, params.kappa
+        kappa = params.kappa
         vibrations = scene.vibrations
         if vibrations is not None and options.noise is not None:
             raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
-        if vibrations is not None and not params.equal_impedances:
-            raise UnsupportedSceneError("thermal vibrations on the scene need rods of one material and section; "
-                                        "use solver='fem' or 'modal' for unequal impedances")
         if isinstance(scene.contact, Hard) or math.isinf(kappa):
             if options.noise is not None:
                 raise UnsupportedSceneError("the hard-core delay solver takes thermal vibrations on the scene "
                                             "(two_rods(..., vibrations=)), not the option noise")
             if vibrations is not None:
-                return _collide_hard_stochastic(scene, gamma, options.hard_core_resolution)
+                return _collide_hard_stochastic(scene, params, options.hard_core_resolution)
             return _collide_hard(params)
         initial_gap = options.initial_gap
         if scene.gaps is not None and initial_gap is None:
@@ -195,16 +196,18 @@ class DelaySolver(SolverBase):
                 raise UnsupportedSceneError("a scene with vibrations needs its start gap "
                                             "(two_rods(..., vibrations=) sets it)")
             tables = scene_noise(scene, kappa, float(initial_gap), options.noise_resolution)
-        t, w, d1, d2, error, work, a0 = _integrate(gamma, kappa, options.rtol, initial_gap, options.end_time,
-                                                   options.noise, options.max_steps, tables, params.impedance_ratio)
+        t, w, d1, d2, error, work, a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
+                                                   options.end_time, options.noise, options.max_steps,
+                                                   params.impedance_ratio, tables)
         unit = params.time_unit
         extra = {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa * unit, "velocity_increase_slope": d1,
                  "delay_parameters": _as_dict(params)}
-        if options.energy_split and options.noise is None and params.equal_impedances:
+        if options.energy_split and options.noise is None and params.impedance_ratio == 1.0:
+            # one material: the per-rod split of wavecontact.delay.energy_split (units with E_tr = 1/4)
             tab = tables if tables is not None else NoiseTables.empty()
             extra["vibration_energy_gain"] = vibration_energy_gain(
-                float(kappa), t, w, d1, d2, np.array([1.0 + gamma, 1.0 + 1.0 / gamma]), tab.periods, tab.values,
-                tab.slopes, NODES, WEIGHTS, 2)
+                float(kappa), t, w, d1, d2, np.asarray(params.round_trip_times, dtype=float), tab.periods,
+                tab.values, tab.slopes, NODES, WEIGHTS, 2)
         if vibrations is not None:
             extra["vibration_energy_before"] = vibrations.vibration_energy()
             extra["bath_modes"] = vibrations.modes
@@ -224,7 +227,7 @@ def _as_dict(params: DelayParameters) -> dict:
     return {**dataclasses.asdict(params), "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
 
 
-def _collide_hard_stochastic(scene, gamma, resolution) -> dict:
+def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> dict:
     """The hard-core limit with the scene's vibrations (max-plus recursion on a grid).
 
     The answer comes from the grid at 2 x resolution; the grid converges at
@@ -235,6 +238,7 @@ def _collide_hard_stochastic(scene, gamma, resolution) -> dict:
     ``(1 - epsilon^2) / 4`` is implied; use a finite kappa for the split.
     """
     vibrations = scene.vibrations
+    gamma = scene.metadata["two_rods"].gamma
     tau_free = float(scene.gaps[0])  # V = 1, l = 1: the gap is the free-flight time
     coarser = [hard_core_noise(gamma, vibrations, tau_free, r)[1][-1] for r in (max(resolution // 2, 1), resolution)]
     t, w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
@@ -244,7 +248,7 @@ def _collide_hard_stochastic(scene, gamma, resolution) -> dict:
         "time": t,
         "relative_velocity": w - 1.0,
         # the force is constant between grid points: force[i] is its value on (time[i-1], time[i]]
-        "contact_force": np.concatenate([[0.0], 0.5 * slopes]),
+        "contact_force": params.force_unit * np.concatenate([[0.0], slopes]),
         "force_sampling": "interval",
         "error_estimate": max(abs(float(coarser[1] - w[-1])), abs(float(coarser[0] - coarser[1]))),
         "work": {"steps": int(t.size)},

@@ -72,7 +72,6 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
     """
     d2 = gamma2 / h
     settle = n1 + int(d2) + 2
-    last_rise = 0
     running = 0.0
     quiet = 0
     f_older = -math.inf  # f at the two previous nodes (-inf where the noise was not read)
@@ -105,10 +104,7 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
                     if peak > running:
                         running = peak
                         w[k - 1] = peak
-                        last_rise = k
-            if value > running:
-                running = value
-                last_rise = k
+            running = max(running, value)
             quiet = 0
         elif running > 0.0:
             # finished once, for a full memory period, even the largest noise could not have
