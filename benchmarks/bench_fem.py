@@ -93,7 +93,7 @@ def table_peer(repeats, reference):
         print(f"| {kappa:g} | {elements} | {ours_ns:.2f} | {theirs_ns:.1f} | {theirs_ns / ours_ns:.0f}x | "
               f"{abs(epsilon - exact):.1e} | {abs(peer_eps - exact):.1e} |")
     print("\n(peer at Courant number 0.99: at exactly 1 the contact stiffness makes it blow up even at kappa = 100;"
-          " at kappa = 1e4 it returns garbage on every mesh, see MODEL.md 5)")
+          " at kappa = 1e4 it returns garbage on every mesh, see docs/fem.md)")
 
 
 def table_time_to_accuracy(repeats, reference):

@@ -1,33 +1,39 @@
 """Benchmark of the rod gas: collisions per second of the event kernel, and a plain-Python heapq loop.
 
-Run: ``python benchmarks/bench_gas.py [--repeats 5] [--collisions 2000000]``
+Run: ``python benchmarks/bench_gas.py [--repeats 5] [--collisions 2000000] [--update-docs]``
 
-Prints two tables (one core; the kernel is warmed up first, so no
-compilation is timed):
+Prints two markdown tables (one core; the kernel is warmed up first, so no
+compilation is timed).  Every time is given twice: wall-clock, and the CPU
+time of this process (``time.process_time``).  On a machine shared with
+other jobs the wall time grows with their load while the CPU time stays
+close to what the work costs on an idle core, so both are shown:
 
-1. the vibration (table) rule and the fixed rule against N: median
-   collisions per second over ``--repeats`` runs of ``--collisions``
-   collisions each, continuing one gas (so the gas is in its cooled/clustered
-   state, not the initial one), and the cost per collision in nanoseconds;
-2. at N = 10,000 with the fixed rule (r = 0.98), the same gas run by the kernel
-   and by :func:`wavecontact.gas.reference.heapq_ring_gas` (the
-   straightforward ``heapq`` loop of Python granular-gas codes), side by side,
-   and the ratio.
+1. the vibration (table) rule and the fixed rule (r = 1) against N: median
+   over ``--repeats`` runs of ``--collisions`` collisions each, continuing
+   one gas (so the gas has left its initial state), as collisions per second
+   and nanoseconds per collision;
+2. at N = 10,000 with the fixed rule (r = 1), the same fresh gas run by the
+   kernel (set-up included) and by :func:`wavecontact.gas.reference.heapq_ring_gas`
+   (the straightforward ``heapq`` loop of Python granular-gas codes),
+   repeats alternating between the two so that both see the same load, and
+   the ratio of the medians.
+
+``--update-docs`` also writes both tables into ``docs/gas.md`` between the
+markers ``<!-- bench_gas:begin -->`` and ``<!-- bench_gas:end -->``.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-
-from timing import median_time
-
+import wavecontact
 from wavecontact.gas import (
     FixedRestitution,
     GasSimulation,
@@ -39,32 +45,116 @@ from wavecontact.gas import (
 from wavecontact.gas.reference import heapq_ring_gas
 
 _LENGTHS = UniformLengths(0.6, 1.0)  # gamma in [0.6, 1], inside the default table
+_DOCS = Path(__file__).resolve().parent.parent / "docs" / "gas.md"
+_BEGIN, _END = "<!-- bench_gas:begin -->", "<!-- bench_gas:end -->"
+
+
+def _timed(function):
+    """(wall seconds, CPU seconds of this process) of one call."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    function()
+    return time.perf_counter() - wall, time.process_time() - cpu
+
+
+def _medians(samples):
+    """Median wall and CPU seconds of a list of ``_timed`` results."""
+    return tuple(float(np.median([s[i] for s in samples])) for i in (0, 1))
 
 
 def kernel_rate(rods, rule, collisions, repeats):
+    """Median (wall, CPU) seconds per collision of ``repeats`` runs continuing one gas."""
     gas = random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
     sim = GasSimulation(gas, rule, seed=2, record_every=collisions, max_frames=0, energy_floor=0.0)
     sim.run(min(collisions, 20 * rods))  # warm-up: compile/load the kernels, leave the initial transient
-    seconds = median_time(lambda: sim.run(collisions), repeats)
-    return collisions / seconds, sim
+    samples = [_timed(lambda: sim.run(collisions)) for _ in range(repeats)]
+    return tuple(s / collisions for s in _medians(samples))
 
 
-def heapq_rate(rods, restitution, collisions, repeats):
+def kernel_against_heapq(rods, restitution, collisions, repeats):
+    """Median (wall, CPU) seconds per collision of the kernel and of the heapq loop, alternating."""
     gas = random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
-    args = (gas.lengths, gas.positions, gas.velocities, gas.system_length, restitution, collisions)
-    return collisions / median_time(lambda: heapq_ring_gas(*args), repeats)
+    GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0).run(10)  # warm-up
 
-
-def kernel_rate_fresh(rods, restitution, collisions, repeats):
-    """The kernel on exactly the heapq loop's task: the same fresh gas, the same number of collisions."""
-    gas = random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
-    GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0).run(10)
-
-    def once():
+    def ours():  # set-up included: the same task as the heapq loop's
         GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0,
                       energy_floor=0.0).run(collisions)
 
-    return collisions / median_time(once, repeats)
+    args = (gas.lengths, gas.positions, gas.velocities, gas.system_length, restitution, collisions)
+    samples = {"ours": [], "heapq": []}
+    for _ in range(repeats):
+        samples["ours"].append(_timed(ours))
+        samples["heapq"].append(_timed(lambda: heapq_ring_gas(*args)))
+    return {name: tuple(s / collisions for s in _medians(values)) for name, values in samples.items()}
+
+
+def _revision():
+    """Short git commit of the imported package's tree (``+`` if it has uncommitted changes), or ``unknown``."""
+    root = Path(wavecontact.__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True,
+                                text=True, timeout=10, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--", "."], capture_output=True,
+                               text=True, timeout=10, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return commit + ("+" if dirty else "")
+
+
+def _row(*cells):
+    return "| " + " | ".join(cells) + " |"
+
+
+def tables(args):
+    """The report as markdown lines (printed as they are measured)."""
+    lines = []
+
+    def emit(line=""):
+        lines.append(line)
+        print(line, flush=True)
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    emit(f"wavecontact {wavecontact.__version__} at commit {_revision()} (the package imported; run from a "
+         f"worktree with `PYTHONPATH=.` to measure its code rather than the installed one's).")
+    emit()
+    emit(f"`python benchmarks/bench_gas.py --repeats {args.repeats} --collisions {args.collisions} "
+         f"--heapq-collisions {args.heapq_collisions} --rods {' '.join(map(str, args.rods))}`, run at {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
+         f"on a machine shared with other jobs (load average {load:.1f} on {os.cpu_count()} cores at the start). "
+         f"Medians of {args.repeats} repeats; wall-clock and CPU time of this process.")
+    emit()
+    emit(_row("N", "rule", "collisions/s (wall)", "ns per collision (wall)", "collisions/s (CPU)",
+              "ns per collision (CPU)"))
+    emit("|---|---|---|---|---|---|")
+    table = VibrationTable(thermal_kick_table())
+    for rods in args.rods:
+        for name, rule in (("vibration (table)", table), ("fixed r = 1 (elastic)", FixedRestitution(1.0))):
+            wall, cpu = kernel_rate(rods, rule, args.collisions, args.repeats)
+            emit(_row(f"{rods:,}", name, f"{1 / wall:,.0f}", f"{1e9 * wall:.0f}", f"{1 / cpu:,.0f}", f"{1e9 * cpu:.0f}"))
+    emit()
+    rods, c = 10_000, args.heapq_collisions
+    per = kernel_against_heapq(rods, 1.0, c, args.repeats)
+    emit(f"Fixed rule r = 1, N = {rods:,}, {c:,} collisions from the same initial gas (a fresh simulation per "
+         f"repeat, set-up included; repeats alternating between the two loops):")
+    emit()
+    emit(_row("loop", "collisions/s (wall)", "ratio (wall)", "collisions/s (CPU)", "ratio (CPU)"))
+    emit("|---|---|---|---|---|")
+    base_wall, base_cpu = per["heapq"]
+    for name, key in (("wavecontact kernel (numba)", "ours"), ("plain Python heapq", "heapq")):
+        wall, cpu = per[key]
+        emit(_row(name, f"{1 / wall:,.0f}", f"{base_wall / wall:.0f}x", f"{1 / cpu:,.0f}", f"{base_cpu / cpu:.0f}x"))
+    emit()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    emit(f"(load average {load:.1f} at the end)")
+    return lines
+
+
+def update_docs(lines, path=_DOCS):
+    """Replace the block between the markers in ``docs/gas.md`` by ``lines``."""
+    text = path.read_text()
+    if text.count(_BEGIN) != 1 or text.count(_END) != 1:
+        raise SystemExit(f"{path} must contain the markers {_BEGIN} and {_END} once each")
+    head, rest = text.split(_BEGIN)
+    tail = rest.split(_END)[1]
+    path.write_text(head + _BEGIN + "\n" + "\n".join(lines) + "\n" + _END + tail)
 
 
 def main(argv=None):
@@ -72,28 +162,12 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--collisions", type=int, default=2_000_000)
     parser.add_argument("--heapq-collisions", type=int, default=200_000)
+    parser.add_argument("--rods", type=int, nargs="+", default=[100, 1_000, 10_000, 100_000, 1_000_000])
+    parser.add_argument("--update-docs", action="store_true", help=f"write the tables into {_DOCS}")
     args = parser.parse_args(argv)
-    table = VibrationTable(thermal_kick_table())
-    print(f"# rod gas, one core, median of {args.repeats} runs; machine shared with other jobs")
-    print(f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
-    print()
-    print("| N | rule | collisions/s | ns per collision |")
-    print("|---|---|---|---|")
-    for rods in (100, 1_000, 10_000, 100_000, 1_000_000):
-        for name, rule in (("vibration (table)", table), ("fixed r = 1 (elastic)", FixedRestitution(1.0))):
-            rate, _ = kernel_rate(rods, rule, args.collisions, args.repeats)
-            print(f"| {rods:,} | {name} | {rate:,.0f} | {1e9 / rate:.0f} |", flush=True)
-    print()
-    rods, c = 10_000, args.heapq_collisions
-    ours = kernel_rate_fresh(rods, 1.0, c, args.repeats)
-    theirs = heapq_rate(rods, 1.0, c, max(1, args.repeats // 2))
-    print(f"Fixed rule r = 1, N = {rods:,}, {c:,} collisions from the same initial gas (a fresh simulation "
-          f"per repeat, set-up included):")
-    print()
-    print("| loop | collisions/s | ratio |")
-    print("|---|---|---|")
-    print(f"| wavecontact kernel (numba) | {ours:,.0f} | {ours / theirs:.0f}x |")
-    print(f"| plain Python heapq | {theirs:,.0f} | 1x |")
+    lines = tables(args)
+    if args.update_docs:
+        update_docs(lines)
     return 0
 
 

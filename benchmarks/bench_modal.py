@@ -1,14 +1,18 @@
 """Benchmark of the modal solver: the paper's Fig. 1 ring run and one collision vs scipy's solve_ivp.
 
-Run: ``python benchmarks/bench_modal.py [--collisions 4500] [--repeats 5] [--skip-ring]``
+Run: ``python benchmarks/bench_modal.py [--collisions 4500] [--repeats 5] [--skip-ring] [--accuracy-only]``
 
-Prints two tables:
+Prints three tables (``--accuracy-only``: the first alone):
+
+0. accuracy against the delay solver over gamma in [0.1, 1] and kappa in [1, 1e4] and inf, per
+   correction of the omitted modes (none, static, end-response) and number of modes, plus a random
+   sample of 200 collisions with the end-response correction at 10 modes (docs/modal.md);
 
 1. the full ring run of Fig. 1 (gamma = 0.6173, kappa = 4000, N_mod = 75,
    4500 collisions): wall time, cost per collision, energy drift;
 2. one collision (same gamma, N = 75, kappa = 100 and 4000) of the modal
    integrators (collocation, the default, and the splitting) against
-   ``solve_ivp`` (DOP853, Radau) on the same modal equations
+   ``solve_ivp`` (DOP853, Radau) on the same modal equations (static correction)
    (``benchmarks/peers/modal_solve_ivp.py``): error against a DOP853
    reference at rtol 1e-12, median wall time of the whole ``collide`` call
    (set-up included; "cold" rows refill the collocation tables, as a first
@@ -19,6 +23,7 @@ Prints two tables:
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import sys
@@ -27,11 +32,12 @@ import time
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "peers"))
 
 import modal_solve_ivp
+import numpy as np
 
 import wavecontact
 from wavecontact.modal import RingSimulation
 from wavecontact.modal import solver as modal_solver
-from wavecontact.scene import two_rods
+from wavecontact.scene import two_rods, two_rods_on_a_ring
 
 GAMMA = 0.6173
 MODES = 75
@@ -39,16 +45,16 @@ MODES = 75
 
 def ring_run(collisions: int) -> dict:
     start = time.perf_counter()
-    ring = RingSimulation(GAMMA, 4000, MODES)
+    ring = RingSimulation(two_rods_on_a_ring(GAMMA, 4000), MODES)
     steps = 0
     worst = 0.0
     for _ in range(collisions):
         record = ring.next_collision()
-        steps += record["steps"]
-        worst = max(worst, abs(record["E_total"] - ring.total_energy) / ring.total_energy)
+        steps += record.steps
+        worst = max(worst, abs(record.total_energy - ring.total_energy) / ring.total_energy)
     wall = time.perf_counter() - start
     return {"wall": wall, "per_collision_ms": 1e3 * wall / collisions, "steps": steps / collisions,
-            "final_drift": (record["E_total"] - ring.total_energy) / ring.total_energy, "worst_drift": worst}
+            "final_drift": (record.total_energy - ring.total_energy) / ring.total_energy, "worst_drift": worst}
 
 
 def median_time(function, repeats):
@@ -61,7 +67,51 @@ def median_time(function, repeats):
     return value, statistics.median(times)
 
 
+GAMMAS = (0.1, 0.2173, 0.45, 0.6, 0.8, 0.95, 1.0)
+KAPPAS = (1.0, 10.0, 100.0, 500.0, 1e4, math.inf)
+CORRECTIONS = ("none", "static", "end-response")
+
+
+def _error(gamma, kappa, reference, **options):
+    result = wavecontact.collide(gamma, kappa, solver="modal", history=False, **options)
+    return abs(result.restitution - reference), result
+
+
+def accuracy_table(modes=(10, 25, 100)) -> None:
+    """Largest error against the delay solver over the (gamma, kappa) grid, per correction and N."""
+    references = {(g, k): g if k == math.inf else wavecontact.collide(g, k, solver="delay").restitution
+                  for g in GAMMAS for k in KAPPAS}
+    print(f"\nAccuracy against the delay solver: gamma in {GAMMAS}, kappa in {KAPPAS}")
+    print(f"{'correction':>13} {'modes':>6} {'max |error|':>12} {'at (gamma, kappa)':>20} {'median ms':>10}")
+    for correction in CORRECTIONS:
+        for n in modes:
+            worst, where, times = 0.0, None, []
+            for (g, k), reference in references.items():
+                if correction == "none" and k == math.inf:
+                    continue  # refused: a hard impact on a truncated end is undefined
+                start = time.perf_counter()
+                error, _ = _error(g, k, reference, modes=n, correction=correction,
+                                  static_correction=correction != "none")
+                times.append(time.perf_counter() - start)
+                if error >= worst:
+                    worst, where = error, (g, k)
+            print(f"{correction:>13} {n:6d} {worst:12.2e} {where!s:>20} {1e3 * statistics.median(times):10.2f}")
+    rng = np.random.default_rng(np.random.SeedSequence(2026))
+    gammas = rng.uniform(0.1, 1.0, 200)
+    kappas = np.where(rng.uniform(size=200) < 0.1, math.inf, 10.0 ** rng.uniform(0.0, 4.0, 200))
+    errors, drifts = [], []
+    for g, k in zip(gammas, kappas):
+        reference = g if k == math.inf else wavecontact.collide(float(g), float(k), solver="delay").restitution
+        error, result = _error(float(g), float(k), reference, modes=10)
+        errors.append(error)
+        drifts.append(result.diagnostics["energy_drift"])
+    print(f"random sample (200 collisions, gamma in [0.1, 1], log10 kappa in [0, 4] or inf with 10 %), "
+          f"end-response, 10 modes: max |error| {max(errors):.2e}, median {statistics.median(errors):.2e}, "
+          f"max energy check {max(drifts):.2e}")
+
+
 def _collide(kappa, **options):
+    options.setdefault("correction", "static")  # the peer integrates the statically corrected equations
     return wavecontact.collide(GAMMA, kappa, solver="modal", modes=MODES, history=False, **options)
 
 
@@ -100,7 +150,7 @@ def single_collision(kappa: float, repeats: int) -> list:
 def setup_cost(kappa: float, repeats: int) -> float:
     """Median time of the solver's Python set-up alone (modes, system, start), seconds."""
     scene = two_rods(GAMMA, kappa)
-    _, wall = median_time(lambda: modal_solver._build(scene, MODES, True, "analytic", None, 1, 0.0125), repeats)
+    _, wall = median_time(lambda: modal_solver._build(scene, MODES, "static", "analytic", None, 1, 0.0125), repeats)
     return wall
 
 
@@ -109,12 +159,16 @@ def main(argv=None):
     parser.add_argument("--collisions", type=int, default=4500)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--skip-ring", action="store_true")
+    parser.add_argument("--accuracy-only", action="store_true")
     args = parser.parse_args(argv)
 
     # compile (numba caches on disk) before any timing
     wavecontact.collide(GAMMA, 100, solver="modal", modes=10)
-    RingSimulation(GAMMA, 4000, 5).next_collision()
+    RingSimulation(two_rods_on_a_ring(GAMMA, 4000), 5).next_collision()
     print(f"machine load average (1, 5, 15 min): {os.getloadavg()}")
+    accuracy_table()
+    if args.accuracy_only:
+        return
 
     if not args.skip_ring:
         ring = ring_run(args.collisions)

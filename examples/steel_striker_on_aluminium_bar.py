@@ -28,6 +28,7 @@ STEEL = {"density": 7850.0, "youngs_modulus": 210e9, "area": AREA}  # kg/m^3, Pa
 ALUMINIUM = {"density": 2700.0, "youngs_modulus": 70e9, "area": AREA}
 BAR_LENGTH = 1.0  # m
 ALPHA = 1e6  # 1/m: the contact force decays over 1 micrometre
+SPEED = 5.0  # m/s
 
 
 def rods():
@@ -43,10 +44,15 @@ def impact(speed, contact=None):
     return wavecontact.Scene(rods=rods(), velocities=(speed, 0.0), contact=contact or wavecontact.Exponential(ALPHA))
 
 
+# the one number tests/test_examples.py checks for every example: hard contact against the
+# two-material wave theory (a closed formula, docs/theory.md "Two materials")
+EXPECTED = {"hard": (two_material_impact(*rods(), SPEED)["restitution"], 1e-12, "two-material wave theory")}
+
+
 def main(out_dir="."):
     out = Path(out_dir)
     striker, bar = rods()
-    speed = 5.0
+    speed = SPEED
     scene = impact(speed)
     params = delay_parameters(scene)
     theory = two_material_impact(striker, bar, speed)

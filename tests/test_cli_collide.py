@@ -61,6 +61,10 @@ def test_save_writes_histories(tmp_path):
         ["collide", "--gamma", "0.6", "--kappa", "10", "--rtol", "2"],
         ["collide", "--gamma", "0.6", "--kappa", "10", "--modes", "10"],
         ["collide", "--gamma", "0.6", "--kappa", "10", "--contact", "penalty"],
+        ["collide", "--gamma", "0.6", "--kappa", "100", "--contact", "hard"],
+        ["collide", "--gamma", "0.6", "--kappa", "inf", "--contact", "exponential"],
+        ["collide", "--gamma", "0.6", "--kappa", "10", "--order", "3"],
+        ["collide", "--gamma", "0.6", "--kappa", "10", "--plot", "figure.txt"],
     ],
 )
 def test_invalid_arguments_exit_nonzero_with_one_line(args):
@@ -69,3 +73,56 @@ def test_invalid_arguments_exit_nonzero_with_one_line(args):
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "error" in lines[0]
     assert "Traceback" not in done.stderr
+
+
+def test_text_reports_the_solve_and_the_kernel_preparation_apart():
+    done = run_cli("collide", "--gamma", "0.6", "--kappa", "100")
+    assert done.returncode == 0, done.stderr
+    line = done.stdout.strip()
+    assert "epsilon = 0.6466970" in line and "contact = exponential" in line
+    solve_ms = float(line.split("solve ")[1].split(" ms")[0])
+    # a fresh process always loads kernels; the second, timed solve of the delay equation is fast
+    assert "kernel preparation" in line and "includ" not in line
+    assert solve_ms < 50
+
+
+def test_penalty_says_that_kappa_is_not_used(capsys):
+    assert main(["collide", "--gamma", "0.6", "--kappa", "100", "--solver", "fem", "--contact", "penalty",
+                 "--elements", "50"]) == 0
+    out = capsys.readouterr().out
+    assert "contact = penalty" in out and "kappa = 100 unused" in out
+
+
+def test_hard_contact_is_printed_as_kappa_inf(capsys):
+    assert main(["collide", "--gamma", "0.6", "--kappa", "inf", "--contact", "hard"]) == 0
+    assert "kappa = inf, contact = hard" in capsys.readouterr().out
+
+
+def test_files_written_are_listed_on_stderr_and_in_json(tmp_path, capsys):
+    figure, saved = tmp_path / "w.png", tmp_path / "run.npz"
+    assert main(["collide", "--gamma", "0.6", "--kappa", "20", "--plot", str(figure), "--save", str(saved),
+                 "--json"]) == 0
+    captured = capsys.readouterr()
+    record = json.loads(captured.out)
+    assert record["files_written"] == [str(figure), str(saved)]
+    assert f"wrote {figure}" in captured.err and f"wrote {saved}" in captured.err
+    assert figure.exists() and saved.exists()
+
+
+def test_the_step_limit_the_solver_advises_to_raise_is_an_option(capsys):
+    assert main(["collide", "--gamma", "0.6", "--kappa", "1", "--max-steps", "3"]) == 2
+    err = capsys.readouterr().err
+    assert "max_steps" in err and "Traceback" not in err
+
+
+def test_fields_are_written_with_units_and_listed(tmp_path, capsys):
+    from wavecontact.io.fields import read_fields
+
+    out = tmp_path / "fields"
+    assert main(["collide", "--solver", "fem", "--gamma", "0.6", "--kappa", "20", "--elements", "20",
+                 "--fields", str(out), "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["files_written"][0] == str(out / "fields.pvd")
+    assert len(record["files_written"]) == 1 + len(read_fields(out)["time"])
+    back = read_fields(out)
+    assert back["units"]["stress"] == "rho c V" and back["parameters"]["gamma"] == 0.6

@@ -339,8 +339,10 @@ def test_real_study_p1_lumped_converges_at_its_declared_order():
     assert fit.observed_order == pytest.approx(expected, abs=0.25)
 
 
-def test_plot_leaves_round_off_results_out_and_refuses_an_all_exact_study(tmp_path):
+def test_plot_draws_exact_runs_on_the_round_off_floor(tmp_path):
+    """At kappa = inf lumped P1 is exact on every mesh: it must stay in the figure and its legend."""
     from wavecontact.plotting.convergence import convergence_figure, plot_convergence
+    from wavecontact.studies.convergence import ERROR_FLOOR
 
     exact = convergence_study(
         0.6,
@@ -351,15 +353,20 @@ def test_plot_leaves_round_off_results_out_and_refuses_an_all_exact_study(tmp_pa
         collide=StandIn(round_off=True),
         progress=False,
     )
-    with pytest.raises(InvalidParameterError, match="round-off"):
-        plot_convergence(exact, tmp_path / "c.png")
+    path = plot_convergence(exact, tmp_path / "c.png")
+    assert path.stat().st_size > 0
+    ax_n = convergence_figure(exact).axes[0]
+    floor = [line for line in ax_n.lines if line.get_label() == ax_n.get_legend().get_texts()[0].get_text()]
+    assert len(floor) == 1 and list(floor[0].get_ydata()) == [ERROR_FLOOR, ERROR_FLOOR]
+    assert "exact on 2 meshes" in ax_n.get_legend().get_texts()[0].get_text()
     mixed = convergence_study(
         0.6, 20, orders=(1, 2), masses=("lumped",), elements=(10, 20), collide=StandIn(), progress=False
     )
     mixed.rows[0] = type(mixed.rows[0])(**{**mixed.rows[0].__dict__, "error": 1e-16})
     ax_n = convergence_figure(mixed).axes[0]
-    assert len(ax_n.lines[0].get_xdata()) == 1
-    assert "1 mesh exact to round-off" in ax_n.get_legend().get_texts()[0].get_text()
+    assert len(ax_n.lines[0].get_xdata()) == 1  # the line joins the inexact runs only
+    assert list(ax_n.lines[1].get_ydata()) == [ERROR_FLOOR]  # the exact one on the floor
+    assert "exact on 1 mesh" in ax_n.get_legend().get_texts()[0].get_text()
 
 
 def test_progress_bar_goes_to_stderr_only_when_asked(capsys):

@@ -1,4 +1,4 @@
-"""Gas kernels: the indexed heap, collision-time prediction, and the in-kernel table draw."""
+"""Gas kernels: the tournament tree of event times, collision-time prediction, and the in-kernel table draw."""
 
 import math
 
@@ -8,31 +8,46 @@ import pytest
 from wavecontact.gas import kernels, thermal_kick_table
 
 
-def _heap_of(keys):
-    heap = np.empty(keys.size, np.int64)
-    times = np.empty(keys.size)
-    slot = np.empty(keys.size, np.int64)
-    kernels.build_heap(keys, heap, times, slot)
-    return heap, times, slot
+def _tree_of(keys):
+    times = np.empty(kernels.tree_size(keys.size))
+    events = np.empty(times.size, np.int64)
+    kernels.build_tree(keys, times, events)
+    return times, events
 
 
 @pytest.mark.parametrize("jit", [True, False])
-def test_heap_top_is_the_earliest_event_after_any_rekeying(jit):
-    rekey = kernels._rekey if jit else kernels._rekey.py_func
-    rng = np.random.default_rng(np.random.SeedSequence(4))
-    keys = rng.exponential(size=257)
+@pytest.mark.parametrize("size", [1, 2, 3, 257])
+def test_tree_root_is_the_earliest_event_after_any_change(jit, size):
+    """After re-timing single events, or a neighbour triple (the ring's seam included), the root is the
+    earliest event, ties going to the lower index, and every node holds the earlier of its children."""
+    pull_range = kernels._pull_range if jit else kernels._pull_range.py_func
+    rng = np.random.default_rng(np.random.SeedSequence([4, size]))
+    keys = rng.exponential(size=size)
     keys[::17] = math.inf
-    keys[5] = keys[9]  # a tie: the lower event index wins
-    heap, times, slot = _heap_of(keys.copy())
+    if size > 9:
+        keys[5] = keys[9]  # a tie: the lower event index wins
+    times, events = _tree_of(keys.copy())
+    leaves = times.size // 2
     reference = keys.copy()
     for step in range(3000):
-        assert heap[0] == min(range(reference.size), key=lambda k: (reference[k], k))
-        assert np.array_equal(heap[slot], np.arange(reference.size))
-        assert np.array_equal(times, reference[heap])
-        k = int(rng.integers(reference.size))
-        new = math.inf if step % 7 == 0 else float(rng.exponential())
-        reference[k] = new
-        rekey(heap, times, slot, k, new)
+        earliest = min(range(size), key=lambda k: (reference[k], k))
+        assert events[1] == earliest and times[1] == reference[earliest]
+        assert np.array_equal(times[leaves:leaves + size], reference)
+        for p in range(1, leaves):
+            child = 2 * p + (1 if times[2 * p + 1] < times[2 * p] else 0)
+            assert times[p] == times[child] and events[p] == events[child]
+        k = int(rng.integers(size))
+        changed = [k] if step % 2 else sorted({(k - 1) % size, k, (k + 1) % size})
+        for c in changed:
+            reference[c] = math.inf if rng.random() < 0.3 else float(rng.exponential())
+            if rng.random() < 0.1:
+                reference[c] = reference[earliest]  # ties with the current root
+            times[leaves + c] = reference[c]
+        if changed == list(range(changed[0], changed[-1] + 1)):
+            pull_range(times, events, changed[0], changed[-1])
+        else:
+            for c in changed:
+                pull_range(times, events, c, c)
 
 
 def test_collision_times_on_a_ring_and_against_walls():
@@ -97,3 +112,16 @@ def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):
             outputs.append({k: data[k] for k in data.files})
     for name in outputs[0]:
         np.testing.assert_array_equal(outputs[0][name], outputs[1][name], err_msg=name)
+
+
+@pytest.mark.parametrize("jit", [True, False])
+def test_branch_free_bracket_agrees_with_searchsorted(jit):
+    """The select-based binary search finds the grid interval np.searchsorted finds (grid points, edges, outside)."""
+    bracket = kernels._bracket if jit else kernels._bracket.py_func
+    rng = np.random.default_rng(np.random.SeedSequence(11))
+    for size in (2, 3, 5, 32, 201):
+        grid = np.cumsum(rng.exponential(size=size))
+        values = np.concatenate([grid, rng.uniform(grid[0] - 1.0, grid[-1] + 1.0, 200), [grid[0] - 5.0]])
+        for value in values:
+            expected = int(np.clip(np.searchsorted(grid, value, side="right") - 1, 0, size - 2))
+            assert bracket(grid, value) == expected

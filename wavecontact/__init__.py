@@ -12,14 +12,13 @@ Three solvers share one scene model and one entry point:
 0.646697
 """
 
+from ._version import __version__ as __version__
 from .api import collide, solve
 from .contact import ContactLaw, Exponential, Hard, Penalty
 from .errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, WavecontactError
 from .result import CollisionResult
 from .scene import Rod, Scene, two_rod_parameters, two_rods
 from .studies.ensemble import ensemble
-
-__version__ = "0.1.0"
 
 __all__ = [
     "CollisionResult",

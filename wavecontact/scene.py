@@ -2,7 +2,7 @@
 
 Nothing here knows about a solver.  Units are whatever the user chooses, as
 long as they are consistent; :func:`two_rods` builds the paper's setting in
-the dimensionless units of MODEL.md section 2 (``rho = c = A = 1``, effective
+the dimensionless units of docs/theory.md (Dimensionless numbers) (``rho = c = A = 1``, effective
 length ``l = 1``, approach speed ``V = 1``, hence ``alpha = kappa``).
 """
 
@@ -190,7 +190,7 @@ class Scene:
 
 @dataclass(frozen=True)
 class TwoRodParameters:
-    """The paper's dimensionless numbers of a two-rod collision (MODEL.md 2)."""
+    """The paper's dimensionless numbers of a two-rod collision (docs/theory.md, Dimensionless numbers)."""
 
     gamma: float  # l1 / l2 in (0, 1]
     kappa: float  # alpha V l / c in (0, inf]
@@ -236,7 +236,7 @@ def two_rods(
 ) -> Scene:
     """The paper's head-on collision of two rods of one material, dimensionless.
 
-    Units (MODEL.md section 2): ``rho = c = A = 1``, effective length
+    Units (docs/theory.md, Dimensionless numbers): ``rho = c = A = 1``, effective length
     ``l = 2 l1 l2 / (l1 + l2) = 1`` and approach speed ``V = 1``; so
     ``l1 = (1 + gamma) / 2``, ``l2 = (1 + gamma) / (2 gamma)``, the reduced
     mass is ``mu = 1/2`` and ``alpha = kappa``.  The short rod is on the

@@ -1,8 +1,8 @@
 """Peer: JiTCDDE on the same delay equation (Eq. 16), as a user would set it up.
 
 JiTCDDE integrates ``W' = exp(kappa t - a0 - W - sum_{i,n} W(t - n Gamma_i))``
-with its Bogacki-Shampine pair and Hermite history.  Two precautions (MODEL.md
-section 7): the exponent is clipped at 50, otherwise a rejected trial step can
+with its Bogacki-Shampine pair and Hermite history.  Two precautions
+(found while setting it up): the exponent is clipped at 50, otherwise a rejected trial step can
 overflow to NaN and be accepted silently; the delays are passed explicitly
 (automatic detection needs sympy).  ``kappa`` is a control parameter, so one
 compilation serves every ``kappa`` at a given ``gamma``.

@@ -18,13 +18,24 @@ COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "m
 
 
 class _Parser(argparse.ArgumentParser):
+    """One-line errors; every command's help states its options' defaults (``common.HelpFormatter``)."""
+
+    def __init__(self, *args, **kwargs):
+        from .common import HelpFormatter
+
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message):  # one line, exit status 2, as argparse does
         self.exit(2, f"wavecontact: error: {message}\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .._version import __version__
     parser = _Parser(prog="wavecontact", description="Collisions of elastic rods and their restitution.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    parser.add_argument("--version", action="version", version=f"wavecontact {__version__}",
+                        help="print the version and exit")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
     for name in COMMANDS:
         try:
             module = importlib.import_module(f"{__name__}.{name.replace('-', '_')}")

@@ -2,9 +2,24 @@
 
 from __future__ import annotations
 
+import json
 import math
 
-from .common import gamma_value, kappa_value, positive_int
+from .common import (
+    contact_law,
+    gamma_value,
+    kappa_value,
+    number_type,
+    option_choices,
+    option_text,
+    positive_int,
+    report_written,
+)
+
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+_positive_float = number_type(lambda v: math.isfinite(v) and v > 0, "a finite positive number")
 
 
 def add_parser(subparsers):
@@ -12,37 +27,45 @@ def add_parser(subparsers):
         "collide",
         help="one collision: print the coefficient of restitution",
         description="Collide two rods of length ratio gamma at softness kappa = alpha V l / c "
-        "(--kappa inf: hard contact) and print the coefficient of restitution.",
+        "(--kappa inf: hard contact) and print the coefficient of restitution. The time printed is the "
+        "solve alone; numba's one-time kernel preparation (compilation or cache loading, once per "
+        "process) is measured by a second, identical solve and reported separately.",
     )
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
-    p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]; 'inf' = hard")
-    p.add_argument("--solver", choices=("delay", "fem", "modal"), default="delay")
+    p.add_argument("--kappa", type=kappa_value, required=True,
+                   help="softness alpha V l / c in (0, inf]; 'inf' is the hard-core limit")
+    p.add_argument("--solver", choices=("delay", "fem", "modal"), default="delay", help="which solver")
+    p.add_argument("--contact", choices=("exponential", "penalty", "hard"),
+                   help="contact law (default: exponential for finite --kappa, hard for --kappa inf); "
+                   "hard needs --kappa inf, penalty (fem only) ignores kappa")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--plot", metavar="FILE", help="draw W(tau) or v_rel(tau) with the asymptotic curve (PNG/PDF/SVG)")
+    p.add_argument("--plot", metavar="FILE",
+                   help="draw W(tau) or v_rel(tau) with the asymptotic curve (.png, .pdf or .svg)")
     p.add_argument("--save", metavar="FILE", help="save scalars and histories to an .npz file")
+    p.add_argument("--no-warmup", dest="warmup", action="store_false",
+                   help="solve once only; the time printed then includes numba's kernel preparation")
     delay = p.add_argument_group("delay solver")
-    delay.add_argument("--rtol", type=float, help="target accuracy of epsilon (default 1e-11)")
+    delay.add_argument("--rtol", type=_positive_float, help=option_text("delay", "rtol"))
+    delay.add_argument("--max-steps", type=positive_int, metavar="N", help=option_text("delay", "max_steps"))
     fem = p.add_argument_group("finite-element solver")
-    fem.add_argument("--elements", type=positive_int, help="elements on the shorter rod")
-    fem.add_argument("--order", type=positive_int, help="Lagrange element order (1, 2, ...)")
-    fem.add_argument("--mass", choices=("lumped", "consistent"))
-    fem.add_argument("--contact", choices=("exponential", "penalty", "hard"), default="exponential")
-    fem.add_argument("--fields", metavar="DIR", help="write stress/velocity fields for ParaView into DIR")
-    fem.add_argument("--fields-format", choices=("vtu", "xdmf"), default="vtu",
-                     help="VTU files with a PVD index (default) or one XDMF time series")
+    fem.add_argument("--elements", type=positive_int, metavar="N", help=option_text("fem", "elements"))
+    fem.add_argument("--order", type=int, choices=option_choices("fem", "order"), help=option_text("fem", "order"))
+    fem.add_argument("--mass", choices=option_choices("fem", "mass"), help=option_text("fem", "mass"))
+    fem.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress for ParaView into DIR (fields.pvd and one "
+                     "VTU file per sample; units and parameters in each file's field data)")
     fem.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
     modal = p.add_argument_group("modal solver")
-    modal.add_argument("--modes", type=positive_int, help="modes per rod")
+    modal.add_argument("--modes", type=positive_int, metavar="N", help=option_text("modal", "modes"))
     modal.add_argument(
         "--no-static-correction", dest="static_correction", action="store_false", default=None,
-        help="plain modal truncation (no residual flexibility)",
+        help="switch off: " + option_text("modal", "static_correction"),
     )
     p.set_defaults(run=run)
     return p
 
 
 _SOLVER_FLAGS = {
-    "delay": ("rtol",),
+    "delay": ("rtol", "max_steps"),
     "fem": ("elements", "order", "mass"),
     "modal": ("modes", "static_correction"),
 }
@@ -58,42 +81,89 @@ def _options(args) -> dict:
             if solver != args.solver:
                 raise ValueError(f"--{name.replace('_', '-')} applies to --solver {solver}, not {args.solver}")
             options[name] = value
-    wants_fields = args.fields or args.xt_plot
-    if wants_fields:
+    if args.fields or args.xt_plot:
         if args.solver != "fem":
             raise ValueError("--fields and --xt-plot need --solver fem")
         options["record_fields"] = True
     return options
 
 
-def run(args) -> int:
+def _check_outputs(args) -> None:
+    from ..io.files import check_output_directory, check_output_file
+
+    if args.plot:
+        check_output_file("--plot", args.plot, PLOT_SUFFIXES)
+    if args.xt_plot:
+        check_output_file("--xt-plot", args.xt_plot, PLOT_SUFFIXES)
+    if args.save:
+        check_output_file("--save", args.save, (".npz",))
+    if args.fields:
+        check_output_directory("--fields", args.fields)
+
+
+def timed_collide(gamma, kappa, solver, contact, options, warmup=True):
+    """Solve; if numba prepared kernels during the call, solve again to time the solve alone.
+
+    Returns
+    -------
+    result : CollisionResult
+        The (second, when repeated) result; ``wall_time_s`` is then the solve alone.
+    preparation_s : float or None
+        Kernel preparation time in seconds (first call minus second), None if
+        there was none or it was not measured (``warmup=False``).
+    """
     from ..api import collide
 
-    contact = "hard" if math.isinf(args.kappa) else args.contact
-    result = collide(args.gamma, args.kappa, solver=args.solver, contact=contact, **_options(args))
+    result = collide(gamma, kappa, solver=solver, contact=contact, **options)
+    if not (warmup and result.diagnostics.get("includes_kernel_preparation")):
+        return result, None
+    first = result.wall_time_s
+    result = collide(gamma, kappa, solver=solver, contact=contact, **options)
+    return result, max(first - result.wall_time_s, 0.0)
+
+
+def run(args) -> int:
+    contact = contact_law(args.kappa, args.contact)
+    options = _options(args)
+    _check_outputs(args)
+    if contact == "penalty" and args.solver != "fem":
+        raise ValueError("--contact penalty needs --solver fem")
+    result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
+    written = []
     if args.fields:
         from ..io.fields import write_fields
 
-        write_fields(result, args.fields, format=args.fields_format)
+        written += write_fields(result, args.fields, units="dimensionless").files
     if args.xt_plot:
         from ..plotting.xt import plot_xt_diagram
 
-        plot_xt_diagram(result, args.xt_plot)
+        written.append(plot_xt_diagram(result, args.xt_plot))
     if args.plot:
         from ..plotting.history import plot_velocity_history
 
-        plot_velocity_history(result, args.plot)
+        written.append(plot_velocity_history(result, args.plot))
     if args.save:
         result.save_npz(args.save)
+        written.append(args.save)
+    files = report_written(written)
     if args.json:
-        print(result.to_json())
-    else:
-        kappa = "inf" if math.isinf(args.kappa) else f"{args.kappa:g}"
-        line = f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa}, solver = {result.solver}"
-        if result.error_estimate is not None:
-            line += f", error estimate {result.error_estimate:.1e}"
-        line += f", {1e3 * result.wall_time_s:.3g} ms"
-        if result.diagnostics.get("includes_kernel_preparation"):
-            line += ", including numba's one-time compilation or cache loading"
-        print(line + ")")
+        record = json.loads(result.to_json())
+        record["contact"] = contact
+        record["kernel_preparation_s"] = preparation
+        record["files_written"] = files
+        print(json.dumps(record))
+        return 0
+    kappa = "inf" if math.isinf(args.kappa) else f"{args.kappa:g}"
+    if contact == "penalty":
+        kappa += " unused: penalty stiffness E A / h"
+    line = (f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa}, "
+            f"contact = {contact}, solver = {result.solver}")
+    if result.error_estimate is not None:
+        line += f", error estimate {result.error_estimate:.1e}"
+    line += f"; solve {1e3 * result.wall_time_s:.3g} ms"
+    if preparation is not None:
+        line += f", numba kernel preparation {1e3 * preparation:.3g} ms (once per process)"
+    elif result.diagnostics.get("includes_kernel_preparation"):
+        line += " including numba's kernel preparation (--no-warmup)"
+    print(line + ")")
     return 0

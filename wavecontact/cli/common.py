@@ -55,3 +55,105 @@ def add_ring_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     parser.add_argument("--no-static-correction", dest="static_correction", action="store_false",
                         help="plain modal truncation (no residual flexibility)")
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Help that states every option's default (``--json`` flags and required options have none)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or action.required
+            or default is None
+            or default is argparse.SUPPRESS
+            or isinstance(default, bool)
+            or not action.option_strings
+        ):
+            return text
+        if isinstance(default, (list, tuple)):
+            default = " ".join(map(str, default))
+        return f"{text} (default: {default})"
+
+
+def solver_option(solver: str, name: str) -> tuple:
+    """``(default, spec)`` of one option, read from the solver's ``Options`` dataclass (never restated here)."""
+    import dataclasses
+
+    from ..solvers import get_solver
+
+    for f in dataclasses.fields(get_solver(solver).Options):
+        if f.name == name:
+            return f.default, f.metadata["option"]
+    raise KeyError(f"solver {solver!r} has no option {name!r}")
+
+
+def option_text(solver: str, name: str) -> str:
+    """Help of a solver option as the solver declares it: meaning, allowed values, default."""
+    from ..solvers.base import option_help
+
+    (row,) = [r for r in option_help(_options_class(solver)) if r[0] == name]
+    _, default, allowed, text = row
+    if isinstance(default, bool):
+        return f"{text} (default: {'on' if default else 'off'})"
+    shown = f"{default:g}" if isinstance(default, float) else str(default)
+    return f"{text}; {allowed} (default: {shown})"
+
+
+def option_choices(solver: str, name: str) -> tuple:
+    """The allowed values of a solver option of kind 'choice'."""
+    return tuple(solver_option(solver, name)[1]["choices"])
+
+
+def _options_class(solver: str):
+    from ..solvers import get_solver
+
+    return get_solver(solver).Options
+
+
+def print_outcome(record: dict, text: str, written, as_json: bool) -> int:
+    """List the files ``written`` on stderr, then print ``record`` (with them) as JSON or ``text``."""
+    import json
+
+    files = report_written(written)
+    print(json.dumps({**record, "files_written": files}) if as_json else text)
+    return 0
+
+
+def number_type(accept, requirement: str):
+    """An argparse type: a float for which ``accept(value)`` holds, else "``requirement``, got ..."."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {requirement}, got {text!r}") from None
+        if not accept(value):
+            raise argparse.ArgumentTypeError(f"expected {requirement}, got {text!r}")
+        return value
+
+    return parse
+
+
+def report_written(paths) -> list:
+    """List files written on stderr, one line each; return them as strings (for JSON output)."""
+    import sys
+
+    names = [str(p) for p in paths]
+    for name in names:
+        print(f"wavecontact: wrote {name}", file=sys.stderr)
+    return names
+
+
+def contact_law(kappa: float, contact: str | None) -> str:
+    """The contact law to use; refuse combinations whose printed kappa would not be the one computed."""
+    if contact is None:
+        return "hard" if math.isinf(kappa) else "exponential"
+    if math.isinf(kappa) and contact != "hard":
+        raise ValueError(f"--contact {contact} needs a finite --kappa; --kappa inf is the hard-core limit "
+                         "(use --contact hard or leave --contact out)")
+    if contact == "hard" and math.isfinite(kappa):
+        raise ValueError(f"--contact hard is the limit kappa -> inf; --kappa {kappa:g} would not be used "
+                         "(pass --kappa inf)")
+    return contact

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .common import gamma_value, kappa_value, positive_int
+from .common import gamma_value, kappa_value, positive_int, print_outcome
 
 
 def add_parser(subparsers):
@@ -15,10 +15,13 @@ def add_parser(subparsers):
     )
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
     p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]; 'inf' = hard")
-    p.add_argument("--repeats", type=positive_int, default=1, help="median over this many solves")
+    p.add_argument("--repeats", type=positive_int, default=1, help="median wall time over this many solves of each method")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--plot", metavar="FILE", help="error against wall time, one marker per solver")
-    p.add_argument("--no-progress", dest="progress", action="store_false", default=None)
+    p.add_argument("--plot", metavar="FILE", help="draw error against wall time, one line per solver and discretization (.png, .pdf or .svg)")
+    p.add_argument("--no-progress", dest="progress", action="store_false", default=None,
+                   help="no progress bar (it is shown on stderr only when that is a terminal)")
+    p.add_argument("--no-warmup", dest="warmup", action="store_false",
+                   help="time every first call too (numba's kernel preparation then shows in the times)")
     p.set_defaults(run=run)
     return p
 
@@ -26,10 +29,15 @@ def add_parser(subparsers):
 def run(args) -> int:
     from ..studies.compare import compare_solvers
 
-    table = compare_solvers(args.gamma, args.kappa, repeats=args.repeats, progress=args.progress)
+    if args.plot:
+        from ..io.files import check_output_file
+
+        check_output_file("--plot", args.plot, (".png", ".pdf", ".svg"))
+    table = compare_solvers(args.gamma, args.kappa, repeats=args.repeats, progress=args.progress,
+                            warmup=args.warmup)
+    written = []
     if args.plot:
         from ..plotting.compare import plot_comparison
 
-        plot_comparison(table, args.plot)
-    print(table.to_json() if args.json else table.format())
-    return 0
+        written.append(plot_comparison(table, args.plot))
+    return print_outcome(table.to_dict(), table.format(), written, args.json)

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from .common import gamma_value, kappa_value, positive_int
+from .common import contact_law, gamma_value, kappa_value, option_choices, positive_int, print_outcome
 
 
 def add_parser(subparsers):
+    orders, masses = option_choices("fem", "order"), option_choices("fem", "mass")
     p = subparsers.add_parser(
         "converge",
         help="mesh-convergence study of the fem solver against the delay equation",
@@ -17,18 +18,19 @@ def add_parser(subparsers):
     p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]; 'inf' = hard")
     p.add_argument(
         "--order",
-        type=positive_int,
+        type=int,
         nargs="+",
-        default=[1, 2],
+        choices=orders,
+        default=list(orders),
         metavar="P",
-        help="Lagrange element orders (default: 1 2)",
+        help=f"Lagrange element orders, each one of {', '.join(map(str, orders))}",
     )
     p.add_argument(
         "--mass",
         nargs="+",
-        choices=("lumped", "consistent"),
-        default=["lumped", "consistent"],
-        help="mass treatments (default: lumped consistent)",
+        choices=masses,
+        default=list(masses),
+        help="mass treatments",
     )
     p.add_argument(
         "--elements",
@@ -36,13 +38,13 @@ def add_parser(subparsers):
         nargs="+",
         default=[25, 50, 100, 200],
         metavar="N",
-        help="elements on the shorter rod, at least two sizes (default: 25 50 100 200)",
+        help="elements on the shorter rod, at least two sizes",
     )
     p.add_argument(
         "--contact",
         choices=("exponential", "penalty", "hard"),
-        default="exponential",
-        help="contact law (--kappa inf forces hard)",
+        help="contact law (default: exponential for finite --kappa, hard for --kappa inf); hard needs "
+        "--kappa inf; penalty ties its stiffness to the mesh and ignores kappa",
     )
     p.add_argument(
         "--reference",
@@ -52,7 +54,7 @@ def add_parser(subparsers):
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     p.add_argument(
-        "--plot", metavar="FILE", help="draw error vs elements and error vs wall time (PNG/PDF/SVG)"
+        "--plot", metavar="FILE", help="draw error vs elements and error vs wall time (.png, .pdf or .svg)"
     )
     p.add_argument(
         "--no-progress",
@@ -76,20 +78,25 @@ def run(args) -> int:
 
     if len(set(args.elements)) < 2:
         raise ValueError("--elements needs at least two different mesh sizes to fit an order")
+    contact = contact_law(args.kappa, args.contact)
+    if args.plot:
+        from ..io.files import check_output_file
+
+        check_output_file("--plot", args.plot, (".png", ".pdf", ".svg"))
     table = convergence_study(
         args.gamma,
         args.kappa,
         orders=args.order,
         masses=args.mass,
         elements=args.elements,
-        contact=args.contact,
+        contact=contact,
         reference=args.reference,
         progress=args.progress,
         warmup=args.warmup,
     )
+    written = []
     if args.plot:
         from ..plotting.convergence import plot_convergence
 
-        plot_convergence(table, args.plot)
-    print(table.to_json() if args.json else table.format_text())
-    return 0
+        written.append(plot_convergence(table, args.plot))
+    return print_outcome(table.to_dict(), table.format_text(), written, args.json)

@@ -6,23 +6,14 @@ import json
 import math
 from pathlib import Path
 
-from .common import add_ring_options, gamma_value, kappa_value, positive_int
+from .common import add_ring_options, gamma_value, kappa_value, number_type, positive_int, report_written
 
 ENTROPY_NAME = "entropy.csv"
 SUMMARY_NAME = "equipartition.json"
 FIGURE_NAME = "fig2_equipartition_vs_modes.png"
 
 
-def _threshold(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"threshold must be a number > 1, got {text!r}") from None
-    if not (math.isfinite(value) and value > 1.0):
-        raise argparse.ArgumentTypeError(f"threshold must be a finite number > 1, got {text!r}")
-    return value
+_threshold = number_type(lambda v: math.isfinite(v) and v > 1.0, "a finite number > 1")
 
 
 def add_parser(subparsers):
@@ -30,17 +21,17 @@ def add_parser(subparsers):
         "equipartition",
         help="spectral entropy after each collision for several mode counts (Fig. 2), and its settling time",
         description="For each N, start two rods on a ring with a cold bath REALISATIONS times (ring "
-        "circumferences 1.5 %% apart), record the spectral entropy eta (Eq. 10) after each of COLLISIONS "
+        "circumferences 1.5 percent apart), record the spectral entropy eta (Eq. 10) after each of COLLISIONS "
         "collisions, and report the collision at which eta first falls below THRESHOLD times its "
         "equipartition mean. Writes entropy.csv, equipartition.json and the figure into DIR.",
     )
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
     p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]")
     p.add_argument("--modes", type=positive_int, nargs="+", required=True, help="modes per rod, one or more N >= 2")
-    p.add_argument("--collisions", type=positive_int, default=100, help="collisions per realisation (default 100)")
-    p.add_argument("--realisations", type=positive_int, default=5, help="realisations per N (default 5)")
+    p.add_argument("--collisions", type=positive_int, default=100, help="collisions per realisation")
+    p.add_argument("--realisations", type=positive_int, default=5, help="realisations per N")
     p.add_argument("--threshold", type=_threshold, default=1.5,
-                   help="settled when eta <= THRESHOLD x its equipartition mean (default 1.5)")
+                   help="settled when eta <= THRESHOLD x its equipartition mean")
     add_ring_options(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON instead of a table")
     p.set_defaults(run=run)
@@ -76,8 +67,9 @@ def run(args) -> int:
         json.dump(summary, handle, indent=2)
         handle.write("\n")
     figure = plot_equipartition(study, out / FIGURE_NAME)
+    files = report_written([out / ENTROPY_NAME, out / SUMMARY_NAME, figure])
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json.dumps({**summary, "files_written": files}, indent=2))
         return 0
     print(f"equipartition of the modes, gamma = {study.gamma:g}, kappa = {summary['kappa']}, "
           f"{args.realisations} realisations x {args.collisions} collisions ({study.wall_time_s:.1f} s)")
@@ -92,5 +84,4 @@ def run(args) -> int:
               f"{settled} | {median} |")
     if summary["settling_exponent"] is not None:
         print(f"\nmedian settling collision ~ N^{summary['settling_exponent']:.2f} (log-log fit)")
-    print(f"wrote {out / ENTROPY_NAME}, {out / SUMMARY_NAME}, {figure}")
     return 0

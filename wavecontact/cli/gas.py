@@ -64,7 +64,7 @@ def add_parser(subparsers):
     p.add_argument("--collisions", type=positive_int, required=True, help="rod-rod collisions to simulate")
     p.add_argument("--rule", choices=("vibration", "fixed"), required=True, help="collision rule")
     p.add_argument("--restitution", type=_fraction("restitution", low_open=False),
-                   help="eps of the fixed rule, in [0, 1] (required with --rule fixed)")
+                   help="eps of the fixed rule, in [0, 1] (no default: required with --rule fixed)")
     p.add_argument("--table", metavar="FILE",
                    help="restitution table (.npz/.json) of the vibration rule (default: the analytic "
                    "thermal-kick stand-in, wavecontact.gas.thermal_kick_table)")

@@ -47,7 +47,8 @@ def add_parser(subparsers):
     p.add_argument("--rtol", type=float, default=1e-8, help="delay-solver accuracy at finite kappa (1e-8)")
     p.add_argument("--workers", type=positive_int, default=None, help="threads at finite kappa (default: cores)")
     p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
-    p.add_argument("--no-progress", dest="progress", action="store_false", default=None)
+    p.add_argument("--no-progress", dest="progress", action="store_false", default=None,
+                   help="no progress bar (it is shown on stderr only when that is a terminal)")
     p.set_defaults(run=run)
     return p
 

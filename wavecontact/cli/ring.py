@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from .common import add_ring_options, gamma_value, kappa_value, positive_int
+from .common import add_ring_options, gamma_value, kappa_value, positive_int, report_written
 
 SUMMARY_NAME = "summary.json"
 SPECTRUM_NAME = "modal_spectrum.csv"
@@ -41,10 +41,11 @@ def add_parser(subparsers):
     p.add_argument("--collisions", type=positive_int, required=True, help="number of collisions M")
     add_ring_options(p)
     p.add_argument("--checkpoint-every", type=positive_int, default=100, metavar="K",
-                   help="write a checkpoint every K collisions (default 100)")
+                   help="write a checkpoint every K collisions")
     p.add_argument("--transient", type=_nonnegative_int, default=None,
                    help="collisions discarded before stationary averages (default: chosen from the relaxation)")
-    p.add_argument("--max-lag", type=positive_int, default=20, help="largest lag k of C_eps(k) (default 20)")
+    p.add_argument("--max-lag", type=positive_int, default=20, help="largest lag k of C_eps(k)")
+    p.add_argument("--json", action="store_true", help="print the summary (summary.json) as one JSON object")
     p.set_defaults(run=run)
     return p
 
@@ -105,6 +106,11 @@ def run(args) -> int:
         handle.write("\n")
     _write_spectrum(out / SPECTRUM_NAME, stats.mean_relative_spectrum)
     figures = plot_ring_figures(ring_run, out, stats)
+    files = report_written([out / "ring.npz", out / "ring.csv", out / SUMMARY_NAME, out / SPECTRUM_NAME,
+                            *figures])
+    if args.json:
+        print(json.dumps({**summary, "files_written": files}))
+        return 0
 
     ratio = stats.mean_translational_energy / stats.equilibrium_translational_energy
     print(f"{ring_run.n_collisions} collisions (gamma = {ring_run.gamma:g}, kappa = {ring_run.kappa:g}, "
@@ -121,6 +127,4 @@ def run(args) -> int:
           f"{_format(stats.entropy_settling_collisions, 'd')} collisions")
     print(f"  restitution: mean {stats.mean_restitution:.4f}, C(1)/C(0) = "
           f"{stats.restitution_correlation_coefficient_lag1:+.3f}; energy drift {stats.energy_drift:.2e}")
-    print(f"  wrote {out / 'ring.npz'}, {out / 'ring.csv'}, {out / SUMMARY_NAME}, {out / SPECTRUM_NAME}, "
-          + ", ".join(str(f) for f in figures))
     return 0

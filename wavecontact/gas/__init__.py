@@ -2,7 +2,7 @@
 
 * :mod:`.model`       -- the rods' state (:class:`RodGas`, :func:`random_gas`, length distributions);
 * :mod:`.rules`       -- collision rules as values (fixed restitution, restitution table, a solve per collision);
-* :mod:`.kernels`     -- the event loop (indexed heap of neighbour-pair collision times, numba);
+* :mod:`.kernels`     -- the event loop (tournament tree of neighbour-pair collision times, numba);
 * :mod:`.simulation`  -- runs in chunks, histories, collapse detection, checkpoint and resume;
 * :mod:`.kick_table`  -- an analytic stand-in restitution table for demonstrations;
 * :mod:`.reference`   -- a plain-Python heapq event loop (test reference and benchmark baseline).

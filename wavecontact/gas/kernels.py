@@ -1,10 +1,15 @@
-"""Event-driven kernels of the rod gas: an indexed binary heap of neighbour-pair collision times.
+"""Event-driven kernels of the rod gas: a tournament tree of neighbour-pair collision times.
 
 In one dimension only neighbours meet, so the gas has one event per
 neighbour pair (N on a ring; N + 1 between walls, the walls counting as
 fixed partners).  Each collision changes the velocities of two rods and
-therefore the predicted times of at most three events; they are re-keyed in
-the heap in ``O(log N)``.  Rods are advanced lazily: a rod's position,
+therefore the predicted times of at most three events, and these three are
+neighbours: they sit on neighbouring leaves of a binary tournament tree
+(each node holding the earlier of its two children, the root the next
+event), so their paths to the root join after a level or two and one path
+of ``log2 N`` comparisons is re-evaluated per collision.  (An indexed
+binary heap would re-key the three events separately, each with its own
+sift of unpredictable branches.)  Rods are advanced lazily: a rod's position,
 velocity and bath temperature refer to its own clock ``local_time`` and are
 brought forward only when it collides (free flight is exact).
 
@@ -39,9 +44,11 @@ __all__ = [
     "STATUS_NEED_DRAW",
     "STATUS_NO_EVENTS",
     "STATUS_TIME_LIMIT",
-    "build_heap",
+    "build_tree",
     "event_time",
+    "event_times",
     "run_events",
+    "tree_size",
 ]
 
 RULE_FIXED, RULE_TABLE, RULE_EXTERNAL = 0, 1, 2
@@ -79,85 +86,98 @@ def event_time(k, now, x, v, local_time, reach, ring, box):
         j = k
         offset = 0.0
     approach = v[i] - v[j]
-    if approach <= 0.0:
-        return math.inf
     gap = (x[j] + v[j] * (now - local_time[j]) + offset) - (x[i] + v[i] * (now - local_time[i])) - reach[k]
-    return now + max(gap, 0.0) / approach
+    # whether the pair closes in is random from one call to the next: selects instead of a branch
+    closing = approach > 0.0
+    when = now + max(gap, 0.0) / (approach if closing else 1.0)
+    return when if closing else math.inf
 
 
 @kernel
-def _sift_up(heap, heap_time, slot, p):
-    item = heap[p]
-    t = heap_time[p]
-    while p > 0:
-        parent = (p - 1) >> 1
-        other = heap[parent]
-        tp = heap_time[parent]
-        if tp < t or (tp == t and other < item):
-            break
-        heap[p] = other
-        heap_time[p] = tp
-        slot[other] = p
-        p = parent
-    heap[p] = item
-    heap_time[p] = t
-    slot[item] = p
+def event_times(now, x, v, local_time, reach, ring, box, out):
+    """Fill ``out[k]`` with :func:`event_time` of every event ``k`` (the set-up of a run, one call)."""
+    for k in range(out.size):
+        out[k] = event_time(k, now, x, v, local_time, reach, ring, box)
+
+
+def tree_size(events):
+    """Length of the tree arrays for ``events`` events: twice the power of two at or above ``events``."""
+    leaves = 1
+    while leaves < events:
+        leaves *= 2
+    return 2 * leaves
 
 
 @kernel
-def _sift_down(heap, heap_time, slot, p):
-    size = heap.size
-    item = heap[p]
-    t = heap_time[p]
-    while True:
-        child = 2 * p + 1
-        if child >= size:
-            break
-        best = heap[child]
-        tb = heap_time[child]
-        right = child + 1
-        if right < size:
-            tr = heap_time[right]
-            if tr < tb or (tr == tb and heap[right] < best):
-                child = right
-                best = heap[right]
-                tb = tr
-        if t < tb or (t == tb and item < best):
-            break
-        heap[p] = best
-        heap_time[p] = tb
-        slot[best] = p
-        p = child
-    heap[p] = item
-    heap_time[p] = t
-    slot[item] = p
+def _pull(tree_time, tree_event, p):
+    """Node ``p`` takes the earlier of its two children (the left one on a tie: it holds the lower events)."""
+    left = 2 * p
+    t = tree_time[left]
+    e = tree_event[left]
+    right_time = tree_time[left + 1]
+    right_event = tree_event[left + 1]
+    e = right_event if right_time < t else e
+    t = min(t, right_time)
+    tree_time[p] = t
+    tree_event[p] = e
 
 
 @kernel
-def _rekey(heap, heap_time, slot, k, t):
-    p = slot[k]
-    old = heap_time[p]
-    heap_time[p] = t
-    if t < old:
-        _sift_up(heap, heap_time, slot, p)
-    elif t > old:
-        _sift_down(heap, heap_time, slot, p)
+def _climb(tree_time, tree_event, p):
+    """Re-evaluate the ancestors of node ``p`` (whose own entry is right), carrying the winner in registers.
 
-
-@kernel
-def build_heap(key, heap, heap_time, slot):
-    """Fill ``heap``/``heap_time``/``slot`` with a min-heap of the event times ``key`` (ties by event index).
-
-    ``heap[p]`` is the event at heap position ``p``, ``heap_time[p]`` its
-    time (kept beside it for locality) and ``slot[k]`` the position of event ``k``.
+    Each level compares the winner so far with the sibling subtree's, which
+    did not change, so the loads need not wait for the stores below them.
+    The choice is written as two selects (compiled to conditional moves, not
+    branches that the processor would mispredict half of the time): the
+    sibling wins if it is earlier, or equally early and on the left (lower events).
     """
-    m = key.size
-    for k in range(m):
-        heap[k] = k
-        heap_time[k] = key[k]
-        slot[k] = k
-    for p in range(m // 2 - 1, -1, -1):
-        _sift_down(heap, heap_time, slot, p)
+    t = tree_time[p]
+    e = tree_event[p]
+    while p > 1:
+        sibling_time = tree_time[p ^ 1]
+        sibling_event = tree_event[p ^ 1]
+        take = (sibling_time < t) | ((sibling_time == t) & ((p & 1) == 1))
+        e = sibling_event if take else e
+        t = min(t, sibling_time)
+        p >>= 1
+        tree_time[p] = t
+        tree_event[p] = e
+
+
+@kernel
+def _pull_range(tree_time, tree_event, lo, hi):
+    """Recompute every ancestor of the leaves of events ``lo..hi`` (their times already set), up to the root."""
+    leaves = tree_time.size >> 1
+    lo += leaves
+    hi += leaves
+    while lo != hi:
+        lo >>= 1
+        hi >>= 1
+        for p in range(lo, hi + 1):
+            _pull(tree_time, tree_event, p)
+    _climb(tree_time, tree_event, lo)
+
+
+@kernel
+def build_tree(key, tree_time, tree_event):
+    """Fill a tournament tree of the event times ``key``: the root holds the earliest (ties: the lowest event).
+
+    The arrays have length ``2 M`` (:func:`tree_size`); leaf ``M + k`` holds
+    the time of event ``k`` (``inf`` for the padding beyond ``key.size``),
+    node ``p < M`` the earlier of nodes ``2 p`` and ``2 p + 1`` (time in
+    ``tree_time``, event in ``tree_event``); node 0 is unused and node 1 is the root.
+    Changing the times of a few neighbouring events re-evaluates their common
+    path to the root once (:func:`_pull_range`), ``log2 M`` comparisons.
+    """
+    leaves = tree_time.size >> 1
+    for k in range(leaves):
+        tree_time[leaves + k] = key[k] if k < key.size else math.inf
+        tree_event[leaves + k] = k
+    tree_time[0] = math.inf
+    tree_event[0] = -1
+    for p in range(leaves - 1, 0, -1):
+        _pull(tree_time, tree_event, p)
 
 
 @kernel
@@ -173,6 +193,23 @@ def _advance(i, t, x, v, local_time, temperature, decay_rate, bath_modes, scalar
 
 
 @kernel
+def _bracket(grid, value):
+    """Largest ``i`` in ``0 .. grid.size - 2`` with ``grid[i] <= value`` (0 if none), for an ascending ``grid``.
+
+    A binary search whose steps are selects rather than branches (the
+    outcome of each comparison is random from one collision to the next, so
+    a branch would be mispredicted half of the time).
+    """
+    base = 0
+    n = grid.size - 1
+    while n > 1:
+        half = n >> 1
+        base = base + half if grid[base + half] <= value else base
+        n -= half
+    return base
+
+
+@kernel
 def _lookup(table_ratio, ratio, counters):
     """Lower grid index and weight of ``ratio``; beyond the grid it is held at the last point (counted)."""
     r = table_ratio.size
@@ -182,32 +219,18 @@ def _lookup(table_ratio, ratio, counters):
         if ratio > table_ratio[r - 1]:
             counters[RATIO_CLAMPED] += 1
         return r - 2, 1.0
-    lo = 0
-    hi = r - 1
-    while hi - lo > 1:
-        mid = (lo + hi) >> 1
-        if table_ratio[mid] <= ratio:
-            lo = mid
-        else:
-            hi = mid
+    lo = _bracket(table_ratio, ratio)
     return lo, (ratio - table_ratio[lo]) / (table_ratio[lo + 1] - table_ratio[lo])
 
 
 @kernel
 def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share):
     """eps^2 at level ``u`` and the short rod's share, bilinear between the four corner quantile functions."""
-    levels = probability.size
-    lo = 0
-    hi = levels - 1
     if uniform_levels:
-        lo = min(int(u * hi), hi - 1)
-        hi = lo + 1
-    while hi - lo > 1:
-        mid = (lo + hi) >> 1
-        if probability[mid] <= u:
-            lo = mid
-        else:
-            hi = mid
+        top = probability.size - 1
+        lo = min(int(u * top), top - 1)
+    else:
+        lo = _bracket(probability, u)
     wu = min(max((u - probability[lo]) / (probability[lo + 1] - probability[lo]), 0.0), 1.0)
     g1 = min(ig + 1, quantiles.shape[0] - 1)
     r1 = min(ir + 1, quantiles.shape[1] - 1)
@@ -246,7 +269,7 @@ def _recount_kinetic(v, mass, ring, scalars):
 @kernel
 def run_events(
     x, v, local_time, temperature, mass, reach, pair_gamma_index, pair_gamma_weight, left_is_short,
-    heap, heap_time, slot, ring, box,
+    tree_time, tree_event, ring, box,
     rule, restitution_squared, table_ratio, probability, uniform_levels, quantiles, share, bath_modes, decay_rate,
     uniforms, pending, max_collisions, time_limit,
     window, collapse_factor, scalars, counters,
@@ -265,8 +288,8 @@ def run_events(
         length ratio (table rule).
     left_is_short : ndarray of bool
         Per event, whether the left rod of the pair is the shorter one.
-    heap, heap_time, slot : ndarray
-        The indexed heap of event times (see :func:`build_heap`; updated in place).
+    tree_time, tree_event : ndarray
+        The tournament tree of event times (see :func:`build_tree`; updated in place).
     ring : bool
         Periodic ring (True) or box with elastic walls (False).
     box : float
@@ -312,11 +335,12 @@ def run_events(
         Rod-rod collisions processed in this call.
     """
     n = x.size
-    events = heap.size
+    events = reach.size
+    leaves = tree_time.size >> 1
     done = 0
     while done < max_collisions:
-        k = heap[0]
-        t = heap_time[0]
+        k = tree_event[1]
+        t = tree_time[1]
         if t == math.inf:
             # on a ring this means all velocities are equal: the gas has merged into one block. If the
             # collisions before were accelerating, that is the end of a collapse lost in the rounding.
@@ -337,9 +361,10 @@ def run_events(
             v[rod] = -v[rod]
             scalars[T_NOW] = t
             counters[WALL_HITS] += 1
-            _rekey(heap, heap_time, slot, k, math.inf)
             neighbour = 1 if k == 0 else n - 1  # the rod's other event (a pair, or the far wall if N = 1)
-            _rekey(heap, heap_time, slot, neighbour, event_time(neighbour, t, x, v, local_time, reach, ring, box))
+            tree_time[leaves + k] = math.inf
+            tree_time[leaves + neighbour] = event_time(neighbour, t, x, v, local_time, reach, ring, box)
+            _pull_range(tree_time, tree_event, min(k, neighbour), max(k, neighbour))
             continue
         if ring:
             i = k
@@ -408,7 +433,7 @@ def run_events(
         scalars[T_NOW] = t
         counters[COLLISIONS] += 1
         done += 1
-        _rekey(heap, heap_time, slot, k, math.inf)
+        tree_time[leaves + k] = math.inf
         before = k - 1
         after_k = k + 1
         if ring:
@@ -416,10 +441,20 @@ def run_events(
                 before = events - 1
             if after_k == events:
                 after_k = 0
-        if before >= 0 and before != k:
-            _rekey(heap, heap_time, slot, before, event_time(before, t, x, v, local_time, reach, ring, box))
-        if after_k < events and after_k != k and after_k != before:
-            _rekey(heap, heap_time, slot, after_k, event_time(after_k, t, x, v, local_time, reach, ring, box))
+        has_before = before >= 0 and before != k
+        has_after = after_k < events and after_k != k and after_k != before
+        if has_before:
+            tree_time[leaves + before] = event_time(before, t, x, v, local_time, reach, ring, box)
+        if has_after:
+            tree_time[leaves + after_k] = event_time(after_k, t, x, v, local_time, reach, ring, box)
+        if before == k - 1 and after_k == k + 1:
+            _pull_range(tree_time, tree_event, before, after_k)  # one shared path to the root
+        else:  # the ring's seam (or fewer than three events): separate paths
+            _pull_range(tree_time, tree_event, k, k)
+            if has_before:
+                _pull_range(tree_time, tree_event, before, before)
+            if has_after:
+                _pull_range(tree_time, tree_event, after_k, after_k)
         # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite time).
         # Compare the time taken by the last half of the window with the half before it; in floating
         # point a collapsing cluster ends after a few dozen collisions with exactly equal velocities,

@@ -28,7 +28,7 @@ __all__ = ["MAX_COLLISIONS", "GasResult", "GasSimulation"]
 MAX_COLLISIONS = 10**11
 MAX_RECORDS = 10**7  # history rows one run may add (6 floats each)
 CHECKPOINT_SCHEMA = "wavecontact.gas"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2  # 2: the event times (leaves of a tournament tree) instead of a heap
 _HISTORY = ("time", "collisions", "kinetic_energy", "bath_energy", "lost_energy", "dissipated_energy")
 _STATUS = {
     kernels.STATUS_DONE: "completed",
@@ -247,12 +247,11 @@ class GasSimulation:
             g = np.clip(self.pair_gamma, grid[0], grid[-1])
             self.gamma_index = np.clip(np.searchsorted(grid, g, side="right") - 1, 0, grid.size - 2).astype(np.int64)
             self.gamma_weight = (g - grid[self.gamma_index]) / (grid[self.gamma_index + 1] - grid[self.gamma_index])
-        key = np.array([kernels.event_time(k, 0.0, self.x, self.v, self.local_time, self.reach, ring,
-                                           gas.system_length) for k in range(left.size)])
-        self.heap = np.empty(left.size, np.int64)
-        self.heap_time = np.empty(left.size)
-        self.slot = np.empty(left.size, np.int64)
-        kernels.build_heap(key, self.heap, self.heap_time, self.slot)
+        key = np.empty(left.size)
+        kernels.event_times(0.0, self.x, self.v, self.local_time, self.reach, ring, gas.system_length, key)
+        self.tree_time = np.empty(kernels.tree_size(left.size))
+        self.tree_event = np.empty(self.tree_time.size, np.int64)
+        kernels.build_tree(key, self.tree_time, self.tree_event)
         self.window = np.zeros(2 * window)
         momentum = float(np.sum(self.mass * self.v))
         total_mass = float(self.mass.sum())
@@ -275,6 +274,12 @@ class GasSimulation:
     @property
     def time(self) -> float:
         return float(self.scalars[kernels.T_NOW])
+
+    @property
+    def event_times(self) -> np.ndarray:
+        """Predicted time of every event (a view of the tree's leaves; the tree above them follows from it)."""
+        leaves = self.tree_time.size // 2
+        return self.tree_time[leaves:leaves + self.reach.size]
 
     @property
     def collisions(self) -> int:
@@ -325,7 +330,7 @@ class GasSimulation:
     def _draw_external(self, event):
         n = self.gas.rods
         i, j = (event, (event + 1) % n) if self.ring else (event - 1, event)
-        now = float(self.heap_time[self.slot[event]])
+        now = float(self.event_times[event])
         temperatures = self._synced_temperatures(now)
         reduced = self.mass[i] * self.mass[j] / (self.mass[i] + self.mass[j])
         e_tr = 0.5 * reduced * (self.v[i] - self.v[j]) ** 2
@@ -390,7 +395,7 @@ class GasSimulation:
             while True:
                 status, event, _done = kernels.run_events(
                     self.x, self.v, self.local_time, self.temperature, self.mass, self.reach,
-                    self.gamma_index, self.gamma_weight, self.left_is_short, self.heap, self.heap_time, self.slot,
+                    self.gamma_index, self.gamma_weight, self.left_is_short, self.tree_time, self.tree_event,
                     self.ring, self.gas.system_length, rule.code, restitution2, ratio, probability, uniform, quantiles,
                     share, float(rule.bath_modes), self._decay_rate(), uniforms[self.collisions - before:],
                     self.pending, chunk - (self.collisions - before), float(max_time), self.window,
@@ -450,7 +455,7 @@ class GasSimulation:
         )
 
     # ------------------------------------------------------------ checkpoint
-    _STATE = ("x", "v", "local_time", "temperature", "heap", "heap_time", "slot", "window", "scalars", "counters",
+    _STATE = ("x", "v", "local_time", "temperature", "event_times", "window", "scalars", "counters",
               "pending")
 
     def _parameters(self) -> dict:
@@ -512,6 +517,7 @@ class GasSimulation:
                   collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"], energy_floor=params["energy_floor"])
         for name in cls._STATE:
             getattr(sim, name)[...] = arrays[name]
+        kernels.build_tree(sim.event_times.copy(), sim.tree_time, sim.tree_event)
         sim._rng.bit_generator.state = json.loads(str(arrays["rng_state"]))
         sim.history = {k: arrays[f"history_{k}"].tolist() for k in _HISTORY}
         sim.history["collisions"] = [int(c) for c in sim.history["collisions"]]

@@ -12,40 +12,67 @@ stores in ``result.extra["fields"]``::
               ...]}
 
 :func:`write_fields` turns this into files ParaView opens as a time series:
-
-* ``format="vtu"`` (default, the robust choice): one VTU file per sample
-  time and a PVD index ``fields.pvd`` that maps times to files;
-* ``format="xdmf"``: one XDMF file ``fields.xdmf`` (data inline as XML, or in
-  ``fields.h5`` when :mod:`h5py` is installed).  The file is read back with
-  meshio and compared with what was written; if anything differs the XDMF
-  files are removed and the VTU series is written instead (with a warning).
+one VTU file per sample time (binary, zlib-compressed) and a PVD index
+``fields.pvd`` that maps times to files.  (XDMF was dropped: meshio's writer
+put its HDF5 file in the working directory, inline XDMF took 91.5 MB and 17 s
+for one 800-element collision, and some ParaView versions fail on line-only
+XDMF series.)
 
 Every element, whatever its order, is written as straight two-node segments
 between neighbouring nodes (``line`` cells), so the nodal values are exact
 and every reader understands the mesh.  Points get three coordinates
 ``(x, 0, 0)``; the rods lie on the x axis at their reference positions.
-Point data per sample: ``displacement``, ``velocity``, ``stress`` (scalars,
-the units of the result), ``displacement_vector`` (``(u, 0, 0)``, for
-ParaView's *Warp By Vector* to show the deformed rods) and ``rod`` (1, 2, ...).
-:func:`read_fields` reads either series back into the layout above.
+Point data per sample: ``displacement``, ``velocity``, ``stress`` (scalars),
+``displacement_vector`` (``(u, 0, 0)``, for ParaView's *Warp By Vector* to
+show the deformed rods) and ``rod`` (1, 2, ...).  Field data of every file
+(ParaView: Information panel, or the spreadsheet's *Field Data*): the
+sample time ``TimeValue``, the parameters of the run (``gamma``, ``kappa``,
+``restitution``, ``solver``, ...) and the unit of every quantity
+(``unit_time``, ``unit_stress``, ...).  :func:`read_fields` reads the series
+back into the layout above, with ``units`` and ``parameters``.
 """
 
 from __future__ import annotations
 
+import math
 import os
-import warnings
+import re
+import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
 from ..errors import InvalidParameterError, WavecontactError
 
-__all__ = ["FIELD_NAMES", "FieldFiles", "MissingFieldsError", "read_fields", "sampled_fields", "write_fields"]
+__all__ = [
+    "FIELD_NAMES",
+    "UNIT_SYSTEMS",
+    "FieldFiles",
+    "MissingFieldsError",
+    "read_fields",
+    "run_parameters",
+    "sampled_fields",
+    "write_fields",
+]
 
 FIELD_NAMES = ("displacement", "velocity", "stress")
-FORMATS = ("vtu", "xdmf")
+FORMATS = ("vtu",)
+QUANTITIES = ("length", "time", "displacement", "velocity", "stress")
+UNIT_SYSTEMS = {
+    # wavecontact.collide / two_rods: rho = c = A = 1, effective length l = 1, approach speed V = 1
+    "dimensionless": {
+        "length": "l = 2 l1 l2 / (l1 + l2)",
+        "time": "l / c",
+        "displacement": "l",
+        "velocity": "V (approach speed)",
+        "stress": "rho c V",
+    },
+    # a Scene given in SI units (wavecontact.solve)
+    "SI": {"length": "m", "time": "s", "displacement": "m", "velocity": "m/s", "stress": "Pa"},
+}
 
 
 class MissingFieldsError(WavecontactError, ValueError):
@@ -58,23 +85,20 @@ class FieldFiles:
 
     Attributes
     ----------
-    format : {'vtu', 'xdmf'}
-        The format actually written (``'vtu'`` after an XDMF fallback).
+    format : {'vtu'}
+        The format written.
     index : Path
-        The file to open in ParaView (``fields.pvd`` or ``fields.xdmf``).
+        The file to open in ParaView (``fields.pvd``).
     files : tuple of Path
         Every file written, index included.
     times : ndarray
         The sample times, as written.
-    note : str
-        Why the requested format was replaced, if it was ('' otherwise).
     """
 
     format: str
     index: Path
     files: tuple
     times: np.ndarray = field(repr=False)
-    note: str = ""
 
 
 def sampled_fields(result) -> dict:
@@ -208,7 +232,49 @@ def _frame_data(values: dict, k: int, rod_ids: np.ndarray) -> dict:
     return data
 
 
-def write_fields(result, directory, format: str = "vtu", *, prefix: str = "fields") -> FieldFiles:
+def run_parameters(result) -> dict:
+    """The scalars of ``result`` worth keeping next to its fields.
+
+    Returns
+    -------
+    dict
+        ``gamma``, ``kappa``, ``restitution``, ``contact_start``,
+        ``contact_duration`` (those that are set), ``solver``, and from
+        ``result.work`` the element ``order``, ``mass`` and time step ``dt``,
+        plus the wavecontact ``version``.
+    """
+    from .._version import __version__
+
+    out = {"solver": str(getattr(result, "solver", "?")), "version": __version__}
+    for name in ("gamma", "kappa", "restitution", "contact_start", "contact_duration"):
+        value = getattr(result, name, None)
+        if value is not None and not math.isnan(value):  # NaN: not a two-rod scene, or no force history
+            out[name] = float(value)
+    work = getattr(result, "work", None) or {}
+    for name in ("order", "mass", "dt"):
+        if name in work and isinstance(work[name], (int, float, str, np.integer, np.floating)):
+            value = work[name]
+            out[name] = value if isinstance(value, str) else float(value)
+    return out
+
+
+def _units(units) -> dict:
+    if isinstance(units, str):
+        if units not in UNIT_SYSTEMS:
+            raise InvalidParameterError(
+                f"units must be one of {', '.join(map(repr, UNIT_SYSTEMS))} or a dict, got {units!r}"
+            )
+        return dict(UNIT_SYSTEMS[units])
+    if not isinstance(units, dict) or not all(isinstance(v, str) for v in units.values()):
+        raise InvalidParameterError("units must be a unit-system name or a dict of quantity -> unit text")
+    missing = [q for q in QUANTITIES if q not in units]
+    if missing:
+        raise InvalidParameterError(f"units lacks {', '.join(missing)}")
+    return dict(units)
+
+
+def write_fields(result, directory, format: str = "vtu", *, prefix: str = "fields", units="dimensionless",
+                 parameters: dict | None = None) -> FieldFiles:
     """Write the sampled fields of a finite-element result for ParaView.
 
     Parameters
@@ -218,52 +284,78 @@ def write_fields(result, directory, format: str = "vtu", *, prefix: str = "field
         ``extra["fields"]`` dict).
     directory : str or Path
         Output directory, created if needed.
-    format : {'vtu', 'xdmf'}
-        ``'vtu'``: VTU file per sample plus a PVD index (opens in every
-        ParaView).  ``'xdmf'``: one XDMF time series, verified by reading it
-        back; replaced by the VTU series (with a warning) if that fails.
+    format : {'vtu'}
+        One binary VTU file per sample plus a PVD index (the only format).
     prefix : str
-        Base name of the files (``<prefix>.pvd``, ``<prefix>_00000.vtu``,
-        ``<prefix>.xdmf``).
+        Base name of the files (``<prefix>.pvd``, ``<prefix>_00000.vtu``).
+    units : {'dimensionless', 'SI'} or dict
+        The units of the result, stored as field data: ``'dimensionless'``
+        for :func:`wavecontact.collide` (lengths in ``l``, time in ``l / c``,
+        velocities in ``V``, stress in ``rho c V``), ``'SI'`` for a
+        :class:`~wavecontact.Scene` given in SI units, or a dict with the
+        keys ``length, time, displacement, velocity, stress``.
+    parameters : dict or None
+        Extra scalars (numbers or strings) to store as field data, added to
+        :func:`run_parameters` of the result.
 
     Returns
     -------
     FieldFiles
-        The format written, the index file to open and all files.
+        The index file to open and all files.
 
     Raises
     ------
     MissingFieldsError
         If the result carries no fields.
     InvalidParameterError
-        For an unknown format or inconsistent field arrays.
+        For an unknown format or unit system, inconsistent field arrays, or
+        a parameter that is neither a number nor a string.
     """
     if format not in FORMATS:
-        raise InvalidParameterError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
+        raise InvalidParameterError(
+            f"format must be 'vtu' (VTU files with a PVD index; XDMF is no longer written), got {format!r}"
+        )
     if not prefix or os.sep in prefix or (os.altsep and os.altsep in prefix):
         raise InvalidParameterError(f"prefix must be a plain file name stem, got {prefix!r}")
     fields = sampled_fields(result)
+    metadata = {f"unit_{name}": text for name, text in _units(units).items()}
+    metadata.update(run_parameters(result) if not isinstance(result, dict) else {})
+    for name, value in (parameters or {}).items():
+        if isinstance(value, bool) or not isinstance(value, (int, float, str, np.integer, np.floating)):
+            raise InvalidParameterError(f"parameters[{name!r}] must be a number or a string, got {value!r}")
+        metadata[str(name)] = value
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    if format == "xdmf":
-        try:
-            written = _write_xdmf(fields, directory, prefix)
-            _check_read_back(fields, written.index)
-            return written
-        except Exception as exc:  # noqa: BLE001 - any write or read-back failure: use the robust format
-            for name in (f"{prefix}.xdmf", f"{prefix}.h5"):
-                (directory / name).unlink(missing_ok=True)
-            note = (
-                f"XDMF series did not read back correctly ({exc}); wrote VTU files with a PVD index instead"
-            )
-            warnings.warn(note, UserWarning, stacklevel=2)
-            written = _write_vtu_series(fields, directory, prefix)
-            return FieldFiles(written.format, written.index, written.files, written.times, note)
-    return _write_vtu_series(fields, directory, prefix)
+    return _write_vtu_series(fields, directory, prefix, metadata)
 
 
-def _write_vtu_series(fields: dict, directory: Path, prefix: str) -> FieldFiles:
+def _field_data_xml(metadata: dict, time: float) -> str:
+    """A VTK XML ``<FieldData>`` block: numbers as Float64 arrays, text as String arrays."""
+    xml = ["<FieldData>\n",
+           f'<DataArray type="Float64" Name="TimeValue" NumberOfTuples="1" format="ascii">{time!r}</DataArray>\n']
+    for name, value in metadata.items():
+        if isinstance(value, str):
+            # VTK writes string arrays as <Array>, in ASCII as character codes, each string ended by 0
+            codes = " ".join(str(byte) for byte in value.encode("utf-8") + b"\0")
+            xml.append(f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
+                       f"{codes}</Array>\n")
+        else:
+            number = float(value)
+            text = "inf" if math.isinf(number) else repr(number)
+            xml.append(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
+                       f"{text}</DataArray>\n")
+    xml.append("</FieldData>\n")
+    return "".join(xml)
+
+
+_GRID_TAG = "<UnstructuredGrid>"
+_FIELD_DATA = re.compile(r"<FieldData>.*?</FieldData>\n?", re.DOTALL)
+
+
+def _write_vtu_series(fields: dict, directory: Path, prefix: str, metadata: dict) -> FieldFiles:
     import meshio
+
+    from .files import atomic_write
 
     points, segments, rod_ids, values = _assemble(fields)
     time = fields["time"]
@@ -279,46 +371,20 @@ def _write_vtu_series(fields: dict, directory: Path, prefix: str) -> FieldFiles:
             point_data=_frame_data(values, k, rod_ids),
             cell_data={"rod": [rod_ids[segments[:, 0]]]},
         )
-        meshio.write(directory / name, mesh, file_format="vtu")
+        path = directory / name
+        meshio.write(path, mesh, file_format="vtu")  # binary, zlib-compressed
+        text = path.read_text()
+        if text.count(_GRID_TAG) != 1:
+            raise WavecontactError(f"unexpected VTU layout from meshio in {path}")
+        path.write_text(text.replace(_GRID_TAG, _GRID_TAG + "\n" + _field_data_xml(metadata, float(t)), 1))
         ET.SubElement(datasets, "DataSet", timestep=repr(float(t)), group="", part="0", file=name)
-        files.append(directory / name)
+        files.append(path)
     index = directory / f"{prefix}.pvd"
     ET.indent(collection)
-    ET.ElementTree(collection).write(index, xml_declaration=True, encoding="utf-8")
+    # the index last and atomically: a series whose index exists is complete
+    atomic_write(index, lambda handle: ET.ElementTree(collection).write(handle, xml_declaration=True,
+                                                                        encoding="utf-8"))
     return FieldFiles("vtu", index, (index, *files), time.copy())
-
-
-def _write_xdmf(fields: dict, directory: Path, prefix: str) -> FieldFiles:
-    import meshio
-
-    try:
-        import h5py  # noqa: F401
-
-        data_format = "HDF"
-    except ImportError:
-        data_format = "XML"  # inline data; meshio's "Binary" writes next to the working directory
-    points, segments, rod_ids, values = _assemble(fields)
-    index = directory / f"{prefix}.xdmf"
-    with meshio.xdmf.TimeSeriesWriter(index, data_format=data_format) as writer:
-        writer.write_points_cells(points, [("line", segments.copy())])
-        for k, t in enumerate(fields["time"]):
-            writer.write_data(float(t), point_data=_frame_data(values, k, rod_ids))
-    files = [index]
-    if data_format == "HDF":
-        files.append(directory / f"{prefix}.h5")
-    return FieldFiles("xdmf", index, tuple(files), fields["time"].copy())
-
-
-def _check_read_back(fields: dict, index: Path) -> None:
-    back = read_fields(index)
-    if back["time"].shape != fields["time"].shape or not np.array_equal(back["time"], fields["time"]):
-        raise ValueError("sample times differ")
-    if len(back["rods"]) != len(fields["rods"]):
-        raise ValueError("number of rods differs")
-    for rod, rod_back in zip(fields["rods"], back["rods"]):
-        for name in ("x", *FIELD_NAMES):
-            if not np.array_equal(rod[name], rod_back[name]):
-                raise ValueError(f"{name} differs")
 
 
 def read_fields(path) -> dict:
@@ -327,31 +393,41 @@ def read_fields(path) -> dict:
     Parameters
     ----------
     path : str or Path
-        The index (``.pvd`` or ``.xdmf``) or the directory holding
-        ``fields.pvd`` / ``fields.xdmf``.
+        The index ``.pvd`` or the directory holding ``fields.pvd``.
 
     Returns
     -------
     dict
         ``{"time": (nt,), "rods": [{"x", "displacement", "velocity",
-        "stress", "segments"}, ...]}``; ``segments`` are the two-node cells
-        with node indices local to the rod.
+        "stress", "segments"}, ...], "units": {...}, "parameters": {...}}``;
+        ``segments`` are the two-node cells with node indices local to the
+        rod; ``units`` maps each quantity to its unit, ``parameters`` holds
+        the other field data of the first file (numbers as float).
     """
     path = Path(path)
     if path.is_dir():
-        for name in ("fields.pvd", "fields.xdmf"):
-            if (path / name).exists():
-                path = path / name
-                break
+        path = path / "fields.pvd"
+        if not path.exists():
+            raise InvalidParameterError(f"no fields.pvd in {path.parent}")
+    if path.suffix != ".pvd":
+        raise InvalidParameterError(f"path must be a .pvd file or a directory, got {path}")
+    time, points, segments, frames, metadata = _read_pvd(path)
+    out = _split_rods(time, points, segments, frames)
+    out["units"] = {k[len("unit_"):]: v for k, v in metadata.items() if k.startswith("unit_")}
+    out["parameters"] = {k: v for k, v in metadata.items() if not k.startswith("unit_") and k != "TimeValue"}
+    return out
+
+
+def _parse_field_data(block: str) -> dict:
+    """The arrays of a ``<FieldData>`` block written by :func:`_field_data_xml`."""
+    out = {}
+    for element in ET.fromstring(block):
+        name, text = element.attrib["Name"], (element.text or "").split()
+        if element.attrib["type"] == "String":
+            out[name] = bytes(int(code) for code in text).split(b"\0")[0].decode("utf-8")
         else:
-            raise InvalidParameterError(f"no fields.pvd or fields.xdmf in {path}")
-    if path.suffix == ".pvd":
-        time, points, segments, frames = _read_pvd(path)
-    elif path.suffix == ".xdmf":
-        time, points, segments, frames = _read_xdmf(path)
-    else:
-        raise InvalidParameterError(f"path must be a .pvd or .xdmf file or a directory, got {path}")
-    return _split_rods(time, points, segments, frames)
+            out[name] = float(text[0])
+    return out
 
 
 def _read_pvd(path: Path):
@@ -361,27 +437,23 @@ def _read_pvd(path: Path):
     entries = [(float(d.attrib["timestep"]), d.attrib["file"]) for d in root.iter("DataSet")]
     if not entries:
         raise InvalidParameterError(f"{path} lists no data sets")
-    time, frames, points, segments = [], [], None, None
-    for t, name in entries:
-        mesh = meshio.read(path.parent / name)
-        if points is None:
-            points, segments = mesh.points, _line_cells(mesh.cells)
-        time.append(t)
-        frames.append(mesh.point_data)
-    return np.array(time), points, segments, frames
-
-
-def _read_xdmf(path: Path):
-    import meshio
-
-    time, frames = [], []
-    with meshio.xdmf.TimeSeriesReader(path) as reader:
-        points, cells = reader.read_points_cells()
-        for k in range(reader.num_steps):
-            t, point_data, _ = reader.read_data(k)
+    time, frames, points, segments, metadata = [], [], None, None, {}
+    with tempfile.TemporaryDirectory() as scratch:
+        plain = Path(scratch) / "frame.vtu"
+        for t, name in entries:
+            text = (path.parent / name).read_text()
+            found = _FIELD_DATA.search(text)
+            if found is not None:
+                if not metadata:
+                    metadata = _parse_field_data(found.group(0))
+                text = text[: found.start()] + text[found.end():]
+            plain.write_text(text)  # meshio reads numeric field data only, and only from a file
+            mesh = meshio.read(plain, file_format="vtu")
+            if points is None:
+                points, segments = mesh.points, _line_cells(mesh.cells)
             time.append(t)
-            frames.append(point_data)
-    return np.array(time, dtype=float), points, _line_cells(cells), frames
+            frames.append(mesh.point_data)
+    return np.array(time), points, segments, frames, metadata
 
 
 def _line_cells(cells) -> np.ndarray:

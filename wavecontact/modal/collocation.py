@@ -29,6 +29,7 @@ from .kernels import (
     LAW_EXPONENTIAL,
     STATUS_BUFFER_FULL,
     STATUS_NOT_FINITE,
+    STATUS_RECORDS_FULL,
     STATUS_RUNNING,
     STATUS_SEPARATED,
     STATUS_STEP_UNDERFLOW,
@@ -215,36 +216,41 @@ def _newton_forces(free_gap, response, law, alpha, strength, stiffness, complian
 
 
 @kernel(error_model="numpy")
-def _newton_lambert(free_gap, response, predicted, alpha, log_beta, compliance, force_scale, forces,
-                    residual, delta, matrix, counters):
-    """Newton for the exponential law in series with a compliance, in ``u_i = log(alpha C F_i)``.
+def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance, force_scale, forces,
+                      residual, delta, matrix, counters):
+    """Newton for the exponential law, possibly in series with a compliance ``C >= 0``, in ``v_i = log F_i``.
 
-    The node equations ``u_i + exp(u_i) = log(alpha^2 B C) - alpha r_i`` with
-    ``r_i = r_free,i + sum_m R_im exp(u_m) / (alpha C)`` need one exponential per node and
-    iteration (the force-based Newton solves a Lambert-W equation inside every evaluation).
+    The node equations ``v_i + alpha C exp(v_i) = log(alpha B) - alpha r_i`` with
+    ``r_i = r_free,i + sum_m R_im exp(v_m)`` need one exponential per node and iteration (with
+    ``C > 0`` a force-based Newton solves a Lambert-W equation inside every evaluation; with
+    ``C = 0`` the logarithm keeps a stiff exponential from overflowing).
     """
     s = forces.size
-    scale = 1.0 / (alpha * compliance)
-    u = residual  # reuse the work arrays: u in `residual`, the right-hand side in `delta`
+    v = residual  # reuse the work arrays: v in `residual`, the right-hand side in `delta`
     rhs = np.empty(s)
+    log_alpha_b = math.log(alpha * strength)
     for i in range(s):
-        if predicted[i] * alpha * compliance > 1e-300:
-            u[i] = math.log(predicted[i] * alpha * compliance)
+        if predicted[i] > 1e-300:
+            v[i] = math.log(predicted[i])
         else:
-            x = log_beta - alpha * free_gap[i]
-            u[i] = x if x < 0.0 else math.log1p(x)
+            # the scalar equation of node i alone, y exp(y) = alpha^2 B K exp(-alpha r_free) with
+            # y = alpha K F and K its own compliance: u = log y from the Lambert-W asymptotics
+            k_ii = compliance if compliance > 0.0 else max(response[i, i], 1e-300)
+            x = log_alpha_b + math.log(alpha * k_ii) - alpha * free_gap[i]
+            u = x if x < 0.0 else math.log1p(x)
+            v[i] = u - math.log(alpha * k_ii)
     for _ in range(60):
         counters[4] += 1
         biggest = 0.0
         for i in range(s):
-            forces[i] = math.exp(u[i]) * scale
+            forces[i] = math.exp(v[i])
             biggest = max(biggest, forces[i])
         for i in range(s):
             gap_i = free_gap[i]
             for m in range(s):
                 gap_i += response[i, m] * forces[m]
             y = forces[i] * alpha * compliance
-            rhs[i] = -(u[i] + y - log_beta + alpha * gap_i)
+            rhs[i] = -(v[i] + y - log_alpha_b + alpha * gap_i)
             for m in range(s):
                 matrix[i, m] = alpha * response[i, m] * forces[m]
             matrix[i, i] += 1.0 + y
@@ -252,22 +258,170 @@ def _newton_lambert(free_gap, response, predicted, alpha, log_beta, compliance, 
         change = 0.0
         for i in range(s):
             step = min(delta[i], 2.0)  # a convex exponential: never overshoot upwards
-            u[i] += step
+            v[i] += step
             change = max(change, abs(step) * forces[i])
         if not math.isfinite(change):
             return False
         if change <= 1e-13 * (force_scale + biggest):
             for i in range(s):
-                forces[i] = math.exp(u[i]) * scale
+                forces[i] = math.exp(v[i])
             return True
     return False
+
+
+@kernel(error_model="numpy")
+def _solve_hard(free_gap, response, predicted, tolerance, forces, active, matrix, rhs, counters):
+    """Hard contact at the nodes: ``F_i >= 0``, ``r_i >= 0``, ``F_i r_i = 0`` (active-set iteration).
+
+    ``r = r_free + R F`` with ``R`` the end response of the step; ``tolerance`` (length) is the
+    overlap accepted at a node left free.  False if the active set does not settle.
+    """
+    s = forces.size
+    for i in range(s):
+        active[i] = predicted[i] > 0.0 or free_gap[i] < 0.0
+    for _ in range(2 * s + 2):
+        counters[4] += 1
+        for i in range(s):
+            for m in range(s):
+                matrix[i, m] = response[i, m] if (active[i] and active[m]) else 0.0
+            if active[i]:
+                rhs[i] = -free_gap[i]
+            else:
+                matrix[i, i] = 1.0
+                rhs[i] = 0.0
+        _solve_small(matrix, rhs, forces)
+        changed = False
+        for i in range(s):
+            if active[i] and forces[i] < 0.0:
+                active[i] = False
+                changed = True
+        if not changed:
+            for i in range(s):
+                if not active[i]:
+                    gap_i = free_gap[i]
+                    for m in range(s):
+                        gap_i += response[i, m] * forces[m]
+                    if gap_i < -tolerance:
+                        active[i] = True
+                        changed = True
+        if not changed:
+            for i in range(s):
+                forces[i] = max(forces[i], 0.0)
+            return True
+    return False
+
+
+@kernel(error_model="numpy")
+def _history_at(t, records, count):
+    """Impulse ``I(t) = int F`` and force ``F(t)`` at a past time ``t`` from the accepted steps.
+
+    ``records[k] = (t0, h, I(t0), a_0 .. a_{s-1})``: step ``k`` began at ``t0``, lasted ``h`` and
+    had the force ``sum_j a_j ((t - t0) / h)^j``.  Zero before the first step.
+    """
+    if count == 0 or t <= records[0, 0]:
+        return 0.0, 0.0
+    low = 0
+    high = count - 1
+    while low < high:  # last step that begins at or before t
+        middle = (low + high + 1) // 2
+        if records[middle, 0] <= t:
+            low = middle
+        else:
+            high = middle - 1
+    h = records[low, 1]
+    x = min((t - records[low, 0]) / h, 1.0)
+    s = records.shape[1] - 3
+    impulse = 0.0
+    force = 0.0
+    for j in range(s - 1, -1, -1):
+        impulse = impulse * x + records[low, 3 + j] / (j + 1)
+        force = force * x + records[low, 3 + j]
+    return records[low, 2] + h * x * impulse, force
+
+
+@kernel(error_model="numpy")
+def _impulse_increment(a, span, records, count):
+    """``I(a + span) - I(a)`` from the recorded step polynomials, summed from small pieces.
+
+    Never the difference of two running totals: in a hard contact the gap is the small remainder of
+    O(1) terms, and a round-off of 1e-16 in it divided by a step's compliance becomes a force error.
+    """
+    if count == 0 or span <= 0.0:
+        return 0.0
+    first = records[0, 0]
+    if a + span <= first:
+        return 0.0
+    if a < first:
+        span -= first - a
+        a = first
+    low = 0
+    high = count - 1
+    while low < high:  # last step that begins at or before a
+        middle = (low + high + 1) // 2
+        if records[middle, 0] <= a:
+            low = middle
+        else:
+            high = middle - 1
+    k = low
+    s = records.shape[1] - 3
+    x = (a - records[k, 0]) / records[k, 1]
+    total = 0.0
+    remaining = span
+    while True:
+        h = records[k, 1]
+        room = (1.0 - x) * h
+        last = remaining <= room or k == count - 1
+        x_end = min(x + remaining / h, 1.0) if last else 1.0
+        upper = 0.0
+        lower = 0.0
+        for j in range(s - 1, -1, -1):
+            upper = upper * x_end + records[k, 3 + j] / (j + 1)
+            lower = lower * x + records[k, 3 + j] / (j + 1)
+        total += h * (x_end * upper - x * lower)
+        if last:
+            return total
+        remaining -= room
+        k += 1
+        x = 0.0
+
+
+@kernel(error_model="numpy")
+def _echo_increment(t0, offset, ends, records, count):
+    """Change of the echo part of the end response over ``[t0, t0 + offset]``.
+
+    ``sum_rods w sum_{n>=1} [I(t0 + offset - n T) - I(t0 - n T)]``, ``ends = (zeta, w_a, w_b, T_a,
+    T_b, t_start, ...)``, ``w = 2 / Z`` (see :func:`run_collision`).
+    """
+    total = 0.0
+    for rod in range(2):
+        trip = ends[3 + rod]
+        delayed = t0 - trip
+        part = 0.0
+        while delayed + offset > ends[5]:
+            part += _impulse_increment(delayed, offset, records, count)
+            delayed -= trip
+        total += ends[1 + rod] * part
+    return total
+
+
+@kernel(error_model="numpy")
+def _echo_force(t, ends, records, count):
+    """Echo part of the end velocity response at ``t``: ``sum_rods w sum_{n>=1} F(t - n T)``."""
+    force = 0.0
+    for rod in range(2):
+        delayed = t - ends[3 + rod]
+        while delayed > ends[5]:
+            _, f_n = _history_at(delayed, records, count)
+            force += ends[1 + rod] * f_n
+            delayed -= ends[3 + rod]
+    return force
 
 
 @kernel(error_model="numpy")
 def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
                   contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
                   node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled,
-                  clock, counters, history, max_steps):
+                  ends, free_q, free_v, records, clock, counters, history, max_steps):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
 
     Parameters
@@ -280,7 +434,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     X, U, mass, half : float arrays (2,)
         Centres of mass, their velocities, masses, half lengths.
     compliance : float
-        Residual compliance in series with the contact law.
+        Residual compliance in series with the contact law (0 with exact ends).
     law, alpha, strength, stiffness : contact law (see ``kernels.contact_response``).
     contact_range, force_scale : float
         Gap beyond which the force is negligible; typical force.
@@ -293,10 +447,27 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     nodes, vinv : arrays (s,), (s, s)
         Collocation nodes and the inverse Vandermonde matrix (node forces -> monomial coefficients).
     node_cos ... filled : tables filled on first use by ``_fill_level``.
+    ends : float array (11,)
+        Exact end response of uniform rods (the end-response correction):
+        ``(zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap)`` with
+        ``zeta = 1/Z_a + 1/Z_b`` (time/mass), ``w = 2/Z`` per rod, ``T = 2 l / c`` its round
+        trip, ``t_start`` the time the force history begins, ``gap_0`` and ``rate_0`` the rigid
+        gap and approach rate then, ``energy_0`` the total energy then and ``tail_compliance``
+        the static compliance of the omitted modes (bounds their end excursion) and ``gap``
+        the true gap now (updated in place).  The gap is ``gap_0 + rate_0 (t - t_start) +
+        (kept modes' free motion) + zeta I(t) + sum_n w I(t - n T)`` with ``I = int F`` (every
+        mode of a uniform rod, omitted ones included), advanced step by step by its increments;
+        the kept modes are only driven by the force.  ``zeta = 0``: the gap of the kept modes
+        and the rigid motion (plain or statically corrected truncation).
+    free_q, free_v : float arrays (M,)
+        The kept modes' free motion from the start (exact ends only; rotated in place).
+    records : float array (K, 3 + s)
+        Accepted steps ``(t0, h, I(t0), force coefficients)`` (exact ends only; the echoes
+        are read from them).
     clock : float array (2,)
         Time; (unused second slot kept for symmetry with the splitting kernel).
-    counters : int array (5,)
-        Accepted steps, rejected steps, history length, filled levels, Newton iterations.
+    counters : int array (6,)
+        Accepted steps, rejected steps, history length, filled levels, Newton iterations, records.
     history : float array (H, 3)
         ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing.
     max_steps : int
@@ -308,6 +479,9 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     log_ratio = math.log(ladder_ratio)
     inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
     recording = history.shape[0] > 0
+    zeta = ends[0]
+    exact = zeta > 0.0
+    hard = law != LAW_EXPONENTIAL and stiffness == math.inf and compliance <= 0.0
 
     free_gap = np.empty(s)
     forces = np.empty(s)
@@ -322,8 +496,23 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     cv = np.empty(n_modes)
     load_q = np.empty(n_modes)
     load_v = np.empty(n_modes)
+    active = np.zeros(s, dtype=np.bool_)
+    step_response = np.empty((s, s))
+    # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
+    # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
+    integral = np.zeros((s, s))
+    for i in range(s):
+        for m in range(s):
+            power = nodes[i]
+            for k in range(s):
+                integral[i, m] += vinv[k, m] * power / (k + 1)
+                power *= nodes[i]
+    warm = False
+    for j in range(n_modes):
+        if free_q[j] != 0.0 or free_v[j] != 0.0:
+            warm = True
 
-    # state at the start
+    # state at the start (or where the last call stopped)
     sq = 0.0
     sv = 0.0
     for j in range(n_modes):
@@ -331,24 +520,45 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         sv += coupling[j] * v[j]
     rigid_gap = X[1] - half[1] - X[0] - half[0]
     rigid_rate = U[1] - U[0]
-    force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
+    impulse_total = 0.0
+    if exact:
+        n_rec = counters[5]
+        if n_rec > 0:
+            impulse_total, _ = _history_at(records[n_rec - 1, 0] + records[n_rec - 1, 1], records, n_rec)
+        else:
+            ends[10] = rigid_gap + sq  # no force yet: the kept modes' gap is the true one
+        sq = ends[10] - rigid_gap
+        sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, n_rec) - rigid_rate
+    if exact and counters[5] > 0:
+        _, force_now = _history_at(clock[0], records, counters[5])
+        k_now = 0.0
+    elif hard:
+        force_now = 0.0  # the first step's solve finds it (a start at zero gap may round to -1e-16)
+        k_now = 0.0
+    else:
+        force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
     if not math.isfinite(force_now):
         return STATUS_NOT_FINITE
+    if exact:
+        sv += zeta * force_now
     have_previous = False
     h_previous = 1.0
     # first step from the contact's rate
-    rate = alpha * abs(rigid_rate + sv) + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
+    if exact:
+        rate = alpha * abs(rigid_rate + sv) + (zeta * k_now if math.isfinite(k_now) else 0.0)
+    else:
+        rate = alpha * abs(rigid_rate + sv) + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
     h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
     level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-12)))  # noqa: RUF046
     steps_here = 0
-    lambert = law == LAW_EXPONENTIAL and compliance > 0.0
-    log_beta = math.log(alpha * alpha * strength * compliance) if lambert else 0.0
 
     while True:
         if steps_here >= max_steps:
             return STATUS_RUNNING
         if recording and counters[2] + s > history.shape[0]:
             return STATUS_BUFFER_FULL
+        if exact and counters[5] >= records.shape[0]:
+            return STATUS_RECORDS_FULL
         if level >= n_levels:
             return STATUS_STEP_UNDERFLOW
         h = h_top * math.exp(-level * log_ratio)
@@ -356,19 +566,39 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv, node_cos, node_sin,
                         end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
             counters[3] += 1
-        # free gap at the nodes (no force over the step)
-        for i in range(s):
-            free_gap[i] = rigid_gap + rigid_rate * nodes[i] * h
-        for j in range(n_modes):
-            cq[j] = coupling[j] * q[j]
-            cv[j] = coupling[j] * v[j]
-        for i in range(s):
-            node_c = node_cos[level, i]
-            node_s = node_sin[level, i]
-            total = 0.0
+        # free gap at the nodes (no force over the step) and its response to the node forces
+        if exact:
+            # increments from the gap now (small terms only, see _impulse_increment)
+            kept_now = 0.0
+            if warm:
+                for j in range(n_modes):
+                    kept_now += coupling[j] * free_q[j]
+            for i in range(s):
+                offset = nodes[i] * h
+                free_gap[i] = ends[10] - kept_now + ends[7] * offset + _echo_increment(clock[0], offset, ends,
+                                                                                        records, counters[5])
+                for m in range(s):
+                    step_response[i, m] = zeta * h * integral[i, m]
+            mode_q = free_q
+            mode_v = free_v
+        else:
+            for i in range(s):
+                free_gap[i] = rigid_gap + rigid_rate * nodes[i] * h
+                for m in range(s):
+                    step_response[i, m] = response[level, i, m]
+            mode_q = q
+            mode_v = v
+        if warm or not exact:
             for j in range(n_modes):
-                total += node_c[j] * cq[j] + node_s[j] * cv[j]
-            free_gap[i] += total
+                cq[j] = coupling[j] * mode_q[j]
+                cv[j] = coupling[j] * mode_v[j]
+            for i in range(s):
+                node_c = node_cos[level, i]
+                node_s = node_sin[level, i]
+                total = 0.0
+                for j in range(n_modes):
+                    total += node_c[j] * cq[j] + node_s[j] * cv[j]
+                free_gap[i] += total
         # predictor: last step's polynomial continued
         for i in range(s):
             if have_previous:
@@ -380,12 +610,15 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             else:
                 predicted[i] = force_now
             forces[i] = max(predicted[i], 0.0)
-        # Newton on the s node forces
-        if lambert:
-            converged = _newton_lambert(free_gap, response[level], predicted, alpha, log_beta, compliance,
-                                        force_scale, forces, residual, delta, matrix, counters)
+        # the s node forces
+        if law == LAW_EXPONENTIAL:
+            converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
+                                          force_scale, forces, residual, delta, matrix, counters)
+        elif hard:
+            converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
+                                    active, matrix, delta, counters)
         else:
-            converged = _newton_forces(free_gap, response[level], law, alpha, strength, stiffness, compliance,
+            converged = _newton_forces(free_gap, step_response, law, alpha, strength, stiffness, compliance,
                                        force_scale, forces, residual, stiff, delta, matrix, counters)
         if not converged:
             level += 4
@@ -400,6 +633,9 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         if error > 1.0 and level < n_levels - 1:
             shrink = math.log(1.1 * error ** (1.0 / s)) / log_ratio
             level += max(1, int(math.ceil(shrink)))  # noqa: RUF046
+            if hard:
+                # a jump of the hard contact's force never passes the test: take it at the smallest step
+                level = min(level, n_levels - 1)
             counters[1] += 1
             continue
         # accept: monomial coefficients of the force polynomial in tau / h
@@ -433,11 +669,26 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             v[j] = vn
             sq += coupling[j] * qn
             sv += coupling[j] * vn
+        if exact and warm:
+            for j in range(n_modes):
+                c = e_cos[j]
+                qj = free_q[j]
+                free_q[j] = c * qj + e_sin[j] * free_v[j]
+                free_v[j] = c * free_v[j] - e_wsin[j] * qj
         impulse = 0.0
         moment = 0.0
         for k in range(s):
             impulse += coefficients[k] * h / (k + 1)
             moment += coefficients[k] * h * h / ((k + 1) * (k + 2))
+        if exact:
+            n_rec = counters[5]
+            records[n_rec, 0] = clock[0]
+            records[n_rec, 1] = h
+            records[n_rec, 2] = impulse_total
+            for k in range(s):
+                records[n_rec, 3 + k] = coefficients[k]
+            counters[5] = n_rec + 1
+            impulse_total += impulse
         if recording:
             # every node of the step: time, relative velocity of the centres of mass, force
             relative = U[1] - U[0]
@@ -466,12 +717,23 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         steps_here += 1
         rigid_gap = X[1] - half[1] - X[0] - half[0]
         rigid_rate = U[1] - U[0]
+        if exact:
+            # the true end motion (all modes) instead of the kept ones
+            gap_end = free_gap[s - 1]
+            for m in range(s):
+                gap_end += step_response[s - 1, m] * forces[m]
+            ends[10] = gap_end
+            sq = gap_end - rigid_gap
+            sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, counters[5]) - rigid_rate
+            sv += zeta * force_now
         # separated for good: the pair opens and the ends' largest excursion cannot reach the force
         if rigid_rate > 0.0 and rigid_gap + sq > contact_range:
             reach = 0.0
             for j in range(n_modes):
                 w = omega[j]
                 reach += abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
+            if exact:
+                reach += _omitted_reach(q, v, omega, U, mass, ends)
             if rigid_gap - reach > contact_range:
                 return STATUS_SEPARATED
         # next step: from the error estimate, and (exponential law) at most `exponent_step` e-folds of
@@ -486,6 +748,33 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             if rate * h_wanted > room:
                 h_wanted = room / rate
         level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
+        if hard:
+            level = min(level, n_levels - 1)
+
+
+@kernel(error_model="numpy")
+def _exact_rate(t, ends, coupling, free_v, warm, records, count):
+    """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``."""
+    rate = ends[7] + _echo_force(t, ends, records, count)
+    if warm:
+        for j in range(free_v.size):
+            rate += coupling[j] * free_v[j]
+    return rate
+
+
+@kernel(error_model="numpy")
+def _omitted_reach(q, v, omega, U, mass, ends):
+    """Bound on the omitted modes' end excursion: ``sqrt(2 C E_omitted)`` (Cauchy-Schwarz).
+
+    ``E_omitted`` is what the total energy ``ends[8]`` leaves after the centres of mass and the kept
+    modes (the omitted modes start at rest; the contact's energy is negligible where this is asked).
+    """
+    kept = 0.0
+    for j in range(q.size):
+        kept += 0.5 * (v[j] * v[j] + omega[j] * omega[j] * q[j] * q[j])
+    translation = 0.5 * (mass[0] * U[0] * U[0] + mass[1] * U[1] * U[1])
+    omitted = max(ends[8] - translation - kept, 0.0) + 1e-12 * ends[8]
+    return math.sqrt(2.0 * ends[9] * omitted)
 
 
 class CollocationTables:

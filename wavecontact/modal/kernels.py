@@ -36,6 +36,7 @@ STATUS_RUNNING = 0  # max_steps reached: call again
 STATUS_SEPARATED = 1  # the episode's pair separated for good
 STATUS_FREE_FOREVER = 2  # no pair will ever meet again (line)
 STATUS_BUFFER_FULL = 3  # history buffer full: grow it and call again
+STATUS_RECORDS_FULL = 4  # step records (collocation with exact ends) full: grow them and call again
 STATUS_STEP_UNDERFLOW = -1
 STATUS_NOT_FINITE = -2
 
@@ -95,12 +96,16 @@ def contact_response_from(gap, law, alpha, strength, stiffness, compliance, gues
         energy = (y + 0.5 * y * y) * scale / alpha
         return force, energy, alpha * force / (1.0 + y), 1.0 + y
     # linear spring on overlap (penalty; hard = infinite stiffness, then only the compliance)
+    if gap >= 0.0:
+        return 0.0, 0.0, 0.0, 1.0
     if stiffness == math.inf:
+        if compliance <= 0.0:
+            # overlap of a hard contact without compliance (round-off: exact ends keep the gap at 0);
+            # the force is unbounded, the constraint stores no energy
+            return math.inf, 0.0, math.inf, 1.0
         series = 1.0 / compliance
     else:
         series = 1.0 / (1.0 / stiffness + compliance)
-    if gap >= 0.0:
-        return 0.0, 0.0, 0.0, 1.0
     return -series * gap, 0.5 * series * gap * gap, series, 1.0
 
 @kernel(error_model="numpy")
@@ -432,15 +437,17 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             for k in range(n_pairs):
                 dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
         if episode[0] < 0:
-            # the collision begins with the first pair that closes in and cannot be proven free, or
-            # that is within reach of the force; a pair that has just separated but whose ends still
-            # vibrate within the bound only keeps the integrator stepping
+            # the collision begins with the closest pair whose centres of mass close in and that
+            # cannot be proven free (out of range) or is within reach of the force; a pair that is
+            # opening (it has just separated, or another pair pushes it apart) only keeps the
+            # integrator stepping, whatever its ends' vibration does to its gap
             best = -1
             if all_far:
                 best = candidate
             else:
                 for k in range(n_pairs):
-                    if gap[k] <= contact_range and (best < 0 or gap[k] < gap[best]):
+                    closing = U[pair_b[k]] - U[pair_a[k]] <= 0.0
+                    if closing and gap[k] <= contact_range and (best < 0 or gap[k] < gap[best]):
                         best = k
             if best >= 0:
                 episode[0] = best
@@ -519,9 +526,9 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
             _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         counters[0] += 1
         steps_here += 1
-        if recording:
+        if recording and episode[0] >= 0:  # only the episode's own pair is recorded
             n = counters[2]
-            ep = max(episode[0], 0)
+            ep = episode[0]
             history[n, 0] = clock[0]
             history[n, 1] = U[pair_b[ep]] - U[pair_a[ep]]
             history[n, 2] = force[ep]

@@ -2,9 +2,11 @@
 
 Each rod keeps ``modes`` vibration modes (analytic for a uniform rod, or the
 eigenmodes of its finite-element model); the contact acts on the two facing
-ends through their modal displacements.  With ``static_correction=True`` the
-compliance of the omitted modes at the ends is put in series with the contact
-law, which turns the ~1/N truncation error into a much faster one.  The
+ends through their modal displacements.  The omitted modes are accounted for
+by the exact end response of uniform rods (``correction='end-response'``, the
+default for analytic modes) or by their static end compliance in series with
+the contact law (``'static'``), which turns the ~1/N truncation error into a
+faster one.  The
 collision is integrated by exponential Radau collocation
 (:mod:`wavecontact.modal.collocation`) or, on request, by the ring's
 kick-rotate-kick splitting.  See ``docs/modal.md``.
@@ -25,7 +27,7 @@ from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
-from . import collocation, kernels
+from . import collocation, end_response, kernels
 from .modes import rod_modes
 from .system import ModalSystem, StepControl
 
@@ -38,8 +40,13 @@ class ModalOptions(SolverOptions):
 
     solver_name = "modal"
     modes: int = option(100, "modes kept per rod", kind="int", low=1, high=20_000)
-    static_correction: bool = option(True, "add the omitted modes' static end compliance (needed for hard "
-                                     "contact)", kind="bool")
+    static_correction: bool = option(True, "account for the omitted modes (needed for hard contact); False: "
+                                     "plain truncation", kind="bool")
+    correction: str | None = option(None, "how the omitted modes are accounted for: 'end-response' (exact end "
+                                    "response of uniform rods), 'static' (static end compliance in series "
+                                    "with the contact) or 'none'; None: 'end-response' for analytic modes and "
+                                    "the collocation, else 'static'", kind="choice",
+                                    choices=("end-response", "static", "none"), allow_none=True)
     mode_source: str = option("analytic", "closed-form modes of uniform rods, or eigenmodes of FE matrices",
                               kind="choice", choices=("analytic", "fe"))
     fe_elements: int | None = option(None, "elements per rod for mode_source='fe'; None: max(8 modes, 64)",
@@ -55,10 +62,18 @@ class ModalOptions(SolverOptions):
                              choices=(2, 4))
     collocation_stages: int = option(6, "Radau IIA stages s of the collocation (order up to 2 s - 1)",
                                      kind="int", low=1, high=8)
-    collocation_tolerance: float = option(1e-2, "accepted step-to-step change of the predicted node forces, "
-                                          "relative to Z V / 2", low=1e-12, high=1.0)
+    collocation_tolerance: float | None = option(None, "accepted step-to-step change of the predicted node "
+                                                 "forces, relative to Z V / 2; None: 1e-3 with the "
+                                                 "end-response correction, else 1e-2", low=1e-12, high=1.0,
+                                                 allow_none=True)
     history: bool = option(True, "record the relative velocity and contact force at every step", kind="bool")
 
+_CORRECTIONS = ("end-response", "static", "none")
+# default collocation tolerance: the end-response correction has no series compliance to soften a stiff
+# contact, and 1e-2 left up to 3e-7 at kappa = 1e4 (1e-3: below 3e-9 on a sweep, 15 % more steps)
+_DEFAULT_TOLERANCE = {"end-response": 1e-3, "static": 1e-2, "none": 1e-2}
+# bound on the steps recorded for the echoes (about 150 MB at s = 6)
+_MAX_RECORDS = 2**21
 # largest change of alpha_eff * gap per collocation step where the force matters
 _EXPONENT_STEP = 2.0
 # collocation tables of recent systems (filling costs ~0.1 ms per step size; repeated collisions reuse them)
@@ -85,8 +100,28 @@ def _project_field(rod, modes, field):
     return mean, density * shapes @ (w * values)
 
 
-def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
+def _resolve_correction(correction, static_correction, mode_source, step_method) -> str:
+    """The correction actually used, from ``correction`` and the older ``static_correction`` flag."""
+    if not static_correction:
+        if correction not in (None, "none"):
+            raise InvalidParameterError(
+                f"static_correction=False means no correction; it contradicts correction={correction!r}"
+            )
+        return "none"
+    if correction is None:
+        return "end-response" if mode_source == "analytic" and step_method == "collocation" else "static"
+    if correction == "end-response" and (mode_source != "analytic" or step_method != "collocation"):
+        raise InvalidParameterError(
+            "correction='end-response' needs mode_source='analytic' (uniform rods) and "
+            "step_method='collocation'; use correction='static'"
+        )
+    return correction
+
+
+def _build(scene: Scene, modes, correction, mode_source, fe_elements, fe_order, step_accuracy,
            step_reach=StepControl.reach, step_order=StepControl.order):
+    if isinstance(correction, (bool, np.bool_)):  # the older flag (benchmarks/peers pass it)
+        correction = "static" if correction else "none"
     if scene.is_ring:
         raise UnsupportedSceneError(
             "the modal solver's single-collision mode takes two rods on a line; for rods on a ring "
@@ -127,7 +162,7 @@ def _build(scene: Scene, modes, static_correction, mode_source, fe_elements, fe_
     force_scale = z_a * z_b / (z_a + z_b) * approach  # wave-theory force plateau
     control = StepControl(accuracy=step_accuracy, reach=step_reach, order=step_order)
     probe = ModalSystem(basis, (0.0, 1.0), velocities, [(0, 1, 0.0)], scene.contact, force_scale,
-                        static_correction, control)
+                        correction == "static", control, exact_ends=correction == "end-response")
     if scene.gaps is not None:
         gap = scene.gaps[0]
     elif isinstance(scene.contact, Exponential):
@@ -157,17 +192,31 @@ def _collocation_tables(system, coupling, stages):
 
 
 def _run_collocation(system, stages, tolerance, buffer, chunks):
-    """Advance ``system`` (two rods, one pair) through its collision by exponential collocation."""
+    """Advance ``system`` (two rods, one pair) through its collision by exponential collocation.
+
+    Returns the last history chunk, the work counters and the step records (exact ends; else empty).
+    """
     first = system.rod_first.astype(np.int64)
     coupling = np.concatenate([-system.right[first[0]:first[1]], system.left[first[1]:first[2]]])
     tables = _collocation_tables(system, coupling, stages)
-    counters = np.zeros(5, dtype=np.int64)
+    counters = np.zeros(6, dtype=np.int64)
+    if system.exact_ends:
+        gap_0 = float(system.X[1] - system.half[1] - system.X[0] - system.half[0])
+        ends = end_response.end_parameters(*system.rods, float(system.clock[0]), gap_0,
+                                           float(system.U[1] - system.U[0]), system.total_energy(),
+                                           float(system.omitted_compliance[0]))
+        free_q, free_v = system.q.copy(), system.v.copy()
+        records = np.empty((1024, 3 + stages))
+    else:
+        ends = np.zeros(end_response.ENDS_SIZE)
+        free_q, free_v = np.zeros_like(system.q), np.zeros_like(system.v)
+        records = np.empty((0, 3 + stages))
     while True:
         status = collocation.run_collision(
             system.q, system.v, system.omega, coupling, system.X, system.U, system.mass, system.half,
             float(system.pair_compliance[0]), system.law_code, system.alpha, system.strength, system.stiffness,
-            system.contact_range, system.force_scale, float(tolerance), _EXPONENT_STEP, *tables.arrays(), system.clock, counters,
-            buffer, 100_000_000,
+            system.contact_range, system.force_scale, float(tolerance), _EXPONENT_STEP, *tables.arrays(),
+            ends, free_q, free_v, records, system.clock, counters, buffer, 100_000_000,
         )
         system.check_status(status)
         if status == kernels.STATUS_BUFFER_FULL:
@@ -175,10 +224,35 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
             counters[2] = 0
             buffer = np.empty((2 * buffer.shape[0], 3))
             continue
+        if status == kernels.STATUS_RECORDS_FULL:
+            if records.shape[0] >= _MAX_RECORDS:
+                raise SolverFailure(f"modal collocation: more than {_MAX_RECORDS} steps in one collision")
+            records = np.concatenate([records, np.empty_like(records)])
+            continue
         if status == kernels.STATUS_SEPARATED:
-            return buffer[: counters[2]], {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
-                                           "newton_iterations": int(counters[4]), "stages": int(stages)}
+            work = {"steps": int(counters[0]), "rejected_steps": int(counters[1]),
+                    "newton_iterations": int(counters[4]), "stages": int(stages)}
+            return buffer[: counters[2]], work, (records[: counters[5]], free_q, free_v)
         raise SolverFailure(f"modal collocation stopped with kernel status {status}", Outcome.NOT_CONVERGED)
+
+
+def _omitted_mode_energy(system, records, free_q, free_v) -> float:
+    """Energy the force left in the omitted modes, from its recorded history (exact ends).
+
+    Per rod: the energy the force puts into a rod at rest (end response, see
+    :func:`~wavecontact.modal.end_response.forced_energy`) minus its rigid part ``I^2 / (2 m)``
+    and minus the kept modes' forced energy (their motion less their free motion).
+    """
+    if records.shape[0] == 0:
+        return 0.0
+    last = records[-1]
+    impulse = last[2] + last[1] * float(np.sum(last[3:] / np.arange(1, last.size - 2)))
+    forced = 0.5 * ((system.v - free_v) ** 2 + (system.omega * (system.q - free_q)) ** 2)
+    total = 0.0
+    for i, rod in enumerate(system.rods):
+        kept = float(np.sum(forced[system.rod_first[i]:system.rod_first[i + 1]]))
+        total += end_response.forced_energy(records, rod) - impulse**2 / (2.0 * rod.mass) - kept
+    return total
 
 
 def _run_splitting(system, buffer, chunks):
@@ -198,16 +272,19 @@ def _run_splitting(system, buffer, chunks):
 
 
 class ModalSolver(SolverBase):
-    """The rods' free-free modes with exact free flight (Eq. 7, 14) and the static correction."""
+    """The rods' free-free modes with exact free flight (Eq. 7, 14), corrected for the omitted modes."""
 
     name = "modal"
     Options = ModalOptions
     resolution = "modes"
     refines = 1
 
-    def expected_order(self, options: ModalOptions) -> float:
-        """Order of epsilon in ``1/N``: 1 for plain truncation, 3 with the static correction (docs/modal.md)."""
-        return 3.0 if options.static_correction else 1.0
+    def expected_order(self, options: ModalOptions) -> float | None:
+        """Order of epsilon in ``1/N``: 1 for plain truncation, 3 with the static correction (docs/modal.md);
+        None with the end-response correction (exact in the modes for rods that start at rest)."""
+        correction = _resolve_correction(options.correction, options.static_correction, options.mode_source,
+                                         options.step_method)
+        return {"none": 1.0, "static": 3.0}.get(correction)
 
     def _collide(self, scene: Scene, options: ModalOptions) -> dict:
         return _collide(scene, **options.as_dict())
@@ -222,16 +299,23 @@ class ModalSolver(SolverBase):
                               step_order=options.step_order, mode_source=options.mode_source)
 
 
-def _collide(scene: Scene, *, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
-             step_reach, step_order, step_method, collocation_stages, collocation_tolerance, history) -> dict:
+def _collide(scene: Scene, *, modes, static_correction, correction, mode_source, fe_elements, fe_order,
+             step_accuracy, step_reach, step_order, step_method, collocation_stages, collocation_tolerance,
+             history) -> dict:
     """One collision of two rods on a line with the modal expansion.
 
     ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
     ``stages`` for collocation, ``free_flights`` for splitting); ``extra``:
     ``modal_energies`` (2, modes) after the collision, ``vibration_energy`` per
-    rod, ``translational_energy_before/after``, ``residual_compliance``.
+    rod (kept modes), ``translational_energy_before/after``, ``residual_compliance``,
+    ``correction`` and, with the end-response correction, ``omitted_mode_energy``
+    (what the force left in the modes above ``modes``, from its history;
+    ``energy_drift`` includes it).
     """
-    system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order, step_accuracy,
+    correction = _resolve_correction(correction, static_correction, mode_source, step_method)
+    if collocation_tolerance is None:
+        collocation_tolerance = _DEFAULT_TOLERANCE[correction]
+    system, gap = _build(scene, modes, correction, mode_source, fe_elements, fe_order, step_accuracy,
                          step_reach, step_order)
     energy_before = system.total_energy()
     momentum_before = system.momentum()
@@ -239,13 +323,19 @@ def _collide(scene: Scene, *, modes, static_correction, mode_source, fe_elements
     e_tr_before = 0.5 * float(np.sum(system.mass * system.U**2))
     buffer = np.empty((4096 if history else 0, 3))
     chunks = []
+    omitted_energy = None
     if step_method == "collocation":
         try:
-            tail, work = _run_collocation(system, collocation_stages, collocation_tolerance, buffer, chunks)
+            tail, work, (steps, free_q, free_v) = _run_collocation(system, collocation_stages,
+                                                                   collocation_tolerance, buffer, chunks)
+            if system.exact_ends:
+                omitted_energy = _omitted_mode_energy(system, steps, free_q, free_v)
         except SolverFailure as failure:
             # the collocation's Newton solve can stall on a stiff contact seen by few modes; the
             # splitting takes any contact (its step follows the force), so start over with it
-            system, gap = _build(scene, modes, static_correction, mode_source, fe_elements, fe_order,
+            if correction == "end-response":
+                correction = "static"  # the splitting knows only the static correction
+            system, gap = _build(scene, modes, correction, mode_source, fe_elements, fe_order,
                                  step_accuracy, step_reach, step_order)
             chunks = []
             tail, work = _run_splitting(system, buffer, chunks)
@@ -261,7 +351,7 @@ def _collide(scene: Scene, *, modes, static_correction, mode_source, fe_elements
     start = np.array([[0.0, w_before, 0.0]])
     records = np.concatenate([start, records])
     w_after = float(system.U[1] - system.U[0])
-    energy_after = system.total_energy()
+    energy_after = system.total_energy() + (omitted_energy or 0.0)
     times, velocity, force = records[:, 0], records[:, 1], records[:, 2]
     energies = system.modal_energies()
     reduced_mass = 1.0 / (1.0 / system.mass[0] + 1.0 / system.mass[1])
@@ -280,6 +370,8 @@ def _collide(scene: Scene, *, modes, static_correction, mode_source, fe_elements
             "translational_energy_after": system.translational_energy(),
             "residual_compliance": float(system.pair_compliance[0]),
             "static_correction": bool(static_correction),
+            "correction": correction,
+            **({} if omitted_energy is None else {"omitted_mode_energy": omitted_energy}),
             "initial_gap": float(gap),
         },
     }

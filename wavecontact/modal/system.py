@@ -76,8 +76,8 @@ def contact_parameters(law: ContactLaw, force_scale: float, static_correction: b
         if not static_correction:
             raise UnsupportedSceneError(
                 "hard contact (kappa = inf) needs static_correction=True in the modal solver: without the "
-                "omitted modes' compliance a truncated rod end has a finite mass and a hard impact on it is "
-                "instantaneous and undefined; with it the limit is a contact spring of that compliance"
+                "omitted modes a truncated rod end has a finite mass and a hard impact on it is "
+                "instantaneous and undefined (correction='end-response' or 'static' account for them)"
             )
         return kernels.LAW_LINEAR, 1.0, 0.0, stiffness, 0.0
     if isinstance(law, Penalty):
@@ -111,6 +111,11 @@ class ModalSystem:
         Add the omitted modes' end compliance in series with the contact.
     control : StepControl
         Step-size control.
+    exact_ends : bool
+        The omitted modes are accounted for by the exact end response of
+        uniform rods (collocation of two rods only, see
+        :func:`wavecontact.modal.collocation.run_collision`): no series
+        compliance, and hard contact is allowed without it.
 
     Notes
     -----
@@ -121,11 +126,12 @@ class ModalSystem:
     """
 
     def __init__(self, rod_modes, positions, velocities, pairs, law, force_scale,
-                 static_correction=True, control=StepControl()):
+                 static_correction=True, control=StepControl(), exact_ends=False):
         self.rod_modes = tuple(rod_modes)
         self.rods = tuple(m.rod for m in self.rod_modes)
         self.law = law
-        self.static_correction = bool(static_correction)
+        self.exact_ends = bool(exact_ends)
+        self.static_correction = bool(static_correction) and not self.exact_ends
         self.control = control
         counts = [m.count for m in self.rod_modes]
         # unsigned offsets let the compiler drop negative-index handling and vectorise the mode loops
@@ -144,18 +150,21 @@ class ModalSystem:
         self.pair_b = np.array([p[1] for p in pairs], dtype=np.int64)
         self.pair_offset = np.array([p[2] for p in pairs], dtype=float)
         compliance = []
+        omitted = []
         inverse_mass = []
         for a, b, _ in pairs:
             ma, mb = self.rod_modes[a], self.rod_modes[b]
-            c = ma.residual_compliance[1, 1] + mb.residual_compliance[0, 0] if self.static_correction else 0.0
-            compliance.append(c)
+            c = ma.residual_compliance[1, 1] + mb.residual_compliance[0, 0]
+            omitted.append(c)
+            compliance.append(c if self.static_correction else 0.0)
             inverse_mass.append(1.0 / self.mass[a] + 1.0 / self.mass[b]
                                 + float(np.sum(ma.right**2)) + float(np.sum(mb.left**2)))
         self.pair_compliance = np.array(compliance, dtype=float)
+        self.omitted_compliance = np.array(omitted, dtype=float)  # of the omitted modes, used or not
         self.pair_inverse_mass = np.array(inverse_mass, dtype=float)
         self.force_scale = float(force_scale)
         (self.law_code, self.alpha, self.strength, self.stiffness,
-         self.contact_range) = contact_parameters(law, self.force_scale, self.static_correction)
+         self.contact_range) = contact_parameters(law, self.force_scale, self.static_correction or self.exact_ends)
         self.dt_top = 0.05 * min(r.length / r.wave_speed for r in self.rods)
         if self.law_code == kernels.LAW_EXPONENTIAL:
             self.dt_top = max(self.dt_top, 0.05 / (self.alpha * max(1e-300, np.max(np.abs(self.U)))))
@@ -176,6 +185,9 @@ class ModalSystem:
 
     def run_episode(self, history=None, max_steps=10_000_000):
         """Integrate until the current collision is over; return the kernel status."""
+        if self.exact_ends:
+            raise UnsupportedSceneError("exact ends are integrated by collocation only (two rods); "
+                                        "use correction='static' with the splitting")
         if history is None:
             history = np.empty((0, 3))
         return kernels.run_episode(

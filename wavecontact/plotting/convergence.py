@@ -17,6 +17,8 @@ def convergence_figure(table):
 
     Left: error of epsilon against elements on the shorter rod, one line per
     discretization, with guide lines of slope -1 and -2 (orders 1 and 2).
+    Runs exact to round-off (error below ``ERROR_FLOOR``) are drawn as hollow
+    markers on a dotted floor line, so an exact discretization stays visible.
     Right: error against wall time; guide lines of slope -1/2 and -1, which
     is what orders 1 and 2 give when the cost grows like ``N**2`` (an explicit
     scheme in 1D: N elements times a number of steps proportional to N).
@@ -33,32 +35,49 @@ def convergence_figure(table):
     series = []
     for fit in table.fits:
         done = [r for r in table.rows_for(fit.order, fit.mass) if r.error is not None]
-        rows = [r for r in done if r.error > ERROR_FLOOR]  # round-off results are not on a log scale
-        if rows:
-            series.append((fit, rows, len(done) - len(rows)))
+        if done:
+            # exact results (round-off) have no place on a log scale: drawn on a floor line instead
+            series.append((fit, [r for r in done if r.error > ERROR_FLOOR], [r for r in done if r.error <= ERROR_FLOOR]))
     if not series:
-        raise InvalidParameterError("nothing to plot: no run of the study has an error above round-off")
+        raise InvalidParameterError("nothing to plot: no run of the study finished")
 
     fig = Figure(figsize=(10, 4.4), dpi=150, layout="constrained")
     FigureCanvasAgg(fig)
     ax_n, ax_t = fig.subplots(1, 2)
     markers = "osD^v<>p"
+    floor = ERROR_FLOOR
     for k, (fit, rows, exact) in enumerate(series):
         notes = [f"p = {fit.observed_order:.2f}"] if fit.observed_order is not None else []
         if exact:
-            notes.append(f"{exact} mesh{'es' if exact > 1 else ''} exact to round-off, not shown")
+            notes.append(f"exact on {len(exact)} mesh{'es' if len(exact) > 1 else ''}")
         label = fit.label + (f" ({'; '.join(notes)})" if notes else "")
-        style = {"marker": markers[k % len(markers)], "ms": 4, "lw": 1.2, "label": label}
-        ax_n.loglog([r.elements for r in rows], [r.error for r in rows], **style)
-        timed = [r for r in rows if r.wall_time_s and r.wall_time_s > 0]
-        if timed:
-            ax_t.loglog([r.wall_time_s for r in timed], [r.error for r in timed], **style)
+        style = {"marker": markers[k % len(markers)], "ms": 4, "lw": 1.2}
+        color = f"C{k % 10}"
+        for ax, x_of in ((ax_n, lambda r: r.elements), (ax_t, lambda r: r.wall_time_s)):
+            shown = [r for r in rows if x_of(r) and x_of(r) > 0]
+            if shown:
+                ax.loglog([x_of(r) for r in shown], [r.error for r in shown], color=color, **style,
+                          label=label if ax is ax_n else None)
+            on_floor = [r for r in exact if x_of(r) and x_of(r) > 0]
+            if on_floor:
+                ax.loglog([x_of(r) for r in on_floor], [floor] * len(on_floor), ls="none", color=color,
+                          mfc="none", mew=1.2, marker=style["marker"], ms=6,
+                          label=label if (ax is ax_n and not shown) else None)
+    exact_any = any(exact for _, _, exact in series)
+    if exact_any:
+        for ax in (ax_n, ax_t):
+            ax.axhline(floor, color="0.5", lw=0.8, ls=":")
+        ax_n.annotate(f"exact (error below {floor:.0e}, round-off): hollow markers on this line",
+                      xy=(0.01, floor), xycoords=("axes fraction", "data"), xytext=(0, 3),
+                      textcoords="offset points", fontsize=7, color="0.35", va="bottom")
 
     all_rows = [r for _, rows, _ in series for r in rows]
-    _guides(ax_n, [r.elements for r in all_rows], [r.error for r in all_rows], (1, 2), "N")
-    timed = [r for r in all_rows if r.wall_time_s and r.wall_time_s > 0]
-    if timed:
-        _guides(ax_t, [r.wall_time_s for r in timed], [r.error for r in timed], (0.5, 1), "t")
+    if all_rows:
+        _guides(ax_n, [r.elements for r in all_rows], [r.error for r in all_rows], (1, 2), "N")
+        timed = [r for r in all_rows if r.wall_time_s and r.wall_time_s > 0]
+        if timed:
+            _guides(ax_t, [r.wall_time_s for r in timed], [r.error for r in timed], (0.5, 1), "t")
+    all_rows += [r for _, _, exact in series for r in exact]
 
     from matplotlib.ticker import NullFormatter
 

@@ -50,7 +50,8 @@ def plot_equipartition(study: EquipartitionStudy, path, dpi: int = 150) -> Path:
     ax.set_title(f"$\\gamma$ = {study.gamma:g}, $\\kappa$ = {kappa}; mean and range of {realisations} "
                  f"realisations\ndashed: equipartition mean, dotted: {study.threshold:g} x that (settled)",
                  fontsize=9)
-    ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
+    # outside the axes: inside, any corner covers the curves or the dashed equipartition levels
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     ax.grid(alpha=0.3, which="both")
 
     medians = []

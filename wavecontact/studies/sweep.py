@@ -8,11 +8,11 @@ GIL) with a progress bar.
 from __future__ import annotations
 
 import os
-import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
+from .. import progress as progress_bar
 from ..api import collide
 from ..errors import InvalidParameterError
 
@@ -46,17 +46,16 @@ def restitution_map(gammas, kappas, solver: str = "delay", *, workers: int | Non
     collide(float(points[0][0]), float(points[0][1]), solver, **options)  # compile once, refuse bad input early
     if workers is None:
         workers = os.cpu_count() or 1
-    if progress is None:
-        progress = sys.stderr.isatty()
 
     def one(point):
         return collide(float(point[0]), float(point[1]), solver, **options).restitution
 
-    with ThreadPoolExecutor(max_workers=max(1, int(workers))) as pool:
-        results = pool.map(one, points)
-        if progress:
-            from tqdm import tqdm
-
-            results = tqdm(results, total=len(points), desc="restitution map", file=sys.stderr)
-        values = np.fromiter(results, dtype=float, count=len(points))
+    values = np.empty(len(points))
+    # advance once per finished point, so the bar ends at len(points) (a bar wrapped around the
+    # iterator stops one short: the last item is counted only when the next one is asked for)
+    with ThreadPoolExecutor(max_workers=max(1, int(workers))) as pool, \
+            progress_bar.Progress(len(points), "restitution map", unit="point", enabled=progress) as bar:
+        for index, value in enumerate(pool.map(one, points)):
+            values[index] = value
+            bar.advance()
     return values.reshape(gammas.size, kappas.size)
