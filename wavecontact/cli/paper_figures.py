@@ -32,7 +32,7 @@ def add_parser(subparsers):
     )
     p.add_argument("--out", metavar="DIR", required=True, help="directory for the figures (created if missing)")
     p.add_argument("--quick", action="store_true", help="small sizes, for a test")
-    p.add_argument("--only", type=_figure_number, nargs="+", metavar="N", help="only these figures (1-10)")
+    p.add_argument("--only", type=_figure_number, nargs="+", metavar="N", help="only these figures, 1-10 (default: all ten)")
     p.add_argument("--page", metavar="FILE", help="write the Markdown page here (default DIR/paper_figures.md)")
     p.add_argument("--workers", type=nonnegative_int, default=1, help="worker processes for the ensembles (default 1)")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress lines on stderr")
