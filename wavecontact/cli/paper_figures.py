@@ -1,0 +1,86 @@
+"""``wavecontact paper-figures``: all ten figures of the paper, each with claim, measurement and verdict."""
+
+from __future__ import annotations
+
+import shlex
+import sys
+from pathlib import Path
+
+from .common import nonnegative_int
+
+
+def _figure_number(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"figure numbers are 1-10, got {text!r}") from None
+    if not 1 <= value <= 10:
+        raise argparse.ArgumentTypeError(f"figure numbers are 1-10, got {text!r}")
+    return value
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "paper-figures",
+        help="reproduce the paper's ten figures and state a verdict for each claim",
+        description="Run the studies behind the paper's Fig. 1-10, write each figure (PNG) into DIR and a page "
+        "with the table of claims, measured numbers and verdicts (DIR/paper_figures.md, or --page FILE). "
+        "--quick uses small sizes (seconds per figure); the default uses the paper's sizes except where the "
+        "page says what was reduced.",
+    )
+    p.add_argument("--out", metavar="DIR", required=True, help="directory for the figures (created if missing)")
+    p.add_argument("--quick", action="store_true", help="small sizes, for a test")
+    p.add_argument("--only", type=_figure_number, nargs="+", metavar="N", help="only these figures, 1-10 (default: all ten)")
+    p.add_argument("--page", metavar="FILE", help="write the Markdown page here (default DIR/paper_figures.md)")
+    p.add_argument("--workers", type=nonnegative_int, default=1, help="worker processes for the ensembles (default 1)")
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress lines on stderr")
+    p.set_defaults(run=run)
+    return p
+
+
+def _log(message: str) -> None:
+    print(f"wavecontact paper-figures: {message}", file=sys.stderr, flush=True)
+
+
+def command_line(args) -> str:
+    """The command that reproduces this run, rebuilt from the parsed options."""
+    words = ["wavecontact", "paper-figures", "--out", str(args.out)]
+    if args.quick:
+        words.append("--quick")
+    if args.only:
+        words += ["--only", *map(str, args.only)]
+    if args.page:
+        words += ["--page", str(args.page)]
+    if args.workers != 1:
+        words += ["--workers", str(args.workers)]
+    return " ".join(shlex.quote(w) for w in words)
+
+
+def run(args) -> int:
+    from ..io.files import check_output_directory, check_output_file
+    from ..studies.paper_figures import run_figures, write_page
+    from .ensemble import executor_from
+
+    out = check_output_directory("--out", args.out)
+    page = Path(args.page) if args.page else out / "paper_figures.md"
+    check_output_file("--page", page, (".md",))
+    out.mkdir(parents=True, exist_ok=True)
+    page.parent.mkdir(parents=True, exist_ok=True)
+    with executor_from(args.workers, None) as executor:
+        reports = run_figures(out, quick=args.quick, only=args.only, executor=executor,
+                              log=_log if args.progress else None)
+    machine = (f"Run with {args.workers} worker process(es) on a 2-core machine shared with other jobs; "
+               "wall times are indicative only.")
+    if args.quick:
+        machine += (" Quick mode: sizes far below the paper's, for testing the command; the statistical verdicts "
+                    "(Fig. 1-3, 8-10) mean little at these sizes.")
+    write_page(reports, page, command_line(args), machine)
+    print("| Fig. | verdict | measured |")
+    print("|---:|---|---|")
+    for r in reports:
+        for c in r.claims:
+            print(f"| {r.number} | {c.verdict} | {c.measured} |")
+    print(f"wrote {page} and {sum(len(r.images) for r in reports)} figures into {out}")
+    return 0
