@@ -51,6 +51,11 @@ class Progress:
         if self._bar is not None:
             self._bar.update(int(count))
 
+    def describe(self, text: str) -> None:
+        """Change the label shown before the bar (what is being worked on now)."""
+        if self._bar is not None:
+            self._bar.set_description(text)
+
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()

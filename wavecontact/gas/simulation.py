@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
+from ..progress import Progress
 from ..restitution_table import RestitutionTable
 from . import kernels
 from .model import RodGas
@@ -382,11 +383,7 @@ class GasSimulation:
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
         no_uniforms = np.zeros(0)
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=collisions, unit="coll", leave=False)
+        bar = Progress(collisions, "gas", unit="collision", enabled=bool(progress))
         status = kernels.STATUS_DONE
         start = time.perf_counter()
         first = self.collisions
@@ -415,8 +412,7 @@ class GasSimulation:
             if rule.code == kernels.RULE_TABLE and used < chunk:
                 self._rng.bit_generator.state = state  # rewind: only the used levels are consumed
                 self._rng.bit_generator.advance(used)
-            if bar is not None:
-                bar.update(used)
+            bar.advance(used)
             if status == kernels.STATUS_DONE and self.collisions % self.record_every == 0:
                 self._record()
             if status != kernels.STATUS_DONE:
@@ -425,8 +421,7 @@ class GasSimulation:
                     self._record()  # the final state of a run that cannot continue
                 break
         wall = time.perf_counter() - start
-        if bar is not None:
-            bar.close()
+        bar.close()
         self.status = _STATUS[status]
         return self._result(wall, self.collisions - first)
 

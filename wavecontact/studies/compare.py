@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -19,6 +18,7 @@ import numpy as np
 
 from ..api import collide
 from ..errors import WavecontactError
+from ..progress import Progress
 
 __all__ = ["ComparisonRow", "ComparisonTable", "Method", "compare_solvers", "default_methods", "reference_restitution"]
 
@@ -152,16 +152,11 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
         raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
     reference, source = reference_restitution(gamma, kappa)
     methods = default_methods(kappa) if methods is None else list(methods)
-    if progress is None:
-        progress = sys.stderr.isatty()
-    iterator = methods
-    if progress:
-        from tqdm import tqdm
-
-        iterator = tqdm(methods, desc="compare", file=sys.stderr)
+    bar = Progress(len(methods), "compare", unit="method", enabled=progress)
     contact = "hard" if math.isinf(kappa) else "exponential"
     rows = []
-    for method in iterator:
+    for method in methods:
+        bar.advance()
         times, untimed = [], 0
         try:
             while len(times) < int(repeats):
@@ -191,4 +186,5 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
                 status="ok",
             )
         )
+    bar.close()
     return ComparisonTable(gamma, kappa, reference, source, rows)

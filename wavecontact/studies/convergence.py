@@ -24,13 +24,13 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from ..errors import InvalidParameterError, SolverFailure
+from ..progress import Progress
 from ..result import to_jsonable
 
 __all__ = [
@@ -358,18 +358,18 @@ def convergence_study(
         solver_options=options,
     )
     runs = [(p, m, n) for p in orders for m in masses for n in meshes]
-    bar = _progress_bar(len(runs), progress)
+    bar = Progress(len(runs), "converge", unit="run", enabled=progress)
     try:
         for p in orders:
             for m in masses:
                 rows = []
                 if warmup:
-                    bar.set_description(f"P{p} {m} warm-up")
+                    bar.describe(f"P{p} {m} warm-up")
                     _warm_up(collide, gamma, kappa, contact, p, m, meshes[0], options)
                 for n in meshes:
-                    bar.set_description(f"P{p} {m} N={n}")
+                    bar.describe(f"P{p} {m} N={n}")
                     rows.append(_one_run(collide, gamma, kappa, contact, p, m, n, reference, options, rows))
-                    bar.update(1)
+                    bar.advance()
                 table.rows.extend(rows)
                 table.fits.append(_fit(p, m, rows))
     finally:
@@ -457,24 +457,5 @@ def _unique(values) -> list:
     return seen
 
 
-class _NoBar:
-    def set_description(self, text):
-        pass
-
-    def update(self, n):
-        pass
-
-    def close(self):
-        pass
-
-
-def _progress_bar(total: int, progress: bool | None):
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if not progress:
-        return _NoBar()
-    from tqdm import tqdm
-
-    return tqdm(total=total, file=sys.stderr, unit="run", leave=False)
 
 

@@ -23,12 +23,15 @@ import numpy as np
 
 from ..bath.model import ThermalBath
 from ..errors import InvalidParameterError, WavecontactError
+from ..io.checkpoint import read_checkpoint, write_checkpoint
+from ..progress import Progress
 from ..scene import validate_gamma_kappa
 
 __all__ = ["MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "ensemble", "run_batch", "sample_collision",
            "sample_restitution", "sample_seed"]
 
 MAX_SAMPLES = 10_000_000
+_BATCH_SCHEMA = "wavecontact.ensemble_batch"
 _SCHEMA = "wavecontact.ensemble"
 _VERSION = 1
 _SOLVERS = ("delay", "modal", "fem")
@@ -123,7 +126,7 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
     from ..bath.collide import thermal_scene, vibration_energy_gain
     from ..bath.scene import start_gap
     from ..contact import Hard
-    from ..delay.stochastic_hardcore import hard_core_noise
+    from ..solvers import get_solver
 
     seed = sample_seed(spec.seed, index)
     if spec.solver == "delay" and math.isinf(spec.kappa):
@@ -131,8 +134,8 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
         lengths = (0.5 * (1.0 + spec.gamma), 0.5 * (1.0 + spec.gamma) / spec.gamma)
         vibrations = spec.bath.draw(lengths, seed)
         resolution = int(spec.options.get("hard_core_resolution", 8))
-        _t, w = hard_core_noise(spec.gamma, vibrations, start_gap(vibrations, Hard()), resolution)
-        return float(w[-1] - 1.0), (0.0, 0.0)
+        gap = start_gap(vibrations, Hard())
+        return get_solver("delay").hard_core_thermal_restitution(spec.gamma, vibrations, resolution, gap), (0.0, 0.0)
     scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, seed)
     options = dict(spec.options)
     if spec.solver == "delay":
@@ -282,6 +285,10 @@ def _batch_path(out: Path, start: int) -> Path:
     return out / f"batch_{start:09d}.npz"
 
 
+def _batch_parameters(spec: EnsembleSpec, start: int, stop: int) -> dict:
+    return {"spec": spec.describe(), "start": int(start), "stop": int(stop)}
+
+
 def _atomic_savez(path: Path, **arrays):
     tmp = path.with_name(path.name + ".part")
     with open(tmp, "wb") as handle:
@@ -312,11 +319,11 @@ def _prepare_output(out, spec: EnsembleSpec) -> dict:
     for start, stop in spec.batches():
         batch = _batch_path(out, start)
         if batch.exists():
+            arrays, _meta = read_checkpoint(batch, _BATCH_SCHEMA, _VERSION, _batch_parameters(spec, start, stop))
             try:
-                with np.load(batch, allow_pickle=False) as data:
-                    values = np.asarray(data["restitution"], dtype=float)
-                    gains = np.asarray(data["vibration_energy_gain"], dtype=float)
-            except (OSError, ValueError, KeyError):
+                values = np.asarray(arrays["restitution"], dtype=float)
+                gains = np.asarray(arrays["vibration_energy_gain"], dtype=float)
+            except KeyError:
                 raise InvalidParameterError(f"{batch} is not a finished batch; delete it to recompute that batch") from None
             if values.shape != (stop - start,) or gains.shape != (stop - start, 2):
                 raise InvalidParameterError(f"{batch} has the wrong size; delete it to recompute that batch")
@@ -376,16 +383,16 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
     done = {} if out is None else _prepare_output(out, spec)
     todo = [(a, b) for a, b in spec.batches() if a not in done]
     fields = asdict(spec)
-    from tqdm import tqdm
-
-    bar = tqdm(total=spec.samples, initial=spec.samples - sum(b - a for a, b in todo), disable=not progress,
-               unit="sample", desc="ensemble")
+    bar = Progress(spec.samples, "ensemble", unit="sample", enabled=bool(progress),
+                   initial=spec.samples - sum(b - a for a, b in todo))
 
     def finish(start, values, gains):
         done[start] = (values, gains)
         if out is not None:
-            _atomic_savez(_batch_path(Path(out), start), restitution=values, vibration_energy_gain=gains)
-        bar.update(values.size)
+            write_checkpoint(_batch_path(Path(out), start), _BATCH_SCHEMA, _VERSION,
+                             _batch_parameters(spec, start, start + values.size),
+                             {"restitution": values, "vibration_energy_gain": gains})
+        bar.advance(values.size)
 
     pool = _executor_for(executor)
     try:

@@ -233,7 +233,7 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
         raise SolverFailure(f"bath temperature ratio T_B/E_tr must be finite and >= 0, got {temperature_ratio!r}")
     if solver == "delay" and math.isinf(kappa):
         from ..bath.model import ThermalBath
-        from ..delay.stochastic_hardcore import hard_core_noise
+        from ..solvers import get_solver
 
         lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (MODEL.md section 2)
         vibrations = ThermalBath(float(temperature_ratio), bath_modes).draw(lengths, seed)
@@ -243,9 +243,7 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
                 f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
             )
         resolution = _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
-        # the nominal contact time only shifts the recursion; epsilon = w(inf) - 1
-        _t, w = hard_core_noise(gamma, vibrations, 0.0, resolution)
-        return float(w[-1] - 1.0)
+        return get_solver("delay").hard_core_thermal_restitution(gamma, vibrations, resolution)
     from ..api import collide
 
     return float(collide(gamma, kappa, solver, bath_temperature=float(temperature_ratio), bath_modes=bath_modes,

@@ -27,10 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..delay.hardcore import hard_core_history
-from ..delay.parameters import echoes_from_ratios
-from ..delay.solver import solve_delay_equation
 from ..errors import InvalidParameterError
+from ..progress import Progress
+from ..solvers import get_solver
 
 __all__ = ["MAX_POINTS", "MaterialMap", "material_map", "special_line_restitution"]
 
@@ -50,14 +49,11 @@ def special_line_restitution(impedance_ratio, time_ratio):
 
 
 def _hard_point(point):
-    delays, weights = echoes_from_ratios(*point)
-    return hard_core_history(delays, weights)[1][-1] - 1.0
+    return get_solver("delay").restitution_of_ratios(point[0], point[1], math.inf)
 
 
 def _soft_point(point, kappa, rtol):
-    impedance_ratio, time_ratio = point
-    w = solve_delay_equation(time_ratio, kappa, rtol=rtol, impedance_ratio=impedance_ratio)[1]
-    return w[-1] / kappa - 1.0
+    return get_solver("delay").restitution_of_ratios(point[0], point[1], kappa, rtol)
 
 
 @dataclass
@@ -156,9 +152,9 @@ def _ratios(name, values):
         raise InvalidParameterError(f"{name} must be a non-empty 1-D sequence")
     for value in values:  # refuses values outside [1e-6, 1e6], naming the ratio
         if name == "impedance_ratios":
-            echoes_from_ratios(value, 1.0)
+            get_solver("delay").check_ratios(value, 1.0)
         else:
-            echoes_from_ratios(1.0, value)
+            get_solver("delay").check_ratios(1.0, value)
     return values
 
 
@@ -215,11 +211,11 @@ def material_map(impedance_ratios, time_ratios, kappa: float = math.inf, *, rtol
     started = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
         results = map(one, points) if workers == 1 else pool.map(one, points)
-        if progress:
-            from tqdm import tqdm
-
-            results = tqdm(results, total=size, desc=f"material map (kappa = {kappa:g})", file=sys.stderr)
-        values = np.fromiter(results, dtype=float, count=size)
+        values = np.empty(size)
+        with Progress(size, f"material map (kappa = {kappa:g})", unit="point", enabled=progress) as bar:
+            for k, value in enumerate(results):
+                values[k] = value
+                bar.advance()
     seconds = time.perf_counter() - started
     return MaterialMap(impedance_ratios, time_ratios, kappa, values.reshape(impedance_ratios.size, time_ratios.size),
                        None if hard else rtol, seconds)
