@@ -20,6 +20,10 @@ def add_parser(subparsers):
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="FILE", help="draw W(tau) or v_rel(tau) with the asymptotic curve (PNG/PDF/SVG)")
     p.add_argument("--save", metavar="FILE", help="save scalars and histories to an .npz file")
+    p.add_argument("--tolerance", type=float, help="fail (exit 2, with advice) if the error estimate exceeds this")
+    p.add_argument("--max-work", type=float, help="limit on the estimated work in updates (default 2e11)")
+    p.add_argument("--max-memory", type=float, help="limit on the estimated memory in bytes "
+                   "(default: half the available memory)")
     delay = p.add_argument_group("delay solver")
     delay.add_argument("--rtol", type=float, help="target accuracy of epsilon (default 1e-11)")
     fem = p.add_argument_group("finite-element solver")
@@ -70,7 +74,8 @@ def run(args) -> int:
     from ..api import collide
 
     contact = "hard" if math.isinf(args.kappa) else args.contact
-    result = collide(args.gamma, args.kappa, solver=args.solver, contact=contact, **_options(args))
+    result = collide(args.gamma, args.kappa, solver=args.solver, contact=contact, tolerance=args.tolerance,
+                     max_work=args.max_work, max_memory=args.max_memory, **_options(args))
     if args.fields:
         from ..io.fields import write_fields
 
