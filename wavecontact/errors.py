@@ -11,8 +11,8 @@ import math
 __all__ = [
     "AccuracyError",
     "CheckpointError",
-    "LimitError",
     "InvalidParameterError",
+    "LimitError",
     "SolverFailure",
     "UnsupportedSceneError",
     "WavecontactError",

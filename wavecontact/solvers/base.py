@@ -113,6 +113,8 @@ def _validate(solver: str, name: str, spec: dict, value):
             raise InvalidParameterError(f"{solver} option {name} must be True or False, got {value!r}")
         value = bool(value)
     elif kind == "choice":
+        if isinstance(value, (float, np.floating)) and float(value).is_integer() and int(value) in spec["choices"]:
+            value = int(value)  # order=1.0 means order=1
         if not isinstance(value, (str, int)) or isinstance(value, bool) or value not in spec["choices"]:
             raise InvalidParameterError(f"{solver} option {name} must be {_range_text(spec)}, got {value!r}")
     elif kind in ("int", "float"):
@@ -303,8 +305,9 @@ class SolverBase:
         """The cost of ``solve(scene, options)`` estimated before any work (None: not estimated)."""
         return None
 
-    def coarser_options(self, options):
+    def coarser_options(self, options) -> SolverOptions | None:
         """Options at half the resolution, for the Richardson error estimate (None: no estimate)."""
+        del options
         return None
 
     def estimate_order(self, scene: Scene, options) -> float | None:
@@ -328,8 +331,8 @@ class SolverBase:
         fine = float(fields["restitution"])
         level = getattr(coarse_options, self.resolution)
         return (richardson_estimate(fine, coarse, order, safety=self.error_safety),
-                f"Richardson: {self.resolution}={level} gave {coarse:.12g}; order {order:.3g}, "
-                f"safety {self.error_safety:g}")
+                (f"Richardson: {self.resolution}={level} gave {coarse:.12g}; order {order:.3g}, "
+                f"safety {self.error_safety:g}"))
 
     def _advice(self, options, estimate: float, tolerance: float) -> str:
         """Which resolution should bring the error estimate below ``tolerance``."""
