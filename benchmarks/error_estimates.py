@@ -4,6 +4,9 @@ One command::
 
     python benchmarks/error_estimates.py [--samples 200] [--seed 2026] [--solver fem modal]
 
+(``--part K/N --verbose > part_K.txt`` in N processes, then ``--summarize part_*.txt``, gives
+the same table.)
+
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
 log-uniform in [10, 2000], the four discretizations in turn; modal: modes
@@ -29,6 +32,7 @@ machine the numbers in docs/error_estimates.md came from was shared.
 from __future__ import annotations
 
 import argparse
+import ast
 import math
 import time
 
@@ -95,18 +99,40 @@ def main(argv=None) -> int:
     parser.add_argument("--samples", type=int, default=200, help="collisions per solver (default 200)")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--solver", nargs="+", choices=("fem", "modal"), default=["fem", "modal"])
-    parser.add_argument("--verbose", action="store_true", help="print every sample")
+    parser.add_argument("--verbose", action="store_true", help="print every sample (one dict per line)")
+    parser.add_argument("--part", default="1/1", metavar="K/N",
+                        help="run only the K-th of N slices of the samples (same streams; to use N processes)")
+    parser.add_argument("--summarize", nargs="+", metavar="FILE",
+                        help="print the table from the --verbose output of earlier runs instead of running")
     args = parser.parse_args(argv)
-    print(f"{'solver':<22}{'solved':>7}{'coverage':>10}{'within 10x':>12}{'(n)':>6}{'median':>9}{'p95':>9}"
-          f"{'refused':>9}{'failed':>8}")
+    if args.summarize:
+        rows = []
+        for name in args.summarize:
+            with open(name, encoding="utf-8") as handle:
+                rows += [ast.literal_eval(line.replace("inf", "1e999")) for line in handle if line.startswith("{")]
+        _table({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver})
+        return 0
+    part, parts = (int(x) for x in args.part.split("/"))
+    tables = {}
     for solver in args.solver:
         streams = [np.random.default_rng(s) for s in np.random.SeedSequence(args.seed).spawn(args.samples)]
         rows = []
         for index, stream in enumerate(streams):
-            row = run_sample(solver, draw(solver, index, stream))
+            if index % parts != part - 1:
+                continue
+            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream))}
             rows.append(row)
             if args.verbose:
                 print(row, flush=True)
+        tables[solver] = rows
+    _table(tables)
+    return 0
+
+
+def _table(tables: dict) -> None:
+    print(f"{'solver':<22}{'solved':>7}{'coverage':>10}{'within 10x':>12}{'(n)':>6}{'median':>9}{'p95':>9}"
+          f"{'refused':>9}{'failed':>8}")
+    for solver, rows in tables.items():
         groups = {solver: rows}
         if solver == "fem":
             for order, mass in DISCRETIZATIONS:

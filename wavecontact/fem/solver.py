@@ -71,8 +71,11 @@ class FemOptions(SolverOptions):
 # fit with these.
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 2, (2, "lumped"): 2, (2, "consistent"): 2}
 # Order assumed by the error estimate where the facing elements do not resolve the contact
-# (alpha V h / c > 1, hard and penalty contact): the front spreads like h^(2/3) (docs/fem.md)
+# (alpha V h / c > RESOLVED_BELOW, hard and penalty contact): the front spreads like h^(2/3)
+# (docs/fem.md); the threshold is the measured best trade-off of coverage and sharpness
+# (docs/error_estimates.md)
 UNRESOLVED_ORDER = 2.0 / 3.0
+RESOLVED_BELOW = 3.0
 # Stable step in units of the element travel time h/c (MODEL.md 7), for the cost estimate
 _STABLE_COURANT = {(1, "lumped"): 1.0, (1, "consistent"): 0.577, (2, "lumped"): 0.408, (2, "consistent"): 0.258}
 # Doubles held per node (state, masses, matrices, kernel buffers) and per step (histories)
@@ -102,12 +105,12 @@ class FemSolver(SolverBase):
         return options.replace(elements=options.elements // 2, record_fields=False)
 
     def estimate_order(self, scene: Scene, options: FemOptions) -> float:
-        """:data:`EXPECTED_ORDER` where the end elements resolve the contact, else :data:`UNRESOLVED_ORDER`."""
+        """:data:`EXPECTED_ORDER` where ``alpha V h / c <= RESOLVED_BELOW``, else :data:`UNRESOLVED_ORDER`."""
         contact = scene.contact
         if isinstance(contact, Exponential) and len(scene.rods) == 2:
             shorter = min(scene.rods, key=lambda rod: rod.length)
             travel = shorter.length / options.elements / shorter.wave_speed
-            if contact.alpha * abs(scene.velocities[0] - scene.velocities[1]) * travel <= 1.0:
+            if contact.alpha * abs(scene.velocities[0] - scene.velocities[1]) * travel <= RESOLVED_BELOW:
                 return self.expected_order(options)
         return UNRESOLVED_ORDER
 

@@ -60,8 +60,11 @@ class ModalOptions(SolverOptions):
                                           "relative to Z V / 2", low=1e-12, high=1.0)
     history: bool = option(True, "record the relative velocity and contact force at every step", kind="bool")
 
-# order assumed by the error estimate where the modes do not resolve the contact time
+# order assumed by the error estimate where the modes do not resolve the contact time ...
 UNRESOLVED_ORDER = 2.0 / 3.0
+# ... which, with the static correction, is where alpha V l_short / (c N) exceeds this (measured:
+# the best coverage/sharpness trade-off on a sample of 160 collisions, docs/error_estimates.md)
+RESOLVED_BELOW = 30.0
 # largest change of alpha_eff * gap per collocation step where the force matters
 _EXPONENT_STEP = 2.0
 # collocation tables of recent systems (filling costs ~0.1 ms per step size; repeated collisions reuse them)
@@ -223,15 +226,16 @@ class ModalSolver(SolverBase):
         return options.replace(modes=options.modes // 2, history=False)
 
     def estimate_order(self, scene: Scene, options: ModalOptions) -> float:
-        """The declared order where the kept modes resolve the contact time (``alpha V l_short / (c N) <= 1``),
-        else :data:`UNRESOLVED_ORDER` (the hard limit's slow convergence)."""
+        """The declared order where the kept modes resolve the contact time
+        (``alpha V l_short / (c N) <= RESOLVED_BELOW``), else :data:`UNRESOLVED_ORDER` (the hard limit's
+        slow convergence)."""
         if not options.static_correction:
             return 1.0
         contact = scene.contact
         if isinstance(contact, Exponential) and len(scene.rods) == 2:
             shorter = min(scene.rods, key=lambda rod: rod.length)
             speed = abs(scene.velocities[0] - scene.velocities[1])
-            if contact.alpha * speed * shorter.length / (shorter.wave_speed * options.modes) <= 1.0:
+            if contact.alpha * speed * shorter.length / (shorter.wave_speed * options.modes) <= RESOLVED_BELOW:
                 return self.expected_order(options)
         return UNRESOLVED_ORDER
 
