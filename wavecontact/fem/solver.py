@@ -90,6 +90,7 @@ class FemSolver(SolverBase):
     Options = FemOptions
     resolution = "elements"
     refines = 1
+    error_safety = 4.0
 
     def expected_order(self, options: FemOptions) -> float:
         """Order of epsilon in ``h`` where the contact is resolved (:data:`EXPECTED_ORDER`)."""

@@ -61,7 +61,7 @@ class ModalOptions(SolverOptions):
     history: bool = option(True, "record the relative velocity and contact force at every step", kind="bool")
 
 # order assumed by the error estimate where the modes do not resolve the contact time ...
-UNRESOLVED_ORDER = 2.0 / 3.0
+UNRESOLVED_ORDER = 1.0
 # ... which, with the static correction, is where alpha V l_short / (c N) exceeds this (measured:
 # the best coverage/sharpness trade-off on a sample of 160 collisions, docs/error_estimates.md)
 RESOLVED_BELOW = 30.0
@@ -210,7 +210,8 @@ class ModalSolver(SolverBase):
     Options = ModalOptions
     resolution = "modes"
     refines = 1
-    error_safety = 2.0
+    error_safety = 1.5
+    error_levels = 2
 
     def expected_order(self, options: ModalOptions) -> float:
         """Order of epsilon in ``1/N``: 1 for plain truncation, 3 with the static correction (docs/modal.md)."""

@@ -30,6 +30,7 @@ ring scene also offer ``simulate(scene, options)`` (see
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import time
 from collections.abc import Callable, Mapping
@@ -256,11 +257,16 @@ ERROR_SAFETY = 3.0
 ERROR_FLOOR = 1e-13
 
 
-def richardson_estimate(fine: float, coarse: float, order: float, ratio: float = 2.0,
-                        safety: float = ERROR_SAFETY) -> float:
-    """``safety |fine - coarse| / (ratio**order - 1)``: the error of ``fine`` from a run at
-    ``1/ratio`` of its resolution, for an error that falls like ``resolution**-order``."""
-    return max(safety * abs(fine - coarse) / (ratio**order - 1.0), ERROR_FLOOR)
+def richardson_estimate(values, order: float, ratio: float = 2.0, safety: float = ERROR_SAFETY) -> float:
+    """Error of ``values[0]`` from runs at ``1/ratio``, ``1/ratio**2`` ... of its resolution.
+
+    ``safety * D / (ratio**order - 1)`` for an error that falls like
+    ``resolution**-order``, with ``D = |v0 - v1|``, or, given a third run, the larger
+    of that and ``|v1 - v2| / ratio**order`` (the coarser pair's difference carried to
+    the finest level: a guard against two runs that agree by accident).
+    """
+    differences = [abs(a - b) / ratio ** (order * i) for i, (a, b) in enumerate(itertools.pairwise(values))]
+    return max(safety * max(differences) / (ratio**order - 1.0), ERROR_FLOOR)
 
 
 def _tolerance(value):
@@ -290,6 +296,8 @@ class SolverBase:
     refines: int = 1
     #: safety factor of the Richardson error estimate (measured per solver, docs/error_estimates.md)
     error_safety: float = ERROR_SAFETY
+    #: coarser runs of the Richardson estimate (each at half the resolution of the previous one)
+    error_levels: int = 1
 
     def expected_order(self, options) -> float | None:
         return None
@@ -320,19 +328,23 @@ class SolverBase:
         own = float(fields.get("error_estimate", math.nan))
         if not math.isnan(own):
             return own, "the solver's own estimate"
-        coarse_options = self.coarser_options(options)
         order = self.estimate_order(scene, options)
-        if coarse_options is None or order is None:
+        values, levels, coarse_options = [float(fields["restitution"])], [], options
+        for _ in range(self.error_levels):
+            coarse_options = self.coarser_options(coarse_options)
+            if coarse_options is None or order is None:
+                break
+            try:
+                values.append(float(self._collide(scene, coarse_options)["restitution"]))
+            except SolverFailure as failure:
+                if len(values) == 1:
+                    return math.nan, f"none (the run at half the resolution failed: {failure})"
+                break
+            levels.append(f"{self.resolution}={getattr(coarse_options, self.resolution)} gave {values[-1]:.12g}")
+        if len(values) == 1:
             return math.nan, "none (no coarser resolution)"
-        try:
-            coarse = float(self._collide(scene, coarse_options)["restitution"])
-        except SolverFailure as failure:
-            return math.nan, f"none (the run at half the resolution failed: {failure})"
-        fine = float(fields["restitution"])
-        level = getattr(coarse_options, self.resolution)
-        return (richardson_estimate(fine, coarse, order, safety=self.error_safety),
-                (f"Richardson: {self.resolution}={level} gave {coarse:.12g}; order {order:.3g}, "
-                f"safety {self.error_safety:g}"))
+        return (richardson_estimate(values, order, safety=self.error_safety),
+                f"Richardson: {'; '.join(levels)}; order {order:.3g}, safety {self.error_safety:g}")
 
     def _advice(self, options, estimate: float, tolerance: float) -> str:
         """Which resolution should bring the error estimate below ``tolerance``."""
