@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
-import time
 
 import numpy as np
 import pytest
@@ -406,33 +403,6 @@ def test_real_ring_resume_is_bit_for_bit(tmp_path):
     resumed = run_ring(0.6173, 200.0, 8, 40, out_dir=tmp_path / "b", checkpoint_every=15, progress=False)
     assert resumed.resumed_from == 15
     _assert_same_run(straight, resumed)
-
-
-@needs_ring_simulation
-def test_cli_killed_subprocess_resumes_to_the_same_result(tmp_path):
-    """Kill the real CLI after its first checkpoint, rerun it, compare with an uninterrupted run."""
-    base = [sys.executable, "-m", "wavecontact", "ring", "--gamma", "0.6173", "--kappa", "4000",
-            "--modes", "12", "--collisions", "300", "--checkpoint-every", "20", "--no-progress"]
-    straight = subprocess.run([*base, "--out", str(tmp_path / "a")], check=False, capture_output=True,
-                              text=True, timeout=300)
-    assert straight.returncode == 0, straight.stderr
-    killed_dir = tmp_path / "b"
-    proc = subprocess.Popen([*base, "--out", str(killed_dir)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 240
-    checkpoint = killed_dir / ring_study.CHECKPOINT_NAME
-    while not checkpoint.exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.002)
-    proc.kill()
-    proc.wait()
-    if (killed_dir / "ring.npz").exists():
-        pytest.skip("the run finished before it could be killed")
-    assert checkpoint.exists()
-    again = subprocess.run([*base, "--out", str(killed_dir)], check=False, capture_output=True, text=True,
-                           timeout=300)
-    assert again.returncode == 0, again.stderr
-    assert "resuming from checkpoint" in again.stderr
-    _assert_same_run(RingRun.load_npz(tmp_path / "a" / "ring.npz"), RingRun.load_npz(killed_dir / "ring.npz"))
 
 
 def _realisations(modes: int, collisions: int, count: int):

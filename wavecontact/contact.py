@@ -2,8 +2,11 @@
 
 A contact law maps the end-to-end gap ``r`` (length; negative means overlap)
 to a repulsive force (force units) that pushes the two ends apart.  Laws are
-plain immutable values: solvers read their parameters and evaluate them in
-their own kernels.
+plain immutable values.  Compiled kernels see a law as the four numbers of
+:meth:`ContactLaw.kernel_parameters` (one code table, shared by the FE and
+modal kernels); :mod:`wavecontact.contact_kernels` evaluates them, and its
+tests hold it to the Python :meth:`~ContactLaw.force` and
+:meth:`~ContactLaw.potential` methods, the reference.
 """
 
 from __future__ import annotations
@@ -15,7 +18,21 @@ import numpy as np
 
 from .errors import InvalidParameterError, require_positive
 
-__all__ = ["ContactLaw", "Exponential", "Hard", "Penalty", "contact_from_name"]
+__all__ = [
+    "LAW_EXPONENTIAL",
+    "LAW_HARD",
+    "LAW_PENALTY",
+    "ContactLaw",
+    "Exponential",
+    "Hard",
+    "Penalty",
+    "contact_from_name",
+]
+
+#: Kernel codes of the contact laws, shared by every compiled kernel.
+LAW_EXPONENTIAL = 0
+LAW_PENALTY = 1  # linear spring on overlap; a hard law is its limit of infinite stiffness
+LAW_HARD = 2
 
 
 class ContactLaw:
@@ -34,6 +51,15 @@ class ContactLaw:
     @property
     def range(self) -> float:
         """Distance over which the force decays (length units); 0 for hard contact."""
+        raise NotImplementedError
+
+    def kernel_parameters(self) -> tuple:
+        """``(code, alpha, strength, stiffness)``: the law as compiled kernels see it.
+
+        ``code`` is one of :data:`LAW_EXPONENTIAL`, :data:`LAW_PENALTY`,
+        :data:`LAW_HARD`; unused numbers are 0 (``stiffness`` of a hard law is
+        ``inf``, of a penalty law left to the solver ``nan``).
+        """
         raise NotImplementedError
 
 
@@ -67,6 +93,9 @@ class Exponential(ContactLaw):
     @property
     def range(self) -> float:
         return 1.0 / self.alpha
+
+    def kernel_parameters(self) -> tuple:
+        return LAW_EXPONENTIAL, float(self.alpha), float(self.strength), 0.0
 
 
 @dataclass(frozen=True)
@@ -102,6 +131,9 @@ class Penalty(ContactLaw):
     def range(self) -> float:
         return 0.0
 
+    def kernel_parameters(self) -> tuple:
+        return LAW_PENALTY, 0.0, 0.0, math.nan if self.stiffness is None else float(self.stiffness)
+
 
 @dataclass(frozen=True)
 class Hard(ContactLaw):
@@ -121,6 +153,9 @@ class Hard(ContactLaw):
     @property
     def range(self) -> float:
         return 0.0
+
+    def kernel_parameters(self) -> tuple:
+        return LAW_HARD, 0.0, 0.0, math.inf
 
 
 def contact_from_name(name: str, alpha: float, strength: float = 1.0) -> ContactLaw:

@@ -13,7 +13,7 @@ import sys
 
 from ..errors import WavecontactError
 
-COMMANDS = ("collide", "converge", "ring", "equipartition", "compare")
+COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas")
 
 
 class _Parser(argparse.ArgumentParser):

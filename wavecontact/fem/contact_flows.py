@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from .._jit import kernel
+from ..contact import LAW_EXPONENTIAL, LAW_HARD, LAW_PENALTY
 
 __all__ = [
     "LAW_EXPONENTIAL",
@@ -39,10 +40,8 @@ __all__ = [
     "penalty_flow",
 ]
 
-LAW_EXPONENTIAL = 0
-LAW_PENALTY = 1
-LAW_HARD_ELASTIC = 2
-LAW_HARD_PLASTIC = 3
+LAW_HARD_ELASTIC = LAW_HARD  # the splitting scheme's end-node impact rules for a hard law
+LAW_HARD_PLASTIC = LAW_HARD + 1
 
 _LN2 = math.log(2.0)
 

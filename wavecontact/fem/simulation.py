@@ -76,7 +76,7 @@ class FemSetup:
 def _law_parameters(scene: Scene, rods, hard_scheme: str):
     law = scene.contact
     if isinstance(law, Exponential):
-        return LAW_EXPONENTIAL, law.alpha, law.strength, 0.0
+        return law.kernel_parameters()
     if isinstance(law, Penalty):
         if law.stiffness is not None:
             k = law.stiffness

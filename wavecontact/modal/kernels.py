@@ -26,11 +26,11 @@ import math
 import numpy as np
 
 from .._jit import kernel
+from ..contact import LAW_EXPONENTIAL, LAW_PENALTY
 
 TOE_MARGIN = 5.0
 
-LAW_EXPONENTIAL = 0
-LAW_LINEAR = 1
+LAW_LINEAR = LAW_PENALTY  # a spring on overlap; hard contact is its infinite stiffness
 
 STATUS_RUNNING = 0  # max_steps reached: call again
 STATUS_SEPARATED = 1  # the episode's pair separated for good

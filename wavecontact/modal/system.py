@@ -63,10 +63,15 @@ class StepControl:
 
 
 def contact_parameters(law: ContactLaw, force_scale: float, static_correction: bool):
-    """Kernel encoding ``(code, alpha, strength, stiffness, contact_range)`` of a contact law."""
+    """Kernel encoding ``(code, alpha, strength, stiffness, contact_range)`` of a contact law.
+
+    The first four numbers are the law's own :meth:`~wavecontact.contact.ContactLaw.kernel_parameters`
+    (a hard law is a penalty spring of infinite stiffness to these kernels).
+    """
+    code, alpha, strength, stiffness = law.kernel_parameters()
     if isinstance(law, Exponential):
         shift = max(0.0, math.log(law.alpha * law.strength / force_scale))
-        return kernels.LAW_EXPONENTIAL, law.alpha, law.strength, 0.0, (NEGLIGIBLE_EXPONENT + shift) / law.alpha
+        return code, alpha, strength, stiffness, (NEGLIGIBLE_EXPONENT + shift) / law.alpha
     if isinstance(law, Hard):
         if not static_correction:
             raise UnsupportedSceneError(
@@ -74,14 +79,14 @@ def contact_parameters(law: ContactLaw, force_scale: float, static_correction: b
                 "omitted modes' compliance a truncated rod end has a finite mass and a hard impact on it is "
                 "instantaneous and undefined; with it the limit is a contact spring of that compliance"
             )
-        return kernels.LAW_LINEAR, 1.0, 0.0, math.inf, 0.0
+        return kernels.LAW_LINEAR, 1.0, 0.0, stiffness, 0.0
     if isinstance(law, Penalty):
         if law.stiffness is None:
             raise UnsupportedSceneError(
                 "the modal solver needs an explicit penalty stiffness (Penalty(stiffness=k)); "
                 "it has no mesh to choose one from"
             )
-        return kernels.LAW_LINEAR, 1.0, 0.0, float(law.stiffness), 0.0
+        return code, 1.0, 0.0, stiffness, 0.0
     raise UnsupportedSceneError(f"the modal solver does not know the contact law {law!r}")
 
 

@@ -1,0 +1,70 @@
+"""``wavecontact gas``: JSON summary, outputs, resume, collapse message, refusals."""
+
+import json
+
+import numpy as np
+import pytest
+
+from wavecontact.cli import main
+
+
+def _json(capsys, argv):
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_json_summary_and_outputs(tmp_path, capsys):
+    out = tmp_path / "run"
+    summary = _json(capsys, ["gas", "--rods", "200", "--collisions", "4000", "--rule", "vibration",
+                             "--damping", "30", "--seed", "2", "--out", str(out), "--json", "--no-progress"])
+    for key in ("collisions", "simulated_time", "collapsed", "collisions_per_second", "final_energy"):
+        assert key in summary
+    assert summary["collisions"] == 4000 and summary["collapsed"] is False
+    assert {p.name for p in out.iterdir()} >= {"gas.png", "gas_summary.json", "gas_history.npz", "gas_checkpoint.npz"}
+    with np.load(out / "gas_history.npz", allow_pickle=False) as data:
+        assert data["history_kinetic_energy"][-1] == pytest.approx(summary["final_energy"])
+
+
+def test_resume_continues_the_same_run(tmp_path, capsys):
+    out = tmp_path / "run"
+    base = ["gas", "--rods", "100", "--rule", "fixed", "--restitution", "0.97", "--seed", "5", "--json", "--no-progress"]
+    straight = _json(capsys, [*base, "--collisions", "2000"])
+    _json(capsys, [*base, "--collisions", "800", "--out", str(out)])
+    resumed = _json(capsys, [*base, "--collisions", "1200", "--out", str(out), "--resume"])
+    assert resumed["collisions"] == 2000
+    assert resumed["simulated_time"] == straight["simulated_time"]
+    assert resumed["final_energy"] == straight["final_energy"]
+
+
+def test_collapse_stops_with_a_message(capsys):
+    summary = _json(capsys, ["gas", "--rods", "400", "--collisions", "1000000", "--rule", "fixed",
+                             "--restitution", "0.6", "--json", "--no-progress"])
+    assert summary["collapsed"] is True and summary["collisions"] < 1000000
+    assert "inelastic collapse" in capsys.readouterr().err or "inelastic collapse" in summary["message"]
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--rule", "fixed"], "--restitution"),
+        (["--rule", "vibration", "--restitution", "0.5"], "fixed only"),
+        (["--rule", "fixed", "--restitution", "1.5"], r"restitution must lie in \[0, 1\]"),
+        (["--rule", "fixed", "--restitution", "0.5", "--packing", "1"], r"packing must lie in \(0, 1\)"),
+        (["--rule", "vibration", "--lengths", "0.1", "1"], "table covers gamma"),
+    ],
+)
+def test_bad_options_end_with_one_line(argv, message, capsys):
+    with pytest.raises(SystemExit) if "must lie" in message else _nothing():
+        status = main(["gas", "--rods", "10", "--collisions", "10", *argv])
+        assert status == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert __import__("re").search(message, err)
+
+
+class _nothing:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False

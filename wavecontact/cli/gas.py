@@ -1,0 +1,158 @@
+"""``wavecontact gas``: an event-driven gas of rods with a fixed or a vibration-drawn restitution."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from .common import positive_int
+
+CHECKPOINT_NAME = "gas_checkpoint.npz"
+FIGURE_NAME = "gas.png"
+
+
+def _fraction(name, low_open=True):
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {text!r}") from None
+        ok = (0.0 < value < 1.0) if low_open else (0.0 <= value <= 1.0)
+        if not ok:
+            raise argparse.ArgumentTypeError(f"{name} must lie in {'(0, 1)' if low_open else '[0, 1]'}, got {text!r}")
+        return value
+
+    return parse
+
+
+def _positive(name):
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a positive number, got {text!r}") from None
+        if not (math.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number > 0, got {text!r}")
+        return value
+
+    return parse
+
+
+def _seed(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0, got {text!r}")
+    return value
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "gas",
+        help="event-driven gas of rods: energy decay, clusters, inelastic collapse (paper Sec. VIII)",
+        description="N rods on a ring (or between walls) with random lengths and Maxwellian velocities. "
+        "Each collision takes eps from a fixed value (--rule fixed) or draws eps^2 and the split of the lost "
+        "energy between the rods' vibration baths from a restitution table (--rule vibration). Stops after "
+        "COLLISIONS collisions, or earlier with a message on an inelastic collapse.",
+    )
+    p.add_argument("--rods", type=positive_int, required=True, help="number of rods N >= 2")
+    p.add_argument("--collisions", type=positive_int, required=True, help="rod-rod collisions to simulate")
+    p.add_argument("--rule", choices=("vibration", "fixed"), required=True, help="collision rule")
+    p.add_argument("--restitution", type=_fraction("restitution", low_open=False),
+                   help="eps of the fixed rule, in [0, 1] (required with --rule fixed)")
+    p.add_argument("--table", metavar="FILE",
+                   help="restitution table (.npz/.json) of the vibration rule (default: the analytic "
+                   "thermal-kick stand-in, wavecontact.gas.thermal_kick_table)")
+    p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
+                   help="relaxation time tau_diss of the baths (default: no dissipation)")
+    p.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
+    p.add_argument("--lengths", type=_positive("lengths"), nargs=2, metavar=("SHORTEST", "LONGEST"),
+                   default=(0.6, 1.0), help="rod lengths uniform in [SHORTEST, LONGEST] (default 0.6 1.0)")
+    p.add_argument("--packing", type=_fraction("packing"), default=0.2,
+                   help="total rod length over system length, in (0, 1) (default 0.2)")
+    p.add_argument("--walls", action="store_true", help="a box with elastic walls instead of a ring")
+    p.add_argument("--out", metavar="DIR", help="write summary, histories, figure and a checkpoint into DIR")
+    p.add_argument("--resume", action="store_true",
+                   help=f"continue the run checkpointed in DIR/{CHECKPOINT_NAME} by COLLISIONS more collisions")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    p.set_defaults(run=run)
+    return p
+
+
+def _rule(args):
+    from ..errors import InvalidParameterError
+    from ..gas import FixedRestitution, VibrationTable, thermal_kick_table
+
+    if args.rule == "fixed":
+        if args.restitution is None:
+            raise InvalidParameterError("--rule fixed needs --restitution E with E in [0, 1]")
+        return FixedRestitution(args.restitution)
+    if args.restitution is not None:
+        raise InvalidParameterError("--restitution applies to --rule fixed only (the vibration rule draws eps)")
+    if args.table:
+        from ..restitution_table import load
+
+        return VibrationTable(load(args.table))
+    return VibrationTable(thermal_kick_table())
+
+
+def run(args) -> int:
+    from ..errors import InvalidParameterError
+    from ..gas import GasSimulation, UniformLengths, random_gas
+
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise InvalidParameterError(f"--out {args.out!r} exists and is not a directory")
+    rule = _rule(args)
+    if args.resume:
+        if out is None or not (out / CHECKPOINT_NAME).is_file():
+            raise InvalidParameterError(f"--resume needs --out DIR holding {CHECKPOINT_NAME}")
+        sim = GasSimulation.resume(out / CHECKPOINT_NAME)
+        if sim.rule.describe() != rule.describe():
+            raise InvalidParameterError(f"--resume: the checkpoint was written with {sim.rule.describe()}, "
+                                        f"not {rule.describe()}")
+    else:
+        shortest, longest = args.lengths
+        if longest < shortest:
+            raise InvalidParameterError(f"--lengths: LONGEST ({longest:g}) must be >= SHORTEST ({shortest:g})")
+        import numpy as np
+
+        initial, dynamics = np.random.SeedSequence(args.seed).spawn(2)
+        gas = random_gas(args.rods, seed=initial, lengths=UniformLengths(shortest, longest),
+                         packing_fraction=args.packing, boundary="walls" if args.walls else "ring")
+        sim = GasSimulation(gas, rule, damping=args.damping, seed=dynamics,
+                            record_every=max(1, args.collisions // 400), frame_every=1, max_frames=400)
+    from .._jit import prepared_kernel_count
+
+    prepared = prepared_kernel_count()
+    result = sim.run(args.collisions, progress=args.progress and sys.stderr.isatty())
+    summary = {"rods": sim.gas.rods, **result.summary(), "damping": args.damping, "seed": args.seed,
+               # True when this call paid numba's one-time compilation or cache load (slower rate)
+               "includes_kernel_preparation": prepared_kernel_count() > prepared}
+    if out is not None:
+        from ..plotting.gas import plot_gas
+
+        out.mkdir(parents=True, exist_ok=True)
+        result.save(out)
+        if sim.status in ("completed", "time_limit"):
+            sim.save_checkpoint(out / CHECKPOINT_NAME)
+        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length)
+    if result.status not in ("completed",):
+        print(f"wavecontact gas: {result.message}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"{summary['rods']} rods, rule {args.rule}: {result.message}")
+        print(f"  collisions            {result.collisions}")
+        print(f"  simulated time        {result.simulated_time:.6g}")
+        note = ", includes compiling the kernels" if summary["includes_kernel_preparation"] else ""
+        print(f"  collisions per second {result.collisions_per_second:.4g} (wall time {result.wall_time_s:.3g} s{note})")
+        print(f"  final kinetic energy  {result.final_energy:.6g}")
+        print(f"  collapsed             {result.collapsed}")
+    return 0

@@ -1,0 +1,522 @@
+"""Running a rod gas: the event loop in chunks, histories, collapse detection, checkpoints.
+
+>>> from wavecontact.gas import FixedRestitution, GasSimulation, random_gas
+>>> sim = GasSimulation(random_gas(50, seed=1), FixedRestitution(0.95), seed=2, record_every=100)
+>>> result = sim.run(1000)
+>>> result.collisions, result.collapsed
+(1000, False)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InvalidParameterError, require_positive
+from ..io.checkpoint import read_checkpoint, write_checkpoint
+from ..restitution_table import RestitutionTable
+from . import kernels
+from .model import RodGas
+from .rules import FixedRestitution, VibrationSolve, VibrationTable, rule_from_description
+
+__all__ = ["MAX_COLLISIONS", "GasResult", "GasSimulation"]
+
+MAX_COLLISIONS = 10**11
+MAX_RECORDS = 10**7  # history rows one run may add (6 floats each)
+CHECKPOINT_SCHEMA = "wavecontact.gas"
+CHECKPOINT_VERSION = 1
+_HISTORY = ("time", "collisions", "kinetic_energy", "bath_energy", "lost_energy", "dissipated_energy")
+_STATUS = {
+    kernels.STATUS_DONE: "completed",
+    kernels.STATUS_TIME_LIMIT: "time_limit",
+    kernels.STATUS_COLLAPSE: "collapsed",
+    kernels.STATUS_NO_EVENTS: "no_events",
+    kernels.STATUS_COOLED: "cooled",
+}
+
+
+@dataclass
+class GasResult:
+    """What a run of :meth:`GasSimulation.run` produced (energies in mass x velocity^2).
+
+    Attributes
+    ----------
+    status : str
+        ``completed``, ``collapsed``, ``cooled`` (below ``energy_floor``), ``time_limit`` or ``no_events``.
+    message : str
+        One line for a human (says why a run stopped early).
+    collisions, wall_hits : int
+        Rod-rod collisions and wall reflections since the simulation began.
+    simulated_time : float
+        Time of the last event.
+    wall_time_s : float
+        Wall-clock time of this call.
+    collisions_per_second : float
+        Collisions of this call per wall-clock second.
+    history : dict of ndarray
+        At every ``record_every`` collisions: ``time``, ``collisions``,
+        ``kinetic_energy`` (in the centre-of-mass frame on a ring),
+        ``bath_energy``, ``lost_energy`` (fixed rule), ``dissipated_energy``
+        (bath damping).
+    frame_times, frames : ndarray
+        Space-time picture: rod centres (centre-of-mass frame, wrapped into
+        the ring) at ``frame_times``; shape (F, rods shown).
+    velocities, bath_temperatures : ndarray
+        The final state.
+    ratio_clamped, bath_limited : int
+        Table draws whose temperature ratio lay beyond the table (held at its
+        edge), and draws capped so that no bath went below zero.
+    energy_drift : float
+        Relative change of kinetic + bath + lost + dissipated energy since the start.
+    """
+
+    status: str
+    message: str
+    collisions: int
+    wall_hits: int
+    simulated_time: float
+    wall_time_s: float
+    collisions_per_second: float
+    history: dict
+    frame_times: np.ndarray
+    frames: np.ndarray
+    velocities: np.ndarray
+    bath_temperatures: np.ndarray
+    ratio_clamped: int
+    bath_limited: int
+    energy_drift: float
+    rule: dict = field(default_factory=dict)
+
+    @property
+    def collapsed(self) -> bool:
+        return self.status == "collapsed"
+
+    @property
+    def final_energy(self) -> float:
+        """Translational (centre-of-mass frame) kinetic energy at the end."""
+        return float(self.history["kinetic_energy"][-1]) if self.history["kinetic_energy"].size else math.nan
+
+    def collision_rate(self):
+        """``(time, collisions per unit time)`` between successive records."""
+        t, c = self.history["time"], self.history["collisions"]
+        dt = np.diff(t)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rate = np.where(dt > 0, np.diff(c) / np.where(dt > 0, dt, 1.0), np.inf)
+        return 0.5 * (t[1:] + t[:-1]), rate
+
+    def summary(self) -> dict:
+        """JSON-ready numbers of the run."""
+        return {
+            "status": self.status,
+            "message": self.message,
+            "collapsed": self.collapsed,
+            "collisions": self.collisions,
+            "wall_hits": self.wall_hits,
+            "simulated_time": self.simulated_time,
+            "wall_time_s": self.wall_time_s,
+            "collisions_per_second": self.collisions_per_second,
+            "final_energy": self.final_energy,
+            "final_bath_energy": float(self.history["bath_energy"][-1]) if self.history["bath_energy"].size else 0.0,
+            "energy_drift": self.energy_drift,
+            "ratio_clamped": self.ratio_clamped,
+            "bath_limited": self.bath_limited,
+            "rule": self.rule,
+        }
+
+    def save(self, directory):
+        """Write ``gas_history.npz`` (histories, frames, final state) and ``gas_summary.json`` into ``directory``."""
+        from pathlib import Path
+
+        from ..io.files import atomic_write
+
+        directory = Path(directory)
+        arrays = {f"history_{k}": v for k, v in self.history.items()}
+        arrays.update(frame_times=self.frame_times, frames=self.frames, velocities=self.velocities,
+                      bath_temperatures=self.bath_temperatures)
+        atomic_write(directory / "gas_history.npz", lambda h: np.savez(h, **arrays))
+        text = json.dumps(self.summary(), indent=2) + "\n"
+        atomic_write(directory / "gas_summary.json", lambda h: h.write(text), binary=False)
+        return directory
+
+
+def _count(name, value, low, high):
+    if isinstance(value, bool) or int(value) != value or not low <= value <= high:
+        raise InvalidParameterError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    return int(value)
+
+
+class GasSimulation:
+    """An event-driven rod gas with a collision rule; run it in pieces, checkpoint, resume.
+
+    Parameters
+    ----------
+    gas : RodGas
+        Initial state.
+    rule : FixedRestitution, VibrationTable or VibrationSolve
+        The collision rule.
+    damping : float, optional
+        Relaxation time ``tau_diss`` of every bath (time unit of the gas; the
+        baths cool as ``exp(-t / tau_diss)`` between collisions).  None: no
+        dissipation.
+    seed : int or numpy.random.SeedSequence
+        Root of the collision draws: ``SeedSequence(seed).spawn(2)`` gives the stream of the
+        table's probability levels and the parent of the per-collision seeds of :class:`VibrationSolve`.
+    record_every : int
+        Collisions between records of the energies (and chunk size of the kernel calls).
+    frame_every : int, optional
+        Records between frames of the space-time picture (default: every record).
+    max_frames : int
+        Frames kept (later ones are dropped).
+    frame_rods : int
+        At most this many rods (evenly chosen) in each frame.
+    collapse_window, collapse_factor : int, float
+        (``collapse_window`` a power of two.)  Inelastic collapse is declared when the last ``collapse_window``
+        collisions took less than ``collapse_factor`` times as long as the
+        ``collapse_window`` collisions before them: collisions accelerating
+        geometrically, as in a cluster that would collide infinitely often in
+        a finite time.  (A homogeneously cooling gas slows down instead, and
+        in a large gas the 16 collisions of a half-window are too many for
+        the shot noise of a steady rate to shrink a thousandfold.)
+    energy_floor : float
+        Stop (status ``cooled``) once the kinetic energy in the centre-of-mass
+        frame falls below this fraction of its initial value: velocities then
+        differ by less than their rounding (0: never).
+    """
+
+    def __init__(self, gas: RodGas, rule, *, damping=None, seed=0, record_every=1000, frame_every=1,
+                 max_frames=400, frame_rods=2000, collapse_window=16, collapse_factor=1e-3,
+                 energy_floor=1e-20):
+        if not isinstance(gas, RodGas):
+            raise InvalidParameterError("gas must be a RodGas (see wavecontact.gas.random_gas)")
+        if not isinstance(rule, (FixedRestitution, VibrationTable, VibrationSolve)):
+            raise InvalidParameterError("rule must be FixedRestitution, VibrationTable or VibrationSolve")
+        self.gas = gas
+        self.rule = rule
+        self.damping = None if damping is None else require_positive("damping time tau_diss", damping, allow_inf=True)
+        self.record_every = _count("record_every", record_every, 1, MAX_COLLISIONS)
+        self.frame_every = _count("frame_every", frame_every, 1, MAX_COLLISIONS)
+        self.max_frames = _count("max_frames", max_frames, 0, 100_000)
+        self.frame_rods = _count("frame_rods", frame_rods, 1, 100_000)
+        window = _count("collapse_window", collapse_window, 2, 2**20)
+        if window & (window - 1):
+            raise InvalidParameterError(f"collapse_window must be a power of two, got {window}")
+        self.collapse_factor = require_positive("collapse_factor", collapse_factor)
+        self.energy_floor = float(energy_floor)
+        if not 0.0 <= self.energy_floor < 1.0:
+            raise InvalidParameterError(f"energy_floor must lie in [0, 1), got {energy_floor!r}")
+        sequence = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+        self.seed_entropy = sequence.entropy
+        levels, self._solve_seeds = sequence.spawn(2)  # table levels; parent of the per-collision seeds
+        self._rng = np.random.Generator(np.random.PCG64(levels))
+        n = gas.rods
+        ring = gas.boundary == "ring"
+        self.ring = ring
+        lengths = gas.lengths
+        # state
+        self.x = gas.positions.copy()
+        self.v = gas.velocities.copy()
+        self.local_time = np.zeros(n)
+        self.temperature = gas.bath_temperatures.copy()
+        self.mass = lengths.copy()
+        # per event
+        if ring:
+            left, right = np.arange(n), np.roll(np.arange(n), -1)
+            self.reach = 0.5 * (lengths[left] + lengths[right])
+        else:
+            left, right = np.arange(-1, n), np.arange(0, n + 1)
+            self.reach = np.concatenate([[0.5 * lengths[0]], 0.5 * (lengths[1:] + lengths[:-1]), [0.5 * lengths[-1]]])
+        inner = (left >= 0) & (right < n)
+        l_left = np.where(inner, lengths[np.clip(left, 0, n - 1)], 1.0)
+        l_right = np.where(inner, lengths[np.clip(right, 0, n - 1)], 1.0)
+        self.left_is_short = l_left <= l_right
+        self.pair_gamma = np.minimum(l_left, l_right) / np.maximum(l_left, l_right)
+        grid = rule.gamma_grid()
+        if rule.code == kernels.RULE_TABLE:
+            low, high = self.pair_gamma[inner].min(), self.pair_gamma[inner].max()
+            if low < grid[0] or high > grid[-1]:
+                raise InvalidParameterError(
+                    f"the gas has length ratios {low:.4g}..{high:.4g} but the table covers gamma in "
+                    f"[{grid[0]:g}, {grid[-1]:g}]: choose lengths inside it or a wider table")
+        if grid.size == 1:
+            self.gamma_index, self.gamma_weight = np.zeros(left.size, np.int64), np.zeros(left.size)
+        else:
+            g = np.clip(self.pair_gamma, grid[0], grid[-1])
+            self.gamma_index = np.clip(np.searchsorted(grid, g, side="right") - 1, 0, grid.size - 2).astype(np.int64)
+            self.gamma_weight = (g - grid[self.gamma_index]) / (grid[self.gamma_index + 1] - grid[self.gamma_index])
+        key = np.array([kernels.event_time(k, 0.0, self.x, self.v, self.local_time, self.reach, ring,
+                                           gas.system_length) for k in range(left.size)])
+        self.heap = np.empty(left.size, np.int64)
+        self.heap_time = np.empty(left.size)
+        self.slot = np.empty(left.size, np.int64)
+        kernels.build_heap(key, self.heap, self.heap_time, self.slot)
+        self.window = np.zeros(2 * window)
+        momentum = float(np.sum(self.mass * self.v))
+        total_mass = float(self.mass.sum())
+        self.scalars = np.zeros(8)
+        self.scalars[kernels.KINETIC] = gas.kinetic_energy()
+        self.scalars[kernels.KINETIC_REFERENCE] = gas.kinetic_energy()
+        self.scalars[kernels.MOMENTUM_ENERGY] = momentum**2 / (2 * total_mass) if ring else 0.0
+        self.total_mass = total_mass
+        self.counters = np.zeros(4, np.int64)
+        self.pending = np.zeros(3)
+        self.initial_energy = self._energies()[4]
+        self.scalars[kernels.ENERGY_FLOOR] = self.energy_floor * self._energies()[0]
+        self.history = {name: [] for name in _HISTORY}
+        self.frame_times, self.frames = [], []
+        self.records = 0
+        self.status = "completed"
+        self.drawn = 0  # collision seeds spawned (external rule)
+
+    # ---------------------------------------------------------------- helpers
+    @property
+    def time(self) -> float:
+        return float(self.scalars[kernels.T_NOW])
+
+    @property
+    def collisions(self) -> int:
+        return int(self.counters[kernels.COLLISIONS])
+
+    def _decay_rate(self):
+        return 0.0 if self.damping is None or math.isinf(self.damping) else 1.0 / self.damping
+
+    def _synced_temperatures(self, now):
+        rate = self._decay_rate()
+        return self.temperature * np.exp(-rate * (now - self.local_time)) if rate > 0 else self.temperature
+
+    def _energies(self):
+        """(kinetic in the COM frame, bath, lost, dissipated, total) at the current time."""
+        now = self.time
+        kinetic = float(0.5 * np.sum(self.mass * self.v**2))
+        if self.ring:
+            kinetic -= float(np.sum(self.mass * self.v)) ** 2 / (2.0 * self.total_mass)
+        temperatures = self._synced_temperatures(now)
+        modes = float(self.rule.bath_modes)
+        bath = modes * float(temperatures.sum()) if self.rule.code != kernels.RULE_FIXED else 0.0
+        dissipated = float(self.scalars[kernels.DISSIPATED])
+        if self.rule.code != kernels.RULE_FIXED:
+            dissipated += modes * float(np.sum(self.temperature - temperatures))
+        lost = float(self.scalars[kernels.LOST])
+        total = float(0.5 * np.sum(self.mass * self.v**2)) + bath + lost + dissipated
+        return kinetic, bath, lost, dissipated, total
+
+    def positions(self):
+        """Rod centres now (centre-of-mass frame, wrapped into [0, L) on a ring)."""
+        now = self.time
+        x = self.x + self.v * (now - self.local_time)
+        if self.ring:
+            drift = float(np.sum(self.mass * self.v)) / self.total_mass
+            x = np.mod(x - drift * now, self.gas.system_length)
+        return x
+
+    def _record(self):
+        kinetic, bath, lost, dissipated, _ = self._energies()
+        for name, value in zip(_HISTORY, (self.time, self.collisions, kinetic, bath, lost, dissipated)):
+            self.history[name].append(value)
+        if self.records % self.frame_every == 0 and len(self.frames) < self.max_frames:
+            stride = max(1, math.ceil(self.gas.rods / self.frame_rods))
+            self.frame_times.append(self.time)
+            self.frames.append(self.positions()[::stride].astype(np.float32))
+        self.records += 1
+
+    def _draw_external(self, event):
+        n = self.gas.rods
+        i, j = (event, (event + 1) % n) if self.ring else (event - 1, event)
+        now = float(self.heap_time[self.slot[event]])
+        temperatures = self._synced_temperatures(now)
+        reduced = self.mass[i] * self.mass[j] / (self.mass[i] + self.mass[j])
+        e_tr = 0.5 * reduced * (self.v[i] - self.v[j]) ** 2
+        ratio = 0.5 * (temperatures[i] + temperatures[j]) / e_tr if e_tr > 0 else math.inf
+        # the drawn-th child of _solve_seeds, as _solve_seeds.spawn() would give it (but stateless)
+        parent = self._solve_seeds
+        seed = np.random.SeedSequence(parent.entropy, spawn_key=parent.spawn_key + (self.drawn,))
+        self.drawn += 1
+        eps2, share = self.rule.draw(float(self.pair_gamma[event]), ratio, seed)
+        eps2, share = float(eps2), float(share)
+        if not (math.isfinite(eps2) and eps2 >= 0 and 0.0 <= share <= 1.0):
+            raise InvalidParameterError(f"the rule's draw must return eps2 >= 0 and a share in [0, 1], "
+                                        f"got ({eps2!r}, {share!r})")
+        self.pending[:] = (1.0, eps2, share)
+
+    # ------------------------------------------------------------------- run
+    def run(self, collisions, *, max_time=math.inf, progress=False) -> GasResult:
+        """Advance by ``collisions`` rod-rod collisions, or until ``max_time``, a collapse, or no events left.
+
+        Parameters
+        ----------
+        collisions : int
+            Collisions to add (1 ... 10^11).
+        max_time : float
+            Absolute simulated time at which to stop.
+        progress : bool
+            Show a tqdm bar.
+        """
+        collisions = _count("collisions", collisions, 1, MAX_COLLISIONS)
+        if math.isnan(float(max_time)) or float(max_time) < 0:
+            raise InvalidParameterError(f"max_time must be >= 0, got {max_time!r}")
+        if collisions // self.record_every > MAX_RECORDS:
+            raise InvalidParameterError(
+                f"record_every must be >= collisions / {MAX_RECORDS:.0e} (= {math.ceil(collisions / MAX_RECORDS)}) "
+                f"so that the history stays bounded, got {self.record_every}")
+        if self.status not in ("completed", "time_limit"):
+            raise InvalidParameterError(f"this simulation ended ({self.status}); it cannot be continued")
+        if self.records == 0:
+            self._record()
+        target = self.collisions + collisions
+        rule = self.rule
+        ratio, probability, quantiles, share = rule.kernel_arrays()
+        uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
+        restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
+        no_uniforms = np.zeros(0)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=collisions, unit="coll", leave=False)
+        status = kernels.STATUS_DONE
+        start = time.perf_counter()
+        first = self.collisions
+        while self.collisions < target:
+            boundary = (self.collisions // self.record_every + 1) * self.record_every
+            chunk = min(boundary, target) - self.collisions
+            uniforms = no_uniforms
+            if rule.code == kernels.RULE_TABLE:
+                state = self._rng.bit_generator.state
+                uniforms = self._rng.random(chunk)
+            before = self.collisions
+            while True:
+                status, event, _done = kernels.run_events(
+                    self.x, self.v, self.local_time, self.temperature, self.mass, self.reach,
+                    self.gamma_index, self.gamma_weight, self.left_is_short, self.heap, self.heap_time, self.slot,
+                    self.ring, self.gas.system_length, rule.code, restitution2, ratio, probability, uniform, quantiles,
+                    share, float(rule.bath_modes), self._decay_rate(), uniforms[self.collisions - before:],
+                    self.pending, chunk - (self.collisions - before), float(max_time), self.window,
+                    self.collapse_factor, self.scalars, self.counters)
+                if status != kernels.STATUS_NEED_DRAW:
+                    break
+                self._draw_external(event)
+            used = self.collisions - before
+            if rule.code == kernels.RULE_TABLE and used < chunk:
+                self._rng.bit_generator.state = state  # rewind: only the used levels are consumed
+                self._rng.bit_generator.advance(used)
+            if bar is not None:
+                bar.update(used)
+            if status == kernels.STATUS_DONE and self.collisions % self.record_every == 0:
+                self._record()
+            if status != kernels.STATUS_DONE:
+                if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS, kernels.STATUS_COOLED):
+                    self._record()  # the final state of a run that cannot continue
+                break
+        wall = time.perf_counter() - start
+        if bar is not None:
+            bar.close()
+        self.status = _STATUS[status]
+        return self._result(wall, self.collisions - first)
+
+    def _message(self):
+        t, c = self.time, self.collisions
+        if self.status == "cooled":
+            return (f"the gas cooled below {self.energy_floor:g} of its initial kinetic energy after {c} collisions "
+                    f"(t = {t:.6g}); further collisions would be lost in the rounding of the velocities")
+        if self.status == "collapsed":
+            w = self.window.size // 2
+            return (f"inelastic collapse at t = {t:.6g} after {c} collisions: the last {w} collisions took "
+                    f"less than {self.collapse_factor:g} times as long as the {w} before them (collisions "
+                    f"accelerating towards infinitely many in a finite time); the run was stopped")
+        if self.status == "time_limit":
+            return f"stopped at the time limit after {c} collisions (t = {t:.6g})"
+        if self.status == "no_events":
+            return f"no further collisions after {c} (all neighbours separate), t = {t:.6g}"
+        return f"{c} collisions, t = {t:.6g}"
+
+    def _result(self, wall, done) -> GasResult:
+        history = {name: np.asarray(values, dtype=np.int64 if name == "collisions" else float)
+                   for name, values in self.history.items()}
+        total = self._energies()[4]
+        frames = np.array(self.frames) if self.frames else np.zeros((0, 0), np.float32)
+        return GasResult(
+            status=self.status, message=self._message(), collisions=self.collisions,
+            wall_hits=int(self.counters[kernels.WALL_HITS]), simulated_time=self.time, wall_time_s=wall,
+            collisions_per_second=done / wall if wall > 0 else math.inf, history=history,
+            frame_times=np.asarray(self.frame_times), frames=frames, velocities=self.v.copy(),
+            bath_temperatures=self._synced_temperatures(self.time).copy(),
+            ratio_clamped=int(self.counters[kernels.RATIO_CLAMPED]),
+            bath_limited=int(self.counters[kernels.BATH_LIMITED]),
+            energy_drift=(total - self.initial_energy) / self.initial_energy if self.initial_energy > 0 else 0.0,
+            rule=self.rule.describe(),
+        )
+
+    # ------------------------------------------------------------ checkpoint
+    _STATE = ("x", "v", "local_time", "temperature", "heap", "heap_time", "slot", "window", "scalars", "counters",
+              "pending")
+
+    def _parameters(self) -> dict:
+        return {
+            "rule": self.rule.describe(),
+            "damping": self.damping,
+            "record_every": self.record_every,
+            "frame_every": self.frame_every,
+            "max_frames": self.max_frames,
+            "frame_rods": self.frame_rods,
+            "collapse_window": int(self.window.size // 2),
+            "collapse_factor": self.collapse_factor,
+            "energy_floor": self.energy_floor,
+            "seed_entropy": str(self.seed_entropy),
+            "boundary": self.gas.boundary,
+            "system_length": self.gas.system_length,
+        }
+
+    def save_checkpoint(self, path):
+        """Write the whole state (npz + JSON, checksummed) so that :meth:`resume` continues bit for bit."""
+        arrays = {name: getattr(self, name) for name in self._STATE}
+        arrays.update(gas_lengths=self.gas.lengths, gas_positions=self.gas.positions,
+                      gas_velocities=self.gas.velocities, gas_bath_temperatures=self.gas.bath_temperatures)
+        arrays.update({f"history_{k}": np.asarray(v, dtype=float) for k, v in self.history.items()})
+        arrays["frame_times"] = np.asarray(self.frame_times, dtype=float)
+        arrays["frames"] = np.array(self.frames) if self.frames else np.zeros((0, 0), np.float32)
+        arrays["rng_state"] = np.asarray(json.dumps(self._rng.bit_generator.state))
+        arrays["progress"] = np.array([self.records, self.drawn], np.int64)
+        arrays["status"] = np.asarray(self.status)
+        if isinstance(self.rule, VibrationTable):
+            arrays.update({f"table_{n}": a for n, a in zip(
+                ("gamma", "temperature_ratio", "probability", "eps2_quantiles", "rod1_share"), self.rule.table.arrays())})
+            arrays["table_metadata"] = np.asarray(json.dumps(self.rule.table.metadata()))
+        return write_checkpoint(path, CHECKPOINT_SCHEMA, CHECKPOINT_VERSION, self._parameters(), arrays)
+
+    @classmethod
+    def resume(cls, path, rule=None):
+        """Rebuild a simulation from :meth:`save_checkpoint` (pass ``rule`` for a :class:`VibrationSolve`)."""
+        arrays, meta = read_checkpoint(path, CHECKPOINT_SCHEMA, CHECKPOINT_VERSION)
+        params = meta["parameters"]
+        if rule is None:
+            table = None
+            if "table_gamma" in arrays:
+                info = json.loads(str(arrays["table_metadata"]))
+                table = RestitutionTable(
+                    arrays["table_gamma"], arrays["table_temperature_ratio"], arrays["table_probability"],
+                    arrays["table_eps2_quantiles"], arrays["table_rod1_share"],
+                    kappa=math.inf if info["kappa"] == "inf" else info["kappa"], bath_modes=info["bath_modes"],
+                    samples_per_point=info["samples_per_point"], solver=info["solver"], seed=info["seed"])
+            rule = rule_from_description(params["rule"], table)
+        elif json.loads(json.dumps(rule.describe())) != params["rule"]:
+            raise InvalidParameterError(f"checkpoint {path} was written with the rule {params['rule']}, "
+                                        f"not {rule.describe()}")
+        gas = RodGas(arrays["gas_lengths"], arrays["gas_positions"], arrays["gas_velocities"],
+                     arrays["gas_bath_temperatures"], params["system_length"], params["boundary"])
+        sim = cls(gas, rule, damping=params["damping"], seed=np.random.SeedSequence(int(params["seed_entropy"])),
+                  record_every=params["record_every"], frame_every=params["frame_every"],
+                  max_frames=params["max_frames"], frame_rods=params["frame_rods"],
+                  collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"], energy_floor=params["energy_floor"])
+        for name in cls._STATE:
+            getattr(sim, name)[...] = arrays[name]
+        sim._rng.bit_generator.state = json.loads(str(arrays["rng_state"]))
+        sim.history = {k: arrays[f"history_{k}"].tolist() for k in _HISTORY}
+        sim.history["collisions"] = [int(c) for c in sim.history["collisions"]]
+        sim.frame_times = arrays["frame_times"].tolist()
+        sim.frames = list(arrays["frames"])
+        sim.records, sim.drawn = (int(a) for a in arrays["progress"])
+        sim.status = str(arrays["status"])
+        return sim
