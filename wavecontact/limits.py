@@ -2,7 +2,7 @@
 
 Every solver estimates, from the scene and its options alone, how many time
 steps it will take, how much work they are (steps times the unknowns each
-step touches: ``work`` is a count of elementary updates, about a nanosecond
+step touches: ``work`` is a count of elementary updates, a few nanoseconds
 each in the compiled kernels) and how much memory it will hold
 (:class:`Cost`).  :func:`check_cost` compares the estimate with the limits
 of the call and refuses, with the estimate and the option that raises the
@@ -10,7 +10,7 @@ limit, before any work is done.
 
 Limits and their defaults (``docs/error_estimates.md`` lists them too):
 
-``max_work`` (default :data:`DEFAULT_MAX_WORK` = 2e11 updates, a few minutes)
+``max_work`` (default :data:`DEFAULT_MAX_WORK` = 5e10 updates, minutes)
     estimated updates (FE: time steps x nodes; modal: steps x modes x stages;
     delay: steps x delayed copies summed per step);
 ``max_memory`` (default: half of the memory available now, :func:`available_memory`)
@@ -46,8 +46,8 @@ __all__ = [
 #: Supported softness of the paper's two rods (besides ``inf``, the hard core).
 KAPPA_MIN = 1e-2
 KAPPA_MAX = 1e7
-#: Default bound on the estimated work of one solve (elementary updates).
-DEFAULT_MAX_WORK = 2e11
+#: Default bound on the estimated work of one solve (elementary updates; a few ns each).
+DEFAULT_MAX_WORK = 5e10
 #: Share of the available memory one solve may take by default.
 MEMORY_SHARE = 0.5
 
@@ -156,8 +156,8 @@ def check_cost(solver: str, cost: Cost | None, limits: Limits) -> None:
     if not cost.work <= limits.max_work:
         raise LimitError(
             f"{solver}: this solve would take about {cost.work:.2g} updates{detail}, more than "
-            f"max_work={limits.max_work:.3g} (about {limits.max_work * 1e-9:.0f} s at 1 ns each); "
-            f"use a coarser resolution or pass max_work={cost.work:.2g} to allow it"
+            f"max_work={limits.max_work:.3g}; use a coarser resolution or pass max_work={cost.work:.2g} "
+            "to allow it"
         )
 
 
