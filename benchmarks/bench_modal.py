@@ -30,8 +30,8 @@ import modal_solve_ivp
 
 import wavecontact
 from wavecontact.modal import RingSimulation
-from wavecontact.scene import two_rods
 from wavecontact.modal import solver as modal_solver
+from wavecontact.scene import two_rods
 
 GAMMA = 0.6173
 MODES = 75

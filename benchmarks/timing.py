@@ -5,11 +5,16 @@ import time
 import numpy as np
 
 
-def median_time(function, repeats):
-    """Median wall time (s) of ``repeats`` calls of ``function()``."""
+def wall_times(function, repeats):
+    """Wall times (s) of ``repeats`` calls of ``function()``."""
     times = []
     for _ in range(repeats):
         started = time.perf_counter()
         function()
         times.append(time.perf_counter() - started)
-    return float(np.median(times))
+    return np.asarray(times)
+
+
+def median_time(function, repeats):
+    """Median wall time (s) of ``repeats`` calls of ``function()``."""
+    return float(np.median(wall_times(function, repeats)))

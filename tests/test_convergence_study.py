@@ -111,8 +111,11 @@ def test_hard_limit_reference_is_gamma_without_the_delay_solver():
     )
     assert table.reference == 0.6 and table.contact == "hard"
     assert all(c[2] == "fem" and c[3] == "hard" for c in fake.calls)
-    # penalty contact tends to hard contact as the mesh is refined: same reference
-    assert reference_restitution(0.6, 20, "penalty", collide=fake)[0] == 0.6
+    # penalty contact at kappa = inf (stiffness tied to the mesh) tends to hard contact: same reference;
+    # at finite kappa the spring's stiffness follows kappa and there is no independent reference
+    assert reference_restitution(0.6, math.inf, "penalty", collide=fake)[0] == 0.6
+    with pytest.raises(InvalidParameterError, match="reference"):
+        reference_restitution(0.6, 20, "penalty", collide=fake)
     # below gamma = 1/2 the hard limit comes from the delay solver's hard-core mode
     value, source = reference_restitution(0.3, math.inf, "hard", collide=StandIn(exact=0.31))
     assert value == 0.31 and "delay" in source

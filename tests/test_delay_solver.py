@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from delay_reference import radau_method_of_steps
 
 import wavecontact
 from wavecontact.analytic import asymptotic_restitution
@@ -26,31 +26,7 @@ def test_model_reference_values(kappa, expected):
 
 
 def _method_of_steps_radau(gamma, kappa, a0=40.0, rtol=1e-11):
-    """An independent reference: Radau on W' = exp(...) window by window,
-    delayed values from the dense output of earlier windows."""
-    delays = (1.0 + gamma, 1.0 + 1.0 / gamma)
-    window = 0.999 * delays[0]
-    pieces = []
-
-    def history(s):
-        if s <= 0.0:
-            return 0.0
-        for start, stop, sol in pieces:
-            if start <= s <= stop:
-                return sol.sol(s)[0]
-        raise AssertionError(s)
-
-    def memory(s):
-        return sum(history(s - n * g) for g in delays for n in range(1, int(s // g) + 1))
-
-    t, w, end = 0.0, 0.0, a0 / kappa + 12.0
-    while t < end:
-        stop = min(t + window, end)
-        rhs = lambda s, y: [math.exp(min(kappa * s - a0 - y[0] - memory(s), 700.0))]
-        sol = solve_ivp(rhs, (t, stop), [w], method="Radau", rtol=rtol, atol=1e-12, dense_output=True)
-        pieces.append((t, stop, sol))
-        t, w = stop, sol.y[0, -1]
-    return w / kappa - 1.0
+    return radau_method_of_steps((1.0 + gamma, 1.0 + 1.0 / gamma), (1.0, 1.0), kappa, a0=a0, rtol=rtol)
 
 
 def test_kappa_20_against_independent_integrator():
@@ -187,13 +163,21 @@ def test_unknown_option_and_bad_rtol_are_refused():
 def test_scenes_outside_the_delay_equation_are_refused():
     with pytest.raises(UnsupportedSceneError, match="penalty"):
         wavecontact.collide(0.6, 10, contact="penalty")
-    scene = wavecontact.Scene(
-        rods=(wavecontact.Rod(1.0), wavecontact.Rod(2.0, density=3.0)),
-        velocities=(1.0, 0.0),
-        contact=wavecontact.Exponential(10.0),
-    )
-    with pytest.raises(UnsupportedSceneError, match="material"):
-        wavecontact.solve(scene, "delay")
+    rods = (wavecontact.Rod(1.0), wavecontact.Rod(2.0, density=3.0), wavecontact.Rod(1.5, area=2.0))
+    three = wavecontact.Scene(rods=rods, velocities=(1.0, 0.0, -1.0), contact=wavecontact.Exponential(10.0))
+    with pytest.raises(UnsupportedSceneError, match="3 rods.*solver='fem'"):
+        wavecontact.solve(three, "delay")
+    ring = wavecontact.Scene(rods=rods[:2], velocities=(1.0, 0.0), contact=wavecontact.Exponential(10.0),
+                             ring_circumference=5.0)
+    with pytest.raises(UnsupportedSceneError, match="ring.*'modal'"):
+        wavecontact.solve(ring, "delay")
+    warm = wavecontact.Scene(rods=rods[:2], velocities=(1.0, 0.0), contact=wavecontact.Exponential(10.0),
+                             initial_velocity=(lambda s: 0.01 * s, None))
+    with pytest.raises(UnsupportedSceneError, match="solver='fem' or 'modal'"):
+        wavecontact.solve(warm, "delay")
+    receding = wavecontact.Scene(rods=rods[:2], velocities=(0.0, 1.0), contact=wavecontact.Hard())
+    with pytest.raises(InvalidParameterError, match=r"velocities\[0\] > velocities\[1\]"):
+        wavecontact.solve(receding, "delay")
 
 
 @pytest.mark.parametrize("gamma", [0.1, 0.6, 1.0])

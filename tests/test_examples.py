@@ -25,3 +25,14 @@ def test_restitution_vs_kappa(tmp_path):
 def test_hard_core_collision():
     result = load("hard_core_collision").main()
     assert result.restitution == pytest.approx(0.6, abs=1e-12)
+
+
+def test_steel_striker_on_aluminium_bar(tmp_path):
+    out = load("steel_striker_on_aluminium_bar").main(str(tmp_path))
+    assert out["hard"] == pytest.approx(out["theory"]["restitution"], abs=1e-12)
+    delay = out["delay"].restitution
+    assert abs(out["fem"].restitution - delay) < 1e-4 and abs(out["modal"].restitution - delay) < 1e-4
+    assert all(a > b for a, b in zip(out["restitution"], out["restitution"][1:]))  # towards the hard core
+    assert 0.0 < out["restitution"][-1] - out["hard"] < 2e-3
+    for name in ("striker_xt.png", "striker_restitution.png"):
+        assert (tmp_path / name).stat().st_size > 10_000

@@ -191,10 +191,11 @@ def test_auto_scheme_falls_back_to_the_interface_for_unresolved_contact():
 
 
 def test_observed_order_of_the_characteristic_scheme():
-    # errors of one sign here (at gamma = 0.6 they change sign between meshes); the scheme is at
-    # least second order, and the reconstructed incoming rate makes it close to third here
+    # errors of one sign here; the long rod's far-end remainder (a delayed echo, third-order
+    # interpolation) and the rest of the scheme are at least second order. N = 800 is left out: the
+    # sub-step quadrature's floor (~6e-10, docs/fem.md 7) is reached there.
     reference = wc.collide(0.6173, 100, solver="delay", rtol=1e-13).restitution
-    elements = np.array([100, 200, 400, 800])
+    elements = np.array([50, 100, 200, 400])
     errors = [abs(wc.collide(0.6173, 100, solver="fem", elements=int(n)).restitution - reference) for n in elements]
     observed = _observed_order(elements, errors)
     assert EXPECTED_ORDER[(1, "lumped")] - 0.2 < observed < 3.5, (observed, errors)

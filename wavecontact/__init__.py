@@ -17,6 +17,7 @@ from .contact import ContactLaw, Exponential, Hard, Penalty
 from .errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, WavecontactError
 from .result import CollisionResult
 from .scene import Rod, Scene, two_rod_parameters, two_rods
+from .studies.ensemble import ensemble
 
 __version__ = "0.1.0"
 
@@ -33,6 +34,7 @@ __all__ = [
     "UnsupportedSceneError",
     "WavecontactError",
     "collide",
+    "ensemble",
     "solve",
     "two_rod_parameters",
     "two_rods",

@@ -60,37 +60,77 @@ def force_plateau(impedance: float, approach_speed: float) -> float:
     return 0.5 * impedance * approach_speed
 
 
-def two_material_impact(rod_left, rod_right, approach_speed: float) -> dict:
-    """Wave theory of the hard impact of two rods of different materials.
+def two_material_impact(rod_left, rod_right, approach_speed: float, max_steps: int = 10_000) -> dict:
+    """Wave theory of the hard impact of two free rods of different materials.
 
     At first contact the interface takes the velocity that balances the two
     stress waves it launches: with impedances ``Z1, Z2`` the force is
-    ``F = Z1 Z2 V / (Z1 + Z2)``.  The wave in the rod with the shorter round
-    trip ``T = 2 l / c`` comes back from its free end as a tension wave; at the
-    interface it leaves a force ``F (Z_fast - Z_slow) / (Z_fast + Z_slow)``,
-    so the ends separate at ``T`` exactly when ``Z_fast <= Z_slow``.  Only that
-    single-plateau case is treated here (otherwise the force steps down and
-    the FE solver is the tool).
+    ``F0 = Z1 Z2 V / (Z1 + Z2)``.  Call ``a`` the rod with the shorter round
+    trip ``T = 2 l / c`` and ``b`` the other.  Rod a's wave comes back from
+    its free end at ``T_a`` as an unloading wave that leaves the force
+    ``R F0`` with ``R = (Z_a - Z_b) / (Z_a + Z_b)``:
+
+    * ``Z_a <= Z_b`` (``R <= 0``): the ends separate at ``T_a``; rod a leaves
+      without vibration;
+    * ``Z_a > Z_b``: the force steps down to ``R^k F0`` at every return
+      ``k T_a`` and the contact ends when rod b's wave returns, at ``T_b``.
+
+    In both cases the ends never meet again (docs/theory.md, "Two materials").
+
+    Parameters
+    ----------
+    rod_left, rod_right : Rod
+        The rods (any order; the left one moves towards the right one).
+    approach_speed : float
+        ``V = v_left - v_right`` (velocity units), > 0.
+    max_steps : int
+        At most this many force steps are listed (the impulse is summed in closed form).
 
     Returns
     -------
     dict
-        ``force`` (force), ``duration`` (time), ``impulse`` (momentum) and
-        ``restitution``: relative centre-of-mass velocity after the impulse
-        over the one before, ``(J (1/m1 + 1/m2) - V) / V``.
+        ``force`` (the first plateau ``F0``, force), ``duration`` (time),
+        ``impulse`` (momentum), ``restitution`` (``(J (1/m1 + 1/m2) - V) / V``),
+        ``reflection`` ``R``, ``steps`` (list of ``(start, end, force)``),
+        ``velocity_change`` (``(-J / m_left, +J / m_right)``, velocity units)
+        and ``vibration_energy`` (per rod, energy; they add up to the
+        translational energy lost).
     """
     z1, z2 = rod_left.impedance, rod_right.impedance
     fast, slow = sorted((rod_left, rod_right), key=lambda rod: rod.round_trip_time)
-    if fast.impedance > slow.impedance * (1.0 + 1e-12):
-        raise ValueError(
-            "the rod with the shorter round trip has the larger impedance: the contact does not end "
-            "after one plateau; use the FE solver"
-        )
+    t_a, t_b = fast.round_trip_time, slow.round_trip_time
     force = z1 * z2 * approach_speed / (z1 + z2)
-    duration = fast.round_trip_time
-    impulse = force * duration
+    reflection = (fast.impedance - slow.impedance) / (fast.impedance + slow.impedance)
+    if reflection <= 1e-12:
+        steps = [(0.0, t_a, force)]
+        impulse, duration = force * t_a, t_a
+    else:
+        whole = math.floor(t_b / t_a)  # full steps of length T_a before rod b's wave returns
+        rest = t_b - whole * t_a
+        impulse = force * (t_a * (1.0 - reflection**whole) / (1.0 - reflection) + rest * reflection**whole)
+        duration = t_b
+        steps = [(k * t_a, min((k + 1) * t_a, t_b), force * reflection**k) for k in range(min(whole + 1, max_steps))]
+        steps = [step for step in steps if step[1] > step[0]]
     after = impulse * (1.0 / rod_left.mass + 1.0 / rod_right.mass) - approach_speed
-    return {"force": force, "duration": duration, "impulse": impulse, "restitution": after / approach_speed}
+    # a constant force held for whole round trips leaves rod a rigid; only the last, shorter step
+    # (length d, force F) leaves it vibrating, with the work F^2 d / Z less the rigid part (F d)^2 / (2 m)
+    last_force = steps[-1][2] if reflection > 1e-12 else 0.0
+    last_length = steps[-1][1] - steps[-1][0]
+    vibration_fast = last_force**2 * last_length / fast.impedance * (1.0 - last_length / t_a)
+    lost = 0.5 * rod_left.mass * rod_right.mass / (rod_left.mass + rod_right.mass) * (
+        approach_speed**2 - after**2
+    )
+    vibration = (vibration_fast, lost - vibration_fast) if fast is rod_left else (lost - vibration_fast, vibration_fast)
+    return {
+        "force": force,
+        "duration": duration,
+        "impulse": impulse,
+        "restitution": after / approach_speed,
+        "reflection": reflection,
+        "steps": steps,
+        "velocity_change": (-impulse / rod_left.mass, impulse / rod_right.mass),
+        "vibration_energy": vibration,
+    }
 
 
 def hard_core_relative_velocity(tau, gamma: float, tau_contact: float = 0.0):

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .contact import ContactLaw, Exponential, Hard, contact_from_name
+from .contact import ContactLaw, Exponential, Hard, Penalty, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_positive
 
-__all__ = ["Rod", "Scene", "TwoRodParameters", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
+__all__ = ["Rod", "Scene", "TwoRodParameters", "penalty_stiffness", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
 
 FieldFunction = Callable[[np.ndarray], np.ndarray]
 
@@ -96,6 +96,11 @@ class Scene:
     initial_displacement, initial_velocity : sequence of callables or None
         Optional fields ``u_i(s)`` (length) and ``du_i/dt(s)`` (length/time)
         of the rod coordinate ``s`` in ``[0, l_i]``, added to the rigid motion.
+    vibrations : wavecontact.bath.BathRealisation or None
+        A thermal-bath realisation (modal amplitudes at the nominal contact
+        time).  The fields above are then that realisation's mode sums at the
+        start; solvers that work with modes or with the noise ``Q(tau)`` use
+        the amplitudes directly (see :func:`two_rods`).
     """
 
     rods: tuple
@@ -106,6 +111,7 @@ class Scene:
     initial_displacement: tuple | None = None
     initial_velocity: tuple | None = None
     metadata: dict = field(default_factory=dict, compare=False)
+    vibrations: object = None
 
     def __post_init__(self):
         rods = tuple(self.rods)
@@ -226,6 +232,7 @@ def two_rods(
     gap: float | None = None,
     initial_displacement: Sequence | None = None,
     initial_velocity: Sequence | None = None,
+    vibrations=None,
 ) -> Scene:
     """The paper's head-on collision of two rods of one material, dimensionless.
 
@@ -245,10 +252,24 @@ def two_rods(
     contact : {'exponential', 'penalty', 'hard'} or ContactLaw
         The contact law.  The exponential law gets ``B = mu c^2 / (alpha l)^2``,
         the value for which the delay equation (Eq. 16) holds without a shift.
+        The penalty law gets the stiffness ``k = kappa Z_eff c / l``
+        (:func:`penalty_stiffness`, here ``kappa / 2``): the spring whose
+        contact relaxes at the rate ``alpha V`` of the exponential law at its
+        plateau, so that both resolve the same collision time; with ``kappa =
+        inf`` the stiffness is left to the solver (the FE solver ties it to
+        the mesh, so the run tends to hard contact as the mesh is refined).
+        A ``Penalty`` passed in must have the rule's stiffness or ``None``
+        (then it is set).
     gap : float or None
         Initial end-to-end gap (length); ``None`` lets the solver choose.
     initial_displacement, initial_velocity : sequences of two callables or None
         Optional internal fields, see :class:`Scene`.
+    vibrations : wavecontact.bath.BathRealisation or None
+        Thermal vibrations (for example ``ThermalBath(...).draw(...)``), given
+        at the nominal contact time ``t_c = gap / V``.  ``gap=None`` then
+        chooses a gap beyond the vibrations' reach
+        (:func:`wavecontact.bath.scene.start_gap`), and the initial fields
+        are the realisation evolved back to ``t = 0``.
 
     Returns
     -------
@@ -266,6 +287,18 @@ def two_rods(
             raise InvalidParameterError(
                 f"contact alpha ({law.alpha:g}) must equal kappa ({k:g}) in the units of two_rods"
             )
+        if isinstance(law, Penalty) and math.isfinite(k):
+            stiffness = penalty_stiffness(k, 0.5, 1.0, 1.0)
+            if law.stiffness is None:
+                law = Penalty(stiffness)
+            elif not math.isclose(law.stiffness, stiffness):
+                raise InvalidParameterError(
+                    f"penalty stiffness ({law.stiffness:g}) must be kappa / 2 = {stiffness:g} in the units of "
+                    "two_rods (or None); for another stiffness build the Scene directly"
+                )
+    elif contact == "penalty":
+        # finite kappa: the rule's stiffness; kappa = inf: the solver ties it to the mesh (hard limit)
+        law = Penalty(penalty_stiffness(k, 0.5, 1.0, 1.0)) if math.isfinite(k) else Penalty()
     else:
         law = contact_from_name(contact, k, reduced_mass / (k * k) if math.isfinite(k) else 1.0)
     if isinstance(law, Hard) and math.isfinite(k) and contact == "hard":
@@ -273,6 +306,12 @@ def two_rods(
     m1, m2 = rods[0].mass, rods[1].mass
     velocities = (m2 / (m1 + m2), -m1 / (m1 + m2))
     params = TwoRodParameters(gamma=g, kappa=k, effective_length=1.0, approach_speed=1.0, wave_speed=1.0)
+    if vibrations is not None:
+        from .bath.scene import vibration_fields
+
+        if initial_displacement is not None or initial_velocity is not None:
+            raise InvalidParameterError("give either vibrations or initial fields, not both")
+        gap, initial_displacement, initial_velocity = vibration_fields(vibrations, rods, law, gap)
     return Scene(
         rods=rods,
         velocities=velocities,
@@ -281,6 +320,7 @@ def two_rods(
         initial_displacement=initial_displacement,
         initial_velocity=initial_velocity,
         metadata={"two_rods": params},
+        vibrations=vibrations,
     )
 
 
@@ -316,12 +356,32 @@ def two_rods_on_a_ring(gamma: float, kappa: float, circumference: float | None =
                  ring_circumference=circumference, metadata=dict(line.metadata))
 
 
+def penalty_stiffness(kappa: float, impedance: float, wave_speed: float, length: float) -> float:
+    """Penalty stiffness ``k = kappa Z_eff c / l`` (force/length) that stands for ``kappa``.
+
+    At the plateau of the exponential law (force ``Z_eff V``) the gap of two
+    massless ends relaxes at the rate ``alpha V``; a spring ``k`` relaxes it at
+    ``k / Z_eff``.  Equal rates give ``k = alpha V Z_eff = kappa Z_eff c / l``.
+
+    Parameters
+    ----------
+    kappa : float
+        ``alpha V l / c`` (dimensionless), finite.
+    impedance : float
+        ``Z_eff = 1 / (1/Z_1 + 1/Z_2)`` (mass/time).
+    wave_speed, length : float
+        ``c`` (length/time) and the effective length ``l`` (length).
+    """
+    return kappa * impedance * wave_speed / length
+
+
 def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     """Recover ``(gamma, kappa, ...)`` of a two-rod scene on a line.
 
     Works for scenes built by :func:`two_rods` (or :func:`two_rods_on_a_ring`)
     and for any line scene of two rods of one material; the contact law fixes
-    ``kappa`` (``inf`` for hard and penalty contact, which have no range).
+    ``kappa`` (``inf`` for hard contact; for a penalty law the inverse of
+    :func:`penalty_stiffness`, NaN if the solver is to choose the stiffness).
     """
     if "two_rods" in scene.metadata:
         return scene.metadata["two_rods"]
@@ -337,6 +397,9 @@ def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     c = r1.wave_speed
     if isinstance(scene.contact, Exponential):
         kappa = scene.contact.alpha * speed * ell / c
+    elif isinstance(scene.contact, Penalty):
+        stiffness = scene.contact.stiffness
+        kappa = math.nan if stiffness is None else stiffness / penalty_stiffness(1.0, 0.5 * r1.impedance, c, ell)
     else:
         kappa = math.inf
     return TwoRodParameters(gamma=gamma, kappa=kappa, effective_length=ell, approach_speed=speed, wave_speed=c)

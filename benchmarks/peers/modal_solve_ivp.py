@@ -18,19 +18,21 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from wavecontact.modal import kernels
-from wavecontact.scene import two_rods
 from wavecontact.modal.solver import _build
+from wavecontact.scene import two_rods
 
 __all__ = ["modal_equations", "restitution"]
 
 
-def modal_equations(gamma, kappa, modes, static_correction=True):
+def modal_equations(gamma, kappa, modes, static_correction=True, scene=None):
     """Right-hand side, Jacobian, initial state and time span of the modal system.
 
     The state is ``(X1, X2, U1, U2, q (2 modes), v (2 modes))`` with
-    mass-normalised mode coordinates.
+    mass-normalised mode coordinates.  ``scene`` (optional) replaces
+    ``two_rods(gamma, kappa)``, e.g. a thermal start.
     """
-    system, gap = _build(two_rods(gamma, kappa), modes, static_correction, "analytic", None, 1, 0.025)
+    scene = two_rods(gamma, kappa) if scene is None else scene
+    system, gap = _build(scene, modes, static_correction, "analytic", None, 1, 0.025)
     n_modes = system.omega.size
     first = system.rod_first.astype(int)
     coupling = np.zeros(n_modes)  # d gap / d q, and the generalised force per unit contact force
@@ -79,13 +81,13 @@ def modal_equations(gamma, kappa, modes, static_correction=True):
     return rhs, jac, y0, (0.0, span)
 
 
-def restitution(gamma, kappa, modes, rtol, method="DOP853", static_correction=True):
+def restitution(gamma, kappa, modes, rtol, method="DOP853", static_correction=True, scene=None):
     """epsilon of the modal system integrated by ``solve_ivp`` and the wall time (s).
 
     ``atol`` is ``rtol`` times 1e-3 (the end displacements are ~1e-3 of the
     rod length during contact).
     """
-    rhs, jac, y0, span = modal_equations(gamma, kappa, modes, static_correction)
+    rhs, jac, y0, span = modal_equations(gamma, kappa, modes, static_correction, scene)
     start = time.perf_counter()
     options = {"jac": jac} if method in ("Radau", "BDF", "LSODA") else {}
     solution = solve_ivp(rhs, span, y0, method=method, rtol=rtol, atol=rtol * 1e-3, **options)

@@ -13,7 +13,8 @@ import sys
 
 from ..errors import WavecontactError
 
-COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas")
+COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "map", "ensemble", "bath-figure",
+            "restitution-table", "markov")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -26,9 +27,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for name in COMMANDS:
         try:
-            module = importlib.import_module(f"{__name__}.{name}")
+            module = importlib.import_module(f"{__name__}.{name.replace('-', '_')}")
         except ModuleNotFoundError as exc:
-            if exc.name != f"{__name__}.{name}":
+            if exc.name != f"{__name__}.{name.replace('-', '_')}":
                 raise
             continue  # command not shipped yet
         module.add_parser(sub)

@@ -38,6 +38,17 @@ def positive_int(text: str) -> int:
     return value
 
 
+def nonnegative_int(text: str) -> int:
+    """An integer >= 0 (seeds, burn-in, worker counts)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
 def add_ring_options(parser: argparse.ArgumentParser) -> None:
     """``--out``, ``--no-progress`` and ``--no-static-correction``, shared by the ring commands."""
     parser.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")

@@ -3,7 +3,7 @@
 The equation ``W' = exp(g(tau) - W)`` with
 
     g(tau) = kappa tau - a0 - S(tau) + Q(tau),
-    S(tau) = sum_{i=1,2} sum_{n>=1} W(tau - n Gamma_i)
+    S(tau) = sum_{i=1,2} beta_i sum_{n>=1} W(tau - n Gamma_i)
 
 has the property ``(e^W)' = e^g``, and ``g`` only involves *delayed* values
 of ``W``.  As long as a step is shorter than the smallest delay ``Gamma_1``,
@@ -11,7 +11,9 @@ of ``W``.  As long as a step is shorter than the smallest delay ``Gamma_1``,
 
     e^{W(t + h)} = e^{W(t)} + integral_t^{t+h} e^{g(s)} ds
 
-is a plain quadrature: there is nothing implicit and nothing stiff.  The
+is a plain quadrature: there is nothing implicit and nothing stiff.  The echo
+weights ``beta_i`` are 1 for rods of one material (Eq. 16) and ``2 Z_s / Z_i``
+for two materials (:mod:`wavecontact.delay.parameters`).  The
 integrand grows like ``e^{kappa s}`` during contact, so the quadrature is done
 on ``e^{g(s)} = e^{g(t) + a s + r(s)}`` with the secant slope ``a`` taken out
 exactly (a change of variable that makes ``e^{a s}`` uniform) and only the
@@ -132,8 +134,37 @@ def hermite5(t, w, d1, d2, last, s):
 
 
 @kernel
-def noise_value(s, freq, cos_amp, sin_amp):
-    """``Q(s)`` and ``Q'(s)`` of a Fourier-series noise (Eq. 17)."""
+def table_value(s, period, values, slopes):
+    """Value and slope at ``s`` of a periodic table (cubic Hermite between its nodes).
+
+    ``values[j]`` and ``slopes[j]`` sample one period ``[0, period)`` at
+    ``j period / n``; the table repeats with that period.
+    """
+    n = values.shape[0]
+    x = s / period
+    x = (x - math.floor(x)) * n
+    j = int(x)
+    if j >= n:
+        j = n - 1
+    f = x - j
+    j1 = j + 1
+    if j1 == n:
+        j1 = 0
+    h = period / n
+    y0 = values[j]
+    y1 = values[j1]
+    m0 = h * slopes[j]
+    m1 = h * slopes[j1]
+    f2 = f * f
+    f3 = f2 * f
+    value = (2.0 * f3 - 3.0 * f2 + 1.0) * y0 + (f3 - 2.0 * f2 + f) * m0 + (3.0 * f2 - 2.0 * f3) * y1 + (f3 - f2) * m1
+    slope = ((6.0 * f2 - 6.0 * f) * (y0 - y1) + (3.0 * f2 - 4.0 * f + 1.0) * m0 + (3.0 * f2 - 2.0 * f) * m1) / h
+    return value, slope
+
+
+@kernel
+def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
+    """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod)."""
     q = 0.0
     dq = 0.0
     for j in range(freq.shape[0]):
@@ -141,12 +172,16 @@ def noise_value(s, freq, cos_amp, sin_amp):
         sn = math.sin(freq[j] * s)
         q += cos_amp[j] * c + sin_amp[j] * sn
         dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
+    for i in range(periods.shape[0]):
+        value, slope = table_value(s, periods[i], tables[i], table_slopes[i])
+        q += value
+        dq += slope
     return q, dq
 
 
 @kernel
-def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, direct_copies):
-    """``S(s) = sum_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
+def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb, direct_copies):
+    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
     round-off) are skipped.  With ``direct_copies = K > 0`` the copies older
@@ -158,6 +193,8 @@ def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, d
     slope = 0.0
     for i in range(delays.shape[0]):
         gamma_i = delays[i]
+        rod_total = 0.0
+        rod_slope = 0.0
         n = 1
         while True:
             u = s - n * gamma_i
@@ -166,15 +203,17 @@ def memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb, d
             if direct_copies > 0 and n > direct_copies:
                 value, derivative, _c = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
                                                  u + gamma_i)
-                total += value
+                rod_total += value
                 if want_slope:
-                    slope += derivative
+                    rod_slope += derivative
                 break
             value, derivative, _c = hermite5(t, w, d1, d2, last, u)
-            total += value
+            rod_total += value
             if want_slope:
-                slope += derivative
+                rod_slope += derivative
             n += 1
+        total += weights[i] * rod_total
+        slope += weights[i] * rod_slope
     return total, slope
 
 
@@ -188,11 +227,11 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
 
 
 @kernel
-def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, want_slope,
-              comb, direct_copies):
-    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, t_significant, want_slope, comb,
+def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
+              tables, table_slopes, want_slope, comb, direct_copies):
+    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb,
                                       direct_copies)
-    q, dq = noise_value(s, freq, cos_amp, sin_amp)
+    q, dq = noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes)
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq
 
 
@@ -212,10 +251,16 @@ def integrate_delay_equation(
     kappa,
     a0,
     delays,
+    weights,
     rtol,
     freq,
     cos_amp,
     sin_amp,
+    periods,
+    tables,
+    table_slopes,
+    noise_rate,
+    noise_step,
     t_end_min,
     t_limit,
     settle_time,
@@ -233,10 +278,22 @@ def integrate_delay_equation(
         ``alpha V l / c`` and the scaled initial gap ``alpha R0``.
     delays : ndarray
         ``(Gamma_1, Gamma_2)``, the round-trip times of the two rods.
+    weights : ndarray
+        ``(beta_1, beta_2)``, the echo weights ``2 Z_s / Z_i`` (1 for one material).
     rtol : float
         Target absolute accuracy of ``W / kappa`` (hence of epsilon).
     freq, cos_amp, sin_amp : ndarray
         Fourier series of the noise ``Q`` (empty for a cold bath).
+    periods, tables, table_slopes : ndarray
+        Further noise terms as periodic tables, shapes ``(R,)``, ``(R, n)``,
+        ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
+    noise_rate : float
+        An upper bound of ``|Q'|`` from the tables (0 without tables).
+    noise_step : float
+        Longest step wherever the force may become appreciable (0: no
+        limit): short enough that ``Q`` departs from its secant by less than
+        one unit of the exponent, so that no narrow rise of the noise slips
+        between the quadrature nodes of a step that looked force-free.
     t_end_min : float
         Never stop before this time.
     t_limit : float
@@ -282,7 +339,8 @@ def integrate_delay_equation(
     t[0] = 0.0
     w[0] = 0.0
     g_now, gp_now = _exponent(
-        0.0, kappa, a0, t, w, d1, d2, 0, delays, math.inf, freq, cos_amp, sin_amp, True, comb, direct_copies
+        0.0, kappa, a0, t, w, d1, d2, 0, delays, weights, math.inf, freq, cos_amp, sin_amp, periods, tables,
+        table_slopes, True, comb, direct_copies,
     )
     d1[0] = math.exp(g_now)
     d2[0] = d1[0] * (gp_now - d1[0])
@@ -295,7 +353,7 @@ def integrate_delay_equation(
     evaluations = 1
     status = STATUS_OK
     gx = np.empty(nodes.shape[0])
-    exponent_rate = kappa
+    exponent_rate = kappa + noise_rate
     for j in range(freq.shape[0]):
         exponent_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
 
@@ -327,6 +385,8 @@ def integrate_delay_equation(
                     n += 1
         if h_free > h:
             h = min(h_wanted, h_free)
+        elif noise_step > 0.0:
+            h = min(h, noise_step)
         h = min(h, h_max)
         if h < 1e-14 * max(1.0, abs(t0)):
             status = STATUS_STEP_UNDERFLOW
@@ -334,7 +394,8 @@ def integrate_delay_equation(
 
         t1 = t0 + h
         g1, gp1 = _exponent(
-            t1, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, True, comb,
+            t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
+            tables, table_slopes, True, comb,
             direct_copies,
         )
         a = (g1 - g_now) / h
@@ -356,8 +417,8 @@ def integrate_delay_equation(
             else:
                 s = h * x
             gs, _unused = _exponent(
-                t0 + s, kappa, a0, t, w, d1, d2, last, delays, t_significant, freq, cos_amp, sin_amp, False, comb,
-                direct_copies,
+                t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
+                periods, tables, table_slopes, False, comb, direct_copies,
             )
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)

@@ -2,29 +2,41 @@
 
 Integrating the rod modes out of the Hamiltonian leaves one scalar equation
 for the scaled velocity increase ``W(tau)`` (Eq. 16), exact for infinitely
-many modes.  It holds for two rods of one material and section on a line
-with exponential contact, and in its hard-core limit (Eq. 26).  See
-:mod:`wavecontact.delay.kernels` for the method and ``docs/theory.md``.
+many modes.  It holds for two rods on a line with exponential contact, and in
+its hard-core limit (Eq. 26); rods of different materials and sections only
+change the round trips and give each rod's echoes the weight ``2 Z_s / Z_i``
+(:mod:`wavecontact.delay.parameters`).  See :mod:`wavecontact.delay.kernels`
+for the method and ``docs/theory.md``.
+
+Results are in the scene's units (for :func:`wavecontact.two_rods` scenes those
+are the paper's dimensionless ones): time ``t = tau mu / Z_s`` from the start
+at the scaled gap ``a0``, relative velocity ``v2 - v1``, contact force.
 
 Its options are :class:`DelayOptions`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..bath.noise import NoiseTables
+from ..bath.scene import scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
-from ..scene import Scene, two_rod_parameters
+from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
-from .hardcore import hard_core_history
+from .energy_split import NODES, WEIGHTS, vibration_energy_gain
+from .hardcore import contact_intervals, hard_core_history
 from .noise import COLD, FourierNoise
+from .parameters import DelayParameters, delay_parameters, echoes_from_ratios
+from .stochastic_hardcore import hard_core_noise
 
 __all__ = ["ORDER", "SOLVER", "DelayOptions", "DelaySolver", "solve_delay_equation"]
 
@@ -57,7 +69,8 @@ def _noise(value):
 
 @dataclass(frozen=True)
 class DelayOptions(SolverOptions):
-    """Options of the delay solver (every time in ``l / c``, the paper's tau)."""
+    """Options of the delay solver (every time is the dimensionless tau: ``l / c``
+    for one material, ``mu / Z_s`` for two)."""
 
     solver_name = "delay"
     rtol: float = option(1e-11, "target accuracy of epsilon (absolute)", low=1e-14, high=1e-2)
@@ -67,63 +80,85 @@ class DelayOptions(SolverOptions):
     end_time: float | None = option(
         None, "integrate at least until this time tau; None: stop once W has settled", low=0.0, allow_none=True)
     noise: FourierNoise | None = option(
-        None, "initial vibrations as the noise Q(tau) (Eq. 17); None: a cold bath",
-        kind="object", allow_none=True, check=_noise)
+        None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath "
+        "or the scene's thermal vibrations", kind="object", allow_none=True, check=_noise)
     max_steps: int = option(2_000_000, "safety limit on accepted steps", kind="int", low=10, high=10**9)
+    noise_resolution: int = option(
+        32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
+        kind="int", low=4, high=1024)
+    hard_core_resolution: int = option(
+        8, "kappa = inf with vibrations: grid points per period of the short rod's fastest bath mode; the result "
+        "comes from twice that, its error estimate from the changes over half and the given resolution",
+        kind="int", low=2, high=4096)
+    energy_split: bool = option(
+        True, "also compute each rod's vibrational energy gain (extra['vibration_energy_gain'], E_tr = 1/4; one "
+        "material)", kind="bool")
 
 
-def _check_scene(scene: Scene):
-    if scene.is_ring or len(scene.rods) != 2:
-        raise UnsupportedSceneError("the delay solver models two rods on a line; use solver='modal' or 'fem'")
-    if not scene.rods[0].same_material(scene.rods[1]):
-        raise UnsupportedSceneError(
-            "the delay equation needs rods of one material and section; use solver='fem' for unequal impedances"
-        )
+def _check_scene(scene: Scene) -> DelayParameters:
+    params = delay_parameters(scene)  # refuses rings, other rod counts and receding rods
     if not isinstance(scene.contact, (Exponential, Hard)):
         raise UnsupportedSceneError(
             f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
-            "use solver='fem' for penalty contact"
+            "use solver='fem' (or 'modal') for penalty contact"
         )
-    if not scene.is_cold:
+    if scene.vibrations is not None and "two_rods" not in scene.metadata:
+        raise UnsupportedSceneError("thermal vibrations need the paper's two rods (two_rods(..., vibrations=))")
+    if not scene.is_cold and scene.vibrations is None:
         raise UnsupportedSceneError(
-            "initial fields enter the delay equation as the noise Q(tau): pass noise=FourierNoise(...)"
+            "the delay solver takes initial vibrations only as a modal sum, the noise Q(tau): pass "
+            "noise=FourierNoise(...) on a cold scene, or use solver='fem' or 'modal' for initial fields"
         )
-    params = two_rod_parameters(scene)
-    if params.approach_speed <= 0.0:
-        raise InvalidParameterError("the rods must approach each other (v1 > v2) for a collision")
     return params
 
 
+def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000,
+                         impedance_ratio=1.0, tables=None):
+    """Integrate the delay equation for transit-time ratio ``gamma`` and softness ``kappa``.
 
+    ``gamma = T_1 / T_2`` is the ratio of the round-trip times ``2 l_i / c_i``
+    (``l_1 / l_2`` for one material, Eq. 16) and ``impedance_ratio = Z_2 / Z_1``
+    (1: one material); see :mod:`wavecontact.delay.parameters`.
 
-def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time=None, noise=None, max_steps=2_000_000):
-    """Integrate Eq. 16 for length ratio ``gamma`` and softness ``kappa``.
+    ``tables`` (:class:`wavecontact.bath.noise.NoiseTables`) adds tabulated
+    noise (a thermal bath) to ``noise``.
 
-    Returns ``(t, W, W', error_estimate, work)`` with ``W`` on the adaptive
+    Returns ``(t, W, W', error_estimate, work, a0)`` with ``W`` on the adaptive
     grid ``t`` (dimensionless time, ``tau = 0`` at the start, scaled gap ``a0``).
     """
+    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps,
+                                                impedance_ratio, tables)
+    return t, w, d1, error, work, a0
+
+
+def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, impedance_ratio, tables):
     options = DelayOptions(rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps)
     rtol, a0, end_time, max_steps = options.rtol, options.initial_gap, options.end_time, options.max_steps
     noise = COLD if options.noise is None else options.noise
+    tables = NoiseTables.empty() if tables is None else tables
     if a0 is None:
         a0 = GAP_MARGIN + noise.amplitude_bound
-    delays = np.array([1.0 + gamma, 1.0 + 1.0 / gamma])
+    delays, weights = (np.array(x) for x in echoes_from_ratios(impedance_ratio, gamma))
     free_time = a0 / kappa
     settle = float(delays.sum())
     t_end_min = free_time if end_time is None else max(free_time, end_time)
     # the collision lasts about Gamma_1 for kappa >> 1 and ~ (|ln rtol| + a0) / (kappa gamma) when soft
-    t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(gamma, 0.5))
-    t, w, d1, _d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
-        float(kappa), float(a0), delays, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
+    ratio = min(delays) / max(delays)
+    t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
+    t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
+        float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
+        tables.periods, tables.values, tables.slopes, float(tables.slope_bound), float(tables.step_limit),
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
     )
     if status != kernels.STATUS_OK:
         outcome, advice = _OUTCOMES[status]
-        raise SolverFailure(f"delay solver (gamma={gamma:g}, kappa={kappa:g}): {outcome.message}; {advice}", outcome)
+        raise SolverFailure(
+            f"delay solver (gamma={gamma:g}, impedance_ratio={impedance_ratio:g}, kappa={kappa:g}): "
+            f"{outcome.message}; {advice}", outcome)
     work = {"steps": int(t.size - 1), "rejected_steps": int(rejected), "evaluations": int(evaluations)}
-    return t, w, d1, float(error), work, a0
+    return t, w, d1, d2, float(error), work, a0
 
 
 
@@ -164,55 +199,113 @@ class DelaySolver(SolverBase):
 
     def _collide(self, scene: Scene, options: DelayOptions) -> dict:
         params = _check_scene(scene)
-        gamma, kappa = params.gamma, params.kappa
+        kappa = params.kappa
+        vibrations = scene.vibrations
+        if vibrations is not None and options.noise is not None:
+            raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
         if isinstance(scene.contact, Hard) or math.isinf(kappa):
             if options.noise is not None:
-                raise UnsupportedSceneError("the hard-core delay solver handles a cold bath only (noise=None)")
-            return _collide_hard(gamma)
+                raise UnsupportedSceneError("the hard-core delay solver takes thermal vibrations on the scene "
+                                            "(two_rods(..., vibrations=)), not the option noise")
+            if vibrations is not None:
+                return _collide_hard_stochastic(scene, params, options.hard_core_resolution)
+            return _collide_hard(params)
         initial_gap = options.initial_gap
         if scene.gaps is not None and initial_gap is None:
-            # a user-placed start: alpha * gap, shifted by ln(B alpha^2 / mu) for B != mu / alpha^2
+            # a user-placed start: alpha * gap, shifted by ln(B alpha^2 mu / Z_s^2) for B != Z_s^2 / (mu alpha^2)
             alpha = scene.contact.alpha
-            reduced_mass = scene.rods[0].mass * scene.rods[1].mass / scene.total_mass
             initial_gap = alpha * scene.gaps[0] - math.log(
-                scene.contact.strength * alpha**2 * params.effective_length**2
-                / (reduced_mass * params.wave_speed**2)
+                scene.contact.strength * alpha**2 * params.reduced_mass / params.series_impedance**2
             )
-        t, w, d1, error, work, a0 = solve_delay_equation(
-            gamma, kappa, rtol=options.rtol, initial_gap=initial_gap, end_time=options.end_time,
-            noise=options.noise, max_steps=options.max_steps,
-        )
+        tables = None
+        if vibrations is not None:
+            if initial_gap is None:
+                raise UnsupportedSceneError("a scene with vibrations needs its start gap "
+                                            "(two_rods(..., vibrations=) sets it)")
+            tables = scene_noise(scene, kappa, float(initial_gap), options.noise_resolution)
+        t, w, d1, d2, error, work, a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
+                                                   options.end_time, options.noise, options.max_steps,
+                                                   params.impedance_ratio, tables)
+        unit = params.time_unit
+        extra = {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa * unit, "velocity_increase_slope": d1,
+                 "delay_parameters": _as_dict(params)}
+        if options.energy_split and options.noise is None and params.impedance_ratio == 1.0:
+            # one material: the per-rod split of wavecontact.delay.energy_split (units with E_tr = 1/4)
+            tab = tables if tables is not None else NoiseTables.empty()
+            extra["vibration_energy_gain"] = vibration_energy_gain(
+                float(kappa), t, w, d1, d2, np.asarray(params.round_trip_times, dtype=float), tab.periods,
+                tab.values, tab.slopes, NODES, WEIGHTS, 2)
+        if vibrations is not None:
+            extra["vibration_energy_before"] = vibrations.vibration_energy()
+            extra["bath_modes"] = vibrations.modes
         return {
             "restitution": w[-1] / kappa - 1.0,
-            "time": t,
-            "relative_velocity": w / kappa - 1.0,
-            # mu dv_rel/dt = W' / (2 kappa) in units of Z V = rho c A V
-            "contact_force": 0.5 * d1 / kappa,
+            "time": t * unit,
+            "relative_velocity": params.approach_speed * (w / kappa - 1.0),
+            # mu dv_rel/dt = Z_s V W' / kappa
+            "contact_force": params.force_unit * d1 / kappa,
             "error_estimate": error,
             "work": work,
-            "extra": {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa, "velocity_increase_slope": d1},
+            "extra": extra,
         }
 
 
-def _collide_hard(gamma: float) -> dict:
-    delays = (1.0 + gamma, 1.0 + 1.0 / gamma)
-    knots_t, knots_w = hard_core_history(delays)
+def _as_dict(params: DelayParameters) -> dict:
+    return {**dataclasses.asdict(params), "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
+
+
+def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> dict:
+    """The hard-core limit with the scene's vibrations (max-plus recursion on a grid).
+
+    The answer comes from the grid at 2 x resolution; the grid converges at
+    first order but unevenly (f often peaks at a kink of the memory terms,
+    between nodes), so the error is estimated by the larger change over the
+    two coarser grids.  The per-rod split needs ``W'`` times the noise's
+    slope, which the max-plus grid resolves too slowly: only the total
+    ``(1 - epsilon^2) / 4`` is implied; use a finite kappa for the split.
+    """
+    vibrations = scene.vibrations
+    gamma = scene.metadata["two_rods"].gamma
+    tau_free = float(scene.gaps[0])  # V = 1, l = 1: the gap is the free-flight time
+    coarser = [hard_core_noise(gamma, vibrations, tau_free, r)[1][-1] for r in (max(resolution // 2, 1), resolution)]
+    t, w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
+    slopes = np.diff(w) / np.diff(t)
+    return {
+        "restitution": float(w[-1] - 1.0),
+        "time": t,
+        "relative_velocity": w - 1.0,
+        # the force is constant between grid points: force[i] is its value on (time[i-1], time[i]]
+        "contact_force": params.force_unit * np.concatenate([[0.0], slopes]),
+        "force_sampling": "interval",
+        "error_estimate": max(abs(float(coarser[1] - w[-1])), abs(float(coarser[0] - coarser[1]))),
+        "work": {"steps": int(t.size)},
+        "extra": {"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
+                  "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])},
+    }
+
+
+def _collide_hard(params: DelayParameters) -> dict:
+    delays, weights = params.round_trip_times, params.echo_weights
+    knots_t, knots_w = hard_core_history(delays, weights)
     restitution = float(knots_w[-1] - 1.0)
+    contacts = contact_intervals(knots_t, knots_w, delays, weights)
     slopes = np.diff(knots_w) / np.diff(knots_t)
     # show the flat parts before and after the contact as well
     knots_t = np.concatenate([[knots_t[0] - 1.0], knots_t, [knots_t[-1] + sum(delays)]])
     knots_w = np.concatenate([[0.0], knots_w, [knots_w[-1]]])
-    # the force is constant between knots: force[i] is its value on (time[i-1], time[i]]
-    force = np.concatenate([[0.0, 0.0], 0.5 * slopes, [0.0]])
+    # the force is constant between knots: force[i] is its value on (time[i-1], time[i]], units Z_s V
+    force = np.concatenate([[0.0, 0.0], slopes, [0.0]])
+    unit = params.time_unit
     return {
         "restitution": restitution,
-        "time": knots_t,
-        "relative_velocity": knots_w - 1.0,
-        "contact_force": force,
+        "time": knots_t * unit,
+        "relative_velocity": params.approach_speed * (knots_w - 1.0),
+        "contact_force": params.force_unit * force,
         "force_sampling": "interval",
         "error_estimate": 1e-14,
         "work": {"steps": int(knots_t.size)},
-        "extra": {"hard_core": True},
+        "extra": {"hard_core": True, "contacts": [(a * unit, b * unit) for a, b in contacts],
+                  "delay_parameters": _as_dict(params)},
     }
 
 

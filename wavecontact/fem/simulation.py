@@ -16,9 +16,11 @@ from ..contact import Exponential, Hard, Penalty
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from ..scene import Scene
-from . import kernels
+from . import kernels, lattice
 from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
-from .discretization import RodDiscretization, discretize_rod, matched_nodes
+from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
+from .explicit_step import elastic_acceleration, prepare_mass
+from .schemes import choose_scheme, gap_treatment, wants_lattice_mesh
 from .stability import banded_mass, check_time_step, stable_step
 
 __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
@@ -27,17 +29,11 @@ __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 # force counts as absent: the start gap and the end of the run are placed there.
 POTENTIAL_TOLERANCE = 1e-16
 _CHUNK = 1 << 15
-# sub-steps of the gap equation with a linearly varying incoming rate, where the contact is resolved
-_GAP_SUBSTEPS = 8  # linear reconstruction (rods of fewer than 5 nodes)
-_QUARTIC_SUBSTEPS = 32  # quartic reconstruction, gap_quadrature='substeps'
 _GAP_QUADRATURES = ("substeps", "gauss")
-_RESOLVED = 10.0  # alpha V dt at or below which the incoming rate is reconstructed
 # plain central differences with the contact force ('force' scheme, resolved exponential contact):
 FORCE_COURANT = 0.95  # fraction of the stable step including the contact stiffness
 FORCE_PEAK = 2.0  # bound of the peak force in units of Z_eff V (the hard-contact plateau is 1)
 FORCE_RESOLUTION = 1.0  # largest alpha V dt
-FORCE_MAX_COST = 4.0  # largest ratio of the mesh's step to the contact-resolving step
-FORCE_MESH_RESOLUTION = 1.0  # largest alpha V h / c of the facing end elements
 _SCHEMES = {
     "characteristic": kernels.SCHEME_CHARACTERISTIC,
     "interface": kernels.SCHEME_INTERFACE,
@@ -67,6 +63,7 @@ class FemSetup:
     gap_substeps: int = 1
     centered: bool = False
     gauss: bool = False
+    far_theta: tuple = (0.0, 0.0)  # unmeshed remainder beyond each rod's far end node, in elements
 
     @property
     def characteristic(self) -> bool:
@@ -173,15 +170,33 @@ def build_setup(
     if gap_quadrature not in _GAP_QUADRATURES:
         raise InvalidParameterError(f"gap_quadrature must be one of {_GAP_QUADRATURES}, got {gap_quadrature!r}")
     left, right = scene.rods
+    approach_speed = abs(scene.velocities[0] - scene.velocities[1])
+    far_theta = (0.0, 0.0)
     if nodes is None:
         elements = _check_elements(elements)
         shorter = left if left.length <= right.length else right
         travel = shorter.length / elements / shorter.wave_speed
-        vertices = (
-            matched_nodes(left.length, travel * left.wave_speed, from_left=False),
-            matched_nodes(right.length, travel * right.wave_speed, from_left=True),
-        )
-        matched = True
+        try:
+            step_ratio = None if dt is None else float(dt) / travel
+        except (TypeError, ValueError):
+            step_ratio = math.nan  # refused with the step check below
+        if wants_lattice_mesh(order, mass, step_ratio, courant, scheme):
+            # matched: one travel time per element on both rods; the remainder of the long rod
+            # (less than one element, at its far end) becomes a delay of the far-end echo
+            vertices = (
+                matched_nodes(left.length, travel * left.wave_speed, from_left=False),
+                matched_nodes(right.length, travel * right.wave_speed, from_left=True),
+            )
+            far_theta = tuple(
+                (rod.length - (v[-1] - v[0])) / (travel * rod.wave_speed) for rod, v in zip((left, right), vertices)
+            )
+            far_theta = tuple(theta if theta > 1e-9 else 0.0 for theta in far_theta)
+            matched = True
+        else:
+            vertices = tuple(
+                uniform_nodes(rod.length, max(1, round(rod.length / (travel * rod.wave_speed)))) for rod in (left, right)
+            )
+            matched = False
     else:
         if len(nodes) != 2:
             raise InvalidParameterError("nodes must be a pair (rod 1 vertices, rod 2 vertices)")
@@ -189,10 +204,9 @@ def build_setup(
         matched = False
         travel = None
     remainder = ("left", "right") if matched else (None, None)
-    lump = not (matched and _contact_unresolved(scene, travel))
     rods = (
-        discretize_rod(left, vertices[0], order, mass, remainder[0], lump),
-        discretize_rod(right, vertices[1], order, mass, remainder[1], lump),
+        discretize_rod(left, vertices[0], order, mass, remainder[0]),
+        discretize_rod(right, vertices[1], order, mass, remainder[1]),
     )
     limit = stable_step(rods)
     if dt is None:
@@ -206,35 +220,16 @@ def build_setup(
     else:
         step = check_time_step(dt, limit)
     law, alpha, strength, stiffness = _law_parameters(scene, rods, hard_scheme)
-    if scheme not in ("auto",) + tuple(_SCHEMES):
-        raise InvalidParameterError(
-            f"scheme must be one of 'auto', {', '.join(map(repr, _SCHEMES))}, got {scheme!r}"
-        )
-    exact = _is_exact_lattice(rods, step)
-    if scheme == "characteristic" and not exact:
-        raise InvalidParameterError(
-            "scheme='characteristic' needs order=1, mass='lumped' and dt equal to the travel time h/c "
-            "of the elements at both facing ends (the default matched mesh with dt=None)"
-        )
-    approach_speed = abs(scene.velocities[0] - scene.velocities[1])
-    force_step = _force_step(rods, limit, law, alpha, approach_speed) if law == LAW_EXPONENTIAL else 0.0
-    if scheme == "force":
-        if law != LAW_EXPONENTIAL:
-            raise InvalidParameterError("scheme='force' needs the exponential contact law")
-        if dt is None:
-            step = min(step, force_step)
-    if scheme == "auto":
-        if exact:
-            scheme = "characteristic"
-        elif law == LAW_EXPONENTIAL and _end_travel_time(rods) * alpha * approach_speed > FORCE_MESH_RESOLUTION:
-            scheme = "interface"  # the mesh does not resolve the force's rise
-        elif step <= force_step:
-            scheme = "force"
-        elif dt is None and FORCE_MAX_COST * force_step >= step:
-            # the contact is resolved by a step at most FORCE_MAX_COST times smaller than the mesh's
-            scheme, step = "force", force_step
-        else:
-            scheme = "interface"
+    exponential = law == LAW_EXPONENTIAL
+    scheme, step = choose_scheme(
+        scheme,
+        exact_lattice=_is_exact_lattice(rods, step) and all(_uniform_interior(d, step) for d in rods),
+        exponential=exponential,
+        mesh_resolution=_end_travel_time(rods) * alpha * approach_speed,
+        mesh_step=step,
+        force_step=_force_step(rods, limit, law, alpha, approach_speed) if exponential else 0.0,
+        user_step=dt is not None,
+    )
     scheme_code = _SCHEMES[scheme]
     # Where the collision time 1/(alpha V) spans at least 1/10 of a step, the incoming rate is
     # reconstructed inside the step (the quartic with the step means of two steps before and two
@@ -242,10 +237,9 @@ def build_setup(
     # rate constant was the dominant error during the release.  Where the contact is stiffer the
     # rate jumps from step to step and a reconstruction would overshoot, so it is held constant
     # (the hard limit stays exact).
-    resolved = law == LAW_EXPONENTIAL and alpha * approach_speed * step <= _RESOLVED
-    # the quartic reconstruction reads the incoming waves three nodes into each rod
-    centered = resolved and min(d.n_nodes for d in rods) >= 5
-    gap_substeps = (_QUARTIC_SUBSTEPS if centered else _GAP_SUBSTEPS) if resolved else 1
+    gap_substeps, centered = gap_treatment(
+        scheme, exponential, alpha * approach_speed * step, min(d.n_nodes for d in rods)
+    )
     u0, v0 = [], []
     for index, (disc, speed) in enumerate(zip(rods, scene.velocities)):
         u = np.zeros(disc.n_nodes)
@@ -284,7 +278,7 @@ def build_setup(
         gap = float(scene.gaps[0])
     else:
         gap = max(r_stop, 0.0)
-        if law == LAW_EXPONENTIAL and scheme_code == kernels.SCHEME_CHARACTERISTIC and gap_substeps == 1:
+        if exponential and scheme_code == kernels.SCHEME_CHARACTERISTIC and gap_substeps == 1:
             # Unresolved contact: the force switches on within a small part of a step.  The
             # lattice sees a step only through its mean, so a collision starting inside a step
             # would end (when the reflected waves return) up to a step early.  Start where the
@@ -296,7 +290,7 @@ def build_setup(
     return FemSetup(
         rods=rods, dt=step, stable_step=limit, law=law, alpha=alpha, strength=strength, stiffness=stiffness,
         gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, scheme=scheme_code,
-        gap_substeps=gap_substeps, centered=centered, gauss=gap_quadrature == "gauss",
+        gap_substeps=gap_substeps, centered=centered, gauss=gap_quadrature == "gauss", far_theta=far_theta,
     )
 
 
@@ -323,25 +317,6 @@ def _force_step(rods, limit: float, law: int, alpha: float, approach: float) -> 
     lambda_max = (2.0 / limit) ** 2
     stable = FORCE_COURANT * 2.0 / math.sqrt(lambda_max + m_inv * contact_stiffness)
     return min(stable, FORCE_RESOLUTION / (alpha * approach))
-
-
-def _contact_unresolved(scene: Scene, step: float) -> bool:
-    """Hard contact, or an exponential law whose collision time is below 1/20 of the step.
-
-    Then the remainder of a matched mesh (less than one element at the far end
-    of the long rod) is left out of the model instead of being lumped there:
-    a heavier far node reflects an initial compression blip that reaches the
-    contact while the ends graze (docs/fem.md), which matters only when the
-    contact is stiff; the missing length shifts the far-end echo by less than
-    2 h / c, which matters only when it is soft.  Masses used for epsilon stay exact.
-    """
-    law = scene.contact
-    if isinstance(law, Hard):
-        return True
-    if isinstance(law, Exponential):
-        approach = abs(scene.velocities[0] - scene.velocities[1])
-        return law.alpha * approach * step > 20.0
-    return False
 
 
 def _uniform_interior(disc: RodDiscretization, dt: float) -> bool:
@@ -380,11 +355,8 @@ class _Run:
         left, right = setup.rods
         self.u = [u.copy() for u in setup.u0]
         self.v = [v.copy() for v in setup.v0]
-        self.lumped = left.mass_kind == "lumped"
         self.inverse_mass = [1.0 / d.lumped_mass for d in setup.rods]
-        self.cholesky = [
-            d.mass_cholesky if d.mass_cholesky is not None else np.zeros((1, 1)) for d in setup.rods
-        ]
+        self.mass_solves = [prepare_mass(d) for d in setup.rods]
         self.mass_bands = [banded_mass(d) for d in setup.rods]
         column1 = left.inverse_mass_column(left.n_nodes - 1)
         column2 = right.inverse_mass_column(0)
@@ -394,9 +366,9 @@ class _Run:
         self.column2 = np.ascontiguousarray(column2[:stop])
         self.m_inv = column1[-1] + column2[0]
         self.a = []
-        for d, u, inv, chol in zip(setup.rods, self.u, self.inverse_mass, self.cholesky):
+        for d, u, (kind, table) in zip(setup.rods, self.u, self.mass_solves):
             a = np.zeros(d.n_nodes)
-            kernels.elastic_acceleration(u, d.stiffness_bands, inv, chol, self.lumped, a)
+            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
             self.a.append(a)
         masses = [float(d.lumped_mass.sum()) for d in setup.rods]
         self.masses = masses
@@ -429,9 +401,7 @@ class _Run:
             v -= 0.5 * dt * a
         self.sync = [np.zeros_like(v) for v in self.v]
         # the exact lattice runs on two time levels: u now, w = u one step earlier
-        self.lattice = setup.scheme == kernels.SCHEME_CHARACTERISTIC and all(
-            _uniform_interior(d, dt) for d in setup.rods
-        )
+        self.lattice = setup.scheme == kernels.SCHEME_CHARACTERISTIC
         if self.lattice:
             self.w = [u - dt * v for u, v in zip(self.u, self.v)]
         self.energy0 = energy
@@ -451,45 +421,120 @@ class _Run:
         massless_ends = setup.scheme in (kernels.SCHEME_CHARACTERISTIC, kernels.SCHEME_INTERFACE)
         self.energy_allowance = 2.0 * self.approach**2 / self.m_inv / scale if massless_ends else 0.0
         self.watchdog_tolerance = energy_tolerance + self.energy_allowance
+        self._pack_contact_and_control()
+        if self.lattice:
+            self._start_lattice()
+
+    def _pack_contact_and_control(self):
+        """The contact law and the general loop's run control as the kernels' plain arrays."""
+        s = self.setup
+        contact = np.zeros(lattice.CONTACT_SIZE)
+        contact[lattice.C_LAW] = s.law
+        contact[lattice.C_ALPHA] = s.alpha
+        contact[lattice.C_STRENGTH] = s.strength
+        contact[lattice.C_STIFFNESS] = s.stiffness
+        contact[lattice.C_OFFSET] = s.gap
+        contact[lattice.C_R_STOP] = s.r_stop
+        contact[lattice.C_M_INV] = self.m_inv
+        contact[lattice.C_COMPLIANCE] = 0.5 * self.m_inv * s.dt
+        self.contact = contact
+        control = np.zeros(kernels.CONTROL_SIZE)
+        control[kernels.K_DT] = s.dt
+        control[kernels.K_PERIOD] = self.period
+        control[kernels.K_CHECK_EVERY] = self.check_every
+        control[kernels.K_ENERGY_TOLERANCE] = self.watchdog_tolerance
+        control[kernels.K_SCHEME] = s.scheme
+        control[kernels.K_KIND1] = self.mass_solves[0][0]
+        control[kernels.K_KIND2] = self.mass_solves[1][0]
+        control[kernels.K_BOUND1] = self.bound[0]
+        control[kernels.K_BOUND2] = self.bound[1]
+        self.general_control = control
+
+    def _start_lattice(self):
+        """Split both rods into their waves and pack the lattice kernel's grouped arrays."""
+        s = self.setup
+        self.waves, self.rod_parameters = [], []
+        for index, (disc, u, w, theta) in enumerate(zip(s.rods, self.u, self.w, s.far_theta)):
+            mask = lattice.buffer_mask(disc.n_nodes)
+            f, g = np.zeros(mask + 1), np.zeros(mask + 1)
+            lattice.split_rod(u, w, f, g, mask)
+            contact_node = disc.n_nodes - 1 if index == 0 else 0
+            neighbour = contact_node - 1 if index == 0 else 1
+            band = disc.stiffness_bands[1, min(contact_node, neighbour)]
+            parameters = np.zeros(lattice.ROD_SIZE)
+            parameters[lattice.R_MASK] = mask
+            parameters[lattice.R_FAR_THETA] = theta
+            parameters[lattice.R_CONTACT_COEFFICIENT] = s.dt * s.dt * band / disc.lumped_mass[contact_node]
+            parameters[lattice.R_CONTACT_INVERSE_MASS] = 1.0 / disc.lumped_mass[contact_node]
+            parameters[lattice.R_BOUND] = self.bound[index]
+            self.waves.append((f, g, np.array([u[contact_node], w[contact_node]])))
+            self.rod_parameters.append(parameters)
+        control = np.zeros(lattice.CONTROL_SIZE)
+        control[lattice.K_DT] = s.dt
+        control[lattice.K_PERIOD] = self.period
+        control[lattice.K_CHECK_EVERY] = self.check_every
+        control[lattice.K_ENERGY_TOLERANCE] = self.watchdog_tolerance
+        control[lattice.K_SUBSTEPS] = s.gap_substeps
+        control[lattice.K_CENTERED] = float(s.centered)
+        control[lattice.K_GAUSS] = float(s.gauss)
+        self.control = control
 
     def advance(self, max_steps: int):
         s = self.setup
         left, right = s.rods
-        hist = [np.empty(max_steps) for _ in range(4)]
+        hist = tuple(np.empty(max_steps) for _ in range(4))
         n_energy = max_steps // self.check_every + 1
-        energies = [np.empty(n_energy) for _ in range(6)]
+        energies = tuple(np.empty(n_energy) for _ in range(6))
         if self.lattice:
-            status, done, samples = kernels.advance_lattice(
-                self.u[0], self.w[0], self.u[1], self.w[1],
-                left.stiffness_bands, right.stiffness_bands, self.inverse_mass[0], self.inverse_mass[1],
-                left.lumped_mass, right.lumped_mass, self.m_inv, s.gap_substeps, s.centered, s.gauss,
-                s.gap, s.law, s.alpha, s.strength, s.stiffness,
-                s.dt, max_steps, s.r_stop, self.period, self.check_every, self.bound[0], self.bound[1],
-                self.watchdog_tolerance, self.state,
-                hist[0], hist[1], hist[2], hist[3], *energies,
+            status, done, samples = lattice.advance_lattice(
+                (self.u[0], self.w[0], left.lumped_mass, left.stiffness_bands),
+                (self.u[1], self.w[1], right.lumped_mass, right.stiffness_bands),
+                self.rod_parameters[0], self.rod_parameters[1], self.waves[0], self.waves[1],
+                self.contact, self.control, self.state, hist, energies,
             )
             for v, u, w in zip(self.v, self.u, self.w):
                 v[:] = (u - w) / s.dt
             return status, [h[:done] for h in hist], [e[:samples] for e in energies]
         status, done, samples = kernels.advance(
-            self.u[0], self.v[0], self.a[0], self.u[1], self.v[1], self.a[1], self.sync[0], self.sync[1],
-            left.stiffness_bands, right.stiffness_bands, self.inverse_mass[0], self.inverse_mass[1],
-            self.cholesky[0], self.cholesky[1], self.lumped,
-            self.mass_bands[0], self.mass_bands[1], left.lumped_mass, right.lumped_mass,
-            self.column1, self.column2, self.m_inv, s.scheme,
-            s.gap, s.law, s.alpha, s.strength, s.stiffness,
-            s.dt, max_steps, s.r_stop, self.period, self.check_every, self.bound[0], self.bound[1],
-            self.watchdog_tolerance, self.state,
-            hist[0], hist[1], hist[2], hist[3], *energies,
+            (self.u[0], self.v[0], self.a[0], self.sync[0], left.stiffness_bands, self.mass_bands[0],
+             left.lumped_mass),
+            (self.u[1], self.v[1], self.a[1], self.sync[1], right.stiffness_bands, self.mass_bands[1],
+             right.lumped_mass),
+            (self.mass_solves[0][1], self.mass_solves[1][1]), (self.column1, self.column2),
+            self.contact, self.general_control, self.state, hist, energies,
         )
         return status, [h[:done] for h in hist], [e[:samples] for e in energies]
+
+    def momentum(self) -> float:
+        """Total momentum of both rods now (mass * length/time), unmeshed remainders included.
+
+        On the exact lattice a far node stands for half an element; the rest
+        of the rod beyond it is in the waves (:func:`lattice.remainder_momentum`,
+        at the half level of the velocities ``(u - w)/dt``).
+        """
+        if not self.lattice:
+            return sum(float(d.lumped_mass @ v) for d, v in zip(self.setup.rods, self.v))
+        total = 0.0
+        level = int(self.state[kernels.S_LEVEL])
+        for index, (d, v, (f, g, _), parameters, theta) in enumerate(
+            zip(self.setup.rods, self.v, self.waves, self.rod_parameters, self.setup.far_theta)
+        ):
+            far, inner = (0, 1) if index == 0 else (d.n_nodes - 1, d.n_nodes - 2)
+            weights = d.lumped_mass.copy()
+            weights[far] = 0.5 * d.rod.density * d.rod.area * abs(d.x[far] - d.x[inner])
+            mask = int(parameters[lattice.R_MASK])
+            remainder = sum(
+                lattice.remainder_momentum(f, g, mask, n, theta, far, d.rod.impedance) for n in (level, level - 1)
+            )
+            total += float(weights @ v) + 0.5 * remainder
+        return total
 
     def synchronized_velocities(self):
         """Nodal velocities at the current time (the loop stores them half a step earlier)."""
         out = []
-        for d, u, v, inv, chol in zip(self.setup.rods, self.u, self.v, self.inverse_mass, self.cholesky):
+        for d, u, v, (kind, table) in zip(self.setup.rods, self.u, self.v, self.mass_solves):
             a = np.zeros_like(u)
-            kernels.elastic_acceleration(u, d.stiffness_bands, inv, chol, self.lumped, a)
+            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
             out.append(v + 0.5 * self.setup.dt * a)
         return out
 

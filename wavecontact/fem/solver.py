@@ -189,7 +189,7 @@ def _collide(scene: Scene, options: dict) -> dict:
     total_energy = out["kinetic"] + out["strain"] + out["contact"]
     energy_drift = abs(total_energy[-1] - run.energy0) / run.energy_scale if total_energy.size else 0.0
     max_drift = float(np.max(np.abs(total_energy - run.energy0))) / run.energy_scale if total_energy.size else 0.0
-    momentum_end = sum(float(d.lumped_mass @ v) for d, v in zip(setup.rods, run.v))
+    momentum_end = run.momentum()
     momentum_drift = abs(momentum_end - run.momentum0) / abs(run.momentum_scale)
     elements = [d.n_elements for d in setup.rods]
     extra = {

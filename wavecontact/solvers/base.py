@@ -400,7 +400,8 @@ class SolverBase:
                 else:
                     estimate, method = math.nan, "not requested"
         restitution = float(fields["restitution"])
-        if restitution > 1.0 and scene.is_cold and not math.isnan(estimate):
+        cold = scene.is_cold and getattr(scene, "vibrations", None) is None and getattr(options, "noise", None) is None
+        if restitution > 1.0 and cold and not math.isnan(estimate):
             # a cold collision cannot gain energy: the excess over 1 is error, whatever the estimate said
             estimate = max(estimate, restitution - 1.0)
         time_, force = np.asarray(fields["time"], dtype=float), fields.get("contact_force")

@@ -12,10 +12,12 @@ References (``reference=None``):
 
 * exponential contact, finite kappa: the delay-equation solver
   (``collide(gamma, kappa, solver="delay")``, exact for the continuum);
-* hard contact or ``kappa = inf``, and penalty contact (whose stiffness the
-  solver ties to the mesh, so it tends to hard contact as the mesh is
-  refined): the hard-core limit, ``epsilon = gamma`` for ``0.5 <= gamma <= 1``
-  (wave theory of impact) and the delay solver's hard-core mode otherwise.
+* hard contact or ``kappa = inf``, penalty contact included (at ``kappa =
+  inf`` the solver ties its stiffness to the mesh, so it tends to hard
+  contact as the mesh is refined): the hard-core limit, ``epsilon = gamma`` for ``0.5 <= gamma <= 1``
+  (wave theory of impact) and the delay solver's hard-core mode otherwise;
+* penalty contact at finite kappa (a spring of stiffness ``kappa Z_eff c /
+  l``, docs/fem.md): none; pass ``reference=``.
 """
 
 from __future__ import annotations
@@ -245,6 +247,11 @@ def reference_restitution(
         from ..api import collide
     if contact == "exponential" and math.isfinite(kappa):
         return float(collide(gamma, kappa, solver="delay").restitution), "delay solver"
+    if contact == "penalty" and math.isfinite(kappa):
+        raise InvalidParameterError(
+            "penalty contact at finite kappa (stiffness kappa Z_eff c / l, docs/fem.md) has no independent "
+            "reference: pass reference=, or use kappa=inf (stiffness tied to the mesh, tending to hard contact)"
+        )
     if 0.5 <= gamma <= 1.0:
         return float(gamma), "hard-core limit epsilon = gamma (wave theory of impact)"
     return float(collide(gamma, math.inf, solver="delay").restitution), "delay solver, hard-core limit"

@@ -1,0 +1,161 @@
+"""Thermal-bath performance: one command, one table (issue 11, "Performance").
+
+    python benchmarks/bench_bath.py            # everything (several minutes on a shared 2-core machine)
+    python benchmarks/bench_bath.py --quick    # smaller sample counts
+
+Rows:
+1. the stochastic hard-core mode (kappa = inf): samples per second on one core;
+2. one delay sample against kappa and nu_max (median seconds);
+3. the Fig. 8 set (2 gamma x 10 T_B/E_tr x 2500 = 50,000 collisions, nu_max = 250) through
+   the parallel path (2 local worker processes): hard-core mode in full, kappa = 250 on a
+   subset, extrapolated;
+4. peers on one realisation at matched accuracy: JiTCDDE with the noise as input, scipy
+   solve_ivp (DOP853) on the modal equations with the thermal start;
+5. Dask: samples per second with 1 and 2 local workers, and the overhead per task.
+
+Timings are medians of repeats; the machine is shared with other jobs, so absolute
+numbers vary from run to run (the load average is printed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from timing import median_time
+
+import wavecontact
+from wavecontact.api import solve
+from wavecontact.bath import ThermalBath
+from wavecontact.bath.collide import thermal_scene
+from wavecontact.bath.scene import scene_noise
+from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
+from wavecontact.studies.ensemble import ensemble
+
+GAMMA = 0.6173
+
+
+def row(name, value, note=""):
+    print(f"| {name:<58} | {value:>14} | {note}")
+
+
+def hard_core_rate(samples):
+    ensemble(GAMMA, math.inf, 1.0, 8, 0)  # kernels ready
+    seconds = median_time(lambda: ensemble(GAMMA, math.inf, 1.0, samples, 1), 3)
+    return samples / seconds
+
+
+def delay_sample_time(kappa, modes, count=4, temperature=1.0):
+    scenes = [thermal_scene(GAMMA, kappa, ThermalBath(temperature, modes), s) for s in range(count)]
+    solve(scenes[0], "delay", rtol=1e-6, energy_split=False)
+    return median_time(lambda: [solve(s, "delay", rtol=1e-6, energy_split=False) for s in scenes], 3) / count
+
+
+def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEMPERATURES):
+    options = {} if math.isinf(kappa) else {"rtol": 1e-6}
+    with ProcessPoolExecutor(2) as pool:
+        ensemble(GAMMA, kappa, 1.0, 4, 0, executor=pool, batch_size=1, **options)  # workers import and load kernels
+        started = time.perf_counter()
+        for a, gamma in enumerate(gammas):
+            for b, temperature in enumerate(temperatures):
+                ensemble(gamma, kappa, temperature, samples, 8 + 1000 * a + b, executor=pool,
+                         batch_size=max(1, min(256, samples // 4)), **options)
+        return time.perf_counter() - started, len(gammas) * len(temperatures) * samples
+
+
+def peers(modes=50, kappa=100.0, seed=3):
+    """One realisation: wavecontact's delay solver, JiTCDDE with input, solve_ivp DOP853 on the modal system."""
+    scene = thermal_scene(GAMMA, kappa, ThermalBath(1.0, modes), seed)
+    reference = solve(scene, "delay", rtol=1e-11).restitution
+    ours = solve(scene, "delay", rtol=1e-6, energy_split=False)
+    ours_time = median_time(lambda: solve(scene, "delay", rtol=1e-6, energy_split=False), 5)
+    out = {"reference": reference, "ours": (ours.restitution, ours_time)}
+    a0 = kappa * scene.gaps[0]
+    span = ours.time[-1]
+    try:
+        from peers.jitcdde_thermal import restitution as jitcdde_restitution
+
+        tables = scene_noise(scene, kappa, a0, 32)
+        for rtol in (1e-5, 1e-7):
+            eps, wall, compiled = jitcdde_restitution(GAMMA, kappa, scene, rtol, a0, tables, span)
+            out[f"jitcdde rtol={rtol:g}"] = (eps, wall, compiled)
+    except ImportError:
+        out["jitcdde"] = None
+    from peers.modal_solve_ivp import restitution as ivp_restitution
+
+    for n_modes, rtol in ((2 * modes, 1e-8),):
+        eps, wall = ivp_restitution(GAMMA, kappa, n_modes, rtol, scene=scene)
+        out[f"DOP853 modes={n_modes} rtol={rtol:g}"] = (eps, wall)
+    return out
+
+
+def dask_scaling(samples):
+    from distributed import Client, LocalCluster
+
+    rates = {}
+    for workers in (1, 2):
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                          silence_logs=logging.ERROR) as cluster, \
+                Client(cluster) as client:
+            ensemble(GAMMA, math.inf, 1.0, 2 * workers, 0, executor=client, batch_size=1)  # warm workers
+            started = time.perf_counter()
+            ensemble(GAMMA, math.inf, 1.0, samples, 5, executor=client, batch_size=250)
+            rates[workers] = samples / (time.perf_counter() - started)
+            if workers == 2:
+                executor = client.get_executor(pure=False)
+                started = time.perf_counter()
+                futures = [executor.submit(abs, -j) for j in range(400)]
+                [f.result() for f in futures]
+                rates["overhead"] = (time.perf_counter() - started) / 400
+    return rates
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer samples")
+    args = parser.parse_args(argv)
+    quick = args.quick
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; wavecontact {wavecontact.__version__}")
+    print("| quantity | value | note")
+    rate = hard_core_rate(500 if quick else 4000)
+    row("hard-core mode (gamma 0.6173, T_B/E_tr 1, nu_max 250), 1 core", f"{rate:,.0f} /s", "target >= 20,000 /s")
+    for kappa in (50.0, 100.0, 250.0, 1000.0):
+        row(f"delay sample, kappa {kappa:g}, nu_max 250", f"{delay_sample_time(kappa, 250):.4f} s", "rtol 1e-6")
+    for modes in (50, 1000):
+        row(f"delay sample, kappa 250, nu_max {modes}", f"{delay_sample_time(250.0, modes):.4f} s", "rtol 1e-6")
+    seconds, count = fig8_parallel(math.inf, 250 if quick else 2500)
+    row(f"Fig. 8 set, hard-core mode, {count} samples, 2 workers", f"{seconds:.1f} s",
+        f"{count / seconds / 2:,.0f} samples/s/core; target <= 30 s")
+    seconds, count = fig8_parallel(250.0, 2 if quick else 10, gammas=(0.6173, 0.2173), temperatures=(0.1, 0.5, 1.0))
+    row(f"Fig. 8 at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
+        f"extrapolated to 50,000: {seconds / count * 50000:.0f} s")
+    result = peers()
+    reference = result.pop("reference")
+    for name, value in result.items():
+        if value is None:
+            row(name, "not installed", "pip install jitcdde symengine")
+            continue
+        note = f"|eps - ref| = {abs(value[0] - reference):.1e}"
+        if len(value) == 3:
+            note += f", compile {value[2]:.1f} s"
+        row(f"peer, one sample (kappa 100, nu_max 50): {name}", f"{value[1]:.4f} s", note)
+    scaling = dask_scaling(400 if quick else 4000)
+    row("Dask LocalCluster, hard-core samples/s, 1 worker", f"{scaling[1]:,.0f} /s")
+    row("Dask LocalCluster, hard-core samples/s, 2 workers", f"{scaling[2]:,.0f} /s",
+        f"speed-up {scaling[2] / scaling[1]:.2f}")
+    row("Dask overhead per task (2 workers, trivial task)", f"{1e3 * scaling['overhead']:.2f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,128 @@
+"""Regenerates the numbers and figures of docs/markov.md: ``python docs/markov_study.py [--workers 2]``.
+
+Writes docs/figures/markov_fig10.png, docs/figures/markov_cooling.png and
+docs/markov_study.json, and prints the tables that docs/markov.md quotes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout this script lives in
+
+from wavecontact.plotting.markov import plot_cooling, plot_stationary_distribution
+from wavecontact.studies.markov import markov_chains, symmetry_samples_needed, symmetry_test
+
+HERE = Path(__file__).resolve().parent
+GAMMA = 0.6
+
+
+def _relaxed_at(energy):
+    """First collision whose chain-mean E_tr lies within 3 standard errors above T_B^0."""
+    mean = energy.mean(axis=0)
+    error = energy.std(axis=0, ddof=1) / math.sqrt(energy.shape[0])
+    return int(np.nonzero(mean <= 1.0 + 3.0 * error)[0][0])
+
+
+def _glauber_contrast(scale, bins=6):
+    edges = -np.log(1.0 - np.arange(bins) / bins)
+    p_start = np.diff(np.append(1.0 - np.exp(-edges), 1.0))
+    p_end = np.diff(np.append(1.0 - np.exp(-edges / scale), 1.0))
+    return symmetry_samples_needed(np.outer(p_start, p_end), alpha=1e-3)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--transitions", type=int, default=20_000)
+    args = parser.parse_args()
+    out = {}
+    with concurrent.futures.ProcessPoolExecutor(args.workers) as pool:
+        # Fig. 10: four chains of 10,000 solved collisions (gamma = 0.6, hard core, nu_max = 250)
+        start = time.perf_counter()
+        fig10 = markov_chains(GAMMA, rule="solve", chains=4, steps=10_000, seed=2026, executor=pool, batch_size=1)
+        out["fig10_wall_s"] = time.perf_counter() - start
+        summary = fig10.summary()
+        per_chain = [
+            {"mean_energy": float(row.mean()), "fraction_below": float(np.mean(row < 1.0))}
+            for row in fig10.stationary(summary["burn_in"])
+        ]
+        first = type(fig10)(fig10.spec, fig10.energy[:1], fig10.temperature[:1], fig10.eps2[:1]).summary()
+        out["fig10_pooled"] = summary
+        out["fig10_first_chain"] = first
+        out["fig10_per_chain"] = per_chain
+        plot_stationary_distribution(fig10, HERE / "figures" / "markov_fig10.png")
+
+        # detailed balance: independent transitions from the Boltzmann law
+        n = args.transitions
+        start = time.perf_counter()
+        pairs = markov_chains(GAMMA, rule="solve", chains=n, steps=1, seed=77, initial_energy="boltzmann",
+                              executor=pool, batch_size=max(1, n // 32))
+        out["transitions_wall_s"] = time.perf_counter() - start
+        test = symmetry_test(pairs.energy[:, 0], pairs.energy[:, 1])
+        pairs_change_250 = pairs.energy[:, 1] - pairs.energy[:, 0]
+        out["detailed_balance_solve"] = {
+            "transitions": n, "statistic": test.statistic, "dof": test.dof, "pvalue": test.pvalue,
+            "asymmetry": test.asymmetry, "asymmetry_standard_error": math.sqrt(2 * test.dof) / n,
+            "stationarity_pvalue": test.stationarity_pvalue, "mean_final_energy": float(pairs.energy[:, 1].mean()),
+            "mean_final_energy_standard_error": float(pairs.energy[:, 1].std(ddof=1) / math.sqrt(n)),
+        }
+        glauber_pairs = markov_chains(GAMMA, rule="glauber", chains=n, steps=1, seed=77, initial_energy="boltzmann")
+        gtest = symmetry_test(glauber_pairs.energy[:, 0], glauber_pairs.energy[:, 1])
+        out["detailed_balance_glauber"] = {"transitions": n, "statistic": gtest.statistic, "dof": gtest.dof,
+                                           "pvalue": gtest.pvalue}
+        out["samples_needed"] = {f"glauber_at_{s:g}_T": _glauber_contrast(s) for s in (1.02, 1.05, 1.1, 1.2, 1.5)}
+
+        # Eq. 32 against the number of bath modes: mean of E' - E for E ~ exp(-E)
+        defects = []
+        for modes in (8, 16, 32, 64, 128):
+            pairs = markov_chains(GAMMA, rule="solve", chains=n, steps=1, seed=78, initial_energy="boltzmann",
+                                  bath_modes=modes, executor=pool, batch_size=max(1, n // 32))
+            change = pairs.energy[:, 1] - pairs.energy[:, 0]
+            defects.append({"bath_modes": modes, "mean_change": float(change.mean()),
+                            "standard_error": float(change.std(ddof=1) / math.sqrt(n))})
+        change = pairs_change_250
+        defects.append({"bath_modes": 250, "mean_change": float(change.mean()),
+                        "standard_error": float(change.std(ddof=1) / math.sqrt(n))})
+        out["boltzmann_defect"] = defects
+        # at 250 modes: two more independent sets, and the first set again on a grid twice as fine
+        repeats = [defects[-1]]
+        for seed, resolution in ((79, 8), (80, 8), (77, 16)):
+            pairs = markov_chains(GAMMA, rule="solve", chains=n, steps=1, seed=seed, initial_energy="boltzmann",
+                                  executor=pool, batch_size=max(1, n // 32), hard_core_resolution=resolution)
+            change = pairs.energy[:, 1] - pairs.energy[:, 0]
+            repeats.append({"seed": seed, "hard_core_resolution": resolution, "mean_change": float(change.mean()),
+                            "standard_error": float(change.std(ddof=1) / math.sqrt(n))})
+        independent = np.array([r["mean_change"] for r in repeats[:3]])
+        out["boltzmann_defect_250"] = {"sets": repeats, "mean_of_independent_sets": float(independent.mean()),
+                                       "standard_error": float(np.hypot.reduce([r["standard_error"] for r in repeats[:3]]) / 3)}
+
+        # cooling from a cold bath (Eq. 28, N_mod = 10, all energy translational at the start)
+        cold = {"chains": 400, "steps": 40, "seed": 31, "bath": "conserved", "modes_per_rod": 10, "initial_energy": 21.0}
+        vibration = markov_chains(GAMMA, rule="solve", executor=pool, batch_size=25, **cold)
+        glauber = markov_chains(GAMMA, rule="glauber", **cold)
+        out["cooling"] = {
+            "chains": 400, "modes_per_rod": 10, "initial_energy": 21.0,
+            "vibration_relaxed_at": _relaxed_at(vibration.energy),
+            "glauber_relaxed_at": _relaxed_at(glauber.energy),
+            "vibration_mean_energy": [float(x) for x in vibration.energy.mean(axis=0)[:12]],
+            "glauber_mean_energy": [float(x) for x in glauber.energy.mean(axis=0)[:12]],
+            "vibration_late_mean": float(vibration.energy[:, 20:].mean()),
+            "glauber_late_mean": float(glauber.energy[:, 20:].mean()),
+        }
+        plot_cooling({"vibration rule (solve)": vibration, "Glauber, Eq. 35": glauber},
+                     HERE / "figures" / "markov_cooling.png")
+    (HERE / "markov_study.json").write_text(json.dumps(out, indent=1))
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,91 @@
+"""The noise Q(tau) (Eq. 17): its tables and its covariance (Eq. 19, Fig. 4)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from wavecontact.bath import ThermalBath, covariance_eq19, covariance_series
+from wavecontact.bath.noise import noise_tables
+from wavecontact.delay.kernels import table_value
+
+GAMMA = 0.6173
+LENGTHS = (0.5 * (1 + GAMMA), 0.5 * (1 + GAMMA) / GAMMA)
+PERIODS = (1 + GAMMA, 1 + 1 / GAMMA)
+
+
+def _direct(coefficients, t, contact_time):
+    total = np.zeros_like(t)
+    for omega, a, b in coefficients:
+        phase = np.outer(t - contact_time, omega)
+        total += np.cos(phase) @ a + np.sin(phase) @ b
+    return total
+
+
+def test_tables_reproduce_the_fourier_sum():
+    v = ThermalBath(1.0, modes=250).draw(LENGTHS, 5)
+    coefficients = v.noise_coefficients(100.0)
+    tables = noise_tables(coefficients, PERIODS, contact_time=3.7)
+    t = np.linspace(0.0, 9.0, 1001)
+    table = np.array([sum(table_value(x, tables.periods[i], tables.values[i], tables.slopes[i])[0]
+                          for i in range(2)) for x in t])
+    exact = _direct(coefficients, t, 3.7)
+    scale = np.max(np.abs(exact))
+    assert np.max(np.abs(table - exact)) < 1e-5 * scale
+
+
+def test_eq19_is_the_limit_of_the_series_with_error_falling_like_one_over_modes():
+    tau = np.linspace(0.0, 7.0, 301)
+    exact = covariance_eq19(tau, GAMMA, 10.0, (1.0, 1.0))
+    modes = np.array([25, 50, 100, 200, 400])
+    errors = [np.max(np.abs(covariance_series(tau, GAMMA, 10.0, (1.0, 1.0), m) - exact)) for m in modes]
+    slope = np.polyfit(np.log(modes), np.log(errors), 1)[0]
+    assert -1.1 < slope < -0.9  # the tail sum_{nu > M} 1/nu^2 ~ 1/M
+
+
+def test_eq19_with_equal_temperatures_is_the_papers_formula():
+    # sigma^2 {sum_i (tau - Gamma_i/2 - Gamma_i sum_n theta(tau - n Gamma_i))^2 / (2 Gamma_i) - Gamma_1 Gamma_2 / 24}
+    kappa, ratio = 7.0, 0.8
+    sigma2 = kappa**2 * ratio / 2.0
+    tau = np.linspace(0.0, 9.0, 97)
+    paper = -PERIODS[0] * PERIODS[1] / 24.0
+    for g in PERIODS:
+        paper = paper + (tau - g / 2 - g * np.floor(tau / g)) ** 2 / (2 * g)
+    assert np.allclose(covariance_eq19(tau, GAMMA, kappa, (ratio, ratio)), sigma2 * paper, rtol=1e-12, atol=1e-12)
+
+
+def test_sampled_noise_has_the_covariance_of_eq19():
+    # Fig. 4: <Q(t') Q(t' + tau)> over realisations against the series (exact for nu_max modes)
+    # and Eq. 19 (nu_max -> inf); tolerance from the spread of the products
+    modes, kappa, ratio, count = 100, 1.0, 1.0, 3000
+    lags = np.array([0.0, 0.3, 0.8, 1.6, 2.5])
+    products = []
+    for s in range(count):
+        coefficients = ThermalBath(ratio, modes).draw(LENGTHS, s).noise_coefficients(kappa)
+        q = _direct(coefficients, 0.9 + lags, 0.0)
+        products.append(q[0] * q)
+    products = np.array(products)
+    mean = products.mean(axis=0)
+    error = products.std(axis=0, ddof=1) / math.sqrt(count)
+    series = covariance_series(lags, GAMMA, kappa, (ratio, ratio), modes)
+    assert np.all(np.abs(mean - series) < 4.5 * error)
+    tail = covariance_series(lags, GAMMA, kappa, (ratio, ratio), modes) - covariance_eq19(lags, GAMMA, kappa, (ratio,) * 2)
+    assert np.max(np.abs(tail)) < 0.01 * covariance_eq19(0.0, GAMMA, kappa, (ratio, ratio))
+
+
+def test_unequal_temperatures_split_the_covariance_by_rod():
+    tau = np.linspace(0.0, 5.0, 51)
+    both = covariance_eq19(tau, GAMMA, 3.0, (0.2, 1.4))
+    parts = covariance_eq19(tau, GAMMA, 3.0, (0.2, 0.0)) + covariance_eq19(tau, GAMMA, 3.0, (0.0, 1.4))
+    assert np.allclose(both, parts)
+    # rod 1's part is periodic in Gamma_1 alone
+    rod1 = covariance_eq19(tau, GAMMA, 3.0, (0.2, 0.0))
+    assert np.allclose(rod1, covariance_eq19(tau + PERIODS[0], GAMMA, 3.0, (0.2, 0.0)))
+
+
+def test_harmonics_of_another_period_are_refused():
+    from wavecontact import InvalidParameterError
+
+    omega = 2 * math.pi * np.arange(1, 4) / 1.0
+    with pytest.raises(InvalidParameterError, match="harmonics"):
+        noise_tables([(omega, np.ones(3), np.ones(3))], (2.0,), 0.0)

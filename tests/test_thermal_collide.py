@@ -1,0 +1,87 @@
+"""One thermal collision: the same realisation through all three solvers (Sec. VI)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import wavecontact
+from wavecontact import two_rods
+from wavecontact.api import solve
+from wavecontact.bath import ThermalBath
+
+WARM = {"bath_temperature": 0.5, "bath_modes": 10, "seed": 3}
+
+
+@pytest.fixture(scope="module")
+def delay_reference():
+    return wavecontact.collide(0.6, 20.0, "delay", **WARM)
+
+
+def test_delay_energy_split_adds_up_to_the_translational_loss(delay_reference):
+    gain = delay_reference.extra["vibration_energy_gain"]
+    eps = delay_reference.restitution
+    assert gain.sum() == pytest.approx((1.0 - eps**2) / 4.0, abs=1e-9)
+
+
+def test_cold_split_gives_the_long_rod_almost_everything():
+    # hard-core limit: the short rod leaves without vibrations (Eq. 25); at kappa = 1000 nearly so
+    result = wavecontact.collide(0.6, 1000.0, "delay")
+    gain = result.extra["vibration_energy_gain"]
+    assert abs(gain[0]) < 0.01 * gain[1]
+    assert gain.sum() == pytest.approx((1 - result.restitution**2) / 4, abs=1e-8)
+
+
+def test_modal_solver_agrees_on_the_same_realisation(delay_reference):
+    modal = wavecontact.collide(0.6, 20.0, "modal", modes=100, **WARM)
+    assert modal.restitution == pytest.approx(delay_reference.restitution, abs=5e-5)
+    # per-rod split of the delay solver against the modal energies
+    assert np.allclose(modal.extra["vibration_energy_gain"], delay_reference.extra["vibration_energy_gain"], atol=5e-4)
+
+
+def test_fem_converges_to_the_delay_result_on_the_same_realisation(delay_reference):
+    elements = np.array([200, 400, 800])
+    runs = [wavecontact.collide(0.6, 20.0, "fem", elements=int(n), **WARM) for n in elements]
+    errors = np.array([abs(r.restitution - delay_reference.restitution) for r in runs])
+    assert errors[-1] < 1e-5
+    assert np.polyfit(np.log(elements), np.log(errors), 1)[0] < -1.5  # second order (observed ~2)
+    split_errors = [np.max(np.abs(r.extra["vibration_energy_gain"] - delay_reference.extra["vibration_energy_gain"]))
+                    for r in runs]
+    assert split_errors[-1] < 1e-3
+    assert np.polyfit(np.log(elements), np.log(split_errors), 1)[0] < -1.5
+
+
+def test_result_does_not_depend_on_the_start_gap_or_the_end_time():
+    gamma, kappa = 0.6, 50.0
+    v = ThermalBath(1.0, 20).draw((0.8, 0.8 / 0.6), 9)
+    chosen = two_rods(gamma, kappa, vibrations=v)
+    farther = two_rods(gamma, kappa, vibrations=v, gap=chosen.gaps[0] + 0.75)
+    a = solve(chosen, "delay")
+    b = solve(farther, "delay")
+    c = solve(chosen, "delay", end_time=a.time[-1] + 30.0)
+    assert b.restitution == pytest.approx(a.restitution, abs=1e-9)
+    assert c.restitution == pytest.approx(a.restitution, abs=1e-9)
+    # and not on the realisation's bookkeeping: the hard-core grid moved by the same amount
+    hard_a = solve(two_rods(gamma, math.inf, contact="hard", vibrations=v), "delay")
+    hard_b = solve(two_rods(gamma, math.inf, contact="hard", vibrations=v, gap=1.25 + chosen.gaps[0]), "delay")
+    assert hard_b.restitution == pytest.approx(hard_a.restitution, abs=3 * max(hard_a.error_estimate, 1e-6))
+
+
+def test_a_cold_bath_is_the_cold_collision():
+    warm = wavecontact.collide(0.6, 100.0, "delay", bath_temperature=0.0, bath_modes=5, seed=1)
+    assert warm.restitution == pytest.approx(0.646697087, abs=2e-9)  # MODEL.md section 5
+
+
+def test_one_cold_rod_takes_no_noise():
+    v = ThermalBath((0.0, 1.0), 10).draw((0.8, 0.8 / 0.6), 4)
+    (_o1, a1, b1), (_o2, a2, _b2) = v.noise_coefficients(10.0)
+    assert not np.any(a1) and not np.any(b1) and np.any(a2)
+
+
+def test_collide_refuses_bad_bath_input_in_one_line():
+    for kwargs, message in (({"bath_temperature": -1.0}, "temperature"), ({"bath_temperature": 1.0, "bath_modes": 0},
+                                                                             "nu_max"),
+                            ({"bath_temperature": 1.0, "seed": -3}, "seed")):
+        with pytest.raises(wavecontact.InvalidParameterError, match=message) as info:
+            wavecontact.collide(0.6, 10.0, **kwargs)
+        assert "\n" not in str(info.value)

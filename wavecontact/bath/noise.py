@@ -1,0 +1,149 @@
+"""The noise ``Q(tau)`` of a realisation on FFT grids, and its covariance (Eq. 19).
+
+Each rod's share of ``Q`` is periodic with that rod's round-trip time, so it
+is tabulated once per rod on a grid of one period by an inverse real FFT
+(values and slopes); a solver then reads it by cubic Hermite interpolation
+(:func:`wavecontact.delay.kernels.table_value`) at a cost that does not grow
+with the number of bath modes.  ``2 nu_max`` cosines per evaluation would
+otherwise multiply the solver's cost.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+
+__all__ = ["POINTS_PER_PERIOD", "NoiseTables", "covariance_eq19", "covariance_series", "noise_tables", "table_points"]
+
+NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
+POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
+
+
+def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
+    """Table length: ``points_per_period`` nodes per period of the fastest of ``modes`` harmonics,
+    at least ``2 modes + 2`` (FFT exactness) and a power of two."""
+    wanted = max(points_per_period * modes, 2 * modes + 2, 16)
+    return 1 << (wanted - 1).bit_length()
+
+
+@dataclass(frozen=True)
+class NoiseTables:
+    """Per-rod periodic tables of ``Q_i`` and ``Q_i'`` (rows), one period each.
+
+    ``values[i, j] = Q_i(origin + j periods[i] / n)``; times in the solver's unit.
+    """
+
+    periods: np.ndarray
+    values: np.ndarray
+    slopes: np.ndarray
+    slope_bound: float
+    curvature_bound: float = 0.0
+
+    @classmethod
+    def empty(cls) -> NoiseTables:
+        return cls(np.zeros(0), np.zeros((0, 1)), np.zeros((0, 1)), 0.0)
+
+    @property
+    def step_limit(self) -> float:
+        """Step over which ``Q`` departs from its secant by at most 1 (``max|Q''| h^2 / 8 <= 1``); 0 if no noise."""
+        return math.sqrt(8.0 * NOISE_EXCURSION / self.curvature_bound) if self.curvature_bound > 0.0 else 0.0
+
+
+def _harmonic_series(a, b, period, shift, n, slopes=True):
+    """Values and slopes of ``sum_nu a cos(2 pi nu (t - t_c)/P) + b sin(...)`` at ``t_c + shift + j P / n``."""
+    nu = np.arange(1, a.size + 1)
+    coefficients = (a - 1j * b) * np.exp(2j * math.pi * nu * shift / period)
+    spectrum = np.zeros(n // 2 + 1, dtype=complex)
+    spectrum[1:a.size + 1] = 0.5 * n * coefficients
+    values = np.fft.irfft(spectrum, n)
+    if not slopes:
+        return values, None
+    spectrum[1:a.size + 1] *= 2j * math.pi * nu / period
+    return values, np.fft.irfft(spectrum, n)
+
+
+def _curvature_peak(a, b, period, n):
+    """Largest ``|q''|`` over ``n`` nodes of a period (the nodes are dense: ``n >= 16 x`` modes)."""
+    nu = np.arange(1, a.size + 1)
+    spectrum = np.zeros(n // 2 + 1, dtype=complex)
+    spectrum[1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
+    return float(np.max(np.abs(np.fft.irfft(spectrum, n)))) if a.size else 0.0
+
+
+def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0,
+                 points_per_period: int = POINTS_PER_PERIOD) -> NoiseTables:
+    """Tabulate each rod's noise term on one period.
+
+    Parameters
+    ----------
+    coefficients : list of (omega, a, b)
+        From :meth:`BathRealisation.noise_coefficients`, converted to the
+        solver's time unit (``omega_nu = 2 pi nu / periods[i]``).
+    periods : sequence of float
+        Each rod's period (its round-trip time ``Gamma_i`` in units of ``l / c``).
+    contact_time : float
+        Time at which the realisation's amplitudes hold (nominal contact).
+    origin : float
+        Time of the first table node.
+    points_per_period : int
+        Nodes per period of the fastest mode.
+    """
+    rows_v, rows_s = [], []
+    bound = 0.0
+    curvature = 0.0
+    modes = max(a.size for _omega, a, _b in coefficients)
+    n = table_points(modes, points_per_period)
+    for (omega, a, b), period in zip(coefficients, periods):
+        if a.size and not np.allclose(omega, 2 * math.pi * np.arange(1, a.size + 1) / period, rtol=1e-12):
+            raise InvalidParameterError("noise frequencies must be the harmonics of the given period")
+        values, slopes = _harmonic_series(np.asarray(a, float), np.asarray(b, float), float(period),
+                                          origin - contact_time, n)
+        rows_v.append(values)
+        rows_s.append(slopes)
+        bound += float(np.sum(omega * np.hypot(a, b)))
+        # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
+        # denser by default), with 10 % for what falls between them
+        curvature += 1.1 * _curvature_peak(np.asarray(a, float), np.asarray(b, float), float(period), n)
+    return NoiseTables(np.asarray(periods, dtype=float), np.array(rows_v), np.array(rows_s), bound, curvature)
+
+
+def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:
+    """``C_Q(tau)`` of Eq. 19 for infinitely many modes, each rod at its own temperature.
+
+    Parameters
+    ----------
+    tau : array_like
+        Lag (units of ``l / c``).
+    gamma, kappa : float
+        The paper's numbers.
+    temperatures : pair of float
+        ``T_i / E_tr`` of each rod.
+
+    Notes
+    -----
+    Rod ``i`` contributes ``2 kappa^2 T_i [(tau_i - Gamma_i/2)^2 / (2 Gamma_i) - Gamma_i / 24]``
+    (``T_i`` in units with ``E_tr = 1/4``, ``tau_i = tau mod Gamma_i``); with
+    ``T_1 = T_2`` the sum is Eq. 19 because ``Gamma_1 + Gamma_2 = Gamma_1 Gamma_2``.
+    """
+    tau = np.abs(np.asarray(tau, dtype=float))
+    total = np.zeros_like(tau)
+    for ratio, period in zip(temperatures, (1.0 + gamma, 1.0 + 1.0 / gamma)):
+        x = np.mod(tau, period)
+        total += 2.0 * kappa**2 * (ratio / 4.0) * ((x - 0.5 * period) ** 2 / (2.0 * period) - period / 24.0)
+    return total
+
+
+def covariance_series(tau, gamma: float, kappa: float, temperatures, modes: int) -> np.ndarray:
+    """``C_Q(tau)`` of the noise truncated at ``modes`` modes per rod (the finite sum behind Eq. 19)."""
+    tau = np.abs(np.asarray(tau, dtype=float))[..., None]
+    nu = np.arange(1, modes + 1)
+    total = 0.0
+    for ratio, period in zip(temperatures, (1.0 + gamma, 1.0 + 1.0 / gamma)):
+        length = 0.5 * period
+        variance = 2.0 * kappa**2 * (ratio / 4.0) * length / (math.pi**2 * nu**2)
+        total = total + np.sum(variance * np.cos(2 * math.pi * nu * tau / period), axis=-1)
+    return total

@@ -1,0 +1,107 @@
+"""``wavecontact ensemble``: the law of the stochastic restitution at one (gamma, kappa, T_B/E_tr)."""
+
+from __future__ import annotations
+
+import json
+import math
+from contextlib import contextmanager
+
+from ..errors import InvalidParameterError
+from .common import gamma_value, kappa_value, positive_int
+
+
+def _temperature(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InvalidParameterError(f"--temperature (T_B/E_tr) must be a number >= 0, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0.0):
+        raise InvalidParameterError(f"--temperature (T_B/E_tr) must be finite and >= 0, got {text!r}")
+    return value
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "ensemble",
+        help="many thermal collisions: mean, spread and law of epsilon",
+        description="Collide SAMPLES independent realisations of the thermal bath (T_B/E_tr = R) and report the "
+        "mean and standard deviation of epsilon with standard errors, and the law of epsilon^2. "
+        "Sample j's seed is SeedSequence(SEED).spawn(...)[j]: the samples do not depend on the workers.",
+    )
+    p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
+    p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]; 'inf' = hard core")
+    p.add_argument("--temperature", type=str, required=True, metavar="R", help="T_B / E_tr >= 0")
+    p.add_argument("--samples", type=positive_int, required=True, help="number of collisions")
+    p.add_argument("--seed", type=int, required=True, help="root seed (>= 0)")
+    p.add_argument("--bath-modes", type=int, default=250, help="modes per rod nu_max (default 250)")
+    p.add_argument("--solver", choices=("delay", "modal", "fem"), default="delay")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=positive_int, default=1, help="local worker processes (default 1)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler")
+    p.add_argument("--batch-size", type=positive_int, default=256, help="samples per task (default 256)")
+    p.add_argument("--rtol", type=float, help="delay solver accuracy (default 1e-6 in ensembles)")
+    p.add_argument("--out", metavar="DIR", help="keep every finished batch here; a rerun resumes")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="FILE", help="draw p(eps^2) and D(eps^2) with confidence bands")
+    p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    p.set_defaults(run=run)
+    return p
+
+
+@contextmanager
+def executor_from(workers: int, scheduler):
+    """A process pool, a Dask client or nothing (one worker), closed afterwards."""
+    if scheduler:
+        try:
+            from distributed import Client
+        except ImportError:  # pragma: no cover
+            raise InvalidParameterError("--scheduler needs dask.distributed installed") from None
+        try:
+            client = Client(scheduler, timeout="3s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InvalidParameterError(f"cannot reach the Dask scheduler at {scheduler!r}: {reason}") from None
+        try:
+            yield client
+        finally:
+            client.close()
+    elif workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            yield pool
+    else:
+        yield None
+
+
+def run(args) -> int:
+    from ..studies.ensemble import ensemble
+
+    temperature = _temperature(args.temperature)
+    options = {}
+    if args.rtol is not None:
+        if args.solver != "delay":
+            raise InvalidParameterError(f"--rtol applies to --solver delay, not {args.solver}")
+        options["rtol"] = args.rtol
+    elif args.solver == "delay" and math.isfinite(args.kappa):
+        options["rtol"] = 1e-6
+    with executor_from(args.workers, args.scheduler) as executor:
+        result = ensemble(args.gamma, args.kappa, temperature, args.samples, args.seed, solver=args.solver,
+                          bath_modes=args.bath_modes, executor=executor, batch_size=args.batch_size, out=args.out,
+                          progress=args.progress and not args.json, **options)
+    summary = result.summary()
+    if args.out:
+        result.save(args.out)
+    if args.plot:
+        from ..plotting.bath import plot_law
+
+        plot_law(result, args.plot)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"gamma = {result.spec.gamma:g}, kappa = {summary['kappa']}, T_B/E_tr = {args.temperature}, "
+              f"nu_max = {result.spec.bath_modes}, {summary['samples']} samples (seed {result.spec.seed})")
+        print(f"mean epsilon = {summary['mean']:.5f} +- {summary['standard_error']:.5f}")
+        print(f"std  epsilon = {summary['std']:.5f} +- {summary['std_standard_error']:.5f}")
+        print(f"mean epsilon^2 = {summary['mean_eps2']:.5f}")
+    return 0

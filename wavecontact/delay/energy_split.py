@@ -1,0 +1,80 @@
+"""Which rod's vibrations took the energy: the per-rod split of the delay solution.
+
+In the units of MODEL.md section 2 (``Z = 1``, ``alpha = kappa``) a contact
+force ``F`` moves rod ``i``'s facing end, away from the contact, by
+
+    kappa y_i(tau) = W(tau) / 2 + S_i(tau) - Q_i(tau),
+    S_i(tau) = sum_{n >= 1} W(tau - n Gamma_i)
+
+(the wave theory of a free-free rod: the end takes ``F / Z`` at once and
+``2 F / Z`` again after every round trip ``Gamma_i``; ``Q_i`` is rod ``i``'s
+own vibration, its share of Eq. 17).  Both rods' terms add up to the memory
+and noise of Eq. 16.  Rod ``i``'s centre of mass moves by
+``int_0^tau W ds / Gamma_i`` of that (momentum over mass), so its vibrations
+gain
+
+    Delta E_i = 1 / (2 kappa^2) int W'(tau) [W'/2 + S_i' - W / Gamma_i - Q_i'] dtau
+
+(energy units with ``E_tr = mu V^2 / 2 = 1/4``; ``F = W' / (2 kappa)``).  Their
+sum is the translational energy lost, ``(1 - epsilon^2) / 4``; the test suite
+checks that identity and compares each term with the modal solver.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import kernel
+from .kernels import hermite5, table_value
+
+__all__ = ["vibration_energy_gain"]
+
+# Gauss-Legendre on [0, 1], 8 nodes
+_X, _W = np.polynomial.legendre.leggauss(8)
+NODES = 0.5 * (_X + 1.0)
+WEIGHTS = 0.5 * _W
+
+
+@kernel
+def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
+    """``Delta E_i`` per rod (see module docstring), Gauss-Legendre on each stored step.
+
+    Parameters
+    ----------
+    kappa : float
+        Softness.
+    t, w, d1, d2 : ndarray
+        The delay solver's grid and ``W, W', W''`` on it.
+    delays : ndarray (2,)
+        ``Gamma_1, Gamma_2``.
+    periods, tables, table_slopes : ndarray
+        Each rod's noise table (``R = 0`` rows for a cold bath).
+    nodes, weights : ndarray
+        Quadrature rule on [0, 1].
+    subdivide : int
+        Sub-intervals per stored step.
+    """
+    last = t.shape[0] - 1
+    gain = np.zeros(2)
+    for j in range(last):
+        for part in range(subdivide):
+            a = t[j] + (t[j + 1] - t[j]) * part / subdivide
+            b = t[j] + (t[j + 1] - t[j]) * (part + 1) / subdivide
+            for m in range(nodes.shape[0]):
+                s = a + (b - a) * nodes[m]
+                value, slope, _c = hermite5(t, w, d1, d2, last, s)
+                if slope == 0.0:
+                    continue
+                for i in range(2):
+                    memory_slope = 0.0
+                    n = 1
+                    while s - n * delays[i] > t[0]:
+                        _v, ds, _cc = hermite5(t, w, d1, d2, last, s - n * delays[i])
+                        memory_slope += ds
+                        n += 1
+                    noise_slope = 0.0
+                    if periods.shape[0] == 2:
+                        _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
+                    end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
+                    gain[i] += weights[m] * (b - a) * slope * end_slope
+    return gain / (2.0 * kappa * kappa)
