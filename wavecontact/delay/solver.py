@@ -176,24 +176,26 @@ class DelaySolver(SolverBase):
         return 1.0
 
     def estimate_cost(self, scene: Scene, options: DelayOptions) -> Cost | None:
-        """Refuse, before any step, what the method of steps cannot do in bounded time:
-        ``gamma < GAMMA_MIN`` at finite kappa, and an ``end_time`` beyond ``max_steps`` steps."""
+        """Refuse, before any step, what the method of steps cannot do in bounded time: round trips
+        more than ``1/GAMMA_MIN`` apart at finite kappa, and an ``end_time`` beyond ``max_steps`` steps."""
         params = _check_scene(scene)
         if math.isinf(params.kappa) or isinstance(scene.contact, Hard):
             return None
-        if params.gamma < GAMMA_MIN:
+        short, long = sorted(params.round_trip_times)
+        if long / short > 1.0 / GAMMA_MIN:
             raise LimitError(
-                f"delay: gamma = {params.gamma:.3g} is below {GAMMA_MIN:g} at finite kappa: the equation must be "
-                "followed until the long rod's echo returns (Gamma_2 = 1 + 1/gamma) in steps shorter than "
-                "Gamma_1, each summing Gamma_2/Gamma_1 delayed copies, so its cost grows like 1/gamma^2; "
-                "use solver='modal' or solver='fem' (or kappa=inf)")
-        shortest_step = 0.95 * (1.0 + params.gamma)  # the method of steps' largest step
+                f"delay: the round trips differ by a factor {long / short:.3g} > {1 / GAMMA_MIN:g} (gamma < "
+                f"{GAMMA_MIN:g} for one material) at finite kappa: the equation must be followed until the long "
+                "rod's echo returns in steps shorter than the short rod's round trip, each summing all its "
+                "echoes, so the cost grows like the square of that factor; use solver='modal' or solver='fem' "
+                "(or kappa=inf)")
+        largest_step = 0.95 * short  # the method of steps' largest step
         if options.end_time is not None:
-            steps = options.end_time / shortest_step
+            steps = options.end_time / largest_step
             if steps > options.max_steps:
                 raise LimitError(
                     f"delay: end_time={options.end_time:g} needs at least {steps:.3g} steps (each at most "
-                    f"0.95 Gamma_1 = {shortest_step:.3g}), more than max_steps={options.max_steps}; "
+                    f"0.95 Gamma_1 = {largest_step:.3g}), more than max_steps={options.max_steps}; "
                     f"lower end_time or pass max_steps={math.ceil(steps * 1.1)}")
         return None
 
