@@ -59,7 +59,13 @@ def test_rods_of_lengths_one_and_a_billionth_are_refused_by_memory():
 def test_tiny_gamma_is_refused_by_every_solver_or_bounded():
     refused(lambda: collide(1e-6, 20), "gamma", "square")
     refused(lambda: collide(1e-6, 20, solver="fem"), "max_")
-    refused(lambda: collide(1e-6, 20, solver="modal"), "max_work")
+    # the modal solver keeps a fixed number of modes per rod: it ends (or is refused) quickly
+    start = time.perf_counter()
+    try:
+        collide(1e-6, 20, solver="modal", modes=20)
+    except WavecontactError:
+        pass
+    assert time.perf_counter() - start < 10.0
 
 
 def test_fem_courant_and_dt_too_small_are_refused():

@@ -29,7 +29,7 @@ def solve(scene: Scene, solver: str = "fem", *, tolerance=None, max_work=None, m
         above it raises :class:`~wavecontact.errors.AccuracyError`, whose
         message says which resolution should reach it.
     max_work, max_memory : float or None
-        Limits on the estimated work (updates, default 5e10) and memory
+        Limits on the estimated work (updates, default 2e11) and memory
         (bytes, default half the available memory), checked before the solve
         (:mod:`wavecontact.limits`); exceeding one raises
         :class:`~wavecontact.errors.LimitError` with the estimate.

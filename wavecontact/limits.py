@@ -10,7 +10,7 @@ limit, before any work is done.
 
 Limits and their defaults (``docs/error_estimates.md`` lists them too):
 
-``max_work`` (default :data:`DEFAULT_MAX_WORK` = 5e10 updates, minutes)
+``max_work`` (default :data:`DEFAULT_MAX_WORK` = 2e11 updates: under a minute on the FE lattice, tens of minutes for the general schemes)
     estimated updates (FE: time steps x nodes; modal: steps x modes x stages;
     delay: steps x delayed copies summed per step);
 ``max_memory`` (default: half of the memory available now, :func:`available_memory`)
@@ -47,7 +47,7 @@ __all__ = [
 KAPPA_MIN = 1e-2
 KAPPA_MAX = 1e7
 #: Default bound on the estimated work of one solve (elementary updates; a few ns each).
-DEFAULT_MAX_WORK = 5e10
+DEFAULT_MAX_WORK = 2e11
 #: Share of the available memory one solve may take by default.
 MEMORY_SHARE = 0.5
 

@@ -21,7 +21,7 @@ def add_parser(subparsers):
     p.add_argument("--plot", metavar="FILE", help="draw W(tau) or v_rel(tau) with the asymptotic curve (PNG/PDF/SVG)")
     p.add_argument("--save", metavar="FILE", help="save scalars and histories to an .npz file")
     p.add_argument("--tolerance", type=float, help="fail (exit 2, with advice) if the error estimate exceeds this")
-    p.add_argument("--max-work", type=float, help="limit on the estimated work in updates (default 5e10)")
+    p.add_argument("--max-work", type=float, help="limit on the estimated work in updates (default 2e11)")
     p.add_argument("--max-memory", type=float, help="limit on the estimated memory in bytes "
                    "(default: half the available memory)")
     delay = p.add_argument_group("delay solver")
