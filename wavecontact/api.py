@@ -6,14 +6,16 @@ import dataclasses
 
 from .contact import ContactLaw
 from .errors import InvalidParameterError
+from .limits import check_kappa
 from .result import CollisionResult
-from .scene import Scene, two_rods
+from .scene import Scene, two_rods, validate_gamma_kappa
 from .solvers import get_solver
 
 __all__ = ["collide", "solve"]
 
 
-def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
+def solve(scene: Scene, solver: str = "fem", *, tolerance=None, max_work=None, max_memory=None,
+          estimate_error: bool = True, **options) -> CollisionResult:
     """Run one collision of ``scene`` with the named solver.
 
     Parameters
@@ -22,6 +24,18 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
         What to simulate.
     solver : {'delay', 'fem', 'modal'}
         How to simulate it.
+    tolerance : float or None
+        Largest acceptable ``error_estimate`` of the restitution; a result
+        above it raises :class:`~wavecontact.errors.AccuracyError`, whose
+        message says which resolution should reach it.
+    max_work, max_memory : float or None
+        Limits on the estimated work (updates, default 2e11) and memory
+        (bytes, default half the available memory), checked before the solve
+        (:mod:`wavecontact.limits`); exceeding one raises
+        :class:`~wavecontact.errors.LimitError` with the estimate.
+    estimate_error : bool
+        Estimate the error (FE and modal: one more run at half the resolution,
+        about a quarter of the cost); False leaves ``error_estimate`` NaN.
     **options
         Solver options; unknown names are refused (each solver's ``Options``
         dataclass lists them: ``get_solver(name).Options``).
@@ -29,11 +43,13 @@ def solve(scene: Scene, solver: str = "fem", **options) -> CollisionResult:
     Returns
     -------
     CollisionResult
-        With ``wall_time_s`` measured around the whole solve, and
+        With ``error_estimate`` (docs/error_estimates.md), ``wall_time_s``
+        measured around the whole solve (the error estimate's run included), and
         ``diagnostics["includes_kernel_preparation"]`` True when numba compiled or
         loaded kernels during it (a first call: that time is not the solver's cost).
     """
-    return get_solver(solver).solve(scene, options)
+    return get_solver(solver).solve(scene, options, tolerance=tolerance, max_work=max_work,
+                                    max_memory=max_memory, estimate_error=estimate_error)
 
 
 def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="exponential", bath_temperature=None,
@@ -45,7 +61,8 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     gamma : float
         Length ratio ``l1 / l2`` in (0, 1].
     kappa : float
-        ``alpha V l / c`` in (0, inf]; ``inf`` is the hard-core limit.
+        ``alpha V l / c`` in [1e-2, 1e7] or ``inf`` (the hard-core limit);
+        :data:`wavecontact.limits.KAPPA_MIN`, :data:`~wavecontact.limits.KAPPA_MAX`.
     solver : {'delay', 'fem', 'modal'}
         Which solver to use.
     contact : {'exponential', 'penalty', 'hard'} or ContactLaw
@@ -59,7 +76,8 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     seed : int or numpy.random.SeedSequence
         Source of the realisation (only with ``bath_temperature``).
     **options
-        Solver options, e.g. ``elements=800`` for ``fem``, ``modes=100`` for
+        ``tolerance``, ``max_work``, ``max_memory``, ``estimate_error`` as
+        :func:`solve`, and solver options, e.g. ``elements=800`` for ``fem``, ``modes=100`` for
         ``modal``, ``rtol=1e-11`` for ``delay``.
 
     Returns
@@ -79,6 +97,7 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     """
     if not isinstance(contact, (str, ContactLaw)):
         raise InvalidParameterError(f"contact must be a name or a ContactLaw, got {contact!r}")
+    check_kappa(validate_gamma_kappa(gamma, kappa)[1])
     if bath_temperature is None:
         scene = two_rods(gamma, kappa, contact=contact)
         return solve(scene, solver, **options)

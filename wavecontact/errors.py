@@ -9,8 +9,10 @@ from __future__ import annotations
 import math
 
 __all__ = [
+    "AccuracyError",
     "CheckpointError",
     "InvalidParameterError",
+    "LimitError",
     "SolverFailure",
     "UnsupportedSceneError",
     "WavecontactError",
@@ -46,6 +48,25 @@ class SolverFailure(WavecontactError, RuntimeError):
     def __init__(self, message: str, outcome=None):
         super().__init__(message)
         self.outcome = outcome
+
+
+class LimitError(InvalidParameterError):
+    """A run would exceed a size or work limit; refused before anything is
+    allocated or run.  The message gives the estimate and the option that
+    raises the limit."""
+
+
+class AccuracyError(WavecontactError, RuntimeError):
+    """A result's error estimate exceeds the requested ``tolerance``.
+
+    ``result`` is the rejected :class:`~wavecontact.result.CollisionResult`
+    (for inspection), ``advice`` the resolution that should reach the tolerance.
+    """
+
+    def __init__(self, message: str, result=None, advice: str = ""):
+        super().__init__(message)
+        self.result = result
+        self.advice = advice
 
 
 def require_finite(name: str, value) -> float:

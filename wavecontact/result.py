@@ -116,7 +116,8 @@ class CollisionResult:
         The paper's numbers of the scene (``kappa = inf``: hard); NaN when the
         scene is not two rods of one material on a line.
     error_estimate : float
-        The solver's estimate of ``|epsilon - epsilon_exact|``; NaN if it has none.
+        The estimate of ``|epsilon - epsilon_exact|`` (docs/error_estimates.md): the delay solver's own,
+        Richardson from a run at half the resolution for FE and modal; NaN if there is none.
     wall_time_s : float
         Wall-clock time of the solve (s), set-up included.
     time : ndarray
@@ -138,7 +139,8 @@ class CollisionResult:
         ``energy_drift`` and ``momentum_drift`` (relative to the initial
         energy in the centre-of-mass frame and to ``mu V``, the reduced mass
         times the approach speed; NaN where the solver does not track them), ``includes_kernel_preparation`` (numba compiled or loaded
-        kernels during the call, so ``wall_time_s`` is not the solver's cost).
+        kernels during the call, so ``wall_time_s`` is not the solver's cost), ``error_estimate_method``
+        (how ``error_estimate`` was obtained) and ``error_estimate_seconds`` (its share of ``wall_time_s``).
     extra : dict
         Solver-specific data (energies per rod, fields, modal energies ...).
     """
@@ -210,8 +212,9 @@ class CollisionResult:
         ``diagnostics``) are stored as arrays, everything else as JSON; read
         it back with :meth:`load_npz`.
         """
-        from .io.files import atomic_write
+        from .io.files import atomic_write, check_output_file
 
+        path = check_output_file("path", path)  # a directory or an unwritable place: refused, named
         arrays = {"time": np.asarray(self.time), "relative_velocity": np.asarray(self.relative_velocity)}
         if self.contact_force is not None:
             arrays["contact_force"] = np.asarray(self.contact_force)

@@ -26,7 +26,8 @@ import numpy as np
 from ..bath.noise import NoiseTables
 from ..bath.scene import scene_noise
 from ..contact import Exponential, Hard
-from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
+from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
@@ -47,6 +48,10 @@ GAP_MARGIN = 40.0  # exp(-40) ~ 4e-18: the force at the start is below round-off
 # interpolation per rod instead of one per copy).  Sharp features (kappa >> 1) keep every copy.
 COMB_BELOW_KAPPA = 2.0
 DIRECT_COPIES = 1
+# Below this gamma (finite kappa) the solve is refused: W must be followed until the long rod's
+# echo is back (Gamma_2 = 1 + 1/gamma) in steps shorter than Gamma_1, each summing about
+# Gamma_2 / Gamma_1 delayed copies, so the cost grows like 1/gamma^2 (gamma = 1e-3: 100x gamma = 0.1)
+GAMMA_MIN = 1e-2
 
 _OUTCOMES = {
     kernels.STATUS_MAX_STEPS: (Outcome.STEP_LIMIT, "raise max_steps or rtol"),
@@ -201,6 +206,30 @@ class DelaySolver(SolverBase):
     def expected_order(self, options) -> float:
         """1: the error is proportional to (and below) the tolerance ``rtol``."""
         return 1.0
+
+    def estimate_cost(self, scene: Scene, options: DelayOptions) -> Cost | None:
+        """Refuse, before any step, what the method of steps cannot do in bounded time: round trips
+        more than ``1/GAMMA_MIN`` apart at finite kappa, and an ``end_time`` beyond ``max_steps`` steps."""
+        params = _check_scene(scene)
+        if math.isinf(params.kappa) or isinstance(scene.contact, Hard):
+            return None
+        short, long = sorted(params.round_trip_times)
+        if long / short > 1.0 / GAMMA_MIN:
+            raise LimitError(
+                f"delay: the round trips differ by a factor {long / short:.3g} > {1 / GAMMA_MIN:g} (gamma < "
+                f"{GAMMA_MIN:g} for one material) at finite kappa: the equation must be followed until the long "
+                "rod's echo returns in steps shorter than the short rod's round trip, each summing all its "
+                "echoes, so the cost grows like the square of that factor; use solver='modal' or solver='fem' "
+                "(or kappa=inf)")
+        largest_step = 0.95 * short  # the method of steps' largest step
+        if options.end_time is not None:
+            steps = options.end_time / largest_step
+            if steps > options.max_steps:
+                raise LimitError(
+                    f"delay: end_time={options.end_time:g} needs at least {steps:.3g} steps (each at most "
+                    f"0.95 Gamma_1 = {largest_step:.3g}), more than max_steps={options.max_steps}; "
+                    f"lower end_time or pass max_steps={math.ceil(steps * 1.1)}")
+        return None
 
     def _collide(self, scene: Scene, options: DelayOptions) -> dict:
         params = _check_scene(scene)

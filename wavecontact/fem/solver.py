@@ -16,7 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..contact import Exponential
 from ..errors import InvalidParameterError
+from ..limits import Cost
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
 from .simulation import build_setup, run_collision
@@ -68,6 +70,17 @@ class FemOptions(SolverOptions):
 # massless-end interface (first order in h, stable for any stiffness).  Tests compare a log-log
 # fit with these.
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 2, (2, "lumped"): 2, (2, "consistent"): 2}
+# Order assumed by the error estimate where the facing elements do not resolve the contact
+# (alpha V h / c > RESOLVED_BELOW, hard and penalty contact): the front spreads like h^(2/3)
+# (docs/fem.md); the threshold is the measured best trade-off of coverage and sharpness
+# (docs/error_estimates.md)
+UNRESOLVED_ORDER = 2.0 / 3.0
+RESOLVED_BELOW = 3.0
+# Stable step in units of the element travel time h/c (MODEL.md 7), for the cost estimate
+_STABLE_COURANT = {(1, "lumped"): 1.0, (1, "consistent"): 0.577, (2, "lumped"): 0.408, (2, "consistent"): 0.258}
+# Doubles held per node (state, masses, matrices, kernel buffers) and per step (histories)
+_BYTES_PER_NODE = 8 * 48
+_BYTES_PER_STEP = 8 * 8
 
 
 class FemSolver(SolverBase):
@@ -77,6 +90,7 @@ class FemSolver(SolverBase):
     Options = FemOptions
     resolution = "elements"
     refines = 1
+    error_safety = 4.0
 
     def expected_order(self, options: FemOptions) -> float:
         """Order of epsilon in ``h`` where the contact is resolved (:data:`EXPECTED_ORDER`)."""
@@ -84,6 +98,55 @@ class FemSolver(SolverBase):
 
     def _collide(self, scene: Scene, options: FemOptions) -> dict:
         return _collide(scene, options.as_dict())
+
+    def coarser_options(self, options: FemOptions):
+        """Half the elements (a user mesh ``nodes`` has no coarser twin: no estimate)."""
+        if options.nodes is not None or options.elements < 2:
+            return None
+        return options.replace(elements=options.elements // 2, record_fields=False)
+
+    def estimate_order(self, scene: Scene, options: FemOptions) -> float:
+        """:data:`EXPECTED_ORDER` where ``alpha V h / c <= RESOLVED_BELOW``, else :data:`UNRESOLVED_ORDER`."""
+        contact = scene.contact
+        if isinstance(contact, Exponential) and len(scene.rods) == 2:
+            shorter = min(scene.rods, key=lambda rod: rod.length)
+            travel = shorter.length / options.elements / shorter.wave_speed
+            if contact.alpha * abs(scene.velocities[0] - scene.velocities[1]) * travel <= RESOLVED_BELOW:
+                return self.expected_order(options)
+        return UNRESOLVED_ORDER
+
+    def estimate_cost(self, scene: Scene, options: FemOptions) -> Cost | None:
+        """Nodes, steps (at least: a contact-resolving step may be smaller) and memory, from the options."""
+        if scene.is_ring or len(scene.rods) != 2:
+            return None
+        rods = scene.rods
+        if options.nodes is not None:
+            elements = [max(len(n) - 1, 1) for n in options.nodes]
+            travel = min(float(np.min(np.diff(n))) / rod.wave_speed if len(n) > 1 else rod.length / rod.wave_speed
+                         for n, rod in zip(options.nodes, rods))
+        else:
+            shorter = min(rods, key=lambda rod: rod.length)
+            travel = shorter.length / options.elements / shorter.wave_speed
+            elements = [math.ceil(rod.length / (travel * rod.wave_speed)) for rod in rods]
+        nodes = options.order * sum(elements) + 2
+        stable = _STABLE_COURANT[(options.order, options.mass)] * travel
+        if options.dt is not None:
+            dt = options.dt
+        elif options.courant is not None:
+            dt = options.courant * stable
+        else:
+            dt = stable if (options.order, options.mass) == (1, "lumped") else 0.95 * stable
+        speed = max(abs(scene.velocities[0] - scene.velocities[1]), 1e-300)
+        span = 4.0 * sum(rod.length / rod.wave_speed for rod in rods)
+        if isinstance(scene.contact, Exponential):
+            span += 100.0 / (scene.contact.alpha * speed)  # in from and out to where the force is negligible
+        if options.max_time is not None:
+            span = min(span, options.max_time)
+        steps = span / dt
+        runs = 2 if options.record_fields else 1  # fields are sampled in a second run
+        return Cost(steps=steps, work=runs * steps * nodes,
+                    memory=nodes * _BYTES_PER_NODE + steps * _BYTES_PER_STEP,
+                    detail=f"{nodes:.3g} nodes, at least {steps:.3g} steps of dt = {dt:.3g}")
 
 
 def _collide(scene: Scene, options: dict) -> dict:

@@ -15,7 +15,10 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError
 
-__all__ = ["atomic_write", "check_output_directory", "check_output_file"]
+__all__ = ["FIGURE_SUFFIXES", "atomic_write", "check_figure_path", "check_output_directory", "check_output_file"]
+
+#: Figure formats the plotting functions write (matplotlib would silently add ``.png`` to any other name).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _umask() -> int:
@@ -88,6 +91,14 @@ def check_output_file(option: str, path, suffixes: tuple = ()) -> Path:
         raise InvalidParameterError(f"{option}: {str(parent)!r} is not a directory")
     if not os.access(parent, os.W_OK):
         raise InvalidParameterError(f"{option}: cannot write in {str(parent)!r} (permission denied)")
+    return path
+
+
+def check_figure_path(option: str, path) -> Path:
+    """:func:`check_output_file` for a figure (:data:`FIGURE_SUFFIXES`) whose directory must exist."""
+    path = check_output_file(option, path, FIGURE_SUFFIXES)
+    if not path.parent.is_dir():
+        raise InvalidParameterError(f"{option}: directory {str(path.parent)!r} does not exist")
     return path
 
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
@@ -74,6 +75,11 @@ _CORRECTIONS = ("end-response", "static", "none")
 _DEFAULT_TOLERANCE = {"end-response": 1e-3, "static": 1e-2, "none": 1e-2}
 # bound on the steps recorded for the echoes (about 150 MB at s = 6)
 _MAX_RECORDS = 2**21
+# order assumed by the error estimate where the modes do not resolve the contact time ...
+UNRESOLVED_ORDER = 1.0
+# ... which, with the static correction, is where alpha V l_short / (c N) exceeds this (measured:
+# the best coverage/sharpness trade-off on a sample of 160 collisions, docs/error_estimates.md)
+RESOLVED_BELOW = 30.0
 # largest change of alpha_eff * gap per collocation step where the force matters
 _EXPONENT_STEP = 2.0
 # collocation tables of recent systems (filling costs ~0.1 ms per step size; repeated collisions reuse them)
@@ -278,6 +284,8 @@ class ModalSolver(SolverBase):
     Options = ModalOptions
     resolution = "modes"
     refines = 1
+    error_safety = 1.5
+    error_levels = 2
 
     def expected_order(self, options: ModalOptions) -> float | None:
         """Order of epsilon in ``1/N``: 1 for plain truncation, 3 with the static correction (docs/modal.md);
@@ -288,6 +296,46 @@ class ModalSolver(SolverBase):
 
     def _collide(self, scene: Scene, options: ModalOptions) -> dict:
         return _collide(scene, **options.as_dict())
+
+    def coarser_options(self, options: ModalOptions):
+        """Half the modes, no histories."""
+        if options.modes < 2:
+            return None
+        return options.replace(modes=options.modes // 2, history=False)
+
+    def estimate_order(self, scene: Scene, options: ModalOptions) -> float:
+        """The declared order where the kept modes resolve the contact time
+        (``alpha V l_short / (c N) <= RESOLVED_BELOW``), else :data:`UNRESOLVED_ORDER` (the hard limit's
+        slow convergence)."""
+        if not options.static_correction:
+            return 1.0
+        contact = scene.contact
+        if isinstance(contact, Exponential) and len(scene.rods) == 2:
+            shorter = min(scene.rods, key=lambda rod: rod.length)
+            speed = abs(scene.velocities[0] - scene.velocities[1])
+            if contact.alpha * speed * shorter.length / (shorter.wave_speed * options.modes) <= RESOLVED_BELOW:
+                return self.expected_order(options)
+        return UNRESOLVED_ORDER
+
+    def estimate_cost(self, scene: Scene, options: ModalOptions) -> Cost | None:
+        """Collocation tables, mode computation and steps of the top step size, from the options."""
+        if scene.is_ring or len(scene.rods) != 2:
+            return None
+        kept = 2 * options.modes
+        stages = options.collocation_stages
+        memory = 60 * (4 * stages + 3) * kept * 8.0
+        if options.mode_source == "fe":
+            unknowns = options.fe_order * (options.fe_elements or max(8 * options.modes, 64)) + 1
+            memory += 2 * (4 * 8.0 * unknowns**2 if unknowns <= 600 else 6 * 8.0 * unknowns * (options.modes + 1))
+        shortest = min(rod.length / rod.wave_speed for rod in scene.rods)
+        span = 4.0 * sum(rod.length / rod.wave_speed for rod in scene.rods)
+        if isinstance(scene.contact, Exponential):
+            speed = max(abs(scene.velocities[0] - scene.velocities[1]), 1e-300)
+            span += 100.0 / (scene.contact.alpha * speed)
+        steps = 2.0 * span / (0.05 * shortest)
+        memory += steps * 3 * 8.0 if options.history else 0.0
+        return Cost(steps=steps, work=steps * kept * stages, memory=memory,
+                    detail=f"{kept} modes, about {steps:.3g} steps")
 
     def simulate(self, scene: Scene, options=None):
         """Many collisions of a ring scene (:class:`wavecontact.modal.ring.RingSimulation`)."""

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analytic import asymptotic_velocity_increase, hard_core_relative_velocity, round_trip_times
+from ..io.files import check_figure_path
 
 __all__ = ["plot_velocity_history", "velocity_history_figure"]
 
@@ -68,8 +69,6 @@ def velocity_history_figure(result):
 
 def plot_velocity_history(result, path) -> Path:
     """Write :func:`velocity_history_figure` to ``path`` (format from the suffix)."""
-    path = Path(path)
-    if path.parent and not path.parent.exists():
-        raise FileNotFoundError(f"directory {path.parent} does not exist")
+    path = check_figure_path("path", path)
     velocity_history_figure(result).savefig(path, dpi=130)
     return path

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analytic import equilibrium_spectral_entropy
+from ..io.files import FIGURE_SUFFIXES, check_output_file
 from ..studies.ring import RingRun
 from ..studies.ring_statistics import RingStatistics
 
@@ -182,9 +183,9 @@ def plot_ring_figures(run: RingRun, out_dir, statistics: RingStatistics | None =
 
 
 def _save(fig, path, dpi) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     try:
+        path = check_output_file("path", path, FIGURE_SUFFIXES)
+        path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=dpi)
     finally:
         import matplotlib.pyplot as plt

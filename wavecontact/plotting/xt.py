@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..io.files import check_figure_path
 
 __all__ = ["plot_xt_diagram", "xt_figure"]
 
@@ -171,10 +172,8 @@ def plot_xt_diagram(result, path, **options) -> Path:
     MissingFieldsError
         If the result carries no sampled fields.
     """
+    path = check_figure_path("path", path)
     fig = xt_figure(result, **options)
-    path = Path(path)
-    if path.parent and not path.parent.exists():
-        raise InvalidParameterError(f"directory of the plot does not exist: {path.parent}")
     fig.savefig(path)
     return path
 

@@ -30,6 +30,7 @@ ring scene also offer ``simulate(scene, options)`` (see
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import time
 from collections.abc import Callable, Mapping
@@ -38,7 +39,8 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 import numpy as np
 
 from .._jit import prepared_kernel_count
-from ..errors import InvalidParameterError, UnsupportedSceneError
+from ..errors import AccuracyError, InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..limits import Cost, Limits, check_cost, check_kappa
 from ..result import CONTACT_FORCE_FRACTION, CollisionResult, Outcome, contact_window
 from ..scene import Scene, two_rod_parameters
 
@@ -112,6 +114,8 @@ def _validate(solver: str, name: str, spec: dict, value):
             raise InvalidParameterError(f"{solver} option {name} must be True or False, got {value!r}")
         value = bool(value)
     elif kind == "choice":
+        if isinstance(value, (float, np.floating)) and float(value).is_integer() and int(value) in spec["choices"]:
+            value = int(value)  # order=1.0 means order=1
         if not isinstance(value, (str, int)) or isinstance(value, bool) or value not in spec["choices"]:
             raise InvalidParameterError(f"{solver} option {name} must be {_range_text(spec)}, got {value!r}")
     elif kind in ("int", "float"):
@@ -247,6 +251,36 @@ def scene_numbers(scene: Scene) -> tuple:
     return float(params.gamma), float(params.kappa)
 
 
+#: Default safety factor of the Richardson error estimate (docs/error_estimates.md).
+ERROR_SAFETY = 3.0
+#: Smallest error estimate reported: the round-off a run of many steps leaves in an O(1) restitution.
+ERROR_FLOOR = 1e-13
+
+
+def richardson_estimate(values, order: float, ratio: float = 2.0, safety: float = ERROR_SAFETY) -> float:
+    """Error of ``values[0]`` from runs at ``1/ratio``, ``1/ratio**2`` ... of its resolution.
+
+    ``safety * D / (ratio**order - 1)`` for an error that falls like
+    ``resolution**-order``, with ``D = |v0 - v1|``, or, given a third run, the larger
+    of that and ``|v1 - v2| / ratio**order`` (the coarser pair's difference carried to
+    the finest level: a guard against two runs that agree by accident).
+    """
+    differences = [abs(a - b) / ratio ** (order * i) for i, (a, b) in enumerate(itertools.pairwise(values))]
+    return max(safety * max(differences) / (ratio**order - 1.0), ERROR_FLOOR)
+
+
+def _tolerance(value):
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"tolerance must be a number in (0, 1] or None, got {value!r}") from None
+    if isinstance(value, bool) or not 0.0 < number <= 1.0:
+        raise InvalidParameterError(f"tolerance must be a number in (0, 1] or None, got {value!r}")
+    return number
+
+
 class SolverBase:
     """Shared implementation of :class:`Solver`; a solver supplies ``_collide``.
 
@@ -260,6 +294,10 @@ class SolverBase:
     Options: type = SolverOptions
     resolution: str = ""
     refines: int = 1
+    #: safety factor of the Richardson error estimate (measured per solver, docs/error_estimates.md)
+    error_safety: float = ERROR_SAFETY
+    #: coarser runs of the Richardson estimate (each at half the resolution of the previous one)
+    error_levels: int = 1
 
     def expected_order(self, options) -> float | None:
         return None
@@ -270,24 +308,111 @@ class SolverBase:
             return given
         return self.Options.from_mapping(dict(given or {}))
 
-    def solve(self, scene: Scene, options=None) -> CollisionResult:
-        """One collision of ``scene`` (see the module docstring)."""
+    # ------------------------------------------------------------ cost and error hooks
+    def estimate_cost(self, scene: Scene, options) -> Cost | None:
+        """The cost of ``solve(scene, options)`` estimated before any work (None: not estimated)."""
+        return None
+
+    def coarser_options(self, options) -> SolverOptions | None:
+        """Options at half the resolution, for the Richardson error estimate (None: no estimate)."""
+        del options
+        return None
+
+    def estimate_order(self, scene: Scene, options) -> float | None:
+        """Order in the resolution assumed by the error estimate (the regime's, not always the
+        declared one: an unresolved contact converges more slowly)."""
+        return self.expected_order(options)
+
+    def _error_estimate(self, scene: Scene, options, fields: dict) -> tuple:
+        """``(estimate, method)`` of the solve's error: the solver's own, or Richardson."""
+        own = float(fields.get("error_estimate", math.nan))
+        if not math.isnan(own):
+            return own, "the solver's own estimate"
+        order = self.estimate_order(scene, options)
+        values, levels, coarse_options = [float(fields["restitution"])], [], options
+        for _ in range(self.error_levels):
+            coarse_options = self.coarser_options(coarse_options)
+            if coarse_options is None or order is None:
+                break
+            try:
+                values.append(float(self._collide(scene, coarse_options)["restitution"]))
+            except SolverFailure as failure:
+                if len(values) == 1:
+                    return math.nan, f"none (the run at half the resolution failed: {failure})"
+                break
+            levels.append(f"{self.resolution}={getattr(coarse_options, self.resolution)} gave {values[-1]:.12g}")
+        if len(values) == 1:
+            return math.nan, "none (no coarser resolution)"
+        return (richardson_estimate(values, order, safety=self.error_safety),
+                f"Richardson: {'; '.join(levels)}; order {order:.3g}, safety {self.error_safety:g}")
+
+    def _advice(self, options, estimate: float, tolerance: float) -> str:
+        """Which resolution should bring the error estimate below ``tolerance``."""
+        level = getattr(options, self.resolution, None)
+        order = self.expected_order(options) or 1.0
+        if level is None or math.isnan(estimate):
+            return "no estimate: choose a finer resolution or another solver"
+        factor = (estimate / tolerance) ** (1.0 / order)
+        spec = next(f.metadata["option"] for f in dataclasses.fields(self.Options) if f.name == self.resolution)
+        if self.refines > 0:
+            wanted = math.ceil(1.2 * level * factor)
+            if spec["high"] is not None and wanted > spec["high"]:
+                return (f"{self.resolution}={wanted} would be needed, beyond this solver's range "
+                        f"({spec['high']:g}); use solver='delay' for two rods of one material")
+            return f"try {self.resolution}={wanted}"
+        wanted = level / (1.2 * factor)
+        if spec["low"] is not None and wanted < spec["low"]:
+            return f"{self.resolution}={wanted:.2g} would be needed, below this solver's range ({spec['low']:g})"
+        return f"try {self.resolution}={wanted:.2g}"
+
+    def solve(self, scene: Scene, options=None, *, tolerance=None, max_work=None, max_memory=None,
+              estimate_error: bool = True) -> CollisionResult:
+        """One collision of ``scene`` (see the module docstring).
+
+        Parameters
+        ----------
+        scene : Scene
+        options : mapping or Options
+        tolerance : float or None
+            Largest acceptable error estimate of the restitution; a larger one
+            raises :class:`~wavecontact.errors.AccuracyError` with advice.
+        max_work, max_memory : float or None
+            Cost limits (:class:`wavecontact.limits.Limits`), checked against
+            :meth:`estimate_cost` before anything runs.
+        estimate_error : bool
+            Estimate the error (for FE and modal: one more run at half the
+            resolution, about a quarter of the cost); False leaves NaN.
+        """
         if not isinstance(scene, Scene):
             raise InvalidParameterError(f"scene must be a wavecontact.Scene, got {type(scene).__name__}")
         options = self.options(options)
+        tolerance = _tolerance(tolerance)
+        limits = Limits(max_work=max_work, max_memory=max_memory)
+        gamma, kappa = scene_numbers(scene)
+        check_kappa(kappa)
+        check_cost(self.name, self.estimate_cost(scene, options), limits)
         prepared = prepared_kernel_count()
         with Stopwatch() as watch:
             fields = self._collide(scene, options)
-        gamma, kappa = scene_numbers(scene)
+            with Stopwatch() as estimating:
+                if estimate_error or tolerance is not None:
+                    estimate, method = self._error_estimate(scene, options, fields)
+                else:
+                    estimate, method = math.nan, "not requested"
+        restitution = float(fields["restitution"])
+        cold = scene.is_cold and getattr(scene, "vibrations", None) is None and getattr(options, "noise", None) is None
+        if restitution > 1.0 and cold and not math.isnan(estimate):
+            # a cold collision cannot gain energy: the excess over 1 is error, whatever the estimate said
+            estimate = max(estimate, restitution - 1.0)
         time_, force = np.asarray(fields["time"], dtype=float), fields.get("contact_force")
         start, duration = contact_window(time_, force, fields.get("force_sampling", "point"))
-        return CollisionResult(
-            restitution=float(fields["restitution"]),
+        result = CollisionResult(
+            restitution=restitution,
             solver=self.name,
             outcome=Outcome.SEPARATED,
             gamma=gamma,
             kappa=kappa,
-            error_estimate=float(fields.get("error_estimate", math.nan)),
+            error_estimate=float(estimate),
             wall_time_s=watch.seconds,
             time=time_,
             relative_velocity=np.asarray(fields["relative_velocity"], dtype=float),
@@ -300,9 +425,17 @@ class SolverBase:
                 "energy_drift": float(fields.get("energy_drift", math.nan)),
                 "momentum_drift": float(fields.get("momentum_drift", math.nan)),
                 "includes_kernel_preparation": prepared_kernel_count() > prepared,
+                "error_estimate_method": method,
+                "error_estimate_seconds": estimating.seconds,
             },
             extra=dict(fields.get("extra", {})),
         )
+        if tolerance is not None and not estimate <= tolerance:
+            advice = self._advice(options, estimate, tolerance)
+            raise AccuracyError(
+                f"{self.name}: error estimate {estimate:.2g} of epsilon = {restitution:.10g} exceeds "
+                f"tolerance={tolerance:g}; {advice}", result=result, advice=advice)
+        return result
 
     def simulate(self, scene: Scene, options=None) -> Any:
         raise UnsupportedSceneError(f"solver {self.name!r} runs single collisions only; use solver='modal' "

@@ -1,0 +1,123 @@
+"""Limits before work (wavecontact/limits.py): every oversized or endless request is refused
+fast, with the estimate and the option that raises the limit, before anything is allocated."""
+
+import math
+import time
+
+import pytest
+
+import wavecontact
+from wavecontact import Rod, Scene, collide, solve
+from wavecontact.cli import main
+from wavecontact.contact import Hard
+from wavecontact.errors import InvalidParameterError, LimitError, WavecontactError
+from wavecontact.limits import KAPPA_MAX, KAPPA_MIN, Cost, Limits, available_memory, check_cost
+
+FAST = 1.0  # seconds: a refusal must come well before any real work
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _warm():
+    """Import every solver once, so the timings below measure the refusal only."""
+    collide(0.6, math.inf)
+    for name in ("fem", "modal"):
+        wavecontact.solvers.get_solver(name)
+
+
+def refused(call, *match):
+    start = time.perf_counter()
+    with pytest.raises(WavecontactError) as info:
+        call()
+    elapsed = time.perf_counter() - start
+    assert elapsed < FAST, f"refusal took {elapsed:.2f} s"
+    message = str(info.value)
+    assert "\n" not in message
+    for word in match:
+        assert word in message, message
+    return info.value
+
+
+def test_modes_ten_million_is_refused():
+    refused(lambda: collide(0.6, 20, solver="modal", modes=10**7), "modes", "20000")
+
+
+def test_ring_with_a_hundred_thousand_modes_is_refused(capsys, tmp_path):
+    start = time.perf_counter()
+    code = main(["ring", "--gamma", "0.6", "--kappa", "100", "--modes", "100000", "--collisions", "10",
+                 "--out", str(tmp_path / "ring")])
+    assert time.perf_counter() - start < FAST
+    assert code == 2
+    assert "modes" in capsys.readouterr().err
+
+
+def test_rods_of_lengths_one_and_a_billionth_are_refused_by_memory():
+    scene = Scene(rods=(Rod(1.0), Rod(1e-9)), velocities=(1.0, 0.0), contact=Hard())
+    error = refused(lambda: solve(scene, "fem"), "max_memory", "nodes")
+    assert isinstance(error, LimitError)
+
+
+def test_tiny_gamma_is_refused_by_every_solver_or_bounded():
+    refused(lambda: collide(1e-6, 20), "gamma", "square")
+    refused(lambda: collide(1e-6, 20, solver="fem"), "max_")
+    # the modal solver keeps a fixed number of modes per rod: it ends (or is refused) quickly
+    start = time.perf_counter()
+    try:
+        collide(1e-6, 20, solver="modal", modes=20)
+    except WavecontactError:
+        pass
+    assert time.perf_counter() - start < 10.0
+
+
+def test_fem_courant_and_dt_too_small_are_refused():
+    refused(lambda: collide(0.6, 20, solver="fem", courant=1e-9), "courant")
+    refused(lambda: collide(0.6, 20, solver="fem", courant=1e-6), "max_")
+    refused(lambda: collide(0.6, 20, solver="fem", dt=1e-12), "max_", "dt")
+
+
+def test_end_time_beyond_the_step_limit_is_refused():
+    error = refused(lambda: collide(0.6, 20, end_time=1e9), "end_time", "max_steps")
+    assert isinstance(error, LimitError)
+
+
+def test_a_million_elements_is_refused_with_the_estimate_and_the_option():
+    error = refused(lambda: collide(0.6, 20, solver="fem", elements=10**6), "max_work=", "updates")
+    assert isinstance(error, LimitError)
+
+
+def test_limits_can_be_raised_explicitly():
+    # the refusal of a million elements comes from max_work: raising it passes the check
+    # (checked on the estimate alone; the run itself would take hours)
+    fem = wavecontact.solvers.get_solver("fem")
+    cost = fem.estimate_cost(wavecontact.two_rods(0.6, 20), fem.Options(elements=10**6))
+    check_cost("fem", cost, Limits(max_work=2 * cost.work, max_memory=2 * cost.memory))
+    with pytest.raises(LimitError, match="max_memory"):
+        check_cost("fem", Cost(steps=1, work=1, memory=10.0), Limits(max_memory=5.0))
+
+
+@pytest.mark.parametrize("kappa", [1e-6, 1e-3, 0.999 * KAPPA_MIN, 1.001 * KAPPA_MAX, 1e10, 1e300])
+def test_kappa_outside_the_supported_range_is_refused_up_front(kappa):
+    error = refused(lambda: collide(0.6, kappa), "kappa", "inf")
+    assert "strength" not in str(error)
+
+
+def test_kappa_inside_the_range_runs():
+    assert 0.0 < collide(0.6, 1e6).restitution - 0.6 < 2e-5  # Eq. 23: ln(kappa (Gamma_2 - Gamma_1))/kappa
+
+
+@pytest.mark.parametrize("kappa", [KAPPA_MIN, 0.03, 0.1])
+@pytest.mark.parametrize("gamma", [0.05, 0.6])
+def test_epsilon_never_exceeds_one_by_more_than_its_estimate(gamma, kappa):
+    result = collide(gamma, kappa)
+    assert result.restitution - 1.0 <= result.error_estimate
+
+
+def test_order_as_a_float_is_accepted_or_refused_cleanly():
+    assert collide(0.6, 20, solver="fem", elements=20, order=1.0).options["order"] == 1
+    refused(lambda: collide(0.6, 20, solver="fem", order=1.5), "order")
+
+
+def test_limit_values_are_validated():
+    for bad in (0, -1.0, math.nan, "a lot", True):
+        with pytest.raises(InvalidParameterError, match="max_work"):
+            collide(0.6, 20, max_work=bad)
+    assert available_memory() > 0
