@@ -13,7 +13,7 @@ from wavecontact.errors import AccuracyError
 DISCRETIZATIONS = ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
 
 
-def _sample(solver, count, seed):
+def _sample(solver, count, seed, correction=None):
     """Small random collisions (own stream per sample) with their errors and estimates."""
     rows = []
     for index, seq in enumerate(np.random.SeedSequence(seed).spawn(count)):
@@ -24,7 +24,7 @@ def _sample(solver, count, seed):
             order, mass = DISCRETIZATIONS[index % 4]
             options = {"elements": int(rng.integers(10, 60)), "order": order, "mass": mass}
         else:
-            options = {"modes": int(rng.integers(10, 80)), "history": False}
+            options = {"modes": int(rng.integers(10, 80)), "history": False, "correction": correction}
         result = collide(gamma, kappa, solver=solver, **options)
         reference = collide(gamma, kappa)
         rows.append((abs(result.restitution - reference.restitution), result.error_estimate,
@@ -32,16 +32,17 @@ def _sample(solver, count, seed):
     return rows
 
 
-@pytest.mark.parametrize("solver", ["fem", "modal"])
-def test_estimate_bounds_the_true_error_on_a_random_sample(solver):
-    rows = _sample(solver, 16, seed=10 if solver == "fem" else 11)
+@pytest.mark.parametrize("solver, correction", [("fem", None), ("modal", "static"), ("modal", "end-response")])
+def test_estimate_bounds_the_true_error_on_a_random_sample(solver, correction):
+    rows = _sample(solver, 16, seed=10 if solver == "fem" else 11, correction=correction)
     assert all(math.isfinite(estimate) and estimate > 0 for _, estimate, _ in rows)
     covered = np.mean([error <= estimate + ref for error, estimate, ref in rows])
     # the full sweep (benchmarks/error_estimates.py) measures >= 0.95; 16 draws of a 0.95 coverage
     # fall below 0.75 with probability < 1 %
     assert covered >= 0.75
     ratios = np.array([estimate / error for error, estimate, _ in rows if error > 1e-10])
-    assert np.median(ratios) <= 10.0
+    # (the end-response correction's errors are mostly below 1e-10: nothing to be sharp about there)
+    assert ratios.size == 0 or np.median(ratios) <= 10.0
 
 
 def test_issue_examples_now_carry_an_honest_estimate():
