@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from dataclasses import dataclass
 
 from .errors import InvalidParameterError, LimitError
@@ -52,12 +53,24 @@ DEFAULT_MAX_WORK = 2e11
 MEMORY_SHARE = 0.5
 
 
+_MEMORY_READ = [-math.inf, 0]  # (when, bytes): /proc/meminfo read at most once a second
+
+
 def available_memory() -> int:
     """Memory available to a new allocation now (bytes).
 
     ``MemAvailable`` of ``/proc/meminfo`` where it exists (Linux), else the
-    free physical pages from ``os.sysconf``, else 4 GiB.
+    free physical pages from ``os.sysconf``, else 4 GiB.  Read at most once a
+    second (a solve of a fraction of a millisecond should not pay for the read).
     """
+    now = time.monotonic()
+    if now - _MEMORY_READ[0] < 1.0:
+        return _MEMORY_READ[1]
+    _MEMORY_READ[:] = [now, _read_available_memory()]
+    return _MEMORY_READ[1]
+
+
+def _read_available_memory() -> int:
     try:
         with open("/proc/meminfo", encoding="ascii") as handle:
             for line in handle:

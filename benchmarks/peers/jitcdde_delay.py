@@ -13,7 +13,9 @@ system compiler).
 
 from __future__ import annotations
 
+import contextlib
 import math
+import tempfile
 import time
 
 import numpy as np
@@ -40,7 +42,10 @@ class JitcddePeer:
         rhs = [symengine.exp(symengine.Min(exponent, 50))]
         started = time.perf_counter()
         self.dde = jitcdde(rhs, control_pars=[kappa], delays=delays, max_delay=max(delays), verbose=False)
-        self.dde.compile_C(simplify=False, do_cse=False, verbose=False)
+        # JiTCDDE builds its C module with setuptools in the working directory, which would read this
+        # project's pyproject.toml (with an older setuptools than the project needs): build elsewhere
+        with tempfile.TemporaryDirectory() as scratch, contextlib.chdir(scratch):
+            self.dde.compile_C(simplify=False, do_cse=False, verbose=False)
         self.compile_time = time.perf_counter() - started
 
     def restitution(self, kappa: float, rtol: float) -> float:

@@ -8,7 +8,9 @@ delays are passed explicitly.  Optional: ``pip install jitcdde symengine``.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import tempfile
 import time
 
 import numpy as np
@@ -44,7 +46,9 @@ def restitution(gamma: float, kappa: float, scene, rtol: float, a0: float, table
     started = time.perf_counter()
     dde = jitcdde_input([symengine.exp(symengine.Min(exponent, 50))], spline, delays=delays,
                         max_delay=max(delays), verbose=False)
-    dde.compile_C(simplify=False, do_cse=False, verbose=False)
+    # built in a scratch directory: setuptools would read this project's pyproject.toml otherwise
+    with tempfile.TemporaryDirectory() as scratch, contextlib.chdir(scratch):
+        dde.compile_C(simplify=False, do_cse=False, verbose=False)
     compiled = time.perf_counter() - started
     started = time.perf_counter()
     dde.constant_past([0.0], time=0.0)

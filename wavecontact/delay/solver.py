@@ -285,7 +285,9 @@ class DelaySolver(SolverBase):
 
 
 def _as_dict(params: DelayParameters) -> dict:
-    return {**dataclasses.asdict(params), "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
+    # a shallow copy: dataclasses.asdict deep-copies every field and cost more than a soft solve
+    values = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+    return {**values, "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
 
 
 def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> dict:
