@@ -331,6 +331,23 @@ def _prepare_output(out, spec: EnsembleSpec) -> dict:
     return done
 
 
+def run_batches(pool, function, fields, batches, on_result) -> None:
+    """Run ``function(fields, a, b)`` for every batch ``(a, b)``, here (``pool`` None) or on the executor,
+    handing each result to ``on_result`` as it arrives; on any error the batches not started are cancelled."""
+    if pool is None:
+        for a, b in batches:
+            on_result(function(fields, a, b))
+        return
+    futures = [pool.submit(function, fields, a, b) for a, b in batches]
+    try:
+        for future in concurrent.futures.as_completed(futures):
+            on_result(future.result())
+    except BaseException:
+        for future in futures:
+            future.cancel()
+        raise
+
+
 def _executor_for(executor):
     """A concurrent.futures executor; a dask.distributed Client is wrapped with pure=False."""
     if executor is None:
@@ -396,18 +413,7 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
 
     pool = _executor_for(executor)
     try:
-        if pool is None:
-            for a, b in todo:
-                finish(*run_batch(fields, a, b))
-        else:
-            futures = [pool.submit(run_batch, fields, a, b) for a, b in todo]
-            try:
-                for future in concurrent.futures.as_completed(futures):
-                    finish(*future.result())
-            except BaseException:
-                for future in futures:
-                    future.cancel()
-                raise
+        run_batches(pool, run_batch, fields, todo, lambda out: finish(*out))
     except WavecontactError:
         raise
     except OSError as exc:

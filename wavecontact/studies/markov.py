@@ -41,7 +41,6 @@ workers or the batch size.
 
 from __future__ import annotations
 
-import concurrent.futures
 import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -471,7 +470,7 @@ def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000
     MarkovResult
     """
     from ..progress import Progress
-    from .ensemble import _executor_for
+    from .ensemble import _executor_for, run_batches
 
     if batch_size is None:
         batch_size = chains if executor is None else max(1, math.ceil(chains / 16))
@@ -483,22 +482,11 @@ def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000
     pool = _executor_for(executor)
     with Progress(spec.chains, "markov", unit="chain", enabled=progress) as bar:
         try:
-            if pool is None:
-                for a, b in spec.batches():
-                    out = run_chains(fields, a, b)
-                    done[a] = out
-                    bar.advance(b - a)
-            else:
-                futures = [pool.submit(run_chains, fields, a, b) for a, b in spec.batches()]
-                try:
-                    for future in concurrent.futures.as_completed(futures):
-                        out = future.result()
-                        done[out[0]] = out
-                        bar.advance(out[1].shape[0])
-                except BaseException:
-                    for future in futures:
-                        future.cancel()
-                    raise
+            def collect(out):
+                done[out[0]] = out
+                bar.advance(out[1].shape[0])
+
+            run_batches(pool, run_chains, fields, spec.batches(), collect)
         except WavecontactError:
             raise
         except OSError as exc:
