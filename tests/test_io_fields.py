@@ -183,7 +183,9 @@ def _field_data(path):
         codes = element.text.split()
         if element.tag == "Array" and element.attrib["type"] == "String":
             assert codes[-1] == "0"
-            out[element.attrib["Name"]] = bytes(int(c) for c in codes[:-1]).decode()
+            text = bytes(int(c) for c in codes[:-1]).decode()
+            # VTK cannot read "inf" as an ASCII number: the writer stores non-finite values as words
+            out[element.attrib["Name"]] = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}.get(text, text)
         else:
             assert element.tag == "DataArray" and element.attrib["type"] == "Float64"
             out[element.attrib["Name"]] = float(codes[0])
@@ -285,3 +287,69 @@ def test_fem_fields_write_and_read_back(tmp_path):
         assert rod_back["segments"].shape == (2 * rod["cells"].shape[0], 2)  # P2: two segments each
     # the stress the solver reports is the impact stress: a compression near -Z V / 2 somewhere
     assert -0.6 < min(rod["stress"].min() for rod in expected["rods"]) < -0.3
+
+
+def _collision_with_fields(kappa):
+    from wavecontact import collide
+
+    return collide(0.6, kappa, solver="fem", elements=12, order=2, mass="consistent", record_fields=True,
+                   field_samples=5)
+
+
+@pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")
+def test_field_data_names_the_discretization_and_round_trips_through_meshio(tmp_path):
+    """The run's discretization and units are in every file; read_fields (meshio for the mesh and point
+    data; meshio 5 refuses VTK's String arrays, so it reads the field data itself) gives everything back."""
+    result = _collision_with_fields(math.inf)
+    written = write_fields(result, tmp_path)
+    data = _field_data(written.files[1])
+    assert data["order"] == 2 and data["mass"] == "consistent" and data["elements"] == 12
+    assert data["kappa"] == math.inf and data["dt"] == result.work["dt"]
+    back = read_fields(written.index)
+    assert back["parameters"]["mass"] == "consistent" and back["parameters"]["kappa"] == math.inf
+    assert back["parameters"]["restitution"] == result.restitution and back["units"] == UNIT_SYSTEMS["dimensionless"]
+    expected = sampled_fields(result)
+    np.testing.assert_array_equal(back["time"], expected["time"])
+    for rod, rod_back in zip(expected["rods"], back["rods"]):
+        for name in ("x", *FIELD_NAMES):
+            np.testing.assert_array_equal(rod_back[name], rod[name])
+
+
+@pytest.mark.skipif(not FEM_IMPORTABLE, reason="finite-element solver not installed")
+@pytest.mark.parametrize("kappa", [100.0, math.inf])
+def test_vtk_reader_gets_every_field_and_the_field_data(tmp_path, kappa):
+    """ParaView reads VTU files with VTK's vtkXMLUnstructuredGridReader; it must see everything."""
+    vtk = pytest.importorskip("vtk")
+    from vtk.util.numpy_support import vtk_to_numpy
+
+    result = _collision_with_fields(kappa)
+    written = write_fields(result, tmp_path, units="dimensionless", parameters={"note": "vtk check"})
+    expected = sampled_fields(result)
+    x = np.concatenate([rod["x"] for rod in expected["rods"]])
+    for k, path in enumerate(written.files[1:]):
+        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader.SetFileName(str(path))
+        reader.Update()
+        assert reader.GetErrorCode() == 0, path
+        grid = reader.GetOutput()
+        assert grid.GetNumberOfPoints() == x.size
+        np.testing.assert_array_equal(vtk_to_numpy(grid.GetPoints().GetData())[:, 0], x)
+        points = grid.GetPointData()
+        for name in FIELD_NAMES:
+            values = np.concatenate([rod[name][k] for rod in expected["rods"]])
+            np.testing.assert_array_equal(vtk_to_numpy(points.GetArray(name)), values)
+        vector = vtk_to_numpy(points.GetArray("displacement_vector"))
+        np.testing.assert_array_equal(vector[:, 0], np.concatenate([rod["displacement"][k] for rod in expected["rods"]]))
+        assert set(vtk_to_numpy(points.GetArray("rod"))) == {1, 2}
+        found = {}
+        data = grid.GetFieldData()
+        for i in range(data.GetNumberOfArrays()):
+            array = data.GetAbstractArray(i)
+            found[array.GetName()] = (array.GetValue(0) if isinstance(array, vtk.vtkStringArray)
+                                      else array.GetTuple1(0))
+        assert found["TimeValue"] == expected["time"][k]
+        assert {f"unit_{q}": found[f"unit_{q}"] for q in UNIT_SYSTEMS["dimensionless"]} == {
+            f"unit_{q}": u for q, u in UNIT_SYSTEMS["dimensionless"].items()}
+        assert found["gamma"] == 0.6 and found["restitution"] == result.restitution
+        assert found["kappa"] == (kappa if math.isfinite(kappa) else "inf")
+        assert found["mass"] == "consistent" and found["order"] == 2 and found["note"] == "vtk check"

@@ -239,9 +239,10 @@ def run_parameters(result) -> dict:
     -------
     dict
         ``gamma``, ``kappa``, ``restitution``, ``contact_start``,
-        ``contact_duration`` (those that are set), ``solver``, and from
-        ``result.work`` the element ``order``, ``mass`` and time step ``dt``,
-        plus the wavecontact ``version``.
+        ``contact_duration`` (those that are set), ``solver``, from
+        ``result.options`` the discretization (``elements``, ``order``,
+        ``mass``, ``scheme``, ``gap_quadrature``), from ``result.work`` the
+        time step ``dt``, plus the wavecontact ``version``.
     """
     from .._version import __version__
 
@@ -250,11 +251,16 @@ def run_parameters(result) -> dict:
         value = getattr(result, name, None)
         if value is not None and not math.isnan(value):  # NaN: not a two-rod scene, or no force history
             out[name] = float(value)
+    # the discretization is in the solver options (elements, order, mass, scheme), the step in the work
+    options = getattr(result, "options", None) or {}
     work = getattr(result, "work", None) or {}
-    for name in ("order", "mass", "dt"):
-        if name in work and isinstance(work[name], (int, float, str, np.integer, np.floating)):
-            value = work[name]
-            out[name] = value if isinstance(value, str) else float(value)
+    for source, names in ((options, ("elements", "order", "mass", "scheme", "gap_quadrature")), (work, ("dt",))):
+        for name in names:
+            value = source.get(name)
+            if isinstance(value, str):
+                out[name] = value
+            elif isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+                out[name] = float(value)
     return out
 
 
@@ -329,19 +335,26 @@ def write_fields(result, directory, format: str = "vtu", *, prefix: str = "field
     return _write_vtu_series(fields, directory, prefix, metadata)
 
 
+# VTK's XML reader parses ASCII numbers with C++ streams, which do not read "inf" or "nan": a file with
+# one such number is refused whole (no points, no data).  Non-finite numbers are therefore written as
+# String arrays holding exactly these words, and read back as floats.
+_NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+
+
 def _field_data_xml(metadata: dict, time: float) -> str:
-    """A VTK XML ``<FieldData>`` block: numbers as Float64 arrays, text as String arrays."""
+    """A VTK XML ``<FieldData>`` block: numbers as Float64 arrays, text (and inf, nan) as String arrays."""
     xml = ["<FieldData>\n",
            f'<DataArray type="Float64" Name="TimeValue" NumberOfTuples="1" format="ascii">{time!r}</DataArray>\n']
     for name, value in metadata.items():
+        if not isinstance(value, str) and not math.isfinite(float(value)):
+            value = repr(float(value))  # 'inf', '-inf' or 'nan'
         if isinstance(value, str):
             # VTK writes string arrays as <Array>, in ASCII as character codes, each string ended by 0
             codes = " ".join(str(byte) for byte in value.encode("utf-8") + b"\0")
             xml.append(f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
                        f"{codes}</Array>\n")
         else:
-            number = float(value)
-            text = "inf" if math.isinf(number) else repr(number)
+            text = repr(float(value))
             xml.append(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
                        f"{text}</DataArray>\n")
     xml.append("</FieldData>\n")
@@ -402,7 +415,8 @@ def read_fields(path) -> dict:
         "stress", "segments"}, ...], "units": {...}, "parameters": {...}}``;
         ``segments`` are the two-node cells with node indices local to the
         rod; ``units`` maps each quantity to its unit, ``parameters`` holds
-        the other field data of the first file (numbers as float).
+        the other field data of the first file (numbers, and the
+        words ``inf``, ``-inf``, ``nan``, as float).
     """
     path = Path(path)
     if path.is_dir():
@@ -424,7 +438,8 @@ def _parse_field_data(block: str) -> dict:
     for element in ET.fromstring(block):
         name, text = element.attrib["Name"], (element.text or "").split()
         if element.attrib["type"] == "String":
-            out[name] = bytes(int(code) for code in text).split(b"\0")[0].decode("utf-8")
+            value = bytes(int(code) for code in text).split(b"\0")[0].decode("utf-8")
+            out[name] = _NON_FINITE.get(value, value)
         else:
             out[name] = float(text[0])
     return out
