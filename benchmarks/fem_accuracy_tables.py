@@ -6,8 +6,14 @@
    (P1 lumped, exact lattice) at N = 200, 800, 3200 elements (docs/fem.md section 7);
 2. two-material hard impacts (steel 0.1 m on aluminium 0.3 m and on CFRP 0.15 m, 1 cm^2, 1 m/s)
    against the characteristic solution of tests/test_fem_far_ends.py (section 1);
-3. orders at fixed far-end remainders (gamma = 0.6, kappa = 100).
-``--quick`` prints only tables 2 and 3.
+3. orders at fixed far-end remainders (gamma = 0.6, kappa = 100);
+4. the other discretizations (P1 consistent, P2, P1 lumped at Courant 0.9, user meshes) at gamma = 0.6,
+   kappa = 20 on 24 .. 192 elements (``discretizations``) and at kappa = 100 on 96 .. 768 elements
+   (``discretizations-100``), with the force scheme ('auto') and the interface scheme forced.
+``--quick`` prints only tables 2 and 3; ``--table NAME`` (repeatable) only the named ones
+(``default``, ``two-materials``, ``remainder-orders``, ``discretizations``,
+``discretizations-100``), which is how ``python docs/generate.py``
+writes each table into docs/fem.md.
 """
 
 from __future__ import annotations
@@ -60,14 +66,52 @@ def table_remainder_orders():
         print(f"| {remainder} |{cells} | {order:.2f} |")
 
 
+DISCRETIZATIONS = (
+    ("P1 consistent", {"order": 1, "mass": "consistent"}),
+    ("P2 lumped", {"order": 2, "mass": "lumped"}),
+    ("P2 consistent", {"order": 2, "mass": "consistent"}),
+    ("P1 lumped, Courant 0.9", {"courant": 0.9}),
+    ("P1 lumped, user meshes (N and 5N/4 elements)", {"unequal": True}),
+)
+
+
+def table_discretizations(gamma=0.6, kappa=20.0, meshes=(24, 48, 96, 192)):
+    """Errors and log-log orders of the other discretizations (the long rod a whole number of elements)."""
+    print(f"\n| discretization (gamma = {gamma}, kappa = {kappa:g}) | scheme | "
+          + " | ".join(f"N = {n}" for n in meshes) + " | observed order |\n|---|---|" + "---|" * len(meshes) + "---|")
+    reference = wc.collide(gamma, kappa, solver="delay", rtol=1e-13).restitution
+    l1, l2 = (1 + gamma) / 2, (1 + gamma) / (2 * gamma)
+    for scheme in ("auto", "interface"):
+        for label, options in DISCRETIZATIONS:
+            if scheme == "interface" and "unequal" in options:
+                continue
+            errors = []
+            for n in meshes:
+                kwargs = dict(options, scheme=scheme)
+                if kwargs.pop("unequal", False):
+                    kwargs["nodes"] = (np.linspace(0.0, l1, n + 1), np.linspace(0.0, l2, n * 5 // 4 + 1))
+                result = wc.collide(gamma, kappa, solver="fem", elements=n, **kwargs)
+                errors.append(abs(result.restitution - reference))
+            order = -np.polyfit(np.log(meshes), np.log(errors), 1)[0]
+            shown = "auto (force)" if scheme == "auto" else "interface (forced)"
+            print(f"| {label} | {shown} | " + " | ".join(f"{e:.1e}" for e in errors) + f" | {order:.2f} |")
+
+
+def table_discretizations_100():
+    table_discretizations(kappa=100.0, meshes=(96, 192, 384, 768))
+
+
+TABLES = {"discretizations": table_discretizations, "discretizations-100": table_discretizations_100, "two-materials": table_two_materials, "remainder-orders": table_remainder_orders, "default": table_default}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--quick", action="store_true", help="only the two-materials and remainder-orders tables")
+    parser.add_argument("--table", action="append", choices=sorted(TABLES), help="only this table (repeatable)")
     args = parser.parse_args(argv)
-    table_two_materials()
-    table_remainder_orders()
-    if not args.quick:
-        table_default()
+    names = args.table or ["two-materials", "remainder-orders"] + ([] if args.quick else ["default", "discretizations", "discretizations-100"])
+    for name in names:
+        TABLES[name]()
 
 
 if __name__ == "__main__":

@@ -48,6 +48,25 @@ def mask_times(text: str) -> str:
     return COMPARE_ROW.sub(r"\1#\2", CONVERGE_ROW.sub(r"\1#\2", TIME.sub("# \\2", text)))
 
 
+def mask(block: Block, text: str) -> str:
+    """:func:`mask_times`, then the block's own volatile numbers (each pattern's groups) replaced by ``#``."""
+    text = mask_times(text)
+    for pattern in block.volatile:
+        text = re.sub(pattern, _hash_groups, text, flags=re.MULTILINE)
+    return text
+
+
+def _hash_groups(match) -> str:
+    whole, start = match.group(0), match.start(0)
+    out, last = [], 0
+    for g in range(1, (match.re.groups or 0) + 1):
+        if match.start(g) < 0:
+            continue
+        out += [whole[last:match.start(g) - start], "#"]
+        last = match.end(g) - start
+    return "".join(out) + whole[last:] if match.re.groups else "#"
+
+
 @dataclass(frozen=True)
 class Block:
     """One generated block: which page, which commands, whether a test re-runs it whole."""
@@ -58,6 +77,8 @@ class Block:
     cheap: bool = False  # seconds, not minutes: tests/test_docs.py re-runs it and compares
     python: str = ""  # instead of commands: the name of a function of this module returning the block
     env: dict = field(default_factory=dict)
+    markdown: bool = False  # the command prints Markdown (tables): shown as it is, under the command
+    volatile: tuple = ()  # regexes whose groups change between runs (timings, load): masked when compared
 
 
 CONVERGE = ("converge", "--gamma", "0.6", "--order", "1", "2", "--mass", "lumped", "consistent",
@@ -97,6 +118,18 @@ BLOCKS = [
     Block("ring-equipartition", "docs/ring.md",
           (("equipartition", "--gamma", "0.6173", "--kappa", "4000", "--modes", "10", "20", "40", "75", "150",
             "--collisions", "120", "--realisations", "5", "--out", "{tmp}/equipartition", "--no-progress"),)),
+    Block("ring-equipartition-variants", "docs/ring.md",
+          tuple(("equipartition", "--gamma", "0.6173", *variant, "--modes", "75", "--collisions", "120",
+                 "--realisations", "5", "--out", "{tmp}/variant", "--no-progress")
+                for variant in (("--kappa", "inf"), ("--kappa", "400"), ("--kappa", "4000", "--no-static-correction")))),
+    Block("ring-result", "docs/ring.md", (("python", "docs/ring_result.py", "--only", "paper"),), markdown=True,
+          volatile=(r"peak memory (\d+) MB",)),
+    Block("ring-spread", "docs/ring.md", (("python", "docs/ring_result.py", "--only", "spread"),), markdown=True),
+    *(Block(f"fem-{table}", "docs/fem.md", (("python", "benchmarks/fem_accuracy_tables.py", "--table", table),),
+            markdown=True) for table in ("two-materials", "remainder-orders", "default", "discretizations", "discretizations-100")),
+    Block("modal-accuracy", "docs/modal.md", (("python", "benchmarks/bench_modal.py", "--accuracy-only"),),
+          volatile=(r"^machine load average.*?: (.*)$", r"^ *\S+ +\d+ +\S+ +\(.*?\)( +[\d.]+)$")),
+    Block("theory-two-material-contacts", "docs/theory.md", (("python", "docs/two_material_contacts.py"),)),
     # the examples write their figures where docs/examples.md shows them
     *(Block(f"example-{name[:-3]}", "docs/examples.md", (("python", f"examples/{name}", "docs/figures/examples"),))
       for name in EXAMPLES),
@@ -151,6 +184,10 @@ def render(block: Block) -> str:
     """The block's text: each command and what it printed, as one code block."""
     if block.python:
         return globals()[block.python]()
+    if block.markdown:
+        with tempfile.TemporaryDirectory() as scratch:
+            return "".join(f"`$ {display(argv)}`\n\n{run_command(argv, scratch, block.env).strip()}\n"
+                           for argv in block.commands)
     parts = []
     with tempfile.TemporaryDirectory() as scratch:
         for argv in block.commands:
@@ -194,7 +231,7 @@ def main(argv=None) -> int:
         page = ROOT / block.page
         if args.check:
             current = page_blocks(page).get(block.name)
-            if current is None or mask_times(current) != mask_times(body):
+            if current is None or mask(block, current) != mask(block, body):
                 stale += 1
                 print(f"{block.page}: block {block.name} is out of date", file=sys.stderr)
             continue

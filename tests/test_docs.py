@@ -2,7 +2,8 @@
 
 Cheap generated blocks are re-run whole and compared (wall times masked); the expensive ones
 are spot-checked: a few of their numbers recomputed here, or compared with independent values
-(MODEL.md, Eq. 11). Every `wavecontact ...` command shown in README.md and docs/ must parse.
+(MODEL.md, Eq. 8, Eq. 11). Every `wavecontact ...` command shown in README.md and docs/ must parse,
+and the cheap ones run (docs/run_commands.py; `python docs/run_commands.py --all` runs every one).
 """
 
 from __future__ import annotations
@@ -23,16 +24,17 @@ ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
-def _generator():
-    spec = importlib.util.spec_from_file_location("docs_generate", ROOT / "docs" / "generate.py")
+def _load(name):
+    spec = importlib.util.spec_from_file_location(f"docs_{name}", ROOT / "docs" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up
     spec.loader.exec_module(module)
     return module
 
 
-generate = _generator()
+generate = _load("generate")
 BLOCKS = {block.name: block for block in generate.BLOCKS}
+commands = _load("run_commands")
 
 
 def block_text(name: str) -> str:
@@ -54,7 +56,7 @@ def test_every_marked_block_has_a_generator_and_every_generator_a_block():
 @pytest.mark.parametrize("name", sorted(n for n, b in BLOCKS.items() if b.cheap))
 def test_cheap_blocks_are_what_their_commands_print(name):
     fresh = generate.render(BLOCKS[name])
-    assert generate.mask_times(block_text(name)) == generate.mask_times(fresh), (
+    assert generate.mask(BLOCKS[name], block_text(name)) == generate.mask(BLOCKS[name], fresh), (
         f"{BLOCKS[name].page} is out of date: python docs/generate.py {name}")
 
 
@@ -114,26 +116,9 @@ def test_compare_page_uses_the_model_reference():
     assert reference == pytest.approx(0.646697087, abs=1e-9)  # MODEL.md section 5
 
 
-def _shown_commands():
-    """Every `wavecontact ...` line in a code block of the pages (continuations joined)."""
-    for page in PAGES:
-        inside, lines = False, []
-        for line in page.read_text().splitlines():
-            if line.startswith("```"):
-                inside = not inside
-                continue
-            if inside:
-                lines.append(line)
-        joined = re.sub(r"\\\n\s*", " ", "\n".join(lines))
-        for line in joined.splitlines():
-            line = line.strip().removeprefix("$ ").split("#")[0].strip()
-            if line.startswith("wavecontact ") and not re.search(r"\[|\||\.\.\.", line):
-                yield page.name, line  # a command (a synopsis with [options] or ... is not)
-
-
 def test_every_command_shown_in_the_docs_parses():
     parser = build_parser()
-    shown = list(_shown_commands())
+    shown = [(page, line) for page, line in commands.shown_commands() if line.startswith("wavecontact ")]
     assert len(shown) >= 10
     for page, line in shown:
         argv = shlex.split(line)[1:]
@@ -143,6 +128,34 @@ def test_every_command_shown_in_the_docs_parses():
             if argv[-1:] in (["--help"], ["--version"]) and exc.code == 0:
                 continue
             pytest.fail(f"{page}: `{line}` does not parse")
+
+
+def test_every_command_is_found_and_the_cheap_list_is_current():
+    shown = {line: page for page, line in commands.shown_commands()}
+    assert "wavecontact collide --gamma 0.6 --kappa 100" in shown  # README's quickstart, after its `&&`
+    assert not any(line.startswith("wavecontact.") for line in shown)  # Python code is not a command
+    stale = sorted(commands.CHEAP - set(shown))
+    assert not stale, f"docs/run_commands.py lists commands no page shows: {stale}"
+    runnable = [line for line in shown if commands.classify(line) != "not run"]
+    for line in runnable:
+        commands.argv_of(line)  # every command shown can be started
+
+
+# commands whose output a cheap generated block already re-runs and compares are not run twice
+RUN_BY_BLOCKS = {generate.display(argv) for block in generate.BLOCKS if block.cheap for argv in block.commands}
+
+
+@pytest.mark.parametrize("command", sorted(commands.CHEAP - RUN_BY_BLOCKS))
+def test_cheap_command_shown_in_the_docs_runs(command):
+    """A fresh user's walk through the pages (the expensive commands: python docs/run_commands.py --all).
+    --help pages are compared whole by the usage-help block."""
+    ok, _, message = commands.run(command, timeout=300)
+    assert ok, f"{command}: {message}"
+
+
+def test_written_paths_are_the_output_options():
+    line = "wavecontact collide --solver fem --plot w.png --fields out/ --xt-plot xt.png --json --out a b --no-progress"
+    assert commands.written_paths(line) == ["w.png", "out/", "xt.png", "a", "b"]
 
 
 def test_examples_page_shows_every_example_and_its_figure():
@@ -157,18 +170,103 @@ def test_examples_page_shows_every_example_and_its_figure():
 
 
 @pytest.mark.slow
-def test_every_command_shown_in_the_docs_runs(tmp_path):
-    """A fresh user's walk through README.md and docs/: each command shown ends with status 0
-    (run in an empty directory, so the files it writes land there)."""
-    import os
-    import subprocess
+def test_every_command_shown_in_the_docs_runs():
+    """Every command, expensive ones and examples included (tens of minutes)."""
+    assert commands.main(["--all"]) == 0
 
-    seen = set()
-    for page, line in _shown_commands():
-        if line in seen:
-            continue
-        seen.add(line)
-        done = subprocess.run([sys.executable, "-m", "wavecontact", *shlex.split(line)[1:]], cwd=tmp_path,
-                              env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True,
-                              timeout=1800, check=False)
-        assert done.returncode == 0, f"{page}: `{line}` failed:\n{done.stderr[-2000:]}"
+
+def _table_rows(name: str) -> list:
+    """The cells of every data row of a generated Markdown table."""
+    rows = []
+    for line in block_text(name).splitlines():
+        if line.startswith("|") and not line.startswith("|---"):
+            rows.append([cell.strip() for cell in line.strip("|").split("|")])
+    return rows[1:]  # without the header
+
+
+def test_fem_accuracy_tables_hold_what_the_solver_gives():
+    """A cheap cell of each generated table of docs/fem.md, recomputed (the coarsest meshes)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_fem_far_ends import ALUMINIUM, STEEL, characteristic_impact
+
+    # two materials against the characteristic solution (exact, independent of the FE code)
+    row = next(r for r in _table_rows("fem-two-materials") if r[0].startswith("aluminium") and r[1] == "200")
+    exact, _ = characteristic_impact(STEEL, ALUMINIUM, 1.0, 0.0)
+    assert row[0] == f"aluminium 0.3 m (exact {exact:.10f})"
+    result = wavecontact.solve(wavecontact.Scene(rods=(STEEL, ALUMINIUM), velocities=(1.0, 0.0),
+                                                 contact=wavecontact.Hard()), "fem", elements=200)
+    assert abs(result.restitution - exact) < 1e-12 and abs(float(row[3])) < 1e-12
+    # fixed remainders and the default table, against the delay solver at rtol = 1e-13
+    reference = wavecontact.collide(0.6, 100, solver="delay", rtol=1e-13).restitution
+    assert abs(reference - 0.6466970871) < 1e-9  # MODEL.md section 5
+    (zero,) = [r for r in _table_rows("fem-remainder-orders") if r[0] == "0"]
+    error = abs(wavecontact.collide(0.6, 100, solver="fem", elements=24).restitution - reference)
+    assert zero[1:3] == ["24", f"{error:.1e}"]
+    (row,) = [r for r in _table_rows("fem-default") if r[:2] == ["0.6", "100"]]
+    error = wavecontact.collide(0.6, 100, solver="fem", elements=200).restitution - reference
+    assert row[2] == f"{error:+.1e}"
+    (hard,) = [r for r in _table_rows("fem-default") if r[:2] == ["0.6", "inf"]]
+    assert all(abs(float(cell)) < 1e-12 for cell in hard[2:])  # the exact lattice: epsilon = gamma
+    # other discretizations at kappa = 20: P2 lumped on 24 elements; observed orders near 2 and 1
+    kappa20 = wavecontact.collide(0.6, 20, solver="delay", rtol=1e-13).restitution
+    rows = _table_rows("fem-discretizations")
+    (p2,) = [r for r in rows if r[:2] == ["P2 lumped", "auto (force)"]]
+    assert p2[2] == f"{abs(wavecontact.collide(0.6, 20, solver='fem', elements=24, order=2).restitution - kappa20):.1e}"
+    for r in rows:
+        assert abs(float(r[-1]) - (2.0 if r[1].startswith("auto") else 1.0)) < 0.3, r
+
+
+def test_modal_accuracy_block_holds_what_the_solver_gives():
+    text = block_text("modal-accuracy")
+    (line,) = [x for x in text.splitlines() if x.split()[:2] == ["static", "10"]]
+    error = abs(wavecontact.collide(0.1, math.inf, solver="modal", modes=10, correction="static").restitution - 0.1)
+    assert line.split()[2] == f"{error:.2e}" and "(0.1, inf)" in line  # hard limit: epsilon = gamma
+    worst = [float(x.split()[2]) for x in text.splitlines() if x.strip().startswith("end-response")]
+    assert len(worst) == 3 and max(worst) < 1e-6  # issue 13's target, met at 10 modes
+
+
+def test_two_material_contacts_block_agrees_with_the_one_contact_proof():
+    text = block_text("theory-two-material-contacts")
+    assert "0 with more than one contact, 0 whose gap shrinks" in text  # docs/theory.md proves it
+    assert "0 with a second force pulse" in text
+    change = float(re.search(r"30 more round trips (\S+)", text).group(1))
+    assert change < 1e-12
+
+
+def test_ring_result_matches_the_first_collisions_and_eq_8_and_11():
+    from wavecontact.studies.ring import run_ring
+    from wavecontact.studies.ring_statistics import relaxation_collisions
+
+    rows = {r[0]: r for r in _table_rows("ring-result")}
+    modes = 75
+    eq8 = 0.5 / (2 * (2 * modes + 1))  # mu V^2 / (2 (2N + 1)), mu = 1/2 (MODEL.md 4)
+    (mean_row,) = [r for k, r in rows.items() if k.startswith("stationary mean `E_tr`")]
+    assert mean_row[2] == f"Eq. 8: {eq8:.7f}"
+    (eta_row,) = [r for k, r in rows.items() if k.startswith("stationary mean `eta`")]
+    harmonic = sum(1.0 / k for k in range(1, 2 * modes + 1))
+    finite = 1 - (harmonic - 1) / math.log(2 * modes)  # <h> = H_2N - 1 for uniform weights on the simplex
+    assert eta_row[2] == f"Eq. 11: {0.423 / math.log(2 * modes):.4f} (finite-N value {finite:.4f})"
+    # the relaxation count needs only the first collisions of the (deterministic) run
+    relaxed = int(rows["collisions until `E_tr` is in its stationary band"][1])
+    run = run_ring(0.6173, 4000, modes=modes, collisions=relaxed + 21, progress=False)
+    assert relaxation_collisions(run.translational_energy, eq8) == relaxed
+    spread = block_text("ring-spread")
+    assert re.search(r"\(120 collisions each\): (\d+)", spread).group(1) == str(relaxed)  # the same run
+
+
+def test_ring_page_finite_n_entropy_differences():
+    """docs/ring.md: Eq. 11 and the finite-N mean differ by 5 % at N = 12 and 0.8 % at N = 75."""
+    text = (ROOT / "docs" / "ring.md").read_text()
+    assert "differ by 5 % at\n`N = 12` and by 0.8 % at `N = 75`" in text
+    for modes, percent in ((12, 5.0), (75, 0.8)):
+        harmonic = sum(1.0 / k for k in range(1, 2 * modes + 1))
+        eq11, finite = 0.423 / math.log(2 * modes), 1 - (harmonic - 1) / math.log(2 * modes)
+        assert round(100 * (eq11 - finite) / eq11, 1) == pytest.approx(percent, abs=0.05 * percent + 0.05)
+
+
+def test_equipartition_variants_match_eq_11():
+    text = block_text("ring-equipartition-variants")
+    rows = re.findall(r"^\| (\d+) \| (\d\.\d{4}) \| (\d\.\d{4}) \|", text, flags=re.MULTILINE)
+    assert [int(n) for n, _, _ in rows] == [75, 75, 75]
+    for n, eq11, _ in rows:
+        assert float(eq11) == pytest.approx(0.423 / math.log(2 * int(n)), abs=6e-4)
