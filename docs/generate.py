@@ -129,6 +129,10 @@ BLOCKS = [
             markdown=True) for table in ("two-materials", "remainder-orders", "default", "discretizations", "discretizations-100")),
     Block("modal-accuracy", "docs/modal.md", (("python", "benchmarks/bench_modal.py", "--accuracy-only"),),
           volatile=(r"^machine load average.*?: (.*)$", r"^ *\S+ +\d+ +\S+ +\(.*?\)( +[\d.]+)$")),
+    Block("materials-map", "docs/materials.md",
+          (("map", "--kappa", "inf", "100", "--out", "docs/figures/material_map", "--no-progress"),), markdown=True),
+    Block("materials-striker", "docs/materials.md",
+          (("python", "examples/steel_striker_on_aluminium_bar.py", "docs/figures"),)),
     Block("theory-two-material-contacts", "docs/theory.md", (("python", "docs/two_material_contacts.py"),)),
     # the examples write their figures where docs/examples.md shows them
     *(Block(f"example-{name[:-3]}", "docs/examples.md", (("python", f"examples/{name}", "docs/figures/examples"),))

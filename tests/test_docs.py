@@ -270,3 +270,41 @@ def test_equipartition_variants_match_eq_11():
     assert [int(n) for n, _, _ in rows] == [75, 75, 75]
     for n, eq11, _ in rows:
         assert float(eq11) == pytest.approx(0.423 / math.log(2 * int(n)), abs=6e-4)
+
+
+def _map_tables(text: str) -> dict:
+    """``{kappa text: {(Z2/Z1, T1/T2): epsilon}}`` of the tables `wavecontact map` prints."""
+    tables, kappa, columns = {}, None, None
+    for line in text.splitlines():
+        heading = re.match(r"epsilon for kappa = (\S+)", line)
+        if heading:
+            kappa, tables[heading.group(1)] = heading.group(1), {}
+        elif line.startswith("| Z2/Z1"):
+            columns = [float(c) for c in line.strip("|").split("|")[1:]]
+        elif kappa and re.match(r"^\| [\d.]+ \|", line):
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            for t, value in zip(columns, cells[1:]):
+                tables[kappa][(float(cells[0]), t)] = float(value)
+    return tables
+
+
+def test_material_map_table_holds_the_known_lines_and_the_page_reads_it_right():
+    tables = _map_tables(block_text("materials-map"))
+    assert set(tables) == {"inf", "100"}
+    for (z, t), epsilon in tables["inf"].items():
+        if z == 1:  # equal impedances: the paper's collision, epsilon = gamma = min(T1/T2, T2/T1)
+            assert epsilon == pytest.approx(min(t, 1 / t), abs=6e-5)
+        if t == 1:  # equal transit times: elastic
+            assert epsilon == 1.0
+    for kappa in ("inf", "100"):  # symmetric under exchanging the rods: (Z2/Z1, T1/T2) -> (Z1/Z2, T2/T1)
+        rows = sorted({z for z, _ in tables[kappa]})
+        columns = sorted({t for _, t in tables[kappa]})
+        for i, z in enumerate(rows):
+            for j, t in enumerate(columns):
+                assert tables[kappa][(z, t)] == tables[kappa][(rows[-1 - i], columns[-1 - j])]
+    # the prose of docs/materials.md: 0.98 or more at Z2/Z1 = 0.01 and 100; 0.147 instead of 0.1
+    page = (ROOT / "docs" / "materials.md").read_text()
+    assert "(0.98 or more at `Z2/Z1 = 0.01` and `100`)" in page and "(0.147 instead of\n  0.1 at `T1/T2 = 0.1`)" in page
+    for kappa in ("inf", "100"):
+        assert min(e for (z, _), e in tables[kappa].items() if z in (0.01, 100)) >= 0.98
+    assert round(tables["100"][(1.0, 0.1)], 3) == 0.147 and tables["inf"][(1.0, 0.1)] == 0.1
