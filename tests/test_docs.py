@@ -276,7 +276,7 @@ def _map_tables(text: str) -> dict:
     """``{kappa text: {(Z2/Z1, T1/T2): epsilon}}`` of the tables `wavecontact map` prints."""
     tables, kappa, columns = {}, None, None
     for line in text.splitlines():
-        heading = re.match(r"epsilon for kappa = (\S+)", line)
+        heading = re.match(r"epsilon for kappa = ([^\s:]+)", line)
         if heading:
             kappa, tables[heading.group(1)] = heading.group(1), {}
         elif line.startswith("| Z2/Z1"):
@@ -293,7 +293,7 @@ def test_material_map_table_holds_the_known_lines_and_the_page_reads_it_right():
     assert set(tables) == {"inf", "100"}
     for (z, t), epsilon in tables["inf"].items():
         if z == 1:  # equal impedances: the paper's collision, epsilon = gamma = min(T1/T2, T2/T1)
-            assert epsilon == pytest.approx(min(t, 1 / t), abs=6e-5)
+            assert epsilon == pytest.approx(min(t, 1 / t), rel=3e-3)  # the column labels have 3 digits
         if t == 1:  # equal transit times: elastic
             assert epsilon == 1.0
     for kappa in ("inf", "100"):  # symmetric under exchanging the rods: (Z2/Z1, T1/T2) -> (Z1/Z2, T2/T1)
