@@ -9,10 +9,10 @@
 3. orders at fixed far-end remainders (gamma = 0.6, kappa = 100);
 4. the other discretizations (P1 consistent, P2, P1 lumped at Courant 0.9, user meshes) at gamma = 0.6,
    kappa = 20 on 24 .. 192 elements (``discretizations``) and at kappa = 100 on 96 .. 768 elements
-   (``discretizations-100``), with the force scheme ('auto') and the interface scheme forced.
+   (``discretizations-100``, ``quadrature``, ``gamma-one``), with the force scheme ('auto') and the interface scheme forced.
 ``--quick`` prints only tables 2 and 3; ``--table NAME`` (repeatable) only the named ones
 (``default``, ``two-materials``, ``remainder-orders``, ``discretizations``,
-``discretizations-100``), which is how ``python docs/generate.py``
+``discretizations-100``, ``quadrature``, ``gamma-one``), which is how ``python docs/generate.py``
 writes each table into docs/fem.md.
 """
 
@@ -97,11 +97,32 @@ def table_discretizations(gamma=0.6, kappa=20.0, meshes=(24, 48, 96, 192)):
             print(f"| {label} | {shown} | " + " | ".join(f"{e:.1e}" for e in errors) + f" | {order:.2f} |")
 
 
+def table_quadrature():
+    """gamma near 1: the two gap quadratures of the characteristic scheme at 800 and 3200 elements."""
+    print("\n| gamma | kappa | substeps 800 | substeps 3200 | gauss 800 | gauss 3200 |\n|---|---|---|---|---|---|")
+    for gamma in (0.95, 0.99, 1.0):
+        for kappa in (100.0, 1e3, 1e4, 1e5, 1e6):
+            exact = wc.collide(gamma, kappa, solver="delay", rtol=1e-13).restitution
+            errors = [wc.collide(gamma, kappa, solver="fem", elements=n, gap_quadrature=q).restitution - exact
+                      for q in ("substeps", "gauss") for n in (800, 3200)]
+            print(f"| {gamma} | {kappa:g} | " + " | ".join(f"{e:+.1e}" for e in errors) + " |")
+
+
+def table_gamma_one():
+    """Equal rods at unresolved finite stiffness: |epsilon - 1| until the mesh resolves the release."""
+    meshes = (800, 3200, 6400, 12800, 25600, 51200)
+    print("\n| kappa | " + " | ".join(f"N = {n}" for n in meshes) + " |\n|---|" + "---|" * len(meshes))
+    for kappa, largest in ((1e4, 3200), (1e5, 51200), (1e6, 51200)):
+        errors = [f"{abs(wc.collide(1.0, kappa, solver='fem', elements=n).restitution - 1.0):.1e}" if n <= largest
+                  else "" for n in meshes]
+        print(f"| {kappa:.0e} | " + " | ".join(errors) + " |")
+
+
 def table_discretizations_100():
     table_discretizations(kappa=100.0, meshes=(96, 192, 384, 768))
 
 
-TABLES = {"discretizations": table_discretizations, "discretizations-100": table_discretizations_100, "two-materials": table_two_materials, "remainder-orders": table_remainder_orders, "default": table_default}
+TABLES = {"quadrature": table_quadrature, "gamma-one": table_gamma_one, "discretizations": table_discretizations, "discretizations-100": table_discretizations_100, "two-materials": table_two_materials, "remainder-orders": table_remainder_orders, "default": table_default}
 
 
 def main(argv=None):
@@ -109,7 +130,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="only the two-materials and remainder-orders tables")
     parser.add_argument("--table", action="append", choices=sorted(TABLES), help="only this table (repeatable)")
     args = parser.parse_args(argv)
-    names = args.table or ["two-materials", "remainder-orders"] + ([] if args.quick else ["default", "discretizations", "discretizations-100"])
+    names = args.table or ["two-materials", "remainder-orders"] + ([] if args.quick else ["default", "discretizations", "discretizations-100", "quadrature", "gamma-one"])
     for name in names:
         TABLES[name]()
 

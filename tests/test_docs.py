@@ -308,3 +308,23 @@ def test_material_map_table_holds_the_known_lines_and_the_page_reads_it_right():
     for kappa in ("inf", "100"):
         assert min(e for (z, _), e in tables[kappa].items() if z in (0.01, 100)) >= 0.98
     assert round(tables["100"][(1.0, 0.1)], 3) == 0.147 and tables["inf"][(1.0, 0.1)] == 0.1
+
+
+def test_fem_page_claims_about_its_tables_hold():
+    """The sentences of docs/fem.md section 7 that summarise the generated tables."""
+    rows = [(float(r[0]), float(r[1]), [abs(float(c)) for c in r[2:]]) for r in _table_rows("fem-default")]
+    for gamma, kappa, (n200, n800, n3200) in rows:
+        if kappa <= 1e3:  # "every entry is below 1e-6 at 800 elements, for every gamma"
+            assert n800 < 1e-6, (gamma, kappa)
+        elif kappa < math.inf:  # "below 1e-4 at 800 elements and below 7e-6 at 3200"
+            assert n800 < 1e-4 and n3200 < 7e-6, (gamma, kappa)
+        if kappa == 0.1:  # "its error there is at most 1.2e-8"
+            assert n3200 <= 1.2e-8
+    # equal rods at unresolved stiffness: epsilon low by about 0.68 / kappa on every mesh (section 7)
+    (row,) = [r for r in _table_rows("fem-gamma-one") if r[0] == "1e+06"]
+    assert all(abs(float(c) - 0.68e-6) < 0.1e-6 for c in row[1:] if c)
+    error = abs(wavecontact.collide(1.0, 1e6, solver="fem", elements=800).restitution - 1.0)
+    assert row[1] == f"{error:.1e}"
+    (quad,) = [r for r in _table_rows("fem-quadrature") if r[:2] == ["0.95", "100"]]
+    exact = wavecontact.collide(0.95, 100, solver="delay", rtol=1e-13).restitution
+    assert quad[2] == f"{wavecontact.collide(0.95, 100, solver='fem', elements=800).restitution - exact:+.1e}"
