@@ -9,10 +9,10 @@
 3. orders at fixed far-end remainders (gamma = 0.6, kappa = 100);
 4. the other discretizations (P1 consistent, P2, P1 lumped at Courant 0.9, user meshes) at gamma = 0.6,
    kappa = 20 on 24 .. 192 elements (``discretizations``) and at kappa = 100 on 96 .. 768 elements
-   (``discretizations-100``, ``quadrature``, ``gamma-one``), with the force scheme ('auto') and the interface scheme forced.
+   (``discretizations-100``, ``quadrature``, ``gamma-one``, ``dispersive``), with the force scheme ('auto') and the interface scheme forced.
 ``--quick`` prints only tables 2 and 3; ``--table NAME`` (repeatable) only the named ones
 (``default``, ``two-materials``, ``remainder-orders``, ``discretizations``,
-``discretizations-100``, ``quadrature``, ``gamma-one``), which is how ``python docs/generate.py``
+``discretizations-100``, ``quadrature``, ``gamma-one``, ``dispersive``), which is how ``python docs/generate.py``
 writes each table into docs/fem.md.
 """
 
@@ -118,11 +118,21 @@ def table_gamma_one():
         print(f"| {kappa:.0e} | " + " | ".join(errors) + " |")
 
 
+def table_dispersive(meshes=(200, 400, 800, 1600, 3200)):
+    """Hard contact (gamma = 0.6) on the dispersive discretizations: |epsilon - gamma| and its order."""
+    print("\n| discretization (hard contact, gamma = 0.6) | " + " | ".join(f"N = {n}" for n in meshes)
+          + " | observed order |\n|---|" + "---|" * len(meshes) + "---|")
+    for label, options in DISCRETIZATIONS[1:2] + DISCRETIZATIONS[0:1] + DISCRETIZATIONS[3:4]:
+        errors = [abs(wc.collide(0.6, math.inf, solver="fem", elements=n, **options).restitution - 0.6) for n in meshes]
+        order = -np.polyfit(np.log(meshes), np.log(errors), 1)[0]
+        print(f"| {label} | " + " | ".join(f"{e:.1e}" for e in errors) + f" | {order:.2f} |")
+
+
 def table_discretizations_100():
     table_discretizations(kappa=100.0, meshes=(96, 192, 384, 768))
 
 
-TABLES = {"quadrature": table_quadrature, "gamma-one": table_gamma_one, "discretizations": table_discretizations, "discretizations-100": table_discretizations_100, "two-materials": table_two_materials, "remainder-orders": table_remainder_orders, "default": table_default}
+TABLES = {"dispersive": table_dispersive, "quadrature": table_quadrature, "gamma-one": table_gamma_one, "discretizations": table_discretizations, "discretizations-100": table_discretizations_100, "two-materials": table_two_materials, "remainder-orders": table_remainder_orders, "default": table_default}
 
 
 def main(argv=None):
@@ -130,7 +140,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="only the two-materials and remainder-orders tables")
     parser.add_argument("--table", action="append", choices=sorted(TABLES), help="only this table (repeatable)")
     args = parser.parse_args(argv)
-    names = args.table or ["two-materials", "remainder-orders"] + ([] if args.quick else ["default", "discretizations", "discretizations-100", "quadrature", "gamma-one"])
+    names = args.table or ["two-materials", "remainder-orders"] + ([] if args.quick else ["default", "discretizations", "discretizations-100", "quadrature", "gamma-one", "dispersive"])
     for name in names:
         TABLES[name]()
 

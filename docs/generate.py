@@ -108,6 +108,26 @@ def solver_options_tables() -> str:
     return "\n".join(out)
 
 
+def modal_truncation_table() -> str:
+    """docs/modal.md: plain truncation against the static correction (gamma = 0.6, errors against delay)."""
+    sys.path.insert(0, str(ROOT))
+    import wavecontact
+
+    cases = ((20.0, 10, True), (20.0, 40, True), (20.0, 160, True), (100.0, 100, True), (100.0, 200, False),
+             (100.0, 400, False), (1000.0, 100, False))
+    lines = [("`python docs/generate.py modal-truncation` (`collide(0.6, kappa, solver=\"modal\", modes=N, "
+             "correction=...)`, static correction at `collocation_tolerance = 1e-4`)"), "",
+             "| kappa | N | plain truncation | static correction |", "|---|---|---|---|"]
+    for kappa, modes, plain in cases:
+        reference = wavecontact.collide(0.6, kappa, solver="delay", rtol=1e-13).restitution
+        static = wavecontact.collide(0.6, kappa, solver="modal", modes=modes, correction="static",
+                                     collocation_tolerance=1e-4).restitution
+        none = (f"{abs(wavecontact.collide(0.6, kappa, solver='modal', modes=modes, correction='none').restitution - reference):.1e}"
+                if plain else "-")
+        lines.append(f"| {kappa:g} | {modes} | {none} | {abs(static - reference):.1e} |")
+    return "\n".join(lines) + "\n"
+
+
 BLOCKS = [
     Block("usage-solver-options", "docs/usage.md", (), cheap=True, python="solver_options_tables"),
     Block("readme-collide", "README.md", (("collide", "--gamma", "0.6", "--kappa", "100"),), cheap=True),
@@ -132,7 +152,8 @@ BLOCKS = [
     Block("ring-spread", "docs/ring.md", (("python", "docs/ring_result.py", "--only", "spread"),), markdown=True),
     *(Block(f"fem-{table}", "docs/fem.md", (("python", "benchmarks/fem_accuracy_tables.py", "--table", table),),
             markdown=True) for table in ("two-materials", "remainder-orders", "default", "discretizations", "discretizations-100",
-                          "quadrature", "gamma-one")),
+                          "quadrature", "gamma-one", "dispersive")),
+    Block("modal-truncation", "docs/modal.md", (), cheap=True, python="modal_truncation_table"),
     Block("modal-accuracy", "docs/modal.md", (("python", "benchmarks/bench_modal.py", "--accuracy-only"),),
           volatile=(r"^machine load average.*?: (.*)$", r"^ *\S+ +\d+ +\S+ +\(.*?\)( +[\d.]+)$")),
     Block("materials-map", "docs/materials.md",

@@ -328,3 +328,10 @@ def test_fem_page_claims_about_its_tables_hold():
     (quad,) = [r for r in _table_rows("fem-quadrature") if r[:2] == ["0.95", "100"]]
     exact = wavecontact.collide(0.95, 100, solver="delay", rtol=1e-13).restitution
     assert quad[2] == f"{wavecontact.collide(0.95, 100, solver='fem', elements=800).restitution - exact:+.1e}"
+
+
+def test_dispersive_table_shows_two_thirds_and_its_first_cell():
+    rows = _table_rows("fem-dispersive")
+    assert len(rows) == 3 and all(abs(float(r[-1]) - 2 / 3) < 0.1 for r in rows)  # d ~ (c t h^2)^(1/3)
+    (p2,) = [r for r in rows if r[0] == "P2 lumped"]
+    assert p2[1] == f"{abs(wavecontact.collide(0.6, math.inf, solver='fem', elements=200, order=2).restitution - 0.6):.1e}"
