@@ -128,6 +128,22 @@ def modal_truncation_table() -> str:
     return "\n".join(lines) + "\n"
 
 
+def modal_hard_static_table() -> str:
+    """docs/modal.md: the static correction in the hard limit, |epsilon - gamma| against N (gamma = 0.6)."""
+    sys.path.insert(0, str(ROOT))
+    import numpy as np
+
+    import wavecontact
+
+    modes = (100, 200, 400)
+    errors = [abs(wavecontact.collide(0.6, float("inf"), solver="modal", modes=n, correction="static").restitution
+                  - 0.6) for n in modes]
+    order = -np.polyfit(np.log(modes), np.log(errors), 1)[0]
+    cells = ", ".join(f"{e:.2e} (N = {n})" for n, e in zip(modes, errors))
+    return (f"`python docs/generate.py modal-hard-static`: `|epsilon - gamma|` at gamma = 0.6, kappa = inf, "
+            f"static correction: {cells}; fitted order {order:.2f}\n")
+
+
 BLOCKS = [
     Block("usage-solver-options", "docs/usage.md", (), cheap=True, python="solver_options_tables"),
     Block("readme-collide", "README.md", (("collide", "--gamma", "0.6", "--kappa", "100"),), cheap=True),
@@ -154,6 +170,7 @@ BLOCKS = [
             markdown=True) for table in ("two-materials", "remainder-orders", "default", "discretizations", "discretizations-100",
                           "quadrature", "gamma-one", "dispersive")),
     Block("modal-truncation", "docs/modal.md", (), cheap=True, python="modal_truncation_table"),
+    Block("modal-hard-static", "docs/modal.md", (), cheap=True, python="modal_hard_static_table"),
     Block("modal-accuracy", "docs/modal.md", (("python", "benchmarks/bench_modal.py", "--accuracy-only"),),
           volatile=(r"^machine load average.*?: (.*)$", r"^ *\S+ +\d+ +\S+ +\(.*?\)( +[\d.]+)$")),
     Block("materials-map", "docs/materials.md",
