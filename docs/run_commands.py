@@ -14,7 +14,8 @@ A command is a line of a code block (fenced or indented) that starts with ``wave
 * ``expensive``: every other command, run by ``--all``.
 
 Each command runs in a new empty directory, with this checkout first on ``PYTHONPATH`` (files it
-writes land there, not in the repository). It passes when it ends with status 0 and every path
+writes land there, not in the repository; directories of the checkout that the command names, such
+as ``docs/figures/examples``, are created there first, as a user in the checkout would have them). It passes when it ends with status 0 and every path
 named after ``--out``, ``--plot``, ``--xt-plot``, ``--fields`` or ``--page`` exists afterwards.
 What the commands print is compared with the pages by ``python docs/generate.py --check`` (the
 generated blocks), not here.
@@ -115,6 +116,9 @@ def written_paths(command: str) -> list:
 def run(command: str, timeout: float = 3600.0) -> tuple:
     """Run one command in an empty directory; ``(ok, seconds, message)``."""
     with tempfile.TemporaryDirectory() as scratch:
+        for word in shlex.split(command)[1:]:  # directories of the checkout that the command names exist there too
+            if not word.startswith("-") and (ROOT / word).is_dir() and not Path(word).is_absolute():
+                (Path(scratch) / word).mkdir(parents=True, exist_ok=True)
         environment = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg", "COLUMNS": "100"}
         start = time.perf_counter()
         try:
