@@ -49,9 +49,9 @@ __all__ = ["DEFAULT_LAW_FILE", "LOG_X_MIN", "REGENERATE", "CollisionLaw", "build
 SCHEMA_NAME = "wavecontact.collision_law"
 SCHEMA_VERSION = 1
 DEFAULT_LAW_FILE = "collision_law_hardcore.npz"
-LOG_X_MIN = -5.0
+LOG_X_MIN = -4.0
 REGENERATE = ("python -m wavecontact.gas.collision_law --gamma 0.6 0.7 0.8 0.9 1.0 "
-              "--log-x 0 -0.25 -0.5 -0.75 -1 -1.5 -2 -2.5 -3 -4 -5 --samples 400 --levels 41 --seed 2026 "
+              "--log-x 0 -0.25 -0.5 -0.75 -1 -1.5 -2 -2.5 -3 -3.5 -4 --samples 400 --levels 41 --seed 2026 "
               "--resolution 16 --workers 2 --out wavecontact/data/collision_law_hardcore.npz")
 MAX_LAW_SAMPLES = 2_000_000
 _ARRAYS = ("gamma", "log_x", "probability", "eps2_quantiles", "gain_short")
