@@ -65,7 +65,7 @@ def test_law_agrees_with_direct_hard_core_solves(gamma, log_x):
     samples' sizes) and the same mean short-rod gain within three combined standard errors.  Two points
     lie below the law's last row (where the rule takes that row's law), one between grid points in
     gamma and x."""
-    n = 60
+    n = 40
     eps2, gain = point_samples(gamma, log_x, n, 99, bath_modes=LAW.bath_modes, resolution=LAW.resolution)
     x = 10.0**log_x
     levels = (np.arange(LAW.samples_per_point) + 0.5) / LAW.samples_per_point

@@ -16,11 +16,10 @@ A pair of rods (length ratio ``gamma``) meets with translational energy
   means, finite and well conditioned at ``gamma = 1``.
 
 Grid in ``log10 x`` from ``LOG_X_MIN`` to 0.  What the solver shows as
-``x -> 0`` (docs/gas.md, ``python docs/gas_study.py law``):
-``E'_tr / (E_tr + T_B) -> 0``; ``epsilon^2`` itself settles to a finite law
-for some ``gamma`` (0.6) and keeps growing like ``x^(-1/2)`` down to
-``x = 1e-6`` for others (0.85), so no single limit law in these variables
-exists.  Below the last row (``x < 10^LOG_X_MIN``) the rule therefore uses the
+``x -> 0`` (docs/gas.md; ``python docs/gas_study.py vibration``, section 4b):
+``E'_tr / (E_tr + T_B) -> 0``; ``epsilon^2`` itself levels off for some
+``gamma`` (0.6) and keeps growing for others (0.85) down to ``x = 1e-5``,
+so no single limit law in these variables exists.  Below the last row (``x < 10^LOG_X_MIN``) the rule therefore uses the
 last row's law (``epsilon^2`` and the gain in units of ``E_tr + T_B``), and the
 gas counts these draws (``GasResult.beyond_law``): a stated approximation,
 never silent.
@@ -50,9 +49,10 @@ SCHEMA_NAME = "wavecontact.collision_law"
 SCHEMA_VERSION = 1
 DEFAULT_LAW_FILE = "collision_law_hardcore.npz"
 LOG_X_MIN = -4.0
-REGENERATE = ("python -m wavecontact.gas.collision_law --gamma 0.6 0.7 0.8 0.9 1.0 "
-              "--log-x 0 -0.25 -0.5 -0.75 -1 -1.5 -2 -2.5 -3 -3.5 -4 --samples 400 --levels 41 --seed 2026 "
-              "--resolution 16 --workers 2 --out wavecontact/data/collision_law_hardcore.npz")
+REGENERATE = ("python -m wavecontact.gas.collision_law --gamma 0.6 0.7 0.8 0.9 0.95 1.0 "
+              "--log-x 0 -0.02 -0.05 -0.1 -0.15 -0.25 -0.35 -0.5 -0.75 -1 -1.5 -2 -2.5 -3 -3.5 -4 "
+              "--samples 400 --levels 41 --seed 2026 --resolution 16 --workers 2 "
+              "--out wavecontact/data/collision_law_hardcore.npz")
 MAX_LAW_SAMPLES = 2_000_000
 _ARRAYS = ("gamma", "log_x", "probability", "eps2_quantiles", "gain_short")
 
