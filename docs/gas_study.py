@@ -265,6 +265,11 @@ def vibration_vs_fixed():
         say(f"| {seed} | {r:.4f} ({critical:.1f}) | {fixed_text} | {result.status} ({result.collisions}) | "
             f"{ratio:.3g} | {result.beyond_law} | {result.bath_limited} |")
     say()
+    modes = LAW.bath_modes
+    say(f"Energy is conserved in the vibration runs, so they can end in equipartition: each rod's translation "
+        f"holding T/2 and its bath {modes} T would leave a fraction 0.5 / ({modes} + 0.5) = {0.5 / (modes + 0.5):.5f} "
+        "of the energy (all kinetic at the start) in the translation.")
+    say()
 
 
 def damping():
@@ -335,6 +340,15 @@ def picture():
         f"{result.energy_drift:.1e}; bath-limited draws: {result.bath_limited}; draws below the law's last row: "
         f"{result.beyond_law}; kinetic energy at the end / start: "
         f"{result.final_energy / result.history['kinetic_energy'][0]:.3g}.")
+    say()
+    order = np.argsort(gas.lengths)
+    thirds = np.array_split(order, 3)
+    temperature = result.bath_temperatures
+    say("Bath temperature at the end (per mode, mean over the rods) of the shortest, middle and longest third of the "
+        "rods: " + ", ".join(f"{temperature[part].mean():.3g}" for part in thirds) + f"; rods with an empty bath "
+        f"(T < 1e-12 of the mean): {int(np.sum(temperature < 1e-12 * temperature.mean()))} of {gas.rods}; mean "
+        f"kinetic energy per rod over the mean bath temperature: "
+        f"{result.final_energy / gas.rods / temperature.mean():.3g} (equipartition: 0.5).")
     say()
 
 
