@@ -63,6 +63,8 @@ def test_collapse_stops_with_a_message(capsys):
         (["--rule", "fixed", "--restitution", "1.5"], r"restitution must lie in \[0, 1\]"),
         (["--rule", "fixed", "--restitution", "0.5", "--packing", "1"], r"packing must lie in \(0, 1\)"),
         (["--rule", "vibration", "--lengths", "0.1", "1"], "table covers gamma"),
+        (["--rule", "vibration", "--table", "a.npz", "--law", "b.npz"], "either --table or --law"),
+        (["--rule", "vibration", "--law", "missing.npz"], "not a readable collision law"),
     ],
 )
 def test_bad_options_end_with_one_line(argv, message, capsys):
