@@ -109,11 +109,12 @@ def _chain_factors(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> 
 
     A chain started ``w`` unknowns early with a zero value carries the error
     ``prod f_j`` (forward) or ``prod g_j`` (backward) over those ``w`` steps
-    times a value of the solution; ``w`` is chosen so that this product is at
-    most ``CHAIN_TOLERANCE`` for the largest factor of the system (mass
-    matrices are diagonally dominant: the factors are at most about 1/2 in
-    magnitude, 0.27 on a uniform P1 mesh).  Left at 0 (twisted solve) when the
-    chains would be shorter than ``CHAIN_MIN_LENGTH`` burn-ins.
+    times an entry of the sweep's result; ``w`` is chosen so that the product
+    of any ``w`` consecutive factors is at most ``CHAIN_TOLERANCE``, so the
+    chains agree with the direct sweeps to rounding relative to the largest
+    entry (mass matrices are diagonally dominant: the factors are at most
+    about 1/2 in magnitude, 0.27 inside a uniform P1 mesh).  Left at 0 (twisted
+    solve) when the chains would be shorter than ``CHAIN_MIN_LENGTH`` burn-ins.
     """
     m = diagonal.size
     pivot = np.empty(m)
