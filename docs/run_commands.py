@@ -93,7 +93,7 @@ def argv_of(command: str) -> list:
     words = shlex.split(command)
     if words[0] == "wavecontact":
         return [sys.executable, "-m", "wavecontact", *words[1:]]
-    if words[:3] == ["python", "-m", "wavecontact"]:
+    if words[:2] == ["python", "-m"] and words[2].split(".")[0] == "wavecontact":
         return [sys.executable, *words[1:]]
     if words[0] == "python" and words[1].endswith(".py"):
         return [sys.executable, str(ROOT / words[1]), *words[2:]]
