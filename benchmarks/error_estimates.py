@@ -58,12 +58,12 @@ def draw(solver: str, index: int, stream: np.random.Generator) -> dict:
     return {"gamma": gamma, "kappa": kappa, "options": options}
 
 
-def run_sample(solver: str, sample: dict) -> dict:
-    """Solve one sample with ``solver`` and the delay reference."""
+def run_sample(solver: str, sample: dict, max_work: float | None = None) -> dict:
+    """Solve one sample with ``solver`` and the delay reference (``max_work``: the solve's work limit)."""
     out = dict(sample)
     start = time.perf_counter()
     try:
-        result = collide(sample["gamma"], sample["kappa"], solver=solver, **sample["options"])
+        result = collide(sample["gamma"], sample["kappa"], solver=solver, max_work=max_work, **sample["options"])
     except LimitError:
         out["status"] = "refused"
         return out
@@ -73,6 +73,9 @@ def run_sample(solver: str, sample: dict) -> dict:
     reference = collide(sample["gamma"], sample["kappa"])
     out.update(status="ok", error=abs(result.restitution - reference.restitution),
                estimate=result.error_estimate, reference_estimate=reference.error_estimate,
+               restitution=result.restitution, reference=reference.restitution,
+               levels=result.diagnostics.get("error_estimate_levels", []),
+               estimate_seconds=result.diagnostics["error_estimate_seconds"], solve_seconds=result.wall_time_s,
                seconds=time.perf_counter() - start)
     return out
 
@@ -99,6 +102,8 @@ def main(argv=None) -> int:
     parser.add_argument("--samples", type=int, default=200, help="collisions per solver (default 200)")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--solver", nargs="+", choices=("fem", "modal"), default=["fem", "modal"])
+    parser.add_argument("--max-work", type=float, default=None,
+                        help="work limit of each solve (default: the library's, 2e11 updates); larger ones are refused")
     parser.add_argument("--verbose", action="store_true", help="print every sample (one dict per line)")
     parser.add_argument("--part", default="1/1", metavar="K/N",
                         help="run only the K-th of N slices of the samples (same streams; to use N processes)")
@@ -120,7 +125,7 @@ def main(argv=None) -> int:
         for index, stream in enumerate(streams):
             if index % parts != part - 1:
                 continue
-            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream))}
+            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream), args.max_work)}
             rows.append(row)
             if args.verbose:
                 print(row, flush=True)
