@@ -119,6 +119,17 @@ def test_fem_estimate_is_within_ten_of_the_error_where_the_old_rule_was_not(gamm
     assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == [elements, elements // 2, elements // 4]
 
 
+def test_tolerance_refuses_the_rough_estimate_of_coarse_meshes_with_an_unresolved_contact():
+    # 20 elements at kappa = 1e4 (alpha V h / c = 640): the runs at 10 and 5 elements say little
+    with pytest.raises(AccuracyError, match="order of magnitude") as info:
+        collide(0.6, 1e4, solver="fem", elements=20, order=2, mass="consistent", tolerance=1.0)
+    assert "elements=32" in info.value.advice and info.value.result.diagnostics["error_estimate_rough"]
+    # from 32 elements on, and where the contact is resolved, the estimate is a bound and is accepted
+    for elements, kappa in ((32, 1e4), (20, 20.0)):
+        result = collide(0.6, kappa, solver="fem", elements=elements, order=2, mass="consistent", tolerance=1.0)
+        assert result.diagnostics["error_estimate_rough"] == ""
+
+
 def test_delay_and_hard_core_report_their_own_estimate():
     assert 0 < collide(0.6, 100).error_estimate < 1e-9
     assert collide(0.6, math.inf).error_estimate < 1e-12

@@ -142,7 +142,8 @@ class CollisionResult:
         kernels during the call, so ``wall_time_s`` is not the solver's cost), ``error_estimate_method``
         (how ``error_estimate`` was obtained), ``error_estimate_seconds`` (its share of ``wall_time_s``)
         and ``error_estimate_levels`` (``(resolution, restitution)`` of the requested run and of the
-        coarser runs a Richardson estimate used; empty otherwise).
+        coarser runs a Richardson estimate used; empty otherwise) and ``error_estimate_rough`` (why the
+        estimate is only an order of magnitude, which ``tolerance=`` then refuses; "" where it is a bound).
     extra : dict
         Solver-specific data (energies per rod, fields, modal energies ...).
     """

@@ -420,6 +420,7 @@ class SolverBase:
                 else:
                     estimate, method, levels = math.nan, "not requested", []
         restitution = float(fields["restitution"])
+        rough = self.rough_estimate(scene, options) if levels else ""
         cold = scene.is_cold and getattr(scene, "vibrations", None) is None and getattr(options, "noise", None) is None
         if restitution > 1.0 and cold and not math.isnan(estimate):
             # a cold collision cannot gain energy: the excess over 1 is error, whatever the estimate said
@@ -448,6 +449,7 @@ class SolverBase:
                 "error_estimate_method": method,
                 "error_estimate_seconds": estimating.seconds,
                 "error_estimate_levels": levels,
+                "error_estimate_rough": rough,
             },
             extra=dict(fields.get("extra", {})),
         )
@@ -456,7 +458,17 @@ class SolverBase:
             raise AccuracyError(
                 f"{self.name}: error estimate {estimate:.2g} of epsilon = {restitution:.10g} exceeds "
                 f"tolerance={tolerance:g}; {advice}", result=result, advice=advice)
+        if tolerance is not None and rough:
+            raise AccuracyError(
+                f"{self.name}: the error estimate {estimate:.2g} of epsilon = {restitution:.10g} cannot be trusted "
+                f"to meet tolerance={tolerance:g}: {rough}", result=result, advice=rough)
         return result
+
+    def rough_estimate(self, scene: Scene, options) -> str:
+        """Why the error estimate of this run is only an order of magnitude, not a bound ("" if it is
+        one): ``tolerance=`` then refuses the result, with this text as advice."""
+        del scene, options
+        return ""
 
     def simulate(self, scene: Scene, options=None) -> Any:
         raise UnsupportedSceneError(f"solver {self.name!r} runs single collisions only; use solver='modal' "
