@@ -3,9 +3,12 @@
 One command::
 
     python benchmarks/error_estimates.py [--samples 200] [--seed 2026] [--solver fem modal]
+        [--max-work 2e10] [--update-docs]
 
 (``--part K/N --verbose > part_K.txt`` in N processes, then ``--summarize part_*.txt``, gives
-the same table.)
+the same table.)  ``--update-docs`` writes the table of one solver into docs/error_estimates.md
+(the block ``sweep:SOLVER:SEED``); the FE tables there come from
+``--solver fem --seed S --max-work 2e10 --update-docs`` for S = 2027, 2028, 2029.
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
@@ -22,8 +25,12 @@ within 10x
 median, p95 ratio
     of ``estimate / error`` over errors above 1e-10;
 refused, failed
-    collisions refused up front (LimitError: over the default work or memory
-    limit) or stopped by the solver (SolverFailure); not counted above.
+    collisions refused up front (LimitError: over the work limit ``--max-work``
+    or the memory limit) or stopped by the solver (SolverFailure); not counted above.
+
+The FE rows are also split by discretization and by regime (``alpha V h / c`` at the
+requested mesh, hard contact), and a last line gives the time of the estimate's coarser
+runs relative to the requested run.
 
 Each sample has its own random stream (``SeedSequence(seed).spawn``); the
 machine the numbers in docs/error_estimates.md came from was shared.
@@ -34,6 +41,7 @@ from __future__ import annotations
 import argparse
 import ast
 import math
+import os
 import time
 
 import numpy as np
@@ -42,7 +50,9 @@ from wavecontact import collide
 from wavecontact.errors import LimitError, SolverFailure
 
 DISCRETIZATIONS = ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
+DOCS_PAGE = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "docs", "error_estimates.md")
 SHARP_ABOVE = 1e-10
+COARSE_BELOW = 32  # elements: with an unresolved contact, the run at N/4 then has fewer than 8
 
 
 def draw(solver: str, index: int, stream: np.random.Generator) -> dict:
@@ -58,12 +68,12 @@ def draw(solver: str, index: int, stream: np.random.Generator) -> dict:
     return {"gamma": gamma, "kappa": kappa, "options": options}
 
 
-def run_sample(solver: str, sample: dict) -> dict:
-    """Solve one sample with ``solver`` and the delay reference."""
+def run_sample(solver: str, sample: dict, max_work: float | None = None) -> dict:
+    """Solve one sample with ``solver`` and the delay reference (``max_work``: the solve's work limit)."""
     out = dict(sample)
     start = time.perf_counter()
     try:
-        result = collide(sample["gamma"], sample["kappa"], solver=solver, **sample["options"])
+        result = collide(sample["gamma"], sample["kappa"], solver=solver, max_work=max_work, **sample["options"])
     except LimitError:
         out["status"] = "refused"
         return out
@@ -73,6 +83,9 @@ def run_sample(solver: str, sample: dict) -> dict:
     reference = collide(sample["gamma"], sample["kappa"])
     out.update(status="ok", error=abs(result.restitution - reference.restitution),
                estimate=result.error_estimate, reference_estimate=reference.error_estimate,
+               restitution=result.restitution, reference=reference.restitution,
+               levels=result.diagnostics.get("error_estimate_levels", []),
+               estimate_seconds=result.diagnostics["error_estimate_seconds"], solve_seconds=result.wall_time_s,
                seconds=time.perf_counter() - start)
     return out
 
@@ -99,19 +112,22 @@ def main(argv=None) -> int:
     parser.add_argument("--samples", type=int, default=200, help="collisions per solver (default 200)")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--solver", nargs="+", choices=("fem", "modal"), default=["fem", "modal"])
+    parser.add_argument("--max-work", type=float, default=None,
+                        help="work limit of each solve (default: the library's, 2e11 updates); larger ones are refused")
     parser.add_argument("--verbose", action="store_true", help="print every sample (one dict per line)")
     parser.add_argument("--part", default="1/1", metavar="K/N",
                         help="run only the K-th of N slices of the samples (same streams; to use N processes)")
     parser.add_argument("--summarize", nargs="+", metavar="FILE",
                         help="print the table from the --verbose output of earlier runs instead of running")
+    parser.add_argument("--update-docs", action="store_true",
+                        help="also write the table into docs/error_estimates.md (block sweep:SOLVER:SEED, one solver)")
     args = parser.parse_args(argv)
     if args.summarize:
         rows = []
         for name in args.summarize:
             with open(name, encoding="utf-8") as handle:
                 rows += [ast.literal_eval(line.replace("inf", "1e999")) for line in handle if line.startswith("{")]
-        _table({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver})
-        return 0
+        return _report({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver}, args)
     part, parts = (int(x) for x in args.part.split("/"))
     tables = {}
     for solver in args.solver:
@@ -120,29 +136,84 @@ def main(argv=None) -> int:
         for index, stream in enumerate(streams):
             if index % parts != part - 1:
                 continue
-            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream))}
+            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream), args.max_work)}
             rows.append(row)
             if args.verbose:
                 print(row, flush=True)
         tables[solver] = rows
-    _table(tables)
+    return _report(tables, args)
+
+
+def _report(tables: dict, args) -> int:
+    lines = table_lines(tables)
+    print("\n".join(lines), flush=True)
+    if args.update_docs:
+        if len(tables) != 1:
+            raise SystemExit("--update-docs writes one solver's table: give one --solver")
+        update_docs(lines, next(iter(tables)), args.seed)
     return 0
 
 
-def _table(tables: dict) -> None:
-    print(f"{'solver':<22}{'solved':>7}{'coverage':>10}{'within 10x':>12}{'(n)':>6}{'median':>9}{'p95':>9}"
-          f"{'refused':>9}{'failed':>8}")
+def regime(row: dict) -> str:
+    """The FE regime of a sample: how well the facing elements resolve the contact (``alpha V h / c``)."""
+    if math.isinf(row["kappa"]):
+        return "hard contact"
+    # units of the two-rod builder: c = V = 1, alpha = kappa, shorter rod (1 + gamma) / 2
+    resolution = row["kappa"] * (1.0 + row["gamma"]) / (2.0 * row["options"]["elements"])
+    if resolution <= 1.0:
+        return "alpha V h/c <= 1"
+    return "alpha V h/c in (1, 30]" if resolution <= 30.0 else "alpha V h/c > 30"
+
+
+def estimate_share(rows: list) -> tuple:
+    """Time of the estimate's coarser runs over the requested runs' time: summed over the solved
+    samples, and the median over the samples whose requested run took at least a second (in
+    shorter ones the per-call overhead of each run dominates)."""
+    solved = [r for r in rows if r["status"] == "ok" and "estimate_seconds" in r]
+    requested = [max(r["solve_seconds"] - r["estimate_seconds"], 1e-12) for r in solved]
+    if not solved:
+        return math.nan, math.nan, 0
+    total = sum(r["estimate_seconds"] for r in solved) / sum(requested)
+    long = [r["estimate_seconds"] / t for r, t in zip(solved, requested) if t >= 1.0]
+    return total, float(np.median(long)) if long else math.nan, len(long)
+
+
+def table_lines(tables: dict) -> list:
+    """The table (markdown) of every solver's rows; FE also per discretization and per regime."""
+    lines = ["| sample | solved | coverage | within 10x | (n) | median | p95 | refused | failed |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for solver, rows in tables.items():
         groups = {solver: rows}
         if solver == "fem":
             for order, mass in DISCRETIZATIONS:
-                groups[f"  P{order} {mass}"] = [r for r in rows if (r["options"]["order"], r["options"]["mass"])
-                                                == (order, mass)]
+                groups[f"P{order} {mass}"] = [r for r in rows if (r["options"]["order"], r["options"]["mass"])
+                                              == (order, mass)]
+            for name in ("alpha V h/c <= 1", "alpha V h/c in (1, 30]", "alpha V h/c > 30", "hard contact"):
+                groups[name] = [r for r in rows if regime(r) == name]
+            coarse = [r for r in rows if r["options"]["elements"] < COARSE_BELOW and regime(r) != "alpha V h/c <= 1"]
+            groups[f"of these, N < {COARSE_BELOW}"] = coarse
+            groups["all but these"] = [r for r in rows if r not in coarse]
         for name, group in groups.items():
             s = summarize(group)
-            print(f"{name:<22}{s['solved']:>7}{s['coverage']:>10.3f}{s['within10']:>12.3f}{s['sharp_count']:>6}"
-                  f"{s['median_ratio']:>9.3g}{s['p95_ratio']:>9.3g}{s['refused']:>9}{s['failed']:>8}", flush=True)
-    return 0
+            lines.append(f"| {name} | {s['solved']} | {s['coverage']:.3f} | {s['within10']:.3f} | {s['sharp_count']} "
+                         f"| {s['median_ratio']:.3g} | {s['p95_ratio']:.3g} | {s['refused']} | {s['failed']} |")
+        total, median, count = estimate_share(rows)
+        lines.append(f"\n{solver}: the coarser runs of the estimate took {total:.2f} of the requested runs' time in "
+                     f"all, {median:.2f} (median) for the {count} requested runs of a second or more.\n")
+    return lines
+
+
+def update_docs(lines: list, solver: str, seed: int, page: str = DOCS_PAGE) -> None:
+    """Replace the block ``<!-- sweep:SOLVER:SEED:start/end -->`` of ``page`` with ``lines``."""
+    start, end = f"<!-- sweep:{solver}:{seed}:start -->\n", f"<!-- sweep:{solver}:{seed}:end -->"
+    with open(page, encoding="utf-8") as handle:
+        text = handle.read()
+    if start not in text or end not in text:
+        raise SystemExit(f"{page} has no block {start.strip()} ... {end}")
+    head, rest = text.split(start, 1)
+    tail = rest.split(end, 1)[1]
+    with open(page, "w", encoding="utf-8") as handle:
+        handle.write(head + start + "\n".join(lines).strip("\n") + "\n" + end + tail)
 
 
 if __name__ == "__main__":

@@ -6,9 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from wavecontact import collide
+from wavecontact import collide, two_rods
 from wavecontact.cli import main
 from wavecontact.errors import AccuracyError
+from wavecontact.fem import solver as fem_solver
 
 DISCRETIZATIONS = ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
 
@@ -58,6 +59,75 @@ def test_issue_examples_now_carry_an_honest_estimate():
         # a bound, not a sharp one: after the exact far ends (main) the P2 lumped case's error fell
         # to 1e-3 while the Richardson difference of its 8-element twin stayed large (36x)
         assert error <= result.error_estimate, (gamma, kappa, order, mass)
+
+
+def _fem_estimate(gamma, kappa, elements, order, mass, errors):
+    """The FE rule applied to restitutions ``eps* + errors[i]`` at elements, elements/2, elements/4."""
+    options = fem_solver.SOLVER.options({"elements": elements, "order": order, "mass": mass})
+    levels = [(elements // 2**i, 0.5 + error) for i, error in enumerate(errors)]
+    return fem_solver.SOLVER.estimate_from_levels(two_rods(gamma, kappa), options, levels)
+
+
+def test_fem_rule_is_safety_times_the_error_of_a_clean_power_law():
+    # e(N) = e* + C N^-p exactly: Richardson with the right order returns |C N^-p| (times the safety)
+    safety = fem_solver.ESTIMATE_SAFETY
+    # resolved (alpha V h / c = 20 * 0.8 / 64 = 0.25): the declared order 2
+    errors = [3e-5 * 2.0 ** (2 * i) for i in range(3)]
+    estimate, rule = _fem_estimate(0.6, 20.0, 64, 2, "consistent", errors)
+    assert estimate == pytest.approx(safety * errors[0], rel=1e-6) and "declared" in rule
+    # partly resolved (x = 400 * 0.8 / 64 = 5): the order observed on the three runs, here 1.3
+    errors = [-4e-5 * 2.0 ** (1.3 * i) for i in range(3)]
+    estimate, rule = _fem_estimate(0.6, 400.0, 64, 2, "lumped", errors)
+    assert estimate == pytest.approx(safety * abs(errors[0]), rel=1e-6) and "observed 1.3" in rule
+    # an observed order above the declared one is not believed: clamped to 2, so the estimate is larger
+    errors = [1e-5 * 2.0 ** (3.5 * i) for i in range(3)]
+    estimate, _ = _fem_estimate(0.6, 400.0, 64, 2, "lumped", errors)
+    assert estimate > safety * errors[0]
+    # unresolved (x = 5e4 * 0.8 / 64 = 625): order 2/3 whatever the runs suggest
+    errors = [2e-3 * 2.0 ** (2 * i / 3) for i in range(3)]
+    estimate, rule = _fem_estimate(0.6, 5e4, 64, 1, "consistent", errors)
+    assert estimate == pytest.approx(safety * errors[0], rel=1e-6) and "unresolved" in rule
+
+
+def test_fem_rule_guards_runs_that_do_not_converge_monotonically():
+    # the runs oscillate about the limit (the differences change sign): the coarser pair's
+    # difference, carried to N at the unresolved order, keeps the estimate at the error's scale
+    errors = [1e-3, -1e-3, 1e-2]
+    estimate, rule = _fem_estimate(0.6, 400.0, 64, 2, "consistent", errors)
+    assert "not monotone" in rule and estimate >= abs(errors[0])
+
+
+def test_fem_rule_has_a_floor_at_the_characteristic_quadrature_level():
+    estimate, _ = _fem_estimate(0.6, 20.0, 800, 1, "lumped", [1e-13, 0.0, 1e-13])
+    assert estimate == fem_solver.CHARACTERISTIC_FLOOR
+    estimate, _ = _fem_estimate(0.6, 20.0, 800, 2, "lumped", [1e-15, 0.0, 1e-15])
+    assert estimate == fem_solver.ROUNDING_FLOOR
+
+
+@pytest.mark.parametrize("gamma, kappa, elements, order, mass", [
+    (0.9668, 65.4, 116, 2, "lumped"),  # force scheme at N; at N/2 'auto' would switch to the interface
+    (0.6838, 134.0, 15, 2, "lumped"),  # contact resolved within the sequence (x = 7.5 at N): observed order
+    (0.9122, 289.7, 43, 2, "consistent"),
+    (0.5971, 536.2, 68, 2, "consistent"),
+])
+def test_fem_estimate_is_within_ten_of_the_error_where_the_old_rule_was_not(gamma, kappa, elements, order, mass):
+    # cases of the tuning sweeps where the two-level rule (order 2/3 above alpha V h / c = 3, or a
+    # coarser run with another contact scheme) overestimated 30 to 470 times
+    result = collide(gamma, kappa, solver="fem", elements=elements, order=order, mass=mass)
+    error = abs(result.restitution - collide(gamma, kappa).restitution)
+    assert error <= result.error_estimate <= 10.0 * error
+    assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == [elements, elements // 2, elements // 4]
+
+
+def test_tolerance_refuses_the_rough_estimate_of_coarse_meshes_with_an_unresolved_contact():
+    # 20 elements at kappa = 1e4 (alpha V h / c = 640): the runs at 10 and 5 elements say little
+    with pytest.raises(AccuracyError, match="order of magnitude") as info:
+        collide(0.6, 1e4, solver="fem", elements=20, order=2, mass="consistent", tolerance=1.0)
+    assert "elements=32" in info.value.advice and info.value.result.diagnostics["error_estimate_rough"]
+    # from 32 elements on, and where the contact is resolved, the estimate is a bound and is accepted
+    for elements, kappa in ((32, 1e4), (20, 20.0)):
+        result = collide(0.6, kappa, solver="fem", elements=elements, order=2, mass="consistent", tolerance=1.0)
+        assert result.diagnostics["error_estimate_rough"] == ""
 
 
 def test_delay_and_hard_core_report_their_own_estimate():

@@ -140,7 +140,10 @@ class CollisionResult:
         energy in the centre-of-mass frame and to ``mu V``, the reduced mass
         times the approach speed; NaN where the solver does not track them), ``includes_kernel_preparation`` (numba compiled or loaded
         kernels during the call, so ``wall_time_s`` is not the solver's cost), ``error_estimate_method``
-        (how ``error_estimate`` was obtained) and ``error_estimate_seconds`` (its share of ``wall_time_s``).
+        (how ``error_estimate`` was obtained), ``error_estimate_seconds`` (its share of ``wall_time_s``)
+        and ``error_estimate_levels`` (``(resolution, restitution)`` of the requested run and of the
+        coarser runs a Richardson estimate used; empty otherwise) and ``error_estimate_rough`` (why the
+        estimate is only an order of magnitude, which ``tolerance=`` then refuses; "" where it is a bound).
     extra : dict
         Solver-specific data (energies per rod, fields, modal energies ...).
     """

@@ -313,11 +313,11 @@ class ModalSolver(SolverBase):
         try:
             value = float(self._collide(scene, finer)["restitution"])
         except SolverFailure as failure:
-            return math.nan, f"none (the run at a tenth of the collocation tolerance failed: {failure})"
+            return math.nan, f"none (the run at a tenth of the collocation tolerance failed: {failure})", []
         change = abs(value - float(fields["restitution"]))
         return (max(self.error_safety * change, END_RESPONSE_FLOOR),
                 (f"collocation tolerance {tolerance:g} against {tolerance / 10:g}: change {change:.3g}, "
-                f"safety {self.error_safety:g}"))
+                f"safety {self.error_safety:g}"), [])
 
     def coarser_options(self, options: ModalOptions):
         """Half the modes, no histories."""

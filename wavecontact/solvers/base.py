@@ -324,27 +324,47 @@ class SolverBase:
         return self.expected_order(options)
 
     def _error_estimate(self, scene: Scene, options, fields: dict) -> tuple:
-        """``(estimate, method)`` of the solve's error: the solver's own, or Richardson."""
+        """``(estimate, method, levels)`` of the solve's error: the solver's own, or Richardson.
+
+        ``levels`` lists ``(resolution, restitution)`` of the requested run and of each coarser
+        run the estimate used (empty for the solver's own estimate).
+        """
         own = float(fields.get("error_estimate", math.nan))
         if not math.isnan(own):
-            return own, "the solver's own estimate"
-        order = self.estimate_order(scene, options)
-        values, levels, coarse_options = [float(fields["restitution"])], [], options
+            return own, "the solver's own estimate", []
+        levels, coarse_options = [(getattr(options, self.resolution, None), float(fields["restitution"]))], options
+        failure_text = ""
         for _ in range(self.error_levels):
             coarse_options = self.coarser_options(coarse_options)
-            if coarse_options is None or order is None:
+            if coarse_options is None:
                 break
             try:
-                values.append(float(self._collide(scene, coarse_options)["restitution"]))
+                value = float(self._collide(scene, coarse_options)["restitution"])
             except SolverFailure as failure:
-                if len(values) == 1:
-                    return math.nan, f"none (the run at half the resolution failed: {failure})"
+                failure_text = str(failure)
                 break
-            levels.append(f"{self.resolution}={getattr(coarse_options, self.resolution)} gave {values[-1]:.12g}")
-        if len(values) == 1:
-            return math.nan, "none (no coarser resolution)"
-        return (richardson_estimate(values, order, safety=self.error_safety),
-                f"Richardson: {'; '.join(levels)}; order {order:.3g}, safety {self.error_safety:g}")
+            levels.append((getattr(coarse_options, self.resolution), value))
+        if len(levels) == 1:
+            why = f"the run at half the resolution failed: {failure_text}" if failure_text else "no coarser resolution"
+            return math.nan, f"none ({why})", levels
+        estimate, rule = self.estimate_from_levels(scene, options, levels)
+        if math.isnan(estimate):
+            return estimate, f"none ({rule})", levels
+        runs = "; ".join(f"{self.resolution}={n} gave {value:.12g}" for n, value in levels[1:])
+        return estimate, f"Richardson: {runs}; {rule}", levels
+
+    def estimate_from_levels(self, scene: Scene, options, levels: list) -> tuple:
+        """``(estimate, rule)`` from ``levels``: ``(resolution, restitution)`` of the requested run
+        first, then of each coarser run (at least one).
+
+        The default: :func:`richardson_estimate` with :meth:`estimate_order` and
+        :attr:`error_safety` (a solver may replace the rule).
+        """
+        order = self.estimate_order(scene, options)
+        if order is None:
+            return math.nan, "no order for this regime"
+        return (richardson_estimate([value for _, value in levels], order, safety=self.error_safety),
+                f"order {order:.3g}, safety {self.error_safety:g}")
 
     def _advice(self, options, estimate: float, tolerance: float) -> str:
         """Which resolution should bring the error estimate below ``tolerance``."""
@@ -396,10 +416,11 @@ class SolverBase:
             fields = self._collide(scene, options)
             with Stopwatch() as estimating:
                 if estimate_error or tolerance is not None:
-                    estimate, method = self._error_estimate(scene, options, fields)
+                    estimate, method, levels = self._error_estimate(scene, options, fields)
                 else:
-                    estimate, method = math.nan, "not requested"
+                    estimate, method, levels = math.nan, "not requested", []
         restitution = float(fields["restitution"])
+        rough = self.rough_estimate(scene, options) if levels else ""
         cold = scene.is_cold and getattr(scene, "vibrations", None) is None and getattr(options, "noise", None) is None
         if restitution > 1.0 and cold and not math.isnan(estimate):
             # a cold collision cannot gain energy: the excess over 1 is error, whatever the estimate said
@@ -427,6 +448,8 @@ class SolverBase:
                 "includes_kernel_preparation": prepared_kernel_count() > prepared,
                 "error_estimate_method": method,
                 "error_estimate_seconds": estimating.seconds,
+                "error_estimate_levels": levels,
+                "error_estimate_rough": rough,
             },
             extra=dict(fields.get("extra", {})),
         )
@@ -435,7 +458,17 @@ class SolverBase:
             raise AccuracyError(
                 f"{self.name}: error estimate {estimate:.2g} of epsilon = {restitution:.10g} exceeds "
                 f"tolerance={tolerance:g}; {advice}", result=result, advice=advice)
+        if tolerance is not None and rough:
+            raise AccuracyError(
+                f"{self.name}: the error estimate {estimate:.2g} of epsilon = {restitution:.10g} cannot be trusted "
+                f"to meet tolerance={tolerance:g}: {rough}", result=result, advice=rough)
         return result
+
+    def rough_estimate(self, scene: Scene, options) -> str:
+        """Why the error estimate of this run is only an order of magnitude, not a bound ("" if it is
+        one): ``tolerance=`` then refuses the result, with this text as advice."""
+        del scene, options
+        return ""
 
     def simulate(self, scene: Scene, options=None) -> Any:
         raise UnsupportedSceneError(f"solver {self.name!r} runs single collisions only; use solver='modal' "
