@@ -47,11 +47,10 @@ import numpy as np
 from .._jit import kernel
 from ..errors import InvalidParameterError, SolverFailure
 
-__all__ = ["DEFAULT_POINTS_PER_PERIOD", "HardCoreGrid", "hard_core_restitution", "hard_core_restitutions",
+__all__ = ["DEFAULT_POINTS_PER_PERIOD", "HardCoreGrid", "cached_grid", "hard_core_restitution", "hard_core_restitutions",
            "max_plus_batch"]
 
 DEFAULT_POINTS_PER_PERIOD = 8
-ROD2_TABLE_POINTS = 8  # rod 2's Hermite table: nodes per period of its fastest mode
 _TRANSLATIONAL_ENERGY = 0.25  # E_tr in the paper's units (mu = 1/2, V = 1)
 BLOCK = 32  # samples whose tables are made together (about 1.5 MB at nu_max = 250)
 STATUS_OK = 0
@@ -152,8 +151,7 @@ def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
     for j in range(last, last + n1):
         c1 = a1[j - n1] if j >= n1 else 0.0
         top = q1[i1] - (c1 - w * (j - last) / n1)
-        if top > top1:
-            top1 = top
+        top1 = max(top1, top)
         i1 += 1
         if i1 == n1:
             i1 = 0
@@ -162,15 +160,14 @@ def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
     for j in range(last, last + j2 + 2):
         c2 = f2 * a2[j - j2 - 1] + (1.0 - f2) * a2[j - j2] if j > j2 else 0.0
         u2 = c2 - w * (j - last) / d2
-        if u2 < low2:
-            low2 = u2
+        low2 = min(low2, u2)
     excess = (last - m) * h + top1 + reach2 - low2 - w
     if excess <= 0.0:
         return last
     steps = excess / (h * (w - 1.0))
     if steps > 2.0**60:
         return 2**62
-    return last + int(math.ceil(steps)) + 1
+    return last + int(math.ceil(steps)) + 1  # noqa: RUF046 (an int in numba and in Python alike)
 
 
 @kernel
@@ -224,7 +221,9 @@ class HardCoreGrid:
         d2 = self.periods[1] / self.h
         self.j2 = int(d2)
         self.f2 = d2 - self.j2
-        self.n2 = table_points(self.modes, ROD2_TABLE_POINTS)
+        # rod 2's Hermite table: as many nodes per period of its fastest mode as the grid has for rod 1's
+        # (rod 2's modes are slower by gamma); a power of two
+        self.n2 = table_points(self.modes, int(points_per_period))
         self.r2 = self.h * self.n2 / self.periods[1]  # rod 2's table index per grid step
         self.max_points = int(max_points)
         self._work = None
@@ -247,10 +246,12 @@ class HardCoreGrid:
             out.append(factor * (normals[:, i, 1] * spread))
         return out
 
-    def tables(self, normals, temperatures):
-        """Rod 1's table on the grid, rod 2's Hermite table (values, slopes per index), reaches, start nodes."""
-        a1, b1, a2, b2 = self.coefficients(normals, temperatures)
-        count = normals.shape[0]
+    def tables(self, a1, b1, a2, b2):
+        """Rod 1's table on the grid, rod 2's Hermite table (values, slopes per index), reaches, start nodes.
+
+        ``a_i, b_i``: noise coefficients ``(samples, nu_max)`` (:meth:`coefficients`).
+        """
+        count = a1.shape[0]
         top = self.modes + 1
         spectrum = np.zeros((count, self.n1 // 2 + 1), dtype=complex)
         spectrum[:, 1:top] = 0.5 * self.n1 * (a1 - 1j * b1)
@@ -277,12 +278,23 @@ class HardCoreGrid:
         self.last_nodes = np.empty(count, dtype=np.int64)
         for start in range(0, count, BLOCK):
             stop = min(start + BLOCK, count)
-            out[start:stop] = self._block(normals[start:stop], temperatures[start:stop],
-                                          self.last_nodes[start:stop])
+            coefficients = self.coefficients(normals[start:stop], temperatures[start:stop])
+            out[start:stop] = self._block(coefficients, self.last_nodes[start:stop])
         return out
 
-    def _block(self, normals, temperatures, nodes):
-        q1, q2v, q2s, reach2, _reach, starts = self.tables(normals, temperatures)
+    def restitution_of(self, vibrations) -> float:
+        """epsilon of one :class:`~wavecontact.bath.BathRealisation` of this grid's rods (at nominal contact).
+
+        Its noise coefficients are the numbers :meth:`coefficients` makes from the same draw,
+        so the result equals the batch's for that seed, bit for bit.
+        """
+        if vibrations.modes != self.modes:
+            raise InvalidParameterError(f"the realisation has {vibrations.modes} modes per rod, the grid {self.modes}")
+        (_o1, a1, b1), (_o2, a2, b2) = vibrations.noise_coefficients(1.0)
+        return float(self._block([a1[None], b1[None], a2[None], b2[None]], np.empty(1, dtype=np.int64))[0])
+
+    def _block(self, coefficients, nodes):
+        q1, q2v, q2s, reach2, _reach, starts = self.tables(*coefficients)
         count = q1.shape[0]
         w = np.empty(count)
         status = np.empty(count, dtype=np.int64)
@@ -381,7 +393,7 @@ def hard_core_restitution(gamma: float, temperatures, modes: int, rng: np.random
     -------
     float
     """
-    grid = _cached_grid(float(gamma), int(modes), int(points_per_period))
+    grid = cached_grid(float(gamma), int(modes), int(points_per_period))
     normals = rng.standard_normal((1, 2, 2, grid.modes))
     return float(grid.restitutions(normals, _temperature_rows(temperatures, 1))[0])
 
@@ -389,7 +401,8 @@ def hard_core_restitution(gamma: float, temperatures, modes: int, rng: np.random
 _GRIDS: dict = {}
 
 
-def _cached_grid(gamma, modes, points_per_period) -> HardCoreGrid:
+def cached_grid(gamma: float, modes: int, points_per_period: int = DEFAULT_POINTS_PER_PERIOD) -> HardCoreGrid:
+    """A :class:`HardCoreGrid` kept for reuse (per process; at most 64 kept)."""
     key = (gamma, modes, points_per_period)
     grid = _GRIDS.get(key)
     if grid is None:
