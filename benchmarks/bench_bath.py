@@ -2,6 +2,7 @@
 
     python benchmarks/bench_bath.py            # everything (several minutes on a shared 2-core machine)
     python benchmarks/bench_bath.py --quick    # smaller sample counts
+    python benchmarks/bench_bath.py --hard-core-only   # rows 1 and the Fig. 8 hard-core row
 
 Rows:
 1. the stochastic hard-core mode (kappa = inf): samples per CPU second on one core at 8 (the default) and
@@ -94,6 +95,12 @@ def fig8_hard_core(samples):
     return seconds, cpu, count
 
 
+def fig8_hard_core_row(quick):
+    seconds, cpu, count = fig8_hard_core(250 if quick else 2500)
+    row(f"Fig. 8 set, hard-core mode, {count} samples, 2 workers", f"{seconds:.1f} s",
+        f"wall; workers' CPU {cpu:.1f} s = {count / cpu:,.0f} samples per CPU second; target <= 30 s")
+
+
 def peers(modes=50, kappa=100.0, seed=3):
     """One realisation: wavecontact's delay solver, JiTCDDE with input, solve_ivp DOP853 on the modal system."""
     scene = thermal_scene(GAMMA, kappa, ThermalBath(1.0, modes), seed)
@@ -144,6 +151,8 @@ def dask_scaling(samples):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer samples")
+    parser.add_argument("--hard-core-only", action="store_true",
+                        help="only the hard-core rows (1 and the Fig. 8 hard-core row), about a minute")
     args = parser.parse_args(argv)
     quick = args.quick
     logging.getLogger("distributed").setLevel(logging.ERROR)
@@ -153,13 +162,14 @@ def main(argv=None):
         rate, bias, bias_error = hard_core_rate(500 if quick else 5000, resolution)
         row(f"hard-core mode (gamma 0.6173, T_B/E_tr 1, nu_max 250), {resolution} points/period, CPU",
             f"{rate:,.0f} /s", f"per core, target >= 20,000 /s; mean error {bias:+.1e} +- {bias_error:.0e}")
+    if args.hard_core_only:
+        fig8_hard_core_row(quick)
+        return 0
     for kappa in (50.0, 100.0, 250.0, 1000.0):
         row(f"delay sample, kappa {kappa:g}, nu_max 250", f"{delay_sample_time(kappa, 250):.4f} s", "rtol 1e-6")
     for modes in (50, 1000):
         row(f"delay sample, kappa 250, nu_max {modes}", f"{delay_sample_time(250.0, modes):.4f} s", "rtol 1e-6")
-    seconds, cpu, count = fig8_hard_core(250 if quick else 2500)
-    row(f"Fig. 8 set, hard-core mode, {count} samples, 2 workers", f"{seconds:.1f} s",
-        f"wall; workers' CPU {cpu:.1f} s = {count / cpu:,.0f} samples per CPU second; target <= 30 s")
+    fig8_hard_core_row(quick)
     seconds, count = fig8_parallel(250.0, 2 if quick else 10, gammas=(0.6173, 0.2173), temperatures=(0.1, 0.5, 1.0))
     row(f"Fig. 8 at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
         f"extrapolated to 50,000: {seconds / count * 50000:.0f} s")
