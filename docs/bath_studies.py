@@ -103,14 +103,15 @@ DEFECT_RUNS = ((8, 400_000), (16, 400_000), (32, 400_000), (64, 400_000), (128, 
 def _transitions(args):
     """Independent transitions of docs/markov.md: chain c's E from the first uniform of its generator
     (Eq. 30), its bath from its step-0 seed, one hard-core collision at T_B/E_tr = 1/E; returns (E, E')."""
-    from wavecontact.delay.stochastic_hardcore_batch import hard_core_restitutions
+    from wavecontact.delay.stochastic_hardcore_batch import HardCoreGrid, hard_core_restitutions
     from wavecontact.studies.markov import chain_seed, step_seed
 
     gamma, modes, seed, start, stop, resolution = args
     chains = [chain_seed(seed, c) for c in range(start, stop)]
     energy = -np.log1p(-np.array([np.random.default_rng(c).random() for c in chains]))
-    eps = hard_core_restitutions(gamma, 1.0 / energy, [step_seed(c, 0) for c in chains], modes=modes,
-                                 points_per_period=resolution)
+    # min_points=0: the step is Gamma_1 / (resolution nu_max) for every nu_max, so halving it is a real halving
+    grid = HardCoreGrid(gamma, modes, resolution, min_points=0)
+    eps = hard_core_restitutions(gamma, 1.0 / energy, [step_seed(c, 0) for c in chains], grid=grid)
     return energy, eps**2 * energy
 
 
@@ -119,8 +120,8 @@ def boltzmann_defect(pool, gamma=0.6, runs=DEFECT_RUNS, seed=77, block=5000):
     nu_max, with the grid's share from the same transitions at half the resolution."""
     print(f"\n### Eq. 32 defect (gamma {gamma}, hard-core mode, E from Boltzmann; 8 points per period, and 4 on "
           "the same transitions)\n")
-    print("| nu_max | transitions | mean E' - E (SE) | grid: mean of (E'_8 - E'_4) (SE) | from E < 0.1 | 0.1 <= E < 1 | "
-          "1 <= E < 3 | E >= 3 | nu_max x defect |")
+    print("| nu_max | transitions | mean E' - E (SE) | grid: mean of (E'_8 - E'_4) (SE) | extrapolated to h = 0 | "
+          "from E < 0.1 | 0.1 <= E < 1 | 1 <= E < 3 | E >= 3 |")
     print("|---|---|---|---|---|---|---|---|---|")
     for m, transitions in runs:
         found = {}
@@ -136,7 +137,7 @@ def boltzmann_defect(pool, gamma=0.6, runs=DEFECT_RUNS, seed=77, block=5000):
                  for lo, hi in ((0.0, 0.1), (0.1, 1.0), (1.0, 3.0), (3.0, np.inf))]
         se = gain.std(ddof=1) / math.sqrt(transitions)
         print(f"| {m} | {transitions} | {gain.mean():+.4f} ({se:.4f}) | {grid.mean():+.5f} ({grid.std(ddof=1) / math.sqrt(transitions):.5f})"
-              f" | {share[0]:+.4f} | {share[1]:+.4f} | {share[2]:+.4f} | {share[3]:+.4f} | {m * gain.mean():+.2f} |",
+              f" | {gain.mean() + grid.mean():+.4f} | {share[0]:+.4f} | {share[1]:+.4f} | {share[2]:+.4f} | {share[3]:+.4f} |",
               flush=True)
 
 
@@ -175,7 +176,7 @@ def _cold_mode_uptake(args):
     return np.array(rows)
 
 
-def cold_mode_uptake(pool, gamma=0.6, transitions=1500, modes=(8, 16), seed=77, resolution=16, top=4):
+def cold_mode_uptake(pool, gamma=0.6, transitions=1000, modes=(8, 16), seed=77, resolution=16, top=4):
     """The energy the cold modes above nu_max take up, against the Eq. 32 defect of the same transitions."""
     print(f"\n### Where the Eq. 32 defect goes (gamma {gamma}, {transitions} Boltzmann transitions per nu_max, "
           f"{resolution} points per period; modes nu_max+1 .. {top} nu_max summed, 1/nu^2 tail added)\n")
