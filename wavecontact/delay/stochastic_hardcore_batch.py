@@ -4,7 +4,7 @@ The same recursion as :mod:`wavecontact.delay.stochastic_hardcore`,
 
     w_k = max(w_{k-1}, f(t_k), 0),   f(t) = t - tau_free - C_1(t) - C_2(t) + q_1(t) + q_2(t),
 
-organised so that a block of samples costs a few microseconds each:
+organised for blocks of samples, with no Python work per grid node or per table entry:
 
 * the bath of sample ``j`` is ``standard_normal((2, 2, nu_max))`` from
   ``numpy.random.default_rng(seed_j)``, the same numbers as
@@ -34,8 +34,9 @@ The kernel steps on until this bound is at most ``W`` for all later nodes
 grid recursion is cut off.  The parabolic peak correction between nodes is
 not part of the bound (it changes ``w`` by the grid's own error).
 
-Error: first order in ``h`` (docs/bath.md section 5 measures it; the study
-script runs a subset at ``h / 2``).
+Error: first order in ``h``.  ``benchmarks/bench_bath.py`` states the mean error
+against a four times finer grid; ``docs/bath_studies.py`` reruns its ensembles at
+twice the step and extrapolates.
 """
 
 from __future__ import annotations
@@ -55,21 +56,6 @@ _TRANSLATIONAL_ENERGY = 0.25  # E_tr in the paper's units (mu = 1/2, V = 1)
 BLOCK = 32  # samples whose tables are made together (about 1.5 MB at nu_max = 250)
 STATUS_OK = 0
 STATUS_FULL = 1
-
-
-@kernel
-def _hermite(x, mask, values, slopes):
-    """Periodic cubic Hermite read at ``x >= 0`` (table index units; ``mask + 1`` nodes, a power of two)."""
-    j = int(x)
-    f = x - j
-    j0 = j & mask
-    j1 = (j + 1) & mask
-    y0 = values[j0]
-    y1 = values[j1]
-    f2 = f * f
-    f3 = f2 * f
-    return ((2.0 * f3 - 3.0 * f2 + 1.0) * y0 + (f3 - 2.0 * f2 + f) * slopes[j0]
-            + (3.0 * f2 - 2.0 * f3) * y1 + (f3 - f2) * slopes[j1])
 
 
 @kernel
