@@ -197,11 +197,22 @@ class DelaySolver(SolverBase):
         ``vibrations`` is a :class:`~wavecontact.bath.BathRealisation` at the nominal contact time
         (the stochastic max-plus limit of Eq. 26; ``resolution`` grid points per period of the
         short rod's fastest bath mode; ``tau_free``, the nominal contact time, only shifts the
-        recursion).  What :meth:`solve` returns for the thermal scene at ``kappa = inf``, without
-        the scene and result objects (ensembles of 10^4-10^5 samples).
+        recursion and is not needed).  The same number as :meth:`hard_core_thermal_batch` for
+        the seed that drew ``vibrations``, bit for bit.
         """
-        _t, w = hard_core_noise(gamma, vibrations, tau_free, resolution)
-        return float(w[-1] - 1.0)
+        from .stochastic_hardcore_batch import cached_grid
+
+        return cached_grid(float(gamma), int(vibrations.modes), int(resolution)).restitution_of(vibrations)
+
+    def hard_core_thermal_batch(self, gamma: float, temperature, seeds, modes: int = 250,
+                                resolution: int = 8):
+        """epsilon of many hard-core thermal collisions, one per seed (``ThermalBath.draw``'s realisation
+        of each seed; ``temperature`` is ``T_B / E_tr``, a pair per rod, or one per seed).  See
+        :func:`wavecontact.delay.stochastic_hardcore_batch.hard_core_restitutions`."""
+        from .stochastic_hardcore_batch import cached_grid, hard_core_restitutions
+
+        return hard_core_restitutions(gamma, temperature, seeds, grid=cached_grid(float(gamma), int(modes),
+                                                                                   int(resolution)))
 
     def expected_order(self, options) -> float:
         """1: the error is proportional to (and below) the tolerance ``rtol``."""

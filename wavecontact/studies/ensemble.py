@@ -100,6 +100,10 @@ class EnsembleSpec:
             raise InvalidParameterError(
                 "energy_split needs a finite kappa (the hard-core grid gives only the total); kappa >= 50 is "
                 "in the kappa-independent regime")
+        if self.solver == "delay" and math.isinf(kappa) and set(self.options) - {"hard_core_resolution"}:
+            raise InvalidParameterError(
+                "the hard-core mode (kappa = inf) takes only the option hard_core_resolution, not "
+                f"{', '.join(sorted(set(self.options) - {'hard_core_resolution'}))}")
         try:
             json.dumps(self.options)
         except TypeError:
@@ -124,18 +128,11 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
     """``(epsilon, (Delta E_1, Delta E_2))`` of sample ``index`` (the gains are zero unless ``spec.energy_split``)."""
     from ..api import solve
     from ..bath.collide import thermal_scene, vibration_energy_gain
-    from ..bath.scene import start_gap
-    from ..contact import Hard
-    from ..solvers import get_solver
 
     seed = sample_seed(spec.seed, index)
-    if spec.solver == "delay" and math.isinf(spec.kappa):
-        # the hard-core mode without the scene and result objects around it (same draw, same gap)
-        lengths = (0.5 * (1.0 + spec.gamma), 0.5 * (1.0 + spec.gamma) / spec.gamma)
-        vibrations = spec.bath.draw(lengths, seed)
-        resolution = int(spec.options.get("hard_core_resolution", 8))
-        gap = start_gap(vibrations, Hard())
-        return get_solver("delay").hard_core_thermal_restitution(spec.gamma, vibrations, resolution, gap), (0.0, 0.0)
+    if _hard_core(spec):
+        # the hard-core mode without the scene and result objects around it (same draw)
+        return float(_hard_core_batch(spec, index, index + 1)[0]), (0.0, 0.0)
     scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, seed)
     options = dict(spec.options)
     if spec.solver == "delay":
@@ -145,6 +142,20 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
     if spec.energy_split:
         gain = tuple(float(x) for x in vibration_energy_gain(result, scene))
     return float(result.restitution), gain
+
+
+def _hard_core(spec: EnsembleSpec) -> bool:
+    return spec.solver == "delay" and math.isinf(spec.kappa)
+
+
+def _hard_core_batch(spec: EnsembleSpec, start: int, stop: int) -> np.ndarray:
+    """epsilon of samples ``start .. stop - 1`` in the stochastic hard-core mode (one batched call)."""
+    from ..solvers import get_solver
+
+    resolution = spec.options.get("hard_core_resolution", 8)
+    seeds = [sample_seed(spec.seed, j) for j in range(start, stop)]
+    return get_solver("delay").hard_core_thermal_batch(spec.gamma, spec.temperature, seeds, spec.bath_modes,
+                                                       resolution)
 
 
 def sample_restitution(spec: EnsembleSpec, index: int) -> float:
@@ -158,6 +169,8 @@ def run_batch(spec_fields: dict, start: int, stop: int) -> tuple:
     Returns ``(start, epsilon (n,), gains (n, 2))``.
     """
     spec = EnsembleSpec(**spec_fields)
+    if _hard_core(spec):
+        return start, _hard_core_batch(spec, start, stop), np.zeros((stop - start, 2))
     pairs = [sample_collision(spec, j) for j in range(start, stop)]
     return start, np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs], dtype=float).reshape(-1, 2)
 
