@@ -35,6 +35,8 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE / "peers"))
 sys.path.insert(0, str(ROOT))  # this checkout's package, not whichever one is installed
 
+from discretization_table import HEADING, discretization_block, runs_from_tables
+
 import wavecontact
 from wavecontact.plotting.compare import comparison_figure, method_family
 from wavecontact.studies.compare import Method, compare_solvers
@@ -494,6 +496,10 @@ def main(argv=None):
         "The cheapest measured method (gamma = 0.6) that reaches each target error, from the runs below.",
         "",
         recommendation,
+        "",
+        f"## {HEADING}",
+        "",
+        discretization_block(runs_from_tables(tables), command),
         "",
         section_pareto(tables, figure_dir),
         "",

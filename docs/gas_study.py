@@ -2,19 +2,21 @@
 
 Run from the repository root: ``python docs/gas_study.py [fixed|vibration|all]`` (default all; a few
 minutes on two shared cores).  ``fixed`` writes sections 1-3 to docs/gas_results.md, ``vibration``
-sections 4-6 to docs/gas_vibration_results.md.
+sections 4-8 to docs/gas_vibration_results.md.
 
 Every number in those two files is printed by this script; docs/gas.md
 quotes them.  The vibration rule uses the restitution table computed from rod
-collisions that ships with the package (:func:`wavecontact.gas.rod_table`).
+collisions that ships with the package (:func:`wavecontact.gas.default_law`, hard core).
 Sections:
 
 1. three rods (McNamara & Young): collapse or not against r around 7 - 4 sqrt(3);
 2. N rods on a ring with a fixed restitution: collapse against N / N_c, N_c = -ln(1-r)/(1-r);
 3. Haff's law: fitted exponent and t0 against kinetic theory;
-4. the vibration rule (computed table) against the fixed rule with the same mean restitution;
-5. bath damping: the late-time decay exponent of the translational energy;
-6. a space-time picture of a damped vibration gas.
+4. the collision law: its rows, and direct solves below its last row;
+5. the law (tabulated) against one solve per collision on small gases;
+6. the vibration rule against the fixed rule with the same mean restitution;
+7. bath damping: the late-time decay exponent of the translational energy;
+8. a space-time picture of a damped vibration gas.
 """
 
 from __future__ import annotations
@@ -27,23 +29,28 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import curve_fit
 
+from wavecontact.errors import SolverFailure
 from wavecontact.gas import (
     EqualLengths,
     FixedRestitution,
     GasSimulation,
     RodGas,
     UniformLengths,
-    VibrationTable,
+    VibrationLaw,
+    VibrationSolve,
+    default_law,
+    hard_core_draw,
     random_gas,
-    rod_table,
 )
+from wavecontact.gas.collision_law import point_samples
+from wavecontact.gas.hardcore_collision import hard_core_collision
 from wavecontact.plotting.gas import plot_gas
 from wavecontact.plotting.ring import _pyplot, _save
 from wavecontact.studies.gas import gas_ensemble
 
 DOCS = Path(__file__).resolve().parent
 FIGURES = DOCS / "figures"
-TABLE = rod_table()
+LAW = default_law()
 lines = []
 
 
@@ -145,66 +152,172 @@ def haff():
     _save(fig, FIGURES / "gas_haff.png", 130)
 
 
+def law():
+    say("## 4. The collision law of the vibration rule")
+    say()
+    say(f"Hard-core collisions (kappa = inf), {LAW.bath_modes} modes per bath, {LAW.samples_per_point} solves per "
+        f"point, grid resolution {LAW.resolution}; x = E_tr / (E_tr + T_B). Mean of eps^2 = E'_tr/E_tr, and in "
+        "brackets the mean gain of the short rod's bath in units of E_tr + T_B (the long rod's is "
+        "(1 - eps^2) x minus it), from the shipped law (`wavecontact/data/collision_law_hardcore.npz`).")
+    say()
+    say("| gamma | " + " | ".join(f"x = 1e{lx:g}" for lx in LAW.log_x) + " |")
+    say("|---|" + "---|" * LAW.log_x.size)
+    weights = np.zeros(LAW.probability.size)  # trapezoid rule over the levels: the mean of the law
+    weights[1:] += 0.5 * np.diff(LAW.probability)
+    weights[:-1] += 0.5 * np.diff(LAW.probability)
+    for a, gamma in enumerate(LAW.gamma):
+        cells = [f"{np.sum(LAW.eps2_quantiles[a, b] * weights):.3g} ({np.sum(LAW.gain_short[a, b] * weights):+.2g})"
+                 for b in range(LAW.log_x.size)]
+        say(f"| {gamma:g} | " + " | ".join(cells) + " |")
+    say()
+    below = LAW.log_x[0] - 1.0
+    say(f"Below the last row (x < 1e{LAW.log_x[0]:g}) the rule uses that row's law. Direct solves one decade "
+        f"further down (x = 1e{below:g}, 40 solves per gamma, mean eps^2 +- standard error) against the last row:")
+    say()
+    say(f"| gamma | direct, x = 1e{below:g} | law's last row | direct mean E'_tr/(E_tr + T_B) |")
+    say("|---|---|---|---|")
+    for gamma in (0.6, 0.8, 1.0):
+        eps2, _gain = point_samples(gamma, below, 40, 7, bath_modes=LAW.bath_modes, resolution=LAW.resolution)
+        a = int(np.searchsorted(LAW.gamma, gamma))
+        mean_last = np.sum(LAW.eps2_quantiles[a, 0] * weights)
+        say(f"| {gamma:g} | {eps2.mean():.3g} +- {eps2.std(ddof=1) / math.sqrt(eps2.size):.2g} | {mean_last:.3g} | "
+            f"{eps2.mean() * 10.0**below:.2g} |")
+    say()
+
+
+def limit_exploration():
+    say("### 4b. eps^2 as x -> 0, direct solves")
+    say()
+    say(f"40 hard-core solves per point (resolution {LAW.resolution}, {LAW.bath_modes} modes), mean eps^2 +- "
+        "standard error; in brackets the mean of E'_tr / (E_tr + T_B) = eps^2 x.")
+    say()
+    exponents = (-1, -2, -3, -4, -5)
+    say("| gamma | " + " | ".join(f"x = 1e{e}" for e in exponents) + " |")
+    say("|---|" + "---|" * len(exponents))
+    for gamma in (0.6, 0.85, 1.0):
+        cells = []
+        for e in exponents:
+            try:
+                eps2, _gain = point_samples(gamma, e, 40, 11, bath_modes=LAW.bath_modes, resolution=LAW.resolution)
+            except SolverFailure as exc:  # a solve too long for the grid bound: say so
+                cells.append(f"refused ({str(exc)[:40]}...)")
+                continue
+            sem = eps2.std(ddof=1) / math.sqrt(eps2.size)
+            cells.append(f"{eps2.mean():.3g} +- {sem:.2g} ({eps2.mean() * 10.0**e:.2g})")
+        say(f"| {gamma:g} | " + " | ".join(cells) + " |")
+    say()
+    gains = [hard_core_collision(0.8, 3.0, 1, resolution=r)[1] for r in (8, 16, 32, 64)]
+    say("Grid convergence of one rod's gain (gamma 0.8, T_B/E_tr = 3, seed 1; short rod's gain in units of E_tr) at "
+        "resolution 8, 16, 32, 64: " + ", ".join(f"{g:.3f}" for g in gains) + ".")
+    say()
+
+
+def solve_vs_law():
+    say("## 5. Law (tabulated) against one solve per collision")
+    say()
+    rods, collisions, seeds = 16, 80, 12
+    say(f"{seeds} gases of {rods} rods (lengths in [0.6, 1], packing 0.2, every bath at T = E_kin/N per mode), "
+        f"{collisions} collisions, the same initial states for each rule; statistic: log of the final over the "
+        "initial kinetic energy (mean +- standard error over the gases). 'solve, own temperatures': each "
+        "collision one hard-core solve with each rod at its own temperature and this collision's own per-rod "
+        "split; 'solve, mean temperature': both rods at the pair's mean, as the law assumes.")
+    say()
+    rules = {"law (kernel)": VibrationLaw(LAW),
+             "solve, own temperatures": VibrationSolve(hard_core_draw(resolution=LAW.resolution), per_rod=True),
+             "solve, mean temperature": VibrationSolve(hard_core_draw(resolution=LAW.resolution))}
+    say("| rule | log(E_end/E_start) | bath-limited draws (all gases) | wall time (s) |")
+    say("|---|---|---|---|")
+    for name, rule in rules.items():
+        values, limited, started = [], 0, time.time()
+        for seed in range(seeds):
+            gas = random_gas(rods, seed=seed, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2)
+            gas = RodGas(gas.lengths, gas.positions, gas.velocities, np.full(rods, gas.kinetic_energy() / rods),
+                         gas.system_length, gas.boundary)
+            result = GasSimulation(gas, rule, seed=seed, record_every=collisions, max_frames=0).run(collisions)
+            values.append(math.log(result.final_energy / gas.kinetic_energy()))
+            limited += result.bath_limited
+        sem = np.std(values, ddof=1) / math.sqrt(len(values))
+        say(f"| {name} | {np.mean(values):.3f} +- {sem:.3f} | {limited} | {time.time() - started:.0f} |")
+    say()
+
+
 def vibration_vs_fixed():
-    say("## 4. Vibration rule against the fixed rule")
+    say("## 6. Vibration rule against the fixed rule")
     say()
-    rods = 400
+    rods, seeds = 400, 5
     say(f"N = {rods} rods, lengths uniform in [0.6, 1] (gamma in [0.6, 1]), packing 0.2, cold baths at the start, "
-        f"{300 * rods} collisions at most; table: {_table_text()}. The fixed rule uses the mean restitution the "
-        "table gives these pairs with cold baths. A vibration run stops ('off_table') when a pair meets at a "
-        "temperature ratio T_B/E_tr beyond the table's grid (the table is not extrapolated).")
+        f"{1000 * rods} collisions at most, the same initial state for both rules. The fixed rule uses the "
+        "vibration rule's cold-bath mean restitution for these pairs (hard core: eps = gamma). N_c = "
+        "-ln(1-r)/(1-r) is McNamara and Young's critical number.")
     say()
-    say("| seed | fixed r | fixed rule | vibration rule (collisions) | vibration: final / initial kinetic energy "
-        "| T_B/E_tr that stopped it |")
-    say("|---|---|---|---|---|---|")
-    for seed in range(5):
+    say("| seed | fixed r (N_c) | fixed rule | vibration rule | vibration: final / initial kinetic energy | "
+        "draws below the law's last row | bath-limited draws |")
+    say("|---|---|---|---|---|---|---|")
+    for seed in range(seeds):
         gas = random_gas(rods, seed=seed, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2)
-        vibrating = GasSimulation(gas, VibrationTable(TABLE), seed=seed, record_every=rods, max_frames=0)
-        gamma = vibrating.pair_gamma
-        r = float(np.mean(TABLE.mean_restitution(gamma, np.zeros_like(gamma))))
-        fixed = GasSimulation(gas, FixedRestitution(r), seed=seed, record_every=rods, max_frames=0).run(300 * rods)
-        result = vibrating.run(300 * rods)
-        fixed_text = f"collapsed after {fixed.collisions}" if fixed.collapsed else fixed.status
+        vibrating = GasSimulation(gas, VibrationLaw(LAW), seed=seed, record_every=rods, max_frames=0)
+        r = float(np.mean(vibrating.pair_gamma))
+        fixed = GasSimulation(gas, FixedRestitution(r), seed=seed, record_every=rods, max_frames=0).run(1000 * rods)
+        result = vibrating.run(1000 * rods)
+        fixed_text = f"collapsed after {fixed.collisions}" if fixed.collapsed else f"{fixed.status} ({fixed.collisions})"
         ratio = result.final_energy / result.history["kinetic_energy"][0]
-        stop = f"{vibrating.off_table[1]:.3g}" if vibrating.off_table else "-"
-        say(f"| {seed} | {r:.4f} | {fixed_text} | {result.status} ({result.collisions}) | {ratio:.3g} | {stop} |")
+        critical = -math.log(1 - r) / (1 - r)
+        say(f"| {seed} | {r:.4f} ({critical:.1f}) | {fixed_text} | {result.status} ({result.collisions}) | "
+            f"{ratio:.3g} | {result.beyond_law} | {result.bath_limited} |")
+    say()
+    modes = LAW.bath_modes
+    say(f"Energy is conserved in the vibration runs, so they can end in equipartition: each rod's translation "
+        f"holding T/2 and its bath {modes} T would leave a fraction 0.5 / ({modes} + 0.5) = {0.5 / (modes + 0.5):.5f} "
+        "of the energy (all kinetic at the start) in the translation.")
     say()
 
 
 def damping():
-    say("## 5. Bath damping: late-time energy decay")
+    say("## 7. Bath damping: late-time energy decay")
     say()
-    rods, collisions, realisations = 200, 4_000_000, 4
-    say(f"N = {rods}, lengths in [0.6, 1], packing 0.2, vibration rule (computed table), {collisions:,} collisions "
-        f"at most per run, {realisations} realisations (ensemble on the serial executor). Slope: least-squares fit "
-        "of log E_tr against log t over the last decade of time reached, only for runs with at least 20 records "
-        "in it (runs stopped early by the table's range give none).")
+    rods, collisions, realisations = 200, 4_000_000, 6
+    say(f"N = {rods}, lengths in [0.6, 1], packing 0.2, cold baths at the start, vibration rule (hard-core law), "
+        f"{collisions:,} collisions at most per run, {realisations} realisations per tau_diss (ensemble on the "
+        "serial executor, seeds spawned from 40). Slope: least-squares fit of log E_tr against log t over the last "
+        "decade of time reached, per realisation that ran all its collisions (a collapsed run has no late time); "
+        "mean +- standard error over those realisations, and the fit's own standard error (median) in brackets.")
     say()
-    say("| tau_diss | statuses | collisions reached (median) | t reached (median) | slope of E_tr(t) (mean +- sem, runs) |")
-    say("|---|---|---|---|---|")
+    say("| tau_diss | collapsed / runs | collisions at the collapse (median) | t reached by the others (median) | "
+        "E_tr end / start (others, median) | slope of E_tr(t) (others: mean +- sem [fit error], runs) | "
+        "bath energy / E_tr at the end (others, median) |")
+    say("|---|---|---|---|---|---|---|")
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.2, 4.3), constrained_layout=True)
     for index, tau in enumerate((1.0, 10.0, 100.0, 1000.0)):
-        ensemble = gas_ensemble(realisations, rods=rods, collisions=collisions, rule=VibrationTable(TABLE), seed=40,
+        ensemble = gas_ensemble(realisations, rods=rods, collisions=collisions, rule=VibrationLaw(LAW), seed=40,
                                 lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2, damping=tau,
                                 record_every=collisions // 400)
-        slopes, reached, counts = [], [], []
+        slopes, errors, reached, left, baths, collapses = [], [], [], [], [], []
         for k, result in enumerate(ensemble.results):
             t, energy = result.history["time"], result.history["kinetic_energy"]
-            late = t > t[-1] / 10
-            if late.sum() >= 20:
-                slopes.append(np.polyfit(np.log(t[late]), np.log(energy[late]), 1)[0])
-            reached.append(t[-1])
-            counts.append(result.collisions)
             ax.loglog(t[t > 0], energy[t > 0], "-", color=f"C{index}", lw=0.9,
                       label=rf"$\tau_\mathrm{{diss}}$ = {tau:g}" if k == 0 else None)
-        statuses = ", ".join(sorted(set(ensemble.summary()["statuses"])))
+            if result.collapsed:
+                collapses.append(result.collisions)
+                continue
+            late = t > t[-1] / 10
+            coefficients, covariance = np.polyfit(np.log(t[late]), np.log(energy[late]), 1, cov=True)
+            slopes.append(coefficients[0])
+            errors.append(math.sqrt(covariance[0, 0]))
+            reached.append(t[-1])
+            left.append(energy[-1] / energy[0])
+            baths.append(result.history["bath_energy"][-1] / energy[-1])
+        collapse_text = f"{np.median(collapses):,.0f}" if collapses else "-"
         if len(slopes) >= 2:
             sem = np.std(slopes, ddof=1) / math.sqrt(len(slopes))
-            slope_text = f"{np.mean(slopes):.2f} +- {sem:.2f} ({len(slopes)})"
+            slope_text = f"{np.mean(slopes):.2f} +- {sem:.2f} [{np.median(errors):.2f}], {len(slopes)}"
+        elif slopes:
+            slope_text = f"{slopes[0]:.2f} [{errors[0]:.2f}], 1"
         else:
-            slope_text = f"not measurable ({len(slopes)} runs long enough)"
-        say(f"| {tau:g} | {statuses} | {np.median(counts):,.0f} | {np.median(reached):.3g} | {slope_text} |")
+            slope_text = "none"
+        others = (f"{np.median(reached):.3g} | {np.median(left):.3g}" if slopes else "- | -")
+        bath_text = f"{np.median(baths):.3g}" if slopes else "-"
+        say(f"| {tau:g} | {len(collapses)}/{realisations} | {collapse_text} | {others} | {slope_text} | {bath_text} |")
     t_guide = np.geomspace(1e2, 1e5, 10)
     ax.loglog(t_guide, 1e4 * t_guide**-2.0, "k--", lw=1.0, label=r"$\propto t^{-2}$")
     ax.set_xlabel("time")
@@ -216,22 +329,27 @@ def damping():
 
 def picture():
     gas = random_gas(500, seed=3, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2)
-    sim = GasSimulation(gas, VibrationTable(TABLE), seed=4, damping=50.0, record_every=250, max_frames=400)
-    result = sim.run(100_000)
+    sim = GasSimulation(gas, VibrationLaw(LAW), seed=4, record_every=500, max_frames=400)
+    result = sim.run(200_000)
     plot_gas(result, FIGURES / "gas_run.png", system_length=gas.system_length,
-             title=f"500 rods, vibration rule (computed table), tau_diss = 50: {result.status}, "
+             title=f"500 rods, vibration rule (hard-core law), no bath damping: {result.status}, "
              f"{result.collisions} collisions")
-    say("## 6. Example run (figure gas_run.png)")
+    say("## 8. Example run (figure gas_run.png)")
     say()
-    say(f"500 rods, tau_diss = 50, 100,000 collisions: {result.message}; energy drift {result.energy_drift:.1e}; "
-        f"bath-limited draws: {result.bath_limited}.")
+    say(f"500 rods, cold baths at the start, no damping, 200,000 collisions: {result.message}; energy drift "
+        f"{result.energy_drift:.1e}; bath-limited draws: {result.bath_limited}; draws below the law's last row: "
+        f"{result.beyond_law}; kinetic energy at the end / start: "
+        f"{result.final_energy / result.history['kinetic_energy'][0]:.3g}.")
     say()
-
-
-def _table_text():
-    return (f"computed from rod collisions ({TABLE.solver} solver, kappa {TABLE.kappa:g}, {TABLE.bath_modes} modes "
-            f"per bath, {TABLE.samples_per_point} collisions per point; gamma {TABLE.gamma.min():g}-"
-            f"{TABLE.gamma.max():g}, T_B/E_tr {TABLE.temperature_ratio.min():g}-{TABLE.temperature_ratio.max():g})")
+    order = np.argsort(gas.lengths)
+    thirds = np.array_split(order, 3)
+    temperature = result.bath_temperatures
+    say("Bath temperature at the end (per mode, mean over the rods) of the shortest, middle and longest third of the "
+        "rods: " + ", ".join(f"{temperature[part].mean():.3g}" for part in thirds) + f"; rods with an empty bath "
+        f"(T < 1e-12 of the mean): {int(np.sum(temperature < 1e-12 * temperature.mean()))} of {gas.rods}; mean "
+        f"kinetic energy per rod over the mean bath temperature: "
+        f"{result.final_energy / gas.rods / temperature.mean():.3g} (equipartition: 0.5).")
+    say()
 
 
 def main(argv):
@@ -240,8 +358,8 @@ def main(argv):
         print("usage: python docs/gas_study.py [fixed|vibration|all]", file=sys.stderr)
         return 2
     parts = {"fixed": ("gas_results.md", "Rod gas", (three_rods, n_rods, haff)),
-             "vibration": ("gas_vibration_results.md", "Rod gas, vibration rule", (vibration_vs_fixed, damping,
-                                                                                   picture))}
+             "vibration": ("gas_vibration_results.md", "Rod gas, vibration rule",
+                           (law, limit_exploration, solve_vs_law, vibration_vs_fixed, damping, picture))}
     for name, (page, title, sections) in parts.items():
         if which not in (name, "all"):
             continue

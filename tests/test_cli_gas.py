@@ -29,14 +29,12 @@ def test_json_summary_and_outputs(tmp_path, capsys):
         assert data["history_kinetic_energy"][-1] == pytest.approx(summary["final_energy"])
 
 
-def test_the_default_vibration_table_is_the_one_computed_from_rods(capsys):
+def test_the_default_vibration_rule_is_the_hard_core_law_and_never_leaves_it(capsys):
     summary = _json(capsys, ["gas", "--rods", "100", "--collisions", "3000", "--rule", "vibration", "--seed", "2",
                              "--json", "--no-progress"])
-    assert summary["rule"]["solver"] == "delay" and summary["rule"]["samples_per_point"] >= 50
-    assert summary["status"] in ("completed", "off_table")
-    if summary["status"] == "off_table":  # a slow pair in warm baths: refused with a message, never clipped
-        assert "outside the restitution table's range" in summary["message"]
-        assert summary["collisions"] < 3000
+    assert summary["rule"]["rule"] == "vibration_law" and summary["rule"]["samples_per_point"] >= 100
+    assert summary["status"] == "completed" and summary["collisions"] == 3000
+    assert summary["beyond_law"] >= 0
 
 
 def test_resume_continues_the_same_run(tmp_path, capsys):
@@ -65,6 +63,8 @@ def test_collapse_stops_with_a_message(capsys):
         (["--rule", "fixed", "--restitution", "1.5"], r"restitution must lie in \[0, 1\]"),
         (["--rule", "fixed", "--restitution", "0.5", "--packing", "1"], r"packing must lie in \(0, 1\)"),
         (["--rule", "vibration", "--lengths", "0.1", "1"], "table covers gamma"),
+        (["--rule", "vibration", "--table", "a.npz", "--law", "b.npz"], "either --table or --law"),
+        (["--rule", "vibration", "--law", "missing.npz"], "not a readable collision law"),
     ],
 )
 def test_bad_options_end_with_one_line(argv, message, capsys):

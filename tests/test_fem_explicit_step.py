@@ -4,10 +4,21 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spl
+from scipy.linalg import solve_banded
 
 from wavecontact import Rod
 from wavecontact.fem.discretization import discretize_rod
-from wavecontact.fem.explicit_step import elastic_acceleration, mass_acceleration, prepare_mass, step_rod
+from wavecontact.fem.explicit_step import (
+    T_CHAIN_BACKWARD,
+    T_CHAIN_BURN_IN,
+    T_CHAIN_FORWARD,
+    _burn_in,
+    _chains,
+    elastic_acceleration,
+    mass_acceleration,
+    prepare_mass,
+    step_rod,
+)
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -57,3 +68,94 @@ def test_fused_step_equals_a_step_written_with_sparse_matrices(order, mass, elem
         u_ref += dt * v_ref
     np.testing.assert_allclose(v, v_ref, rtol=0, atol=1e-11 * np.abs(v_ref).max())
     np.testing.assert_allclose(u, u_ref, rtol=0, atol=1e-12 * np.abs(u_ref).max())
+
+
+def _graded_nodes(rng, elements, length, spread):
+    """A mesh whose element lengths vary by up to a factor ``spread`` from one element to the next."""
+    sizes = np.exp(rng.uniform(0.0, np.log(spread), elements))
+    return np.r_[0.0, np.cumsum(sizes)] * (length / sizes.sum())
+
+
+def _banded_mass(disc):
+    """The assembled mass matrix in scipy.linalg.solve_banded's upper-form layout (an independent solve)."""
+    dense = disc.mass_matrix.toarray()
+    width = 1 if disc.order == 1 else 2
+    banded = np.zeros((2 * width + 1, disc.n_nodes))
+    for d in range(-width, width + 1):
+        diagonal = np.diagonal(dense, d)
+        if d >= 0:
+            banded[width - d, d:] = diagonal
+        else:
+            banded[width - d, : disc.n_nodes + d] = diagonal
+    return (width, width), banded
+
+
+@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("spread", [1.0, 3.0])
+@pytest.mark.parametrize("elements", [700, 1501])
+def test_chained_mass_solve_equals_a_banded_solve_to_rounding(order, spread, elements):
+    """The interleaved chains of a large consistent mass (burn-in instead of exact starts) against LAPACK."""
+    rng = np.random.default_rng(elements + 100 * order + int(10 * spread))
+    disc = discretize_rod(Rod(1.7, 2.0, 3.0, 0.5), _graded_nodes(rng, elements, 1.7, spread), order, "consistent")
+    kind, table = prepare_mass(disc)
+    assert table[T_CHAIN_BURN_IN, 0] > 0  # the chained solve is the one under test
+    (lower, upper), banded = _banded_mass(disc)
+    for _ in range(3):
+        forces = rng.normal(size=disc.n_nodes) * np.exp(rng.uniform(-5.0, 5.0, disc.n_nodes))
+        expected = solve_banded((lower, upper), banded, forces)
+        mass_acceleration(kind, table, forces)
+        np.testing.assert_allclose(forces, expected, rtol=0, atol=2e-15 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("mass", ["lumped", "consistent"])
+def test_many_fast_steps_equal_a_reference_step_with_a_banded_solve(order, mass):
+    """400 steps of ``step_rod`` near the stability limit against a step written with scipy's banded solver."""
+    rng = np.random.default_rng(7 * order + len(mass))
+    length, elements = 1.1, 900
+    disc = discretize_rod(Rod(length, 2.0, 3.0, 0.5), _graded_nodes(rng, elements, length, 2.0), order, mass)
+    kind, table = prepare_mass(disc)
+    if mass == "consistent":
+        assert table[T_CHAIN_BURN_IN, 0] > 0
+    (lower, upper), banded = _banded_mass(disc)
+    bands = disc.stiffness_bands
+    stiffness = disc.stiffness  # the assembled K
+    highest = spl.eigsh(stiffness, k=1, M=disc.mass_matrix.tocsc(), which="LM", return_eigenvectors=False)[0]
+    dt = 1.9 / np.sqrt(highest)  # stable (central differences need dt < 2 / omega_max), every mode active
+    u = 1e-3 * np.sin(3.0 * disc.x) + 1e-6 * rng.normal(size=disc.n_nodes)
+    v = rng.normal(size=disc.n_nodes) * 1e-3
+    u_ref, v_ref = u.copy(), v.copy()
+    scratch = np.empty(disc.n_nodes)
+    for _ in range(400):
+        step_rod(u, v, scratch, bands, kind, table, dt)
+        v_ref += dt * solve_banded((lower, upper), banded, -(stiffness @ u_ref))
+        u_ref += dt * v_ref
+    # rounding differences grow at most like the number of steps times the conditioning of the step
+    np.testing.assert_allclose(v, v_ref, rtol=0, atol=1e-11 * np.abs(v_ref).max())
+    np.testing.assert_allclose(u, u_ref, rtol=0, atol=1e-11 * np.abs(u_ref).max())
+
+
+def test_burn_in_is_refused_when_the_factors_do_not_decay():
+    """Factors near 1 (no decay within the chain length): no burn-in, the twisted solve is kept."""
+    assert _burn_in(np.full(500, 0.99), np.full(500, 0.99), 60) == 0
+    assert _burn_in(np.full(500, -0.2), np.full(500, 0.1), 60) == 28  # 0.2^28 < 2^-64 < 0.2^27
+    assert _burn_in(np.full(500, 0.2), np.full(500, 0.1), 27) == 0
+    assert _burn_in(np.r_[0.5, np.full(499, 0.1)], np.full(500, 0.1), 60) == 20  # 0.5 * 0.1^19 < 2^-64 < 0.1^19
+
+
+def test_compiled_chains_equal_their_pure_python_form_bit_for_bit():
+    """The interleaved chains compiled by numba and run as plain Python give the same bits (no reassociation)."""
+    rng = np.random.default_rng(5)
+    disc = discretize_rod(Rod(1.0), _graded_nodes(rng, 900, 1.0, 2.0), 1, "consistent")
+    _, table = prepare_mass(disc)
+    burn_in = int(table[T_CHAIN_BURN_IN, 0])
+    forces = rng.normal(size=disc.n_nodes)
+    results = []
+    for chains in (_chains, _chains.py_func):
+        x = forces.copy()
+        chains(x, x, table[T_CHAIN_FORWARD], x.size, burn_in)
+        reverse = x[::-1]
+        chains(reverse, reverse, table[T_CHAIN_BACKWARD, ::-1], x.size, burn_in)
+        results.append(x)
+    assert burn_in > 0
+    np.testing.assert_array_equal(results[0], results[1])

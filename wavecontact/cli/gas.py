@@ -48,7 +48,8 @@ def add_parser(subparsers):
         help="event-driven gas of rods: energy decay, clusters, inelastic collapse (paper Sec. VIII)",
         description="N rods on a ring (or between walls) with random lengths and Maxwellian velocities. "
         "Each collision takes eps from a fixed value (--rule fixed) or draws eps^2 and the split of the lost "
-        "energy between the rods' vibration baths from a restitution table (--rule vibration). Stops after "
+        "energy between the rods' vibration baths from the hard-core collision law, which covers every pair state "
+        "(--rule vibration), or from a restitution table (--table). Stops after "
         "COLLISIONS collisions, or earlier with a message on an inelastic collapse.",
     )
     p.add_argument("--rods", type=positive_int, required=True, help="number of rods N >= 2")
@@ -57,9 +58,11 @@ def add_parser(subparsers):
     p.add_argument("--restitution", type=_fraction("restitution", low_open=False),
                    help="eps of the fixed rule, in [0, 1] (no default: required with --rule fixed)")
     p.add_argument("--table", metavar="FILE",
-                   help="restitution table (.npz/.json) of the vibration rule (default: the table computed "
-                   "from rod collisions shipped in wavecontact/data, kappa 100; a gas state outside its grid "
-                   "stops the run with a message)")
+                   help="restitution table (.npz/.json, T_B/E_tr grid) for the vibration rule instead of the "
+                   "default hard-core collision law; a gas state outside its grid stops the run with a message")
+    p.add_argument("--law", metavar="FILE",
+                   help="collision law (.npz, wavecontact.gas.collision_law) of the vibration rule (default: "
+                   "the hard-core law shipped in wavecontact/data)")
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="root seed (default 0)")
@@ -79,7 +82,7 @@ def add_parser(subparsers):
 
 def _rule(args):
     from ..errors import InvalidParameterError
-    from ..gas import FixedRestitution, VibrationTable, rod_table
+    from ..gas import FixedRestitution, VibrationLaw, VibrationTable, default_law, load_law
 
     if args.rule == "fixed":
         if args.restitution is None:
@@ -87,11 +90,13 @@ def _rule(args):
         return FixedRestitution(args.restitution)
     if args.restitution is not None:
         raise InvalidParameterError("--restitution applies to --rule fixed only (the vibration rule draws eps)")
+    if args.table and args.law:
+        raise InvalidParameterError("pass either --table or --law, not both")
     if args.table:
         from ..restitution_table import load
 
         return VibrationTable(load(args.table))
-    return VibrationTable(rod_table())
+    return VibrationLaw(load_law(args.law) if args.law else default_law())
 
 
 def run(args) -> int:

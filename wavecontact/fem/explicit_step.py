@@ -18,6 +18,13 @@ node:
   vertices, so they are eliminated first (static condensation, one pass) and
   the vertices solve a tridiagonal system as above; the midpoints' back
   substitution is fused with the update.
+* large tridiagonal systems (at least ``CHAINS * CHAIN_MIN_LENGTH`` burn-in
+  lengths, about 560 unknowns for P1 and 420 vertices for P2) are solved by
+  :func:`_chained_solve` instead: a plain ``L D L^T`` factorization whose two
+  sweeps each run as ``CHAINS`` = 8 interleaved recurrences, each started a
+  burn-in length early so that the value it starts from is damped below
+  rounding (the mass matrices are diagonally dominant).  Equal to the direct
+  solve to rounding, not bit for bit (tests/test_fem_explicit_step.py).
 
 ``prepare_mass`` returns ``(kind, table)``: ``table`` a 2D float array whose
 rows are listed at ``T_*``; the kernels read it by row.
@@ -45,8 +52,16 @@ T_MID_LEFT = 4  # M[j, j - 1]
 T_MID_RIGHT = 5  # M[j, j + 1]
 T_WORK = 6  # rows 6, 7: scratch (the vertex system of P2; no allocation per step)
 T_UPWARD = 8  # k and below: c_i of z_i = r_i + c_i z_(i+1) (c_(m-1) = 0); c_k also at the twist
-T_ROWS = 9
+# the same system as CHAINS independent recurrences (see _chained_solve): a plain L D L^T factorization
+T_CHAIN_FORWARD = 9  # y_i = r_i + f_i y_(i-1), f_0 = 0
+T_CHAIN_BACKWARD = 10  # x_i = y_i / D_i + g_i x_(i+1), g_(m-1) = 0
+T_CHAIN_INVERSE = 11  # 1 / D_i
+T_CHAIN_BURN_IN = 12  # [0]: burn-in length w of each chain (0: the system is solved by the twisted sweeps)
+T_ROWS = 13
 TWISTED_MIN = 8  # smaller systems take the plain sweeps (same table)
+CHAINS = 8  # independent recurrences of the chained solve
+CHAIN_TOLERANCE = 2.0**-64  # what a chain may inherit from the value it was started with, relative
+CHAIN_MIN_LENGTH = 2  # chains at least this many burn-in lengths long, else the twisted solve
 
 
 def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> None:
@@ -86,6 +101,54 @@ def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> No
     table[T_UPWARD, :m] = upward
     table[T_BACKWARD, :m] = backward
     table[T_INVERSE_PIVOT, :m] = inverse
+    _chain_factors(diagonal, off, table)
+
+
+def _chain_factors(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> None:
+    """Plain ``L D L^T`` factors of the tridiagonal ``(diagonal, off)`` and the chains' burn-in length.
+
+    A chain started ``w`` unknowns early with a zero value carries the error
+    ``prod f_j`` (forward) or ``prod g_j`` (backward) over those ``w`` steps
+    times an entry of the sweep's result; ``w`` is chosen so that the product
+    of any ``w`` consecutive factors is at most ``CHAIN_TOLERANCE``, so the
+    chains agree with the direct sweeps to rounding relative to the largest
+    entry (mass matrices are diagonally dominant: the factors are at most
+    about 1/2 in magnitude, 0.27 inside a uniform P1 mesh).  Left at 0 (twisted
+    solve) when the chains would be shorter than ``CHAIN_MIN_LENGTH`` burn-ins.
+    """
+    m = diagonal.size
+    pivot = np.empty(m)
+    pivot[0] = diagonal[0]
+    for i in range(1, m):
+        pivot[i] = diagonal[i] - off[i - 1] * off[i - 1] / pivot[i - 1]
+    forward = np.zeros(m)
+    backward = np.zeros(m)
+    forward[1:] = -off / pivot[:-1]
+    backward[:-1] = -off / pivot[:-1]
+    table[T_CHAIN_FORWARD, :m] = forward
+    table[T_CHAIN_BACKWARD, :m] = backward
+    table[T_CHAIN_INVERSE, :m] = 1.0 / pivot
+    table[T_CHAIN_BURN_IN, 0] = 0.0
+    burn_in = _burn_in(forward[1:], backward[:-1], m // CHAINS // CHAIN_MIN_LENGTH)
+    if burn_in:
+        table[T_CHAIN_BURN_IN, 0] = burn_in
+
+
+def _burn_in(forward: np.ndarray, backward: np.ndarray, longest: int) -> int:
+    """Fewest steps ``w <= longest`` such that every ``w`` consecutive factors, forward or backward, have
+    ``prod |f| <= CHAIN_TOLERANCE`` (0 if there is no such ``w``)."""
+    needed = 0
+    tiny = np.finfo(float).tiny
+    for factors in (forward, backward):
+        logs = np.log(np.maximum(np.abs(factors), tiny))
+        sums = np.concatenate(([0.0], np.cumsum(logs)))
+        for w in range(1, min(longest, factors.size) + 1):
+            if np.max(sums[w:] - sums[:-w]) <= np.log(CHAIN_TOLERANCE):
+                needed = max(needed, w)
+                break
+        else:
+            return 0
+    return needed
 
 
 def prepare_mass(disc) -> tuple:
@@ -233,6 +296,9 @@ def _tridiagonal_solve(table, x, m):
     also unrolled twice (``y_i = r_i + a_i r_(i-1) + (a_i a_(i-1)) y_(i-2)``),
     four independent dependency chains in all.
     """
+    if table[T_CHAIN_BURN_IN, 0] > 0.0:
+        _chained_solve(table, x, m)
+        return
     if m < TWISTED_MIN:
         _tridiagonal_solve_plain(table, x, m)
         return
@@ -313,6 +379,85 @@ def _tridiagonal_solve(table, x, m):
         current = x[0] * inverse[0]
         x[0] = current + b[0] * top_old + (b[0] * b_top) * top_older
 
+
+@kernel(fastmath=False)
+def _chained_solve(table, x, m):
+    """``x <- T^-1 x`` as ``CHAINS`` independent recurrences per sweep, interleaved (``m`` unknowns, in place).
+
+    A first-order recurrence ``y_i = r_i + f_i y_(i-1)`` costs the latency of a
+    multiplication and an addition per unknown when run as one chain.  Here the
+    unknowns are cut into ``CHAINS`` consecutive pieces whose recurrences run
+    side by side, so the processor overlaps them.  Each piece but the first is
+    started ``w`` unknowns early from zero (burn-in, nothing stored): the value
+    it inherits is damped by ``prod |f_j| <= CHAIN_TOLERANCE`` over those steps
+    (see :func:`_chain_factors`), far below rounding.  The back substitution
+    ``x_i = y_i / D_i + g_i x_(i+1)`` runs the same way towards lower indices
+    (on reversed views, so that every index is a counter plus a constant).
+    """
+    burn_in = int(table[T_CHAIN_BURN_IN, 0])
+    _chains(x, x, table[T_CHAIN_FORWARD], m, burn_in)
+    inverse = table[T_CHAIN_INVERSE]
+    for i in range(m):
+        x[i] *= inverse[i]
+    reverse = x[m - 1 :: -1]  # the table's rows are longer than m for the vertices of P2
+    _chains(reverse, reverse, table[T_CHAIN_BACKWARD, m - 1 :: -1], m, burn_in)
+
+
+@kernel(fastmath=False, inline="always")
+def _link(r, f, i, previous):
+    """One step of a chain: ``r_i + f_i previous``."""
+    return r[i] + f[i] * previous
+
+
+@kernel(fastmath=False)
+def _chains(r, out, f, m, burn_in):
+    """``out_i = r_i + f_i out_(i-1)`` as ``CHAINS`` = 8 interleaved chains.
+
+    Chain ``c`` owns ``[c L, (c + 1) L)`` (``L = m // 8``; the last one also the
+    remainder) and, for ``c > 0``, starts ``burn_in`` steps before it from zero.
+    ``r`` and ``out`` may be the same array: each entry is read before it is
+    written and burn-in steps only read entries of earlier pieces, ahead of
+    their own chain.
+    """
+    length = m // 8
+    y0 = 0.0
+    y1 = 0.0
+    y2 = 0.0
+    y3 = 0.0
+    y4 = 0.0
+    y5 = 0.0
+    y6 = 0.0
+    y7 = 0.0
+    start = length - burn_in
+    for t in range(burn_in):
+        s = start + t
+        y1 = _link(r, f, s, y1)
+        y2 = _link(r, f, length + s, y2)
+        y3 = _link(r, f, 2 * length + s, y3)
+        y4 = _link(r, f, 3 * length + s, y4)
+        y5 = _link(r, f, 4 * length + s, y5)
+        y6 = _link(r, f, 5 * length + s, y6)
+        y7 = _link(r, f, 6 * length + s, y7)
+    for s in range(length):
+        y0 = _link(r, f, s, y0)
+        y1 = _link(r, f, length + s, y1)
+        y2 = _link(r, f, 2 * length + s, y2)
+        y3 = _link(r, f, 3 * length + s, y3)
+        y4 = _link(r, f, 4 * length + s, y4)
+        y5 = _link(r, f, 5 * length + s, y5)
+        y6 = _link(r, f, 6 * length + s, y6)
+        y7 = _link(r, f, 7 * length + s, y7)
+        out[s] = y0
+        out[length + s] = y1
+        out[2 * length + s] = y2
+        out[3 * length + s] = y3
+        out[4 * length + s] = y4
+        out[5 * length + s] = y5
+        out[6 * length + s] = y6
+        out[7 * length + s] = y7
+    for i in range(8 * length, m):
+        y7 = _link(r, f, i, y7)
+        out[i] = y7
 
 @kernel(fastmath=False)
 def _tridiagonal_solve_plain(table, x, m):

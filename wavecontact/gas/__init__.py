@@ -6,25 +6,35 @@
 * :mod:`.simulation`  -- runs in chunks, histories, collapse detection, checkpoint and resume;
 * :mod:`.rod_table`   -- the restitution table computed from rod collisions that the gas uses by default,
   and the per-collision draw of :class:`VibrationSolve` from :func:`wavecontact.collide`;
+* :mod:`.collision_law` -- the hard-core collision law in ``x = E_tr/(E_tr + T_B)`` (every pair state), the
+  default of the vibration rule; :mod:`.hardcore_collision` -- one hard-core thermal collision with the per-rod split;
 * :mod:`.reference`   -- a plain-Python heapq event loop (test reference and benchmark baseline).
 """
 
+from .collision_law import CollisionLaw, default_law, load_law
+from .hardcore_collision import hard_core_collision
 from .model import EqualLengths, RodGas, UniformLengths, random_gas
-from .rod_table import DEFAULT_TABLE_FILE, collision_draw, rod_table
-from .rules import FixedRestitution, VibrationSolve, VibrationTable
+from .rod_table import DEFAULT_TABLE_FILE, collision_draw, hard_core_draw, rod_table
+from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable
 from .simulation import GasResult, GasSimulation
 
 __all__ = [
     "DEFAULT_TABLE_FILE",
+    "CollisionLaw",
     "EqualLengths",
     "FixedRestitution",
     "GasResult",
     "GasSimulation",
     "RodGas",
     "UniformLengths",
+    "VibrationLaw",
     "VibrationSolve",
     "VibrationTable",
     "collision_draw",
+    "default_law",
+    "hard_core_collision",
+    "hard_core_draw",
+    "load_law",
     "random_gas",
     "rod_table",
 ]

@@ -37,6 +37,7 @@ from .._jit import kernel
 __all__ = [
     "RULE_EXTERNAL",
     "RULE_FIXED",
+    "RULE_LAW",
     "RULE_TABLE",
     "STATUS_COLLAPSE",
     "STATUS_COOLED",
@@ -52,13 +53,13 @@ __all__ = [
     "tree_size",
 ]
 
-RULE_FIXED, RULE_TABLE, RULE_EXTERNAL = 0, 1, 2
+RULE_FIXED, RULE_TABLE, RULE_EXTERNAL, RULE_LAW = 0, 1, 2, 3
 STATUS_DONE, STATUS_TIME_LIMIT, STATUS_NEED_DRAW, STATUS_COLLAPSE, STATUS_NO_EVENTS, STATUS_COOLED = 0, 1, 2, 3, 4, 5
 STATUS_OFF_TABLE = 6  # a pair met at a temperature ratio outside the table: the run stops (never clipped)
 
 # indices into the float64 ``scalars`` array
 T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, ENERGY_FLOOR, KINETIC_CARRY, KINETIC_REFERENCE = range(8)
-# indices into the int64 ``counters`` array
+# indices into the int64 ``counters`` array (OFF_TABLE: for the law rule, the draws below its last row)
 COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED = 0, 1, 2, 3
 
 
@@ -226,8 +227,9 @@ def _lookup(table_ratio, ratio):
 
 
 @kernel
-def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share):
-    """eps^2 at level ``u`` and the short rod's share, bilinear between the four corner quantile functions."""
+def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share, per_level):
+    """eps^2 at level ``u`` and the short rod's share (``share[..., 0]``) or, ``per_level``, its gain at level
+    ``u`` (``share`` holds one value per level), bilinear between the four corner quantile functions."""
     if uniform_levels:
         top = probability.size - 1
         lo = min(int(u * top), top - 1)
@@ -241,10 +243,16 @@ def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share
     q10 = (1.0 - wu) * quantiles[g1, ir, lo] + wu * quantiles[g1, ir, lo + 1]
     q11 = (1.0 - wu) * quantiles[g1, r1, lo] + wu * quantiles[g1, r1, lo + 1]
     eps2 = (1.0 - wg) * ((1.0 - wr) * q00 + wr * q01) + wg * ((1.0 - wr) * q10 + wr * q11)
-    s = (1.0 - wg) * ((1.0 - wr) * share[ig, ir] + wr * share[ig, r1]) + wg * (
-        (1.0 - wr) * share[g1, ir] + wr * share[g1, r1]
-    )
-    return eps2, s
+    if not per_level:
+        s = (1.0 - wg) * ((1.0 - wr) * share[ig, ir, 0] + wr * share[ig, r1, 0]) + wg * (
+            (1.0 - wr) * share[g1, ir, 0] + wr * share[g1, r1, 0]
+        )
+        return eps2, s
+    s00 = (1.0 - wu) * share[ig, ir, lo] + wu * share[ig, ir, lo + 1]
+    s01 = (1.0 - wu) * share[ig, r1, lo] + wu * share[ig, r1, lo + 1]
+    s10 = (1.0 - wu) * share[g1, ir, lo] + wu * share[g1, ir, lo + 1]
+    s11 = (1.0 - wu) * share[g1, r1, lo] + wu * share[g1, r1, lo + 1]
+    return eps2, (1.0 - wg) * ((1.0 - wr) * s00 + wr * s01) + wg * ((1.0 - wr) * s10 + wr * s11)
 
 
 @kernel
@@ -297,11 +305,13 @@ def run_events(
     box : float
         Circumference or box length.
     rule : int
-        :data:`RULE_FIXED`, :data:`RULE_TABLE` or :data:`RULE_EXTERNAL`.
+        :data:`RULE_FIXED`, :data:`RULE_TABLE`, :data:`RULE_EXTERNAL` or :data:`RULE_LAW`.
     restitution_squared : float
         eps^2 of the fixed rule.
     table_ratio, probability, quantiles, share : ndarray
-        The restitution table's arrays (:meth:`RestitutionTable.arrays`).
+        The restitution table's arrays (:meth:`RestitutionTable.arrays`, ``share`` with a trailing axis of
+        length 1), or for :data:`RULE_LAW` the collision law's (:meth:`CollisionLaw.arrays`: ``log10 x``
+        grid, levels, eps^2 quantiles, short-rod gains per level).
     uniform_levels : bool
         Whether ``probability`` is ``linspace(0, 1, P)`` exactly (then the
         level is found by one multiplication instead of a search).
@@ -402,13 +412,45 @@ def run_events(
                 counters[OFF_TABLE] += 1
                 return STATUS_OFF_TABLE, k, done
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr,
-                                  probability, uniform_levels, quantiles, share)
+                                  probability, uniform_levels, quantiles, share, False)
+        elif rule == RULE_LAW:
+            # the hard-core law in x = E_tr / (E_tr + T_pair): every pair lies in (0, 1]; below the last row
+            # the last row's law is used (counted); s is the short rod's gain in units of E_tr + T_pair
+            scale = e_tr + 0.5 * (temperature[i] + temperature[j])
+            log_x = math.log10(e_tr / scale)
+            if log_x < table_ratio[0]:
+                counters[OFF_TABLE] += 1
+                ir, wr = 0, 0.0
+            else:
+                ir, wr = _lookup(table_ratio, log_x)
+            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr,
+                                  probability, uniform_levels, quantiles, share, True)
+            s *= scale
         else:
             eps2 = pending[1]
             s = pending[2]
             pending[0] = 0.0
         lost = (1.0 - eps2) * e_tr
-        if rule != RULE_FIXED and lost < 0.0:
+        if rule == RULE_LAW:
+            # s: the short rod's gain, lost - s the long rod's. A bath cannot give more than it holds: the
+            # deficit goes to the other bath, and if that one cannot give it either, eps^2 is reduced
+            gain_short = s
+            gain_long = lost - s
+            if bath_modes * temperature[short] + gain_short < 0.0:
+                gain_short = -bath_modes * temperature[short]
+                gain_long = lost - gain_short
+                counters[BATH_LIMITED] += 1
+            if bath_modes * temperature[long] + gain_long < 0.0:
+                gain_long = -bath_modes * temperature[long]
+                gain_short = lost - gain_long
+                counters[BATH_LIMITED] += 1
+                if bath_modes * temperature[short] + gain_short < 0.0:
+                    gain_short = -bath_modes * temperature[short]
+                    lost = gain_short + gain_long
+                    eps2 = 1.0 - lost / e_tr
+            temperature[short] = max(temperature[short] + gain_short / bath_modes, 0.0)
+            temperature[long] = max(temperature[long] + gain_long / bath_modes, 0.0)
+        elif rule != RULE_FIXED and lost < 0.0:
             # energy returned from the baths cannot exceed what they hold
             floor = 0.0
             if s > 0.0:
@@ -430,7 +472,7 @@ def run_events(
                 counters[BATH_LIMITED] += 1
         if rule == RULE_FIXED:
             scalars[LOST] += lost
-        else:
+        elif rule != RULE_LAW:
             temperature[short] += s * lost / bath_modes
             temperature[long] += (1.0 - s) * lost / bath_modes
             # a bath emptied by the cap above can end a rounding error below zero: it is empty
@@ -501,4 +543,4 @@ def run_events(
 
 def empty_table():
     """Placeholder table arrays for rules that use none (one grid point, two levels)."""
-    return (np.zeros(1), np.array([0.0, 1.0]), np.ones((1, 1, 2)), np.zeros((1, 1)))
+    return (np.zeros(1), np.array([0.0, 1.0]), np.ones((1, 1, 2)), np.zeros((1, 1, 1)))

@@ -6,6 +6,10 @@
     ``kappa = 100``, 250 bath modes) per point of a ``(gamma, T_B/E_tr)``
     grid.  It was produced by the package's own command; docs/gas.md quotes
     it and :data:`REGENERATE` holds it.
+:func:`hard_core_draw`
+    the solve rule of the default (hard-core) vibration law: one
+    :func:`~wavecontact.gas.hardcore_collision.hard_core_collision` per gas
+    collision, any temperature ratio, this collision's own per-rod split.
 :func:`collision_draw`
     a ``draw`` for :class:`~wavecontact.gas.rules.VibrationSolve`: one
     thermal collision solved with :func:`wavecontact.collide` per gas
@@ -20,7 +24,7 @@ from importlib import resources
 from ..errors import InvalidParameterError
 from ..restitution_table import RestitutionTable, load
 
-__all__ = ["DEFAULT_TABLE_FILE", "REGENERATE", "collision_draw", "rod_table"]
+__all__ = ["DEFAULT_TABLE_FILE", "REGENERATE", "collision_draw", "hard_core_draw", "rod_table"]
 
 DEFAULT_TABLE_FILE = "restitution_table_kappa100.npz"
 REGENERATE = ("python -m wavecontact restitution-table --gamma 0.6 0.8 1.0 "
@@ -74,5 +78,27 @@ def collision_draw(kappa=100.0, *, solver="delay", max_temperature_ratio=100.0, 
         total = float(gain[0] + gain[1])
         share = float(gain[0]) / total if total != 0.0 else 0.5
         return eps2, share
+
+    return draw
+
+
+def hard_core_draw(*, bath_modes=250, resolution=16):
+    """A per-collision ``draw(gamma, temperature_ratio, seed) -> (eps2, rod1_share)``: one hard-core solve.
+
+    The exact counterpart of :class:`~wavecontact.gas.rules.VibrationLaw` (same ``kappa = inf`` model;
+    with ``VibrationSolve(draw, per_rod=True)`` each rod at its own temperature, otherwise both at the
+    pair's mean, as the law assumes): ``rod1_share = gain_1 / (1 - eps2)`` reproduces this collision's own
+    gain of the short rod, ``gain_1 E_tr`` (0.5 when ``eps2 == 1`` exactly, where nothing is lost).
+    Any ``T_B/E_tr`` is accepted; the cost grows like its square root (the solve refuses grids beyond
+    :data:`~wavecontact.gas.hardcore_collision.MAX_GRID_POINTS`).
+    """
+    from .hardcore_collision import hard_core_collision
+
+    def draw(gamma, temperature_ratio, seed):
+        pair = tuple(temperature_ratio) if isinstance(temperature_ratio, tuple) else None
+        eps2, gain_1, _gain_2 = hard_core_collision(gamma, 0.0 if pair else temperature_ratio, seed,
+                                                    bath_modes=bath_modes, resolution=resolution, temperatures=pair)
+        lost = 1.0 - eps2
+        return eps2, (gain_1 / lost if lost != 0.0 else 0.5)
 
     return draw

@@ -36,8 +36,9 @@ import numpy as np
 from ..errors import InvalidParameterError, require_finite
 from ..restitution_table import RestitutionTable
 from . import kernels
+from .collision_law import CollisionLaw
 
-__all__ = ["FixedRestitution", "VibrationSolve", "VibrationTable", "rule_from_description"]
+__all__ = ["FixedRestitution", "VibrationLaw", "VibrationSolve", "VibrationTable", "rule_from_description"]
 
 
 @dataclass(frozen=True)
@@ -86,7 +87,7 @@ class VibrationTable:
 
     def kernel_arrays(self):
         _, ratio, probability, quantiles, share = self.table.arrays()
-        return ratio, probability, quantiles, share
+        return ratio, probability, quantiles, np.ascontiguousarray(share[:, :, None])
 
     def gamma_grid(self):
         return self.table.gamma
@@ -96,6 +97,41 @@ class VibrationTable:
         return {"rule": "vibration", "kappa": meta["kappa"], "bath_modes": self.table.bath_modes,
                 "solver": self.table.solver, "samples_per_point": self.table.samples_per_point,
                 "table_seed": self.table.seed}
+
+
+@dataclass(frozen=True)
+class VibrationLaw:
+    """``epsilon^2`` and the short rod's gain drawn from the hard-core :class:`CollisionLaw` (inside the kernel).
+
+    Covers every pair state: the law's grid is in ``x = E_tr / (E_tr + T_pair)`` in (0, 1]; below its
+    last row the last row's law is used and the draw is counted (``GasResult.beyond_law``).  The gains
+    are conditional means per level of ``epsilon^2`` (the exchange between the baths beyond that mean
+    is averaged out); a bath asked for more than it holds gives what it has, the other bath the rest
+    (counted as ``bath_limited``).
+    """
+
+    law: CollisionLaw
+
+    def __post_init__(self):
+        if not isinstance(self.law, CollisionLaw):
+            raise InvalidParameterError("VibrationLaw needs a CollisionLaw (wavecontact.gas.default_law())")
+
+    code = kernels.RULE_LAW
+
+    @property
+    def bath_modes(self):
+        return self.law.bath_modes
+
+    def kernel_arrays(self):
+        _, log_x, probability, quantiles, gains = self.law.arrays()
+        return log_x, probability, quantiles, gains
+
+    def gamma_grid(self):
+        return self.law.gamma
+
+    def describe(self) -> dict:
+        return {"rule": "vibration_law", "kappa": "inf", "bath_modes": self.law.bath_modes,
+                "samples_per_point": self.law.samples_per_point, "law_seed": self.law.seed}
 
 
 @dataclass(frozen=True)
@@ -117,11 +153,14 @@ class VibrationSolve:
         Modes per rod (the baths' heat capacity).
     name : str
         Recorded in results and checkpoints; a resumed run must pass a rule with the same name.
+    per_rod : bool
+        Pass ``temperature_ratio`` as the pair ``(T_short, T_long) / E_tr`` instead of their mean.
     """
 
     draw: Callable
     bath_modes: int = 250
     name: str = "solve"
+    per_rod: bool = False
 
     def __post_init__(self):
         if not callable(self.draw):
@@ -138,7 +177,7 @@ class VibrationSolve:
         return np.array([1.0])
 
     def describe(self) -> dict:
-        return {"rule": "solve", "name": self.name, "bath_modes": int(self.bath_modes)}
+        return {"rule": "solve", "name": self.name, "bath_modes": int(self.bath_modes), "per_rod": bool(self.per_rod)}
 
 
 def rule_from_description(description: dict, table: RestitutionTable | None = None):
@@ -146,6 +185,8 @@ def rule_from_description(description: dict, table: RestitutionTable | None = No
     kind = description.get("rule")
     if kind == "fixed":
         return FixedRestitution(description["restitution"])
-    if kind == "vibration" and table is not None:
+    if kind == "vibration" and isinstance(table, RestitutionTable):
         return VibrationTable(table)
+    if kind == "vibration_law" and isinstance(table, CollisionLaw):
+        return VibrationLaw(table)
     raise InvalidParameterError(f"cannot rebuild the collision rule {kind!r} from a description; pass it explicitly")

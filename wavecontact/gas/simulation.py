@@ -21,8 +21,9 @@ from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..progress import Progress
 from ..restitution_table import RestitutionTable
 from . import kernels
+from .collision_law import CollisionLaw
 from .model import RodGas
-from .rules import FixedRestitution, VibrationSolve, VibrationTable, rule_from_description
+from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable, rule_from_description
 
 __all__ = ["MAX_COLLISIONS", "GasResult", "GasSimulation"]
 
@@ -73,6 +74,9 @@ class GasResult:
         The final state.
     bath_limited : int
         Draws capped so that no bath went below zero.
+    beyond_law : int
+        Law rule: draws for pairs below the law's last row (``E_tr / (E_tr + T_pair) < 10^log_x[0]``),
+        which took that row's law.
     energy_drift : float
         Relative change of kinetic + bath + lost + dissipated energy since the start.
     """
@@ -92,6 +96,7 @@ class GasResult:
     bath_limited: int
     energy_drift: float
     rule: dict = field(default_factory=dict)
+    beyond_law: int = 0
 
     @property
     def collapsed(self) -> bool:
@@ -125,6 +130,7 @@ class GasResult:
             "final_bath_energy": float(self.history["bath_energy"][-1]) if self.history["bath_energy"].size else 0.0,
             "energy_drift": self.energy_drift,
             "bath_limited": self.bath_limited,
+            "beyond_law": self.beyond_law,
             "rule": self.rule,
         }
 
@@ -157,7 +163,7 @@ class GasSimulation:
     ----------
     gas : RodGas
         Initial state.
-    rule : FixedRestitution, VibrationTable or VibrationSolve
+    rule : FixedRestitution, VibrationLaw, VibrationTable or VibrationSolve
         The collision rule.
     damping : float, optional
         Relaxation time ``tau_diss`` of every bath (time unit of the gas; the
@@ -193,8 +199,8 @@ class GasSimulation:
                  energy_floor=1e-20):
         if not isinstance(gas, RodGas):
             raise InvalidParameterError("gas must be a RodGas (see wavecontact.gas.random_gas)")
-        if not isinstance(rule, (FixedRestitution, VibrationTable, VibrationSolve)):
-            raise InvalidParameterError("rule must be FixedRestitution, VibrationTable or VibrationSolve")
+        if not isinstance(rule, (FixedRestitution, VibrationLaw, VibrationTable, VibrationSolve)):
+            raise InvalidParameterError("rule must be FixedRestitution, VibrationLaw, VibrationTable or VibrationSolve")
         self.gas = gas
         self.rule = rule
         self.damping = None if damping is None else require_positive("damping time tau_diss", damping, allow_inf=True)
@@ -236,7 +242,7 @@ class GasSimulation:
         self.left_is_short = l_left <= l_right
         self.pair_gamma = np.minimum(l_left, l_right) / np.maximum(l_left, l_right)
         grid = rule.gamma_grid()
-        if rule.code == kernels.RULE_TABLE:
+        if rule.code in (kernels.RULE_TABLE, kernels.RULE_LAW):
             low, high = self.pair_gamma[inner].min(), self.pair_gamma[inner].max()
             if low < grid[0] or high > grid[-1]:
                 raise InvalidParameterError(
@@ -338,6 +344,9 @@ class GasSimulation:
         reduced = self.mass[i] * self.mass[j] / (self.mass[i] + self.mass[j])
         e_tr = 0.5 * reduced * (self.v[i] - self.v[j]) ** 2
         ratio = 0.5 * (temperatures[i] + temperatures[j]) / e_tr if e_tr > 0 else math.inf
+        if self.rule.code == kernels.RULE_EXTERNAL and self.rule.per_rod:
+            short, long = (i, j) if self.left_is_short[event] else (j, i)
+            ratio = (temperatures[short] / e_tr, temperatures[long] / e_tr) if e_tr > 0 else (math.inf, math.inf)
         return float(self.pair_gamma[event]), ratio
 
     def _draw_external(self, event):
@@ -391,7 +400,7 @@ class GasSimulation:
             boundary = (self.collisions // self.record_every + 1) * self.record_every
             chunk = min(boundary, target) - self.collisions
             uniforms = no_uniforms
-            if rule.code == kernels.RULE_TABLE:
+            if rule.code in (kernels.RULE_TABLE, kernels.RULE_LAW):
                 state = self._rng.bit_generator.state
                 uniforms = self._rng.random(chunk)
             before = self.collisions
@@ -409,7 +418,7 @@ class GasSimulation:
                     break
                 self._draw_external(event)
             used = self.collisions - before
-            if rule.code == kernels.RULE_TABLE and used < chunk:
+            if rule.code in (kernels.RULE_TABLE, kernels.RULE_LAW) and used < chunk:
                 self._rng.bit_generator.state = state  # rewind: only the used levels are consumed
                 self._rng.bit_generator.advance(used)
             bar.advance(used)
@@ -461,6 +470,7 @@ class GasSimulation:
             bath_limited=int(self.counters[kernels.BATH_LIMITED]),
             energy_drift=(total - self.initial_energy) / self.initial_energy if self.initial_energy > 0 else 0.0,
             rule=self.rule.describe(),
+            beyond_law=int(self.counters[kernels.OFF_TABLE]) if self.rule.code == kernels.RULE_LAW else 0,
         )
 
     # ------------------------------------------------------------ checkpoint
@@ -494,6 +504,10 @@ class GasSimulation:
         arrays["rng_state"] = np.asarray(json.dumps(self._rng.bit_generator.state))
         arrays["progress"] = np.array([self.records, self.drawn], np.int64)
         arrays["status"] = np.asarray(self.status)
+        if isinstance(self.rule, VibrationLaw):
+            arrays.update({f"law_{n}": a for n, a in zip(
+                ("gamma", "log_x", "probability", "eps2_quantiles", "gain_short"), self.rule.law.arrays())})
+            arrays["law_metadata"] = np.asarray(json.dumps(self.rule.law.metadata()))
         if isinstance(self.rule, VibrationTable):
             arrays.update({f"table_{n}": a for n, a in zip(
                 ("gamma", "temperature_ratio", "probability", "eps2_quantiles", "rod1_share"), self.rule.table.arrays())})
@@ -507,6 +521,12 @@ class GasSimulation:
         params = meta["parameters"]
         if rule is None:
             table = None
+            if "law_gamma" in arrays:
+                info = json.loads(str(arrays["law_metadata"]))
+                table = CollisionLaw(*(arrays[f"law_{n}"] for n in (
+                    "gamma", "log_x", "probability", "eps2_quantiles", "gain_short")),
+                    bath_modes=info["bath_modes"], samples_per_point=info["samples_per_point"], seed=info["seed"],
+                    resolution=info.get("resolution", 8))
             if "table_gamma" in arrays:
                 info = json.loads(str(arrays["table_metadata"]))
                 table = RestitutionTable(
