@@ -8,7 +8,12 @@ Prints Markdown tables:
 2. cost at kappa = 1e6 against kappa = 100 at the same rtol;
 3. a 1000-point (gamma, kappa) sweep;
 4. JiTCDDE on the same equation at matched accuracy (optional peer; its C
-   compilation is timed separately), with the speed-up.
+   compilation is timed separately), with the speed-up;
+5. where the time of one warm ``collide`` call goes, for the rows of
+   docs/performance.md's recommendation table (CPU time, medians): the
+   integration (``solve_delay_equation``: option check and kernel), the
+   per-rod energy split (``energy_split=True``, the default) and the rest
+   (scene, options, limits, result).  ``--breakdown-only`` prints only this.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
+sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout this script lives in
 
 from timing import median_time
 
@@ -124,19 +130,55 @@ def table_peer(repeats, ours):
               f"{row[2] / mine:.1f}x |")
 
 
+BREAKDOWN_ROWS = ((20.0, 1e-3), (20.0, 1e-7), (100.0, 1e-3), (100.0, 1e-5), (1e4, 1e-3), (1e4, 1e-7),
+                  (1e6, 1e-3), (1e6, 1e-11), (math.inf, 1e-3))
+
+
+def cpu_median(function, repeats):
+    """Median CPU time (s) of ``repeats`` calls: per-core cost, less disturbed by other jobs than wall time."""
+    times = []
+    for _ in range(repeats):
+        started = time.process_time()
+        function()
+        times.append(time.process_time() - started)
+    return float(np.median(times))
+
+
+def table_breakdown(repeats):
+    print("\n### Where one warm `collide(0.6, kappa, rtol=...)` spends its time (CPU ms, medians)\n")
+    print("| kappa | rtol | steps | whole call | integration | energy split | rest (scene, options, result) |")
+    print("|---|---|---|---|---|---|---|")
+    for kappa, rtol in BREAKDOWN_ROWS:
+        steps = wavecontact.collide(0.6, kappa, rtol=rtol).work["steps"]
+        whole = cpu_median(lambda k=kappa, r=rtol: wavecontact.collide(0.6, k, rtol=r), repeats)
+        if math.isinf(kappa):
+            print(f"| inf | (hard core) | {steps} knots | {1e3 * whole:.3f} | | | |")
+            continue
+        no_split = cpu_median(lambda k=kappa, r=rtol: wavecontact.collide(0.6, k, rtol=r, energy_split=False),
+                              repeats)
+        integration = cpu_median(lambda k=kappa, r=rtol: solve_delay_equation(0.6, k, rtol=r), repeats)
+        print(f"| {kappa:g} | {rtol:g} | {steps} | {1e3 * whole:.3f} | {1e3 * integration:.3f} | "
+              f"{1e3 * (whole - no_split):.3f} | {1e3 * (no_split - integration):.3f} |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=20)
     parser.add_argument("--no-peer", action="store_true")
+    parser.add_argument("--breakdown-only", action="store_true", help="only the per-call breakdown (table 5)")
     args = parser.parse_args()
     wavecontact.collide(0.6, 100.0)  # load the compiled kernels
     print(f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}, wavecontact {wavecontact.__version__}")
+    if args.breakdown_only:
+        table_breakdown(10 * args.repeats)
+        return
     ours = table_accuracy(args.repeats)
     table_kappa_cost(args.repeats)
     table_sweep()
     if not args.no_peer:
         table_peer(args.repeats, ours)
+    table_breakdown(10 * args.repeats)
 
 
 if __name__ == "__main__":

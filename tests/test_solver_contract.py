@@ -177,3 +177,15 @@ def test_a_scene_of_other_rods_reports_nan_gamma():
     result = wavecontact.solve(scene, "fem", elements=20)
     assert math.isnan(result.gamma) and math.isnan(result.kappa)
     assert math.isnan(result.error_estimate) or result.error_estimate >= 0.0
+
+
+@pytest.mark.parametrize("name", SOLVER_NAMES)
+def test_validated_options_are_reused_but_never_for_a_value_of_another_type(name):
+    solver = get_solver(name)
+    first = solver.options({"rtol": 1e-5} if name == "delay" else {})
+    assert solver.options({"rtol": 1e-5} if name == "delay" else {}) is first  # frozen: one object serves
+    # True is cached now; 1 == True and hashes alike, yet a bool option must still refuse it
+    flag = next(row[0] for row in option_help(solver.Options) if row[2].startswith("True or False"))
+    solver.options({flag: True})
+    with pytest.raises(InvalidParameterError, match=flag):
+        solver.options({flag: 1})

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 from .contact import ContactLaw
 from .errors import InvalidParameterError
@@ -12,6 +13,13 @@ from .scene import Scene, two_rods, validate_gamma_kappa
 from .solvers import get_solver
 
 __all__ = ["collide", "solve"]
+
+
+@functools.lru_cache(maxsize=256)
+def _cold_scene(gamma: float, kappa: float, contact: str) -> Scene:
+    # a Scene is frozen and no solver changes it: sweeps of fast solves reuse it instead of rebuilding
+    # and revalidating its rods on every call
+    return two_rods(gamma, kappa, contact=contact)
 
 
 def solve(scene: Scene, solver: str = "fem", *, tolerance=None, max_work=None, max_memory=None,
@@ -99,7 +107,8 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
         raise InvalidParameterError(f"contact must be a name or a ContactLaw, got {contact!r}")
     check_kappa(validate_gamma_kappa(gamma, kappa)[1])
     if bath_temperature is None:
-        scene = two_rods(gamma, kappa, contact=contact)
+        scene = _cold_scene(float(gamma), float(kappa), contact) if isinstance(contact, str) else \
+            two_rods(gamma, kappa, contact=contact)
         return solve(scene, solver, **options)
     from .bath.collide import thermal_scene, vibration_energy_gain
     from .bath.model import ThermalBath

@@ -83,10 +83,11 @@ def contact_window(time, force, sampling: str | None = "point") -> tuple:
     if force is None:
         return math.nan, math.nan
     force = np.asarray(force, dtype=float)
-    if force.size == 0 or not np.max(force) > 0.0:
+    peak = float(force.max()) if force.size else math.nan
+    if not peak > 0.0:
         return math.nan, math.nan
-    active = np.flatnonzero(force > CONTACT_FORCE_FRACTION * np.max(force))
-    first, last = int(active[0]), int(active[-1])
+    above = force > CONTACT_FORCE_FRACTION * peak
+    first, last = int(above.argmax()), force.size - 1 - int(above[::-1].argmax())
     if sampling == "interval" and first > 0:
         begin = float(time[first - 1])
     else:

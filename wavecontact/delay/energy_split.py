@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import kernel
-from .kernels import hermite5, table_value
+from .kernels import hermite5_on, locate_from, table_value
 
 __all__ = ["vibration_energy_gain"]
 
@@ -56,20 +56,30 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
     """
     last = t.shape[0] - 1
     gain = np.zeros(2)
+    # the nodes advance through the history, so each delayed copy's step is found by walking on from
+    # where it was last (locate_from: the same step as hermite5's binary search, without the search)
+    copies = int((t[last] - t[0]) / min(delays[0], delays[1])) + 2
+    hints = np.zeros((2, copies), dtype=np.int64)
+    here = 0
     for j in range(last):
         for part in range(subdivide):
             a = t[j] + (t[j + 1] - t[j]) * part / subdivide
             b = t[j] + (t[j + 1] - t[j]) * (part + 1) / subdivide
             for m in range(nodes.shape[0]):
                 s = a + (b - a) * nodes[m]
-                value, slope, _c = hermite5(t, w, d1, d2, last, s)
+                value, slope = 0.0, 0.0
+                if s > t[0]:
+                    here = locate_from(t, last, s, here)
+                    value, slope, _c = hermite5_on(t, w, d1, d2, here, s)
                 if slope == 0.0:
                     continue
                 for i in range(2):
                     memory_slope = 0.0
                     n = 1
                     while s - n * delays[i] > t[0]:
-                        _v, ds, _cc = hermite5(t, w, d1, d2, last, s - n * delays[i])
+                        u = s - n * delays[i]
+                        hints[i, n] = locate_from(t, last, u, hints[i, n])
+                        _v, ds, _cc = hermite5_on(t, w, d1, d2, hints[i, n], u)
                         memory_slope += ds
                         n += 1
                     noise_slope = 0.0

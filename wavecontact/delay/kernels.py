@@ -92,13 +92,29 @@ def locate(t, last, s):
     return lo
 
 
-@kernel
+@kernel(inline="always")
+def locate_from(t, last, s, lo):
+    """:func:`locate` (the same index for ``s >= t[0]``) found by walking from the index ``lo``:
+    cheaper when ``s`` moved by a step or two since ``lo`` was found."""
+    while lo > 0 and t[lo] > s:
+        lo -= 1
+    while lo + 1 < last and t[lo + 1] <= s:
+        lo += 1
+    return lo
+
+
+@kernel(inline="always")
 def hermite5(t, w, d1, d2, last, s):
     """Value, first and second derivative at ``s`` of the quintic Hermite
     interpolant of the history ``(t, w, d1, d2)[:last + 1]``; zero for ``s <= t[0]``."""
     if s <= t[0]:
         return 0.0, 0.0, 0.0
-    lo = locate(t, last, s)
+    return hermite5_on(t, w, d1, d2, locate(t, last, s), s)
+
+
+@kernel(inline="always")
+def hermite5_on(t, w, d1, d2, lo, s):
+    """:func:`hermite5` on the stored step ``[t[lo], t[lo + 1]]`` (found by the caller)."""
     h = t[lo + 1] - t[lo]
     x = (s - t[lo]) / h
     x = min(x, 1.0)
@@ -162,7 +178,7 @@ def table_value(s, period, values, slopes):
     return value, slope
 
 
-@kernel
+@kernel(inline="always")
 def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
     """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod)."""
     q = 0.0
@@ -179,7 +195,7 @@ def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
     return q, dq
 
 
-@kernel
+@kernel(inline="always")
 def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb, direct_copies):
     """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
 
@@ -226,7 +242,7 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
     return wv + cv, ws + cs, wc + cc
 
 
-@kernel
+@kernel(inline="always")
 def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
               tables, table_slopes, want_slope, comb, direct_copies):
     memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb,

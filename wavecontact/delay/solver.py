@@ -61,6 +61,9 @@ _OUTCOMES = {
 }
 
 
+_NO_TABLES = NoiseTables.empty()  # read only by the kernels
+
+
 def _noise(value):
     if not isinstance(value, FourierNoise):
         raise InvalidParameterError("delay option noise must be a wavecontact.delay.noise.FourierNoise or None")
@@ -95,8 +98,15 @@ class DelayOptions(SolverOptions):
         "material)", kind="bool")
 
 
+_LAST_SCENE = (None, None)  # (scene, its parameters): estimate_cost and _collide check the same scene
+
+
 def _check_scene(scene: Scene) -> DelayParameters:
-    params = delay_parameters(scene)  # refuses rings, other rod counts and receding rods
+    global _LAST_SCENE
+    last, params = _LAST_SCENE
+    if scene is not last:  # a Scene is frozen (rods, velocities and contact law too): same object, same numbers
+        params = delay_parameters(scene)  # refuses rings, other rod counts and receding rods
+        _LAST_SCENE = (scene, params)
     if not isinstance(scene.contact, (Exponential, Hard)):
         raise UnsupportedSceneError(
             f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
@@ -126,18 +136,18 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     Returns ``(t, W, W', error_estimate, work, a0)`` with ``W`` on the adaptive
     grid ``t`` (dimensionless time, ``tau = 0`` at the start, scaled gap ``a0``).
     """
-    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps,
-                                                impedance_ratio, tables)
+    options = DelayOptions(rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps)
+    t, w, d1, _d2, error, work, a0 = _integrate(gamma, kappa, options.rtol, options.initial_gap, options.end_time,
+                                                options.noise, options.max_steps, impedance_ratio, tables)
     return t, w, d1, error, work, a0
 
 
-def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, impedance_ratio, tables):
-    options = DelayOptions(rtol=rtol, initial_gap=initial_gap, end_time=end_time, noise=noise, max_steps=max_steps)
-    rtol, a0, end_time, max_steps = options.rtol, options.initial_gap, options.end_time, options.max_steps
-    noise = COLD if options.noise is None else options.noise
-    tables = NoiseTables.empty() if tables is None else tables
+def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_ratio, tables):
+    """The kernel call behind :func:`solve_delay_equation`, for options already validated (DelayOptions)."""
+    noise = COLD if noise is None else noise
+    tables = _NO_TABLES if tables is None else tables
     if a0 is None:
-        a0 = GAP_MARGIN + noise.amplitude_bound
+        a0 = GAP_MARGIN + (noise.amplitude_bound if noise.freq.size else 0.0)
     delays, weights = (np.array(x) for x in echoes_from_ratios(impedance_ratio, gamma))
     free_time = a0 / kappa
     settle = float(delays.sum())
@@ -276,7 +286,7 @@ class DelaySolver(SolverBase):
                  "delay_parameters": _as_dict(params)}
         if options.energy_split and options.noise is None and params.impedance_ratio == 1.0:
             # one material: the per-rod split of wavecontact.delay.energy_split (units with E_tr = 1/4)
-            tab = tables if tables is not None else NoiseTables.empty()
+            tab = tables if tables is not None else _NO_TABLES
             extra["vibration_energy_gain"] = vibration_energy_gain(
                 float(kappa), t, w, d1, d2, np.asarray(params.round_trip_times, dtype=float), tab.periods,
                 tab.values, tab.slopes, NODES, WEIGHTS, 2)
@@ -295,9 +305,12 @@ class DelaySolver(SolverBase):
         }
 
 
+_PARAMETER_NAMES = tuple(f.name for f in dataclasses.fields(DelayParameters))
+
+
 def _as_dict(params: DelayParameters) -> dict:
     # a shallow copy: dataclasses.asdict deep-copies every field and cost more than a soft solve
-    values = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+    values = {name: getattr(params, name) for name in _PARAMETER_NAMES}
     return {**values, "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
 
 

@@ -154,16 +154,26 @@ class SolverOptions:
 
     solver_name: ClassVar[str] = "solver"
 
+    @classmethod
+    def _declared(cls) -> tuple:
+        """``(name, spec)`` of every field, ``spec`` None for an undeclared one; read once per class
+        (``dataclasses.fields`` on every construction cost more than a fast solve's own work)."""
+        declared = cls.__dict__.get("_declared_fields")
+        if declared is None:
+            declared = tuple((f.name, f.metadata.get("option")) for f in dataclasses.fields(cls))
+            cls._declared_fields = declared
+        return declared
+
     def __post_init__(self):
-        for f in dataclasses.fields(self):
-            spec = f.metadata.get("option")
+        solver = self.solver_name
+        for name, spec in self._declared():
             if spec is not None:
-                object.__setattr__(self, f.name, _validate(self.solver_name, f.name, spec, getattr(self, f.name)))
+                object.__setattr__(self, name, _validate(solver, name, spec, getattr(self, name)))
 
     @classmethod
     def from_mapping(cls, given: Mapping):
         """Options from keyword arguments, refusing unknown names."""
-        allowed = {f.name for f in dataclasses.fields(cls)}
+        allowed = {name for name, _spec in cls._declared()}
         unknown = sorted(set(given) - allowed)
         if unknown:
             raise InvalidParameterError(
@@ -178,7 +188,7 @@ class SolverOptions:
 
     def as_dict(self) -> dict:
         """The options as a plain dict (values as given; arrays and objects kept)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return {name: getattr(self, name) for name, _spec in self._declared()}
 
 
 def option_help(options_class) -> list:
@@ -281,6 +291,10 @@ def _tolerance(value):
     return number
 
 
+_OPTIONS_CACHE: dict = {}
+_OPTIONS_CACHE_SIZE = 256
+
+
 class SolverBase:
     """Shared implementation of :class:`Solver`; a solver supplies ``_collide``.
 
@@ -303,10 +317,26 @@ class SolverBase:
         return None
 
     def options(self, given: Mapping | None = None):
-        """Validated options from a mapping (or the defaults)."""
+        """Validated options from a mapping (or the defaults).
+
+        Options are frozen, so the same arguments give the same object: a small cache keyed by
+        each value and its type (``True`` and ``1`` stay apart) spares sweeps of fast solves
+        the validation; unhashable values (arrays, noise objects) are validated every time.
+        """
         if isinstance(given, self.Options):
             return given
-        return self.Options.from_mapping(dict(given or {}))
+        given = dict(given or {})
+        try:
+            key = (self.Options, frozenset((name, type(value), value) for name, value in given.items()))
+            cached = _OPTIONS_CACHE.get(key)
+        except TypeError:
+            return self.Options.from_mapping(given)
+        if cached is None:
+            cached = self.Options.from_mapping(given)
+            if len(_OPTIONS_CACHE) >= _OPTIONS_CACHE_SIZE:
+                _OPTIONS_CACHE.clear()
+            _OPTIONS_CACHE[key] = cached
+        return cached
 
     # ------------------------------------------------------------ cost and error hooks
     def estimate_cost(self, scene: Scene, options) -> Cost | None:

@@ -1,0 +1,65 @@
+"""Delay kernels' history look-ups (wavecontact/delay/kernels.py) and the energy split's use of them.
+
+``locate_from`` walks from a hint where ``locate`` bisects; both must name the same stored step for
+every time and hint, compiled and in pure Python, and the per-rod energy split, which walks, must
+equal the same quadrature written here with a fresh bisection for every point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wavecontact.bath.noise import NoiseTables
+from wavecontact.delay import kernels
+from wavecontact.delay.energy_split import NODES, WEIGHTS, vibration_energy_gain
+from wavecontact.delay.solver import solve_delay_equation
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_locate_from_names_the_step_bisection_finds(compiled):
+    locate = kernels.locate if compiled else kernels.locate.py_func
+    walk = kernels.locate_from if compiled else kernels.locate_from.py_func
+    rng = np.random.default_rng(np.random.SeedSequence(7))
+    for _ in range(12):
+        t = np.cumsum(rng.exponential(size=rng.integers(2, 40)))
+        t -= t[0]
+        last = t.size - 1
+        # times on the nodes, between them, past the end; hints anywhere in range
+        for s in np.concatenate([t, t[:-1] + 0.5 * np.diff(t), [t[-1] + 1.0], rng.uniform(0.0, t[-1], 10)]):
+            for hint in {*range(0, last, 3), last - 1}:
+                assert walk(t, last, s, hint) == locate(t, last, s)
+
+
+def _split_by_bisection(kappa, t, w, d1, d2, delays):
+    """Delta E_i of wavecontact.delay.energy_split (cold), each point found by bisection (hermite5)."""
+    last = t.size - 1
+    gain = np.zeros(2)
+    for j in range(last):
+        for part in range(2):
+            a = t[j] + (t[j + 1] - t[j]) * part / 2
+            b = t[j] + (t[j + 1] - t[j]) * (part + 1) / 2
+            for node, weight in zip(NODES, WEIGHTS):
+                s = a + (b - a) * node
+                value, slope, _ = kernels.hermite5(t, w, d1, d2, last, s)
+                if slope == 0.0:
+                    continue
+                for i in range(2):
+                    memory = 0.0
+                    n = 1
+                    while s - n * delays[i] > t[0]:
+                        memory += kernels.hermite5(t, w, d1, d2, last, s - n * delays[i])[1]
+                        n += 1
+                    gain[i] += weight * (b - a) * slope * (0.5 * slope + memory - value / delays[i])
+    return gain / (2.0 * kappa * kappa)
+
+
+@pytest.mark.parametrize("gamma, kappa, rtol", [(0.6, 20.0, 1e-4), (0.3, 1e3, 1e-6)])
+def test_energy_split_walk_equals_bisection(gamma, kappa, rtol):
+    t, w, d1, *_ = solve_delay_equation(gamma, kappa, rtol=rtol)
+    d2 = np.gradient(d1, t)  # any smooth-enough third column: both sides interpolate the same data
+    delays = np.array([1.0 + gamma, 1.0 + 1.0 / gamma])
+    empty = NoiseTables.empty()
+    ours = vibration_energy_gain(kappa, t, w, d1, d2, delays, empty.periods, empty.values, empty.slopes,
+                                 NODES, WEIGHTS, 2)
+    assert np.array_equal(ours, _split_by_bisection(kappa, t, w, d1, d2, delays))
