@@ -163,6 +163,75 @@ def table_value(s, period, values, slopes):
 
 
 @kernel
+def _cell_upper(values, slopes, j, h):
+    """Upper bound of the cubic Hermite interpolant on cell ``j`` (``|H10|, |H11| <= 4/27``)."""
+    j1 = j + 1
+    if j1 == values.shape[0]:
+        j1 = 0
+    return max(values[j], values[j1]) + (4.0 / 27.0) * h * (abs(slopes[j]) + abs(slopes[j1]))
+
+
+@kernel
+def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
+    """An upper bound of the tabulated noise (the sum of the rows) on ``[t0, t1]``.
+
+    Each row is bounded on the cells that the interval touches (one more on
+    each side against round-off in the cell index), whole blocks at once
+    from ``block_max`` (:func:`wavecontact.bath.noise.block_maxima`).
+    """
+    total = 0.0
+    for i in range(periods.shape[0]):
+        values = tables[i]
+        slopes = table_slopes[i]
+        n = values.shape[0]
+        blocks = block_max.shape[1]
+        size = n // blocks
+        h = periods[i] / n
+        first = int(t0 / h) - 1  # t0 >= 0
+        stop = int(t1 / h) + 2
+        if stop - first >= n:
+            best = block_max[i, 0]
+            for k in range(1, blocks):
+                best = max(best, block_max[i, k])
+            total += best
+            continue
+        best = -math.inf
+        k = first
+        while k < stop:
+            j = k % n
+            if j % size == 0 and k + size <= stop:
+                best = max(best, block_max[i, j // size])
+                k += size
+            else:
+                best = max(best, _cell_upper(values, slopes, j, h))
+                k += 1
+        total += best
+    return total
+
+
+@kernel
+def free_span(t0, distance, rate, h_min, h_max, periods, tables, table_slopes, block_max, q0):
+    """The longest step from ``t0`` (at most ``h_max``) over which the force stays negligible, or 0.
+
+    The exponent ``g - W`` of ``W'`` is ``distance`` below the negligible level
+    at ``t0``; it rises no faster than ``rate`` (``kappa`` plus the bound of an
+    untabulated noise's slope) plus the tabulated noise's rise above its value
+    ``q0`` at ``t0``, because the memory terms and ``W`` never decrease.  The
+    span is halved from ``distance / rate`` until the noise bound
+    (:func:`noise_upper_bound`) confirms it; 0 if that needs a span below ``h_min``.
+    """
+    if distance <= 0.0:
+        return 0.0
+    span = min(h_max, distance / rate)
+    while span > h_min:
+        rise = noise_upper_bound(t0, t0 + span, periods, tables, table_slopes, block_max) - q0
+        if rate * span + rise <= distance:
+            return span
+        span *= 0.5
+    return 0.0
+
+
+@kernel
 def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
     """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod)."""
     q = 0.0
@@ -259,6 +328,7 @@ def integrate_delay_equation(
     periods,
     tables,
     table_slopes,
+    block_max,
     noise_rate,
     noise_step,
     t_end_min,
@@ -287,8 +357,14 @@ def integrate_delay_equation(
     periods, tables, table_slopes : ndarray
         Further noise terms as periodic tables, shapes ``(R,)``, ``(R, n)``,
         ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
+    block_max : ndarray
+        Upper bounds of the tables over blocks of cells, ``(R, n / B)``
+        (:func:`wavecontact.bath.noise.block_maxima`): with tables, a step is
+        taken as force-free only where these bounds show the force negligible
+        all along it (:func:`free_span`).
     noise_rate : float
-        An upper bound of ``|Q'|`` from the tables (0 without tables).
+        An upper bound of ``|Q'|`` from the tables (0 without tables; unused
+        with tables, whose local bounds are sharper).
     noise_step : float
         Longest step wherever the force may become appreciable (0: no
         limit): short enough that ``Q`` departs from its secant by less than
@@ -353,9 +429,11 @@ def integrate_delay_equation(
     evaluations = 1
     status = STATUS_OK
     gx = np.empty(nodes.shape[0])
-    exponent_rate = kappa + noise_rate
+    series_rate = kappa
     for j in range(freq.shape[0]):
-        exponent_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+        series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+    exponent_rate = series_rate + noise_rate
+    tabulated = periods.shape[0] > 0
 
     while True:
         t0 = t[last]
@@ -366,7 +444,15 @@ def integrate_delay_equation(
             status = STATUS_TIME_LIMIT
             break
         # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
-        h_free = (negligible - (g_now - w[last])) / exponent_rate
+        # (with tables: than kappa plus the local rise of the tabulated noise)
+        if tabulated:
+            q0 = 0.0
+            for i in range(periods.shape[0]):
+                q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
+            h_free = free_span(t0, negligible - (g_now - w[last]), series_rate, h, h_max, periods, tables,
+                               table_slopes, block_max, q0)
+        else:
+            h_free = (negligible - (g_now - w[last])) / exponent_rate
         h_wanted = h
         # do not stride over more than two stored steps around any delayed time
         if t_significant < math.inf and h_free < h:

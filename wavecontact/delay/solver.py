@@ -147,7 +147,7 @@ def _integrate(gamma, kappa, rtol, initial_gap, end_time, noise, max_steps, impe
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
     t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
-        tables.periods, tables.values, tables.slopes, float(tables.slope_bound), float(tables.step_limit),
+        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound), float(tables.step_limit),
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
