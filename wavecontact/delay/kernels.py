@@ -210,25 +210,19 @@ def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
 
 
 @kernel
-def free_span(t0, distance, rate, h_min, h_max, periods, tables, table_slopes, block_max, q0):
-    """The longest step from ``t0`` (at most ``h_max``) over which the force stays negligible, or 0.
+def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_max, q0):
+    """True if the force stays negligible on ``[t0, t0 + span]`` (tabulated noise).
 
     The exponent ``g - W`` of ``W'`` is ``distance`` below the negligible level
     at ``t0``; it rises no faster than ``rate`` (``kappa`` plus the bound of an
     untabulated noise's slope) plus the tabulated noise's rise above its value
-    ``q0`` at ``t0``, because the memory terms and ``W`` never decrease.  The
-    span is halved from ``distance / rate`` until the noise bound
-    (:func:`noise_upper_bound`) confirms it; 0 if that needs a span below ``h_min``.
+    ``q0`` at ``t0`` (bounded by :func:`noise_upper_bound`), because the
+    memory terms and ``W`` never decrease.
     """
-    if distance <= 0.0:
-        return 0.0
-    span = min(h_max, distance / rate)
-    while span > h_min:
-        rise = noise_upper_bound(t0, t0 + span, periods, tables, table_slopes, block_max) - q0
-        if rate * span + rise <= distance:
-            return span
-        span *= 0.5
-    return 0.0
+    if distance <= 0.0 or rate * span >= distance:
+        return False
+    rise = noise_upper_bound(t0, t0 + span, periods, tables, table_slopes, block_max) - q0
+    return rate * span + rise <= distance
 
 
 @kernel
@@ -444,18 +438,21 @@ def integrate_delay_equation(
             status = STATUS_TIME_LIMIT
             break
         # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
-        # (with tables: than kappa plus the local rise of the tabulated noise)
+        h_wanted = h
         if tabulated:
+            # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
+            # step is free or it is not (a free step is the proposed one in either branch below)
             q0 = 0.0
             for i in range(periods.shape[0]):
                 q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
-            h_free = free_span(t0, negligible - (g_now - w[last]), series_rate, h, h_max, periods, tables,
-                               table_slopes, block_max, q0)
+            free = span_is_free(t0, h, negligible - (g_now - w[last]), series_rate, periods, tables,
+                                table_slopes, block_max, q0)
+            h_free = h if free else 0.0
         else:
             h_free = (negligible - (g_now - w[last])) / exponent_rate
-        h_wanted = h
+            free = not h_free < h
         # do not stride over more than two stored steps around any delayed time
-        if t_significant < math.inf and h_free < h:
+        if t_significant < math.inf and not free:
             for i in range(delays.shape[0]):
                 n = 1
                 while True:
@@ -469,7 +466,9 @@ def integrate_delay_equation(
                         if reach > 0.0 and j > lo:
                             h = min(h, reach)
                     n += 1
-        if h_free > h:
+        if not tabulated:
+            free = h_free > h
+        if free:
             h = min(h_wanted, h_free)
         elif noise_step > 0.0:
             h = min(h, noise_step)
