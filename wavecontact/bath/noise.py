@@ -135,23 +135,31 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
     points_per_period : int
         Nodes per period of the fastest mode.
     """
-    rows_v, rows_s = [], []
-    bound = 0.0
-    curvature = 0.0
     modes = max(a.size for _omega, a, _b in coefficients)
     n = table_points(modes, points_per_period)
-    for (omega, a, b), period in zip(coefficients, periods):
-        if a.size and not np.allclose(omega, 2 * math.pi * np.arange(1, a.size + 1) / period, rtol=1e-12):
+    shift = origin - contact_time
+    # one inverse FFT for all rows: per rod the values, the slopes and the (unshifted) curvature
+    spectra = np.zeros((3 * len(coefficients), n // 2 + 1), dtype=complex)
+    bound = 0.0
+    for i, ((omega, a, b), period) in enumerate(zip(coefficients, periods)):
+        a, b, period = np.asarray(a, float), np.asarray(b, float), float(period)
+        nu = np.arange(1, a.size + 1)
+        harmonics = 2 * math.pi * nu / period
+        if a.size and not np.all(np.abs(omega - harmonics) <= 1e-8 + 1e-12 * np.abs(harmonics)):
             raise InvalidParameterError("noise frequencies must be the harmonics of the given period")
-        values, slopes = _harmonic_series(np.asarray(a, float), np.asarray(b, float), float(period),
-                                          origin - contact_time, n)
-        rows_v.append(values)
-        rows_s.append(slopes)
+        # as _harmonic_series and _curvature_peak compute them
+        values = 0.5 * n * ((a - 1j * b) * np.exp(2j * math.pi * nu * shift / period))
+        spectra[3 * i, 1:a.size + 1] = values
+        spectra[3 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
+        spectra[3 * i + 2, 1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
         bound += float(np.sum(omega * np.hypot(a, b)))
-        # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
-        # denser by default), with 10 % for what falls between them
-        curvature += 1.1 * _curvature_peak(np.asarray(a, float), np.asarray(b, float), float(period), n)
-    return NoiseTables(np.asarray(periods, dtype=float), np.array(rows_v), np.array(rows_s), bound, curvature)
+    rows = np.fft.irfft(spectra, n, axis=1)
+    # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
+    # denser by default), with 10 % for what falls between them
+    curvature = 0.0
+    for i, (_omega, a, _b) in enumerate(coefficients):
+        curvature += 1.1 * float(np.max(np.abs(rows[3 * i + 2]))) if a.size else 0.0
+    return NoiseTables(np.asarray(periods, dtype=float), rows[0::3].copy(), rows[1::3].copy(), bound, curvature)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:
