@@ -205,7 +205,7 @@ def main(argv=None):
         if value is None:
             row(name, "not installed", "pip install jitcdde symengine")
             continue
-        note = f"|eps - ref| = {abs(value[0] - reference):.1e}"
+        note = f"abs(eps - ref) = {abs(value[0] - reference):.1e}"
         if name != "ours":
             note += f", {value[1] / ours_time:.0f}x ours"
         if len(value) == 3:
