@@ -4,15 +4,22 @@
     python benchmarks/bench_bath.py --quick    # smaller sample counts
     python benchmarks/bench_bath.py --hard-core-only   # rows 1 and the Fig. 8 hard-core row
 
+    python benchmarks/bench_bath.py --full     # row 3 at kappa = 250 in full (50,000 samples, ~2 min
+                                               # on a quiet 2-core machine) instead of a subset
+
 Rows:
 1. the stochastic hard-core mode (kappa = inf): samples per CPU second on one core at 8 (the default) and
    4 grid points per period of the fastest mode, with the mean error against 32 points on the same samples;
-2. one delay sample against kappa and nu_max (median seconds);
+2. one finite-kappa sample as an ensemble computes it (rtol 1e-6, no energy split), CPU ms
+   (median over samples) against kappa (nu_max 250) and nu_max (kappa 250); and one
+   ``collide()`` with its defaults (rtol 1e-11, energy split) for comparison;
 3. the Fig. 8 set (2 gamma x 10 T_B/E_tr x 2500 = 50,000 collisions, nu_max = 250) through
-   the parallel path (2 local worker processes): hard-core mode in full, kappa = 250 on a
-   subset, extrapolated;
-4. peers on one realisation at matched accuracy: JiTCDDE with the noise as input, scipy
-   solve_ivp (DOP853) on the modal equations with the thermal start;
+   the parallel path (2 local worker processes): hard-core mode in full; kappa = 250 on
+   100 samples a point (2,000), extrapolated, or in full with --full;
+4. peers on one realisation (kappa 100, nu_max 50), each at a per-sample error far below the
+   standard error of a 2500-sample ensemble mean (matched accuracy of the mean): JiTCDDE with
+   the noise as input, scipy solve_ivp (DOP853) on the modal equations with the thermal start;
+   time ratios to wavecontact's delay solver in the same run;
 5. Dask: samples per second with 1 and 2 local workers, and the overhead per task.
 
 Timings are medians of repeats; the machine is shared with other jobs, so absolute
@@ -25,10 +32,13 @@ import argparse
 import logging
 import math
 import os
+import resource
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -41,7 +51,7 @@ from wavecontact.bath import ThermalBath
 from wavecontact.bath.collide import thermal_scene
 from wavecontact.bath.scene import scene_noise
 from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
-from wavecontact.studies.ensemble import ensemble
+from wavecontact.studies.ensemble import EnsembleSpec, ensemble, sample_collision
 
 GAMMA = 0.6173
 
@@ -67,31 +77,67 @@ def hard_core_rate(samples, resolution):
     return samples / sorted(seconds)[1], float(difference.mean()), float(difference.std() / math.sqrt(subset))
 
 
-def delay_sample_time(kappa, modes, count=4, temperature=1.0):
-    scenes = [thermal_scene(GAMMA, kappa, ThermalBath(temperature, modes), s) for s in range(count)]
-    solve(scenes[0], "delay", rtol=1e-6, energy_split=False)
-    return median_time(lambda: [solve(s, "delay", rtol=1e-6, energy_split=False) for s in scenes], 3) / count
+def delay_sample_cpu(kappa, modes, count=8, temperature=1.0):
+    """Median CPU seconds of one ensemble sample (``sample_collision``: rtol 1e-6, no energy split)."""
+    spec = EnsembleSpec(GAMMA, kappa, temperature, count, 3, bath_modes=modes, options={"rtol": 1e-6})
+    sample_collision(spec, 0)  # kernels ready
+    times = []
+    for j in range(count):
+        started = time.process_time()
+        sample_collision(spec, j)
+        times.append(time.process_time() - started)
+    return float(np.median(times))
+
+
+def collide_default_cpu(kappa=250.0, modes=250, count=4):
+    """Median CPU seconds of ``collide(gamma, kappa, bath_temperature=1, ...)`` with its defaults."""
+    wavecontact.collide(GAMMA, kappa, bath_temperature=1.0, bath_modes=modes, seed=0, estimate_error=False)
+    times = []
+    for seed in range(count):
+        started = time.process_time()
+        wavecontact.collide(GAMMA, kappa, bath_temperature=1.0, bath_modes=modes, seed=seed, estimate_error=False)
+        times.append(time.process_time() - started)
+    return float(np.median(times))
+
+
+def _children_cpu():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEMPERATURES):
+    """Wall seconds, sample count and worker CPU seconds (start-up excluded) of the Fig. 8 set on 2 processes.
+
+    The workers' CPU time is read once they have exited (``RUSAGE_CHILDREN``);
+    the CPU of a pool that only starts up and warms its kernels is measured
+    first and subtracted.
+    """
     options = {} if math.isinf(kappa) else {"rtol": 1e-6}
-    with ProcessPoolExecutor(2) as pool:
+
+    def warm(pool):
         ensemble(GAMMA, kappa, 1.0, 4, 0, executor=pool, batch_size=1, **options)  # workers import and load kernels
+
+    before = _children_cpu()
+    with ProcessPoolExecutor(2) as pool:
+        warm(pool)
+    start_up = _children_cpu() - before
+    before = _children_cpu()
+    with ProcessPoolExecutor(2) as pool:
+        warm(pool)
         started = time.perf_counter()
         for a, gamma in enumerate(gammas):
             for b, temperature in enumerate(temperatures):
                 ensemble(gamma, kappa, temperature, samples, 8 + 1000 * a + b, executor=pool,
                          batch_size=max(1, min(256, samples // 4)), **options)
-        return time.perf_counter() - started, len(gammas) * len(temperatures) * samples
+        wall = time.perf_counter() - started
+    cpu = _children_cpu() - before - start_up
+    return wall, len(gammas) * len(temperatures) * samples, cpu
 
 
 def fig8_hard_core(samples):
     """The Fig. 8 set in the hard-core mode through 2 worker processes: wall seconds, the workers' CPU
     seconds (read from the finished children, so the load of other jobs does not count) and samples."""
-    children = os.times()
-    seconds, count = fig8_parallel(math.inf, samples)
-    after = os.times()
-    cpu = (after.children_user - children.children_user) + (after.children_system - children.children_system)
+    seconds, count, cpu = fig8_parallel(math.inf, samples)
     return seconds, cpu, count
 
 
@@ -107,6 +153,7 @@ def peers(modes=50, kappa=100.0, seed=3):
     reference = solve(scene, "delay", rtol=1e-11).restitution
     ours = solve(scene, "delay", rtol=1e-6, energy_split=False)
     ours_time = median_time(lambda: solve(scene, "delay", rtol=1e-6, energy_split=False), 5)
+    # the delay solver's own accuracy at this tolerance: its error estimate, checked against the reference
     out = {"reference": reference, "ours": (ours.restitution, ours_time)}
     a0 = kappa * scene.gaps[0]
     span = ours.time[-1]
@@ -153,6 +200,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="fewer samples")
     parser.add_argument("--hard-core-only", action="store_true",
                         help="only the hard-core rows (1 and the Fig. 8 hard-core row), about a minute")
+    parser.add_argument("--full", action="store_true", help="the Fig. 8 set at kappa = 250 in full (50,000 samples)")
     args = parser.parse_args(argv)
     quick = args.quick
     logging.getLogger("distributed").setLevel(logging.ERROR)
@@ -165,21 +213,32 @@ def main(argv=None):
     if args.hard_core_only:
         fig8_hard_core_row(quick)
         return 0
-    for kappa in (50.0, 100.0, 250.0, 1000.0):
-        row(f"delay sample, kappa {kappa:g}, nu_max 250", f"{delay_sample_time(kappa, 250):.4f} s", "rtol 1e-6")
-    for modes in (50, 1000):
-        row(f"delay sample, kappa 250, nu_max {modes}", f"{delay_sample_time(250.0, modes):.4f} s", "rtol 1e-6")
+    for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4):
+        row(f"delay sample, kappa {kappa:g}, nu_max 250 (CPU)", f"{1e3 * delay_sample_cpu(kappa, 250):.2f} ms",
+            "rtol 1e-6, no energy split; target 1.2 ms at kappa 250")
+    for modes in (50, 250, 1000):
+        row(f"delay sample, kappa 250, nu_max {modes} (CPU)", f"{1e3 * delay_sample_cpu(250.0, modes):.2f} ms",
+            "rtol 1e-6, no energy split")
+    row("collide(0.6173, 250, T_B/E_tr 1, nu_max 250), its defaults (CPU)", f"{1e3 * collide_default_cpu():.2f} ms",
+        "rtol 1e-11, energy split")
     fig8_hard_core_row(quick)
-    seconds, count = fig8_parallel(250.0, 2 if quick else 10, gammas=(0.6173, 0.2173), temperatures=(0.1, 0.5, 1.0))
-    row(f"Fig. 8 at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
-        f"extrapolated to 50,000: {seconds / count * 50000:.0f} s")
+    per_point = 2500 if args.full else (10 if quick else 100)
+    seconds, count, cpu = fig8_parallel(250.0, per_point)
+    note = "" if args.full else (f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, "
+                                 f"{cpu / count * 50000 / 2:.0f} s at 2 full cores")
+    row(f"Fig. 8 set at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
+        f"{count / seconds / 2:,.0f} samples/s/core wall, {1e3 * cpu / count:.2f} ms CPU per sample{note}; "
+        "target <= 30 s")
     result = peers()
     reference = result.pop("reference")
+    ours_time = result["ours"][1]
     for name, value in result.items():
         if value is None:
             row(name, "not installed", "pip install jitcdde symengine")
             continue
-        note = f"|eps - ref| = {abs(value[0] - reference):.1e}"
+        note = f"abs(eps - ref) = {abs(value[0] - reference):.1e}"
+        if name != "ours":
+            note += f", {value[1] / ours_time:.0f}x ours"
         if len(value) == 3:
             note += f", compile {value[2]:.1f} s"
         row(f"peer, one sample (kappa 100, nu_max 50): {name}", f"{value[1]:.4f} s", note)

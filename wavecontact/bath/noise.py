@@ -17,10 +17,14 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["POINTS_PER_PERIOD", "NoiseTables", "covariance_eq19", "covariance_series", "noise_tables", "table_points"]
+__all__ = ["POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19", "covariance_series", "noise_tables", "table_points"]
 
 NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
 POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
+BOUND_BLOCK = 64  # table cells per entry of the block maxima (NoiseTables.block_max)
+# |H10|, |H11| <= 4/27 on [0, 1]: the cubic Hermite interpolant of a cell exceeds the larger
+# end value by at most 4/27 h (|m0| + |m1|)
+_HERMITE_SLOPE_BOUND = 4.0 / 27.0
 
 
 def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
@@ -35,6 +39,10 @@ class NoiseTables:
     """Per-rod periodic tables of ``Q_i`` and ``Q_i'`` (rows), one period each.
 
     ``values[i, j] = Q_i(origin + j periods[i] / n)``; times in the solver's unit.
+    ``block_max[i, k]`` bounds rod ``i``'s interpolated table from above on the
+    cells ``k B .. (k + 1) B - 1`` (``B = n / block_max.shape[1]``), so that a
+    solver can bound ``Q`` on any interval with a few operations
+    (:func:`wavecontact.delay.kernels.noise_upper_bound`).
     """
 
     periods: np.ndarray
@@ -42,6 +50,11 @@ class NoiseTables:
     slopes: np.ndarray
     slope_bound: float
     curvature_bound: float = 0.0
+    block_max: np.ndarray = None
+
+    def __post_init__(self):
+        if self.block_max is None:
+            object.__setattr__(self, "block_max", block_maxima(self.periods, self.values, self.slopes))
 
     @classmethod
     def empty(cls) -> NoiseTables:
@@ -51,6 +64,36 @@ class NoiseTables:
     def step_limit(self) -> float:
         """Step over which ``Q`` departs from its secant by at most 1 (``max|Q''| h^2 / 8 <= 1``); 0 if no noise."""
         return math.sqrt(8.0 * NOISE_EXCURSION / self.curvature_bound) if self.curvature_bound > 0.0 else 0.0
+
+
+def block_maxima(periods, values, slopes, block: int = BOUND_BLOCK) -> np.ndarray:
+    """Upper bounds of each row's cubic Hermite interpolant over blocks of ``block`` cells.
+
+    Parameters
+    ----------
+    periods : ndarray (R,)
+        Each row's period (time units).
+    values, slopes : ndarray (R, n)
+        Nodes ``j period / n`` of one period (a scaled length and its rate).
+    block : int
+        Cells per block; ``min(block, n)`` is used, ``n`` must be a multiple of it.
+
+    Returns
+    -------
+    ndarray (R, n / block)
+    """
+    values = np.asarray(values, dtype=float)
+    rows, n = values.shape
+    if rows == 0:
+        return np.zeros((0, 1))
+    block = min(block, n)
+    if n % block:
+        raise InvalidParameterError(f"noise table length {n} is not a multiple of the bound block {block}")
+    step = (np.asarray(periods, dtype=float) / n)[:, None]
+    magnitude = np.abs(slopes)
+    cells = (np.maximum(values, np.roll(values, -1, axis=1))
+             + _HERMITE_SLOPE_BOUND * step * (magnitude + np.roll(magnitude, -1, axis=1)))
+    return cells.reshape(rows, n // block, block).max(axis=2)
 
 
 def _harmonic_series(a, b, period, shift, n, slopes=True):
@@ -92,23 +135,31 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
     points_per_period : int
         Nodes per period of the fastest mode.
     """
-    rows_v, rows_s = [], []
-    bound = 0.0
-    curvature = 0.0
     modes = max(a.size for _omega, a, _b in coefficients)
     n = table_points(modes, points_per_period)
-    for (omega, a, b), period in zip(coefficients, periods):
-        if a.size and not np.allclose(omega, 2 * math.pi * np.arange(1, a.size + 1) / period, rtol=1e-12):
+    shift = origin - contact_time
+    # one inverse FFT for all rows: per rod the values, the slopes and the (unshifted) curvature
+    spectra = np.zeros((3 * len(coefficients), n // 2 + 1), dtype=complex)
+    bound = 0.0
+    for i, ((omega, a, b), period) in enumerate(zip(coefficients, periods)):
+        a, b, period = np.asarray(a, float), np.asarray(b, float), float(period)
+        nu = np.arange(1, a.size + 1)
+        harmonics = 2 * math.pi * nu / period
+        if a.size and not np.all(np.abs(omega - harmonics) <= 1e-8 + 1e-12 * np.abs(harmonics)):
             raise InvalidParameterError("noise frequencies must be the harmonics of the given period")
-        values, slopes = _harmonic_series(np.asarray(a, float), np.asarray(b, float), float(period),
-                                          origin - contact_time, n)
-        rows_v.append(values)
-        rows_s.append(slopes)
+        # as _harmonic_series and _curvature_peak compute them
+        values = 0.5 * n * ((a - 1j * b) * np.exp(2j * math.pi * nu * shift / period))
+        spectra[3 * i, 1:a.size + 1] = values
+        spectra[3 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
+        spectra[3 * i + 2, 1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
         bound += float(np.sum(omega * np.hypot(a, b)))
-        # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
-        # denser by default), with 10 % for what falls between them
-        curvature += 1.1 * _curvature_peak(np.asarray(a, float), np.asarray(b, float), float(period), n)
-    return NoiseTables(np.asarray(periods, dtype=float), np.array(rows_v), np.array(rows_s), bound, curvature)
+    rows = np.fft.irfft(spectra, n, axis=1)
+    # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
+    # denser by default), with 10 % for what falls between them
+    curvature = 0.0
+    for i, (_omega, a, _b) in enumerate(coefficients):
+        curvature += 1.1 * float(np.max(np.abs(rows[3 * i + 2]))) if a.size else 0.0
+    return NoiseTables(np.asarray(periods, dtype=float), rows[0::3].copy(), rows[1::3].copy(), bound, curvature)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:

@@ -178,6 +178,69 @@ def table_value(s, period, values, slopes):
     return value, slope
 
 
+@kernel
+def _cell_upper(values, slopes, j, h):
+    """Upper bound of the cubic Hermite interpolant on cell ``j`` (``|H10|, |H11| <= 4/27``)."""
+    j1 = j + 1
+    if j1 == values.shape[0]:
+        j1 = 0
+    return max(values[j], values[j1]) + (4.0 / 27.0) * h * (abs(slopes[j]) + abs(slopes[j1]))
+
+
+@kernel
+def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
+    """An upper bound of the tabulated noise (the sum of the rows) on ``[t0, t1]``.
+
+    Each row is bounded on the cells that the interval touches (one more on
+    each side against round-off in the cell index), whole blocks at once
+    from ``block_max`` (:func:`wavecontact.bath.noise.block_maxima`).
+    """
+    total = 0.0
+    for i in range(periods.shape[0]):
+        values = tables[i]
+        slopes = table_slopes[i]
+        n = values.shape[0]
+        blocks = block_max.shape[1]
+        size = n // blocks
+        h = periods[i] / n
+        first = int(t0 / h) - 1  # t0 >= 0
+        stop = int(t1 / h) + 2
+        if stop - first >= n:
+            best = block_max[i, 0]
+            for k in range(1, blocks):
+                best = max(best, block_max[i, k])
+            total += best
+            continue
+        best = -math.inf
+        k = first
+        while k < stop:
+            j = k % n
+            if j % size == 0 and k + size <= stop:
+                best = max(best, block_max[i, j // size])
+                k += size
+            else:
+                best = max(best, _cell_upper(values, slopes, j, h))
+                k += 1
+        total += best
+    return total
+
+
+@kernel
+def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_max, q0):
+    """True if the force stays negligible on ``[t0, t0 + span]`` (tabulated noise).
+
+    The exponent ``g - W`` of ``W'`` is ``distance`` below the negligible level
+    at ``t0``; it rises no faster than ``rate`` (``kappa`` plus the bound of an
+    untabulated noise's slope) plus the tabulated noise's rise above its value
+    ``q0`` at ``t0`` (bounded by :func:`noise_upper_bound`), because the
+    memory terms and ``W`` never decrease.
+    """
+    if distance <= 0.0 or rate * span >= distance:
+        return False
+    rise = noise_upper_bound(t0, t0 + span, periods, tables, table_slopes, block_max) - q0
+    return rate * span + rise <= distance
+
+
 @kernel(inline="always")
 def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
     """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod)."""
@@ -275,6 +338,7 @@ def integrate_delay_equation(
     periods,
     tables,
     table_slopes,
+    block_max,
     noise_rate,
     noise_step,
     t_end_min,
@@ -303,8 +367,14 @@ def integrate_delay_equation(
     periods, tables, table_slopes : ndarray
         Further noise terms as periodic tables, shapes ``(R,)``, ``(R, n)``,
         ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
+    block_max : ndarray
+        Upper bounds of the tables over blocks of cells, ``(R, n / B)``
+        (:func:`wavecontact.bath.noise.block_maxima`): with tables, a step is
+        taken as force-free only where these bounds show the force negligible
+        all along it (:func:`free_span`).
     noise_rate : float
-        An upper bound of ``|Q'|`` from the tables (0 without tables).
+        An upper bound of ``|Q'|`` from the tables (0 without tables; unused
+        with tables, whose local bounds are sharper).
     noise_step : float
         Longest step wherever the force may become appreciable (0: no
         limit): short enough that ``Q`` departs from its secant by less than
@@ -369,9 +439,11 @@ def integrate_delay_equation(
     evaluations = 1
     status = STATUS_OK
     gx = np.empty(nodes.shape[0])
-    exponent_rate = kappa + noise_rate
+    series_rate = kappa
     for j in range(freq.shape[0]):
-        exponent_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+        series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+    exponent_rate = series_rate + noise_rate
+    tabulated = periods.shape[0] > 0
 
     while True:
         t0 = t[last]
@@ -382,10 +454,21 @@ def integrate_delay_equation(
             status = STATUS_TIME_LIMIT
             break
         # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
-        h_free = (negligible - (g_now - w[last])) / exponent_rate
         h_wanted = h
+        if tabulated:
+            # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
+            # step is free or it is not (a free step is the proposed one in either branch below)
+            q0 = 0.0
+            for i in range(periods.shape[0]):
+                q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
+            free = span_is_free(t0, h, negligible - (g_now - w[last]), series_rate, periods, tables,
+                                table_slopes, block_max, q0)
+            h_free = h if free else 0.0
+        else:
+            h_free = (negligible - (g_now - w[last])) / exponent_rate
+            free = not h_free < h
         # do not stride over more than two stored steps around any delayed time
-        if t_significant < math.inf and h_free < h:
+        if t_significant < math.inf and not free:
             for i in range(delays.shape[0]):
                 n = 1
                 while True:
@@ -399,7 +482,9 @@ def integrate_delay_equation(
                         if reach > 0.0 and j > lo:
                             h = min(h, reach)
                     n += 1
-        if h_free > h:
+        if not tabulated:
+            free = h_free > h
+        if free:
             h = min(h_wanted, h_free)
         elif noise_step > 0.0:
             h = min(h, noise_step)

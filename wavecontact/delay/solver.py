@@ -157,7 +157,7 @@ def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_rat
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
     t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
-        tables.periods, tables.values, tables.slopes, float(tables.slope_bound), float(tables.step_limit),
+        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound), float(tables.step_limit),
         float(t_end_min), float(t_limit), settle, max_steps,
         kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
@@ -224,6 +224,25 @@ class DelaySolver(SolverBase):
         return hard_core_restitutions(gamma, temperature, seeds, grid=cached_grid(float(gamma), int(modes),
                                                                                    int(resolution)))
 
+    def thermal_restitution(self, scene: Scene, options=None) -> float:
+        """epsilon of a finite-kappa thermal scene (``two_rods(..., vibrations=)``), as :meth:`solve` gives it.
+
+        The same start gap, noise tables and integration, without the result
+        object, the contact window and the energy split (ensembles of many
+        samples).  ``options``: a mapping of :class:`DelayOptions` (validated).
+        """
+        options = self.options(options)
+        params = _check_scene(scene)
+        self.estimate_cost(scene, options)  # refuses what solve() refuses before any work
+        if scene.vibrations is None or math.isinf(params.kappa) or isinstance(scene.contact, Hard):
+            raise UnsupportedSceneError("thermal_restitution needs a finite-kappa scene with vibrations")
+        if options.noise is not None:
+            raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
+        initial_gap, tables = _start(scene, params, options)
+        w = _integrate(params.time_ratio, params.kappa, options.rtol, initial_gap, options.end_time, None,
+                       options.max_steps, params.impedance_ratio, tables)[1]
+        return float(w[-1] / params.kappa - 1.0)
+
     def expected_order(self, options) -> float:
         """1: the error is proportional to (and below) the tolerance ``rtol``."""
         return 1.0
@@ -265,19 +284,7 @@ class DelaySolver(SolverBase):
             if vibrations is not None:
                 return _collide_hard_stochastic(scene, params, options.hard_core_resolution)
             return _collide_hard(params)
-        initial_gap = options.initial_gap
-        if scene.gaps is not None and initial_gap is None:
-            # a user-placed start: alpha * gap, shifted by ln(B alpha^2 mu / Z_s^2) for B != Z_s^2 / (mu alpha^2)
-            alpha = scene.contact.alpha
-            initial_gap = alpha * scene.gaps[0] - math.log(
-                scene.contact.strength * alpha**2 * params.reduced_mass / params.series_impedance**2
-            )
-        tables = None
-        if vibrations is not None:
-            if initial_gap is None:
-                raise UnsupportedSceneError("a scene with vibrations needs its start gap "
-                                            "(two_rods(..., vibrations=) sets it)")
-            tables = scene_noise(scene, kappa, float(initial_gap), options.noise_resolution)
+        initial_gap, tables = _start(scene, params, options)
         t, w, d1, d2, error, work, a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
                                                    options.end_time, options.noise, options.max_steps,
                                                    params.impedance_ratio, tables)
@@ -306,6 +313,24 @@ class DelaySolver(SolverBase):
 
 
 _PARAMETER_NAMES = tuple(f.name for f in dataclasses.fields(DelayParameters))
+
+
+def _start(scene: Scene, params: DelayParameters, options: DelayOptions) -> tuple:
+    """``(initial_gap, tables)``: the scaled start gap (None: the solver's choice) and the scene's noise tables."""
+    initial_gap = options.initial_gap
+    if scene.gaps is not None and initial_gap is None:
+        # a user-placed start: alpha * gap, shifted by ln(B alpha^2 mu / Z_s^2) for B != Z_s^2 / (mu alpha^2)
+        alpha = scene.contact.alpha
+        initial_gap = alpha * scene.gaps[0] - math.log(
+            scene.contact.strength * alpha**2 * params.reduced_mass / params.series_impedance**2
+        )
+    tables = None
+    if scene.vibrations is not None:
+        if initial_gap is None:
+            raise UnsupportedSceneError("a scene with vibrations needs its start gap "
+                                        "(two_rods(..., vibrations=) sets it)")
+        tables = scene_noise(scene, params.kappa, float(initial_gap), options.noise_resolution)
+    return initial_gap, tables
 
 
 def _as_dict(params: DelayParameters) -> dict:

@@ -135,6 +135,9 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
         return float(_hard_core_batch(spec, index, index + 1)[0]), (0.0, 0.0)
     scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, seed)
     options = dict(spec.options)
+    if spec.solver == "delay" and not spec.energy_split:
+        # what solve() returns, without the result object around it
+        return get_solver("delay").thermal_restitution(scene, options), (0.0, 0.0)
     if spec.solver == "delay":
         options.setdefault("energy_split", spec.energy_split)
     result = solve(scene, spec.solver, **options)

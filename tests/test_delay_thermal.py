@@ -1,0 +1,52 @@
+"""The delay solver with tabulated thermal noise against an independent integrator (issue 11, performance).
+
+The solver takes long steps wherever block bounds of the noise tables show the
+force negligible; these tests check that no contact slips through them: rough
+noise (nu_max = 250) at kappa = 250, the paper's Fig. 8 case.
+"""
+
+import pytest
+from thermal_reference import thermal_restitution
+
+import wavecontact
+from wavecontact.api import solve
+from wavecontact.bath import ThermalBath
+from wavecontact.bath.collide import thermal_scene
+from wavecontact.solvers import get_solver
+from wavecontact.studies.ensemble import EnsembleSpec, sample_collision, sample_seed
+
+CASES = [(0.6173, 1.0, 0), (0.6173, 0.1, 1), (0.2173, 0.5, 2)]
+
+
+@pytest.mark.parametrize("gamma, temperature, seed", CASES)
+def test_rough_noise_sample_agrees_with_an_independent_integrator(gamma, temperature, seed):
+    kappa, rtol = 250.0, 1e-6
+    result = wavecontact.collide(gamma, kappa, bath_temperature=temperature, bath_modes=250, seed=seed, rtol=rtol,
+                                 energy_split=False)
+    a0 = result.extra["scaled_initial_gap"]
+    vibrations = ThermalBath(temperature, 250).draw((0.5 * (1 + gamma), 0.5 * (1 + gamma) / gamma), seed)
+    end = result.time[-1] + 1.0
+    coarse, fine = (thermal_restitution(gamma, kappa, vibrations, a0, end, d) for d in (1e-5, 5e-6))
+    reference = fine + (fine - coarse) / 3.0  # the integrator is second order
+    assert abs(fine - coarse) < 1e-6  # the reference itself is converged
+    assert abs(result.restitution - reference) <= min(result.error_estimate, rtol)
+
+
+def test_tolerance_refines_to_the_same_sample():
+    scene = thermal_scene(0.6173, 250.0, ThermalBath(1.0, 250), 7)
+    loose = solve(scene, "delay", rtol=1e-4, energy_split=False)
+    tight = solve(scene, "delay", rtol=1e-11, energy_split=False)
+    assert abs(loose.restitution - tight.restitution) <= loose.error_estimate
+    assert abs(loose.restitution - tight.restitution) <= 1e-4
+
+
+def test_ensemble_fast_path_gives_what_solve_gives():
+    spec = EnsembleSpec(0.6173, 100.0, 0.5, 4, 21, bath_modes=40, options={"rtol": 1e-7})
+    for j in range(spec.samples):
+        scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, sample_seed(spec.seed, j))
+        assert sample_collision(spec, j)[0] == solve(scene, "delay", rtol=1e-7).restitution
+
+
+def test_fast_path_refuses_what_it_does_not_cover():
+    with pytest.raises(wavecontact.errors.WavecontactError, match="vibrations"):
+        get_solver("delay").thermal_restitution(wavecontact.two_rods(0.6, 20.0))
