@@ -25,10 +25,10 @@ def _warm():
 
 
 def refused(call, *match):
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(WavecontactError) as info:
         call()
-    elapsed = time.perf_counter() - start
+    elapsed = time.process_time() - start
     assert elapsed < FAST, f"refusal took {elapsed:.2f} s"
     message = str(info.value)
     assert "\n" not in message
@@ -42,10 +42,10 @@ def test_modes_ten_million_is_refused():
 
 
 def test_ring_with_a_hundred_thousand_modes_is_refused(capsys, tmp_path):
-    start = time.perf_counter()
+    start = time.process_time()
     code = main(["ring", "--gamma", "0.6", "--kappa", "100", "--modes", "100000", "--collisions", "10",
                  "--out", str(tmp_path / "ring")])
-    assert time.perf_counter() - start < FAST
+    assert time.process_time() - start < FAST
     assert code == 2
     assert "modes" in capsys.readouterr().err
 
@@ -60,12 +60,12 @@ def test_tiny_gamma_is_refused_by_every_solver_or_bounded():
     refused(lambda: collide(1e-6, 20), "gamma", "square")
     refused(lambda: collide(1e-6, 20, solver="fem"), "max_")
     # the modal solver keeps a fixed number of modes per rod: it ends (or is refused) quickly
-    start = time.perf_counter()
+    start = time.process_time()
     try:
         collide(1e-6, 20, solver="modal", modes=20)
     except WavecontactError:
         pass
-    assert time.perf_counter() - start < 10.0
+    assert time.process_time() - start < 10.0
 
 
 def test_fem_courant_and_dt_too_small_are_refused():
@@ -121,3 +121,25 @@ def test_limit_values_are_validated():
         with pytest.raises(InvalidParameterError, match="max_work"):
             collide(0.6, 20, max_work=bad)
     assert available_memory() > 0
+
+
+@pytest.mark.parametrize("name", ["length", "density", "youngs_modulus", "area"])
+def test_rod_quantities_outside_double_range_products_are_refused(name):
+    # found by the fuzz test: a rod 1e304 long overflowed inside the FE set-up (c^2 / h^2)
+    for value in (1e304, 1e-304):
+        with pytest.raises(InvalidParameterError, match=f"rod {name} must lie in \\[1e-30, 1e\\+30\\]"):
+            Rod(**{"length": 1.0, name: value})
+    Rod(**{"length": 1.0, name: 1e30})
+
+
+def test_velocity_beyond_the_range_is_refused():
+    with pytest.raises(InvalidParameterError, match="velocities\\[0\\]"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1e31, 0.0), contact=Hard())
+
+
+def test_modal_echo_sums_of_a_tiny_length_ratio_are_refused_before_work():
+    # found by the fuzz test: rods 493.8 and 0.4 with hard contact ran for minutes, because each
+    # collocation step of the end-response correction sums one echo per short-rod round trip
+    scene = Scene(rods=(Rod(493.8), Rod(0.40)), velocities=(1.0, 0.0), contact=Hard())
+    error = refused(lambda: solve(scene, "modal", modes=20, max_work=2e8), "echoes", "max_work=")
+    assert isinstance(error, LimitError)

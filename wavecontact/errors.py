@@ -90,3 +90,20 @@ def require_positive(name: str, value, *, allow_inf: bool = False) -> float:
         allowed = "(0, inf]" if allow_inf else "(0, inf) and finite"
         raise InvalidParameterError(f"{name} must lie in {allowed}, got {number!r}")
     return number
+
+
+MAGNITUDE_RANGE = (1e-30, 1e30)  # physical inputs: any consistent units, products stay in double range
+
+
+def require_magnitude(name: str, value, *, signed: bool = False) -> float:
+    """Return ``value`` as a float if its magnitude lies in :data:`MAGNITUDE_RANGE`.
+
+    Positive quantities must lie in ``[1e-30, 1e30]``; with ``signed`` the value may
+    also be zero or negative, ``|value| <= 1e30`` (a velocity).
+    """
+    low, high = MAGNITUDE_RANGE
+    number = require_finite(name, value) if signed else require_positive(name, value)
+    if abs(number) > high or (not signed and number < low):
+        allowed = f"[-{high:g}, {high:g}]" if signed else f"[{low:g}, {high:g}]"
+        raise InvalidParameterError(f"{name} must lie in {allowed} (any consistent units), got {number!r}")
+    return number

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .contact import ContactLaw, Exponential, Hard, Penalty, contact_from_name
-from .errors import InvalidParameterError, require_finite, require_positive
+from .errors import InvalidParameterError, require_finite, require_magnitude, require_positive
 
 __all__ = ["Rod", "Scene", "TwoRodParameters", "penalty_stiffness", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
 
@@ -29,13 +29,19 @@ class Rod:
     Parameters
     ----------
     length : float
-        Length ``l`` (length units), in (0, inf).
+        Length ``l`` (length units), in [1e-30, 1e30].
     density : float
-        Mass density ``rho`` (mass/length^3), in (0, inf).
+        Mass density ``rho`` (mass/length^3), in [1e-30, 1e30].
     youngs_modulus : float
-        Young's modulus ``E`` (force/length^2), in (0, inf).
+        Young's modulus ``E`` (force/length^2), in [1e-30, 1e30].
     area : float
-        Cross-section ``A`` (length^2), in (0, inf).
+        Cross-section ``A`` (length^2), in [1e-30, 1e30].
+
+    Notes
+    -----
+    The range covers any consistent unit system (SI spans 1e-9 m to 1e12 Pa);
+    it keeps the products the solvers form (``c^2 / h^2``, ``rho A l``, ...)
+    inside double precision, where values near 1e300 would overflow.
     """
 
     length: float
@@ -45,7 +51,7 @@ class Rod:
 
     def __post_init__(self):
         for name in ("length", "density", "youngs_modulus", "area"):
-            object.__setattr__(self, name, require_positive(f"rod {name}", getattr(self, name)))
+            object.__setattr__(self, name, require_magnitude(f"rod {name}", getattr(self, name)))
 
     @property
     def wave_speed(self) -> float:
@@ -126,7 +132,7 @@ class Scene:
                 f"velocities must have one entry per rod ({len(rods)}), got {len(velocities)}"
             )
         object.__setattr__(
-            self, "velocities", tuple(require_finite(f"velocities[{i}]", v) for i, v in enumerate(velocities))
+            self, "velocities", tuple(require_magnitude(f"velocities[{i}]", v, signed=True) for i, v in enumerate(velocities))
         )
         if not isinstance(self.contact, ContactLaw):
             raise InvalidParameterError("contact must be a wavecontact contact law (Exponential, Penalty, Hard)")

@@ -356,8 +356,17 @@ class ModalSolver(SolverBase):
             span += 100.0 / (scene.contact.alpha * speed)
         steps = 2.0 * span / (0.05 * shortest)
         memory += steps * 3 * 8.0 if options.history else 0.0
-        return Cost(steps=steps, work=steps * kept * stages, memory=memory,
-                    detail=f"{kept} modes, about {steps:.3g} steps")
+        work = steps * kept * stages
+        detail = f"{kept} modes, about {steps:.3g} steps"
+        correction = _resolve_correction(options.correction, options.static_correction, options.mode_source,
+                                         options.step_method)
+        if correction == "end-response":
+            # every step sums the echoes of the force history that have come back so far: one per
+            # round trip of the shorter rod, so the cost grows like the square of the round-trip ratio
+            echoes = span / (2.0 * shortest)
+            work += steps * stages * echoes
+            detail += f" each summing up to {echoes:.3g} echoes of the end response"
+        return Cost(steps=steps, work=work, memory=memory, detail=detail)
 
     def simulate(self, scene: Scene, options=None):
         """Many collisions of a ring scene (:class:`wavecontact.modal.ring.RingSimulation`)."""
