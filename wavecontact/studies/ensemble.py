@@ -128,6 +128,7 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
     """``(epsilon, (Delta E_1, Delta E_2))`` of sample ``index`` (the gains are zero unless ``spec.energy_split``)."""
     from ..api import solve
     from ..bath.collide import thermal_scene, vibration_energy_gain
+    from ..solvers import get_solver
 
     seed = sample_seed(spec.seed, index)
     if _hard_core(spec):
