@@ -224,6 +224,19 @@ class DelaySolver(SolverBase):
         return hard_core_restitutions(gamma, temperature, seeds, grid=cached_grid(float(gamma), int(modes),
                                                                                    int(resolution)))
 
+    def hard_core_thermal_split(self, gamma: float, temperature_ratio, seed, *, bath_modes: int = 250,
+                                resolution: int = 8, temperatures=None) -> tuple:
+        """``(epsilon^2, gain_1, gain_2)`` of one hard-core thermal collision with each rod's share.
+
+        The gains are what each rod's vibrations gained, in units of the incoming
+        ``E_tr`` (``gain_1 + gain_2 = 1 - epsilon^2``).  See
+        :func:`wavecontact.delay.stochastic_hardcore_split.hard_core_collision`.
+        """
+        from .stochastic_hardcore_split import hard_core_collision
+
+        return hard_core_collision(gamma, temperature_ratio, seed, bath_modes=bath_modes, resolution=resolution,
+                                   temperatures=temperatures)
+
     def thermal_restitution(self, scene: Scene, options=None) -> float:
         """epsilon of a finite-kappa thermal scene (``two_rods(..., vibrations=)``), as :meth:`solve` gives it.
 

@@ -90,7 +90,7 @@ def hard_core_draw(*, bath_modes=250, resolution=16):
     pair's mean, as the law assumes): ``rod1_share = gain_1 / (1 - eps2)`` reproduces this collision's own
     gain of the short rod, ``gain_1 E_tr`` (0.5 when ``eps2 == 1`` exactly, where nothing is lost).
     Any ``T_B/E_tr`` is accepted; the cost grows like its square root (the solve refuses grids beyond
-    :data:`~wavecontact.gas.hardcore_collision.MAX_GRID_POINTS`).
+    :data:`~wavecontact.delay.stochastic_hardcore_split.MAX_GRID_POINTS`).
     """
     from .hardcore_collision import hard_core_collision
 
