@@ -1,7 +1,7 @@
 """The batched stochastic hard-core mode: bit-identical samples, an independent reference, the stop certificate."""
 
 import math
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -9,6 +9,7 @@ import pytest
 from wavecontact.bath import ThermalBath
 from wavecontact.delay.stochastic_hardcore_batch import (
     HardCoreGrid,
+    cached_grid,
     hard_core_restitution,
     hard_core_restitutions,
 )
@@ -153,3 +154,17 @@ def test_equal_rods_bounce_elastically():
 def test_bad_input_is_refused_in_one_line(call, match):
     with pytest.raises(InvalidParameterError, match=match):
         call()
+
+
+def test_threads_sharing_one_cached_grid_give_the_serial_samples():
+    # found by CI: the grid kept its work arrays between calls, and threads sampling the same
+    # cached grid (the kernel runs without the GIL) overwrote each other's
+    grid = cached_grid(0.6173, 40)
+    blocks = [[sample_seed(11, 8 * b + j) for j in range(8)] for b in range(24)]
+    temperatures = [0.3 + 0.4 * (b % 5) for b in range(24)]  # blocks of different lengths
+    serial = [hard_core_restitutions(0.6173, t, seeds, grid=grid) for t, seeds in zip(temperatures, blocks)]
+    with ThreadPoolExecutor(6) as pool:
+        threaded = list(pool.map(lambda args: hard_core_restitutions(0.6173, args[0], args[1], grid=grid),
+                                 zip(temperatures, blocks)))
+    for one, other in zip(serial, threaded):
+        assert np.array_equal(one, other)

@@ -212,7 +212,6 @@ class HardCoreGrid:
         self.n2 = table_points(self.modes, int(points_per_period))
         self.r2 = self.h * self.n2 / self.periods[1]  # rod 2's table index per grid step
         self.max_points = int(max_points)
-        self._work = None
         nu = np.arange(1, self.modes + 1)
         self._omega = tuple(math.pi * nu / length for length in self.lengths)  # m_i = l_i, c = 1
         self._signs = ((-1.0) ** nu, -np.ones(self.modes))  # BathRealisation.contact_end_signs
@@ -261,11 +260,11 @@ class HardCoreGrid:
         """
         count = normals.shape[0]
         out = np.empty(count)
-        self.last_nodes = np.empty(count, dtype=np.int64)
+        nodes = np.empty(count, dtype=np.int64)
         for start in range(0, count, BLOCK):
             stop = min(start + BLOCK, count)
             coefficients = self.coefficients(normals[start:stop], temperatures[start:stop])
-            out[start:stop] = self._block(coefficients, self.last_nodes[start:stop])
+            out[start:stop] = self._block(coefficients, nodes[start:stop])
         return out
 
     def restitution_of(self, vibrations) -> float:
@@ -285,9 +284,9 @@ class HardCoreGrid:
         w = np.empty(count)
         status = np.empty(count, dtype=np.int64)
         capacity = int(min(self.max_points, int(starts.max()) + 6 * self.n1 + 4 * self.j2))
-        if self._work is None or self._work[0].size < capacity:
-            self._work = (np.empty(capacity), np.empty(capacity))
-        a1, a2 = self._work
+        # work arrays of this call: a grid is shared (cached_grid) by every thread that samples it,
+        # and the kernel runs without the GIL, so arrays kept on the grid would be overwritten
+        a1, a2 = np.empty(capacity), np.empty(capacity)
         max_plus_batch(self.h, self.n1, self.j2, self.f2, q1, q2v, q2s, self.r2, reach2, starts, a1.size, a1, a2,
                        w, nodes, status)
         for s in np.flatnonzero(status != STATUS_OK):
