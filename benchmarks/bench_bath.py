@@ -56,8 +56,26 @@ from wavecontact.studies.ensemble import EnsembleSpec, ensemble, sample_collisio
 GAMMA = 0.6173
 
 
+ROWS: list = []  # the table as printed, for --update-docs
+DOCS = Path(__file__).resolve().parent.parent / "docs"
+
+
 def row(name, value, note=""):
-    print(f"| {name:<58} | {value:>14} | {note}")
+    line = f"| {name:<58} | {value:>14} | {note} |"
+    ROWS.append(line)
+    print(line)
+
+
+def update_docs(header):
+    """Write the table into docs/bath.md (between its bench-bath markers) and docs/figures/bath/bench.txt."""
+    table = "\n".join([header, "", "| quantity | value | note |", "|---|---|---|", *ROWS])
+    (DOCS / "figures" / "bath" / "bench.txt").write_text(table + "\n", encoding="utf-8")
+    page = DOCS / "bath.md"
+    text = page.read_text(encoding="utf-8")
+    start, end = "<!-- bench-bath:start -->", "<!-- bench-bath:end -->"
+    before, rest = text.split(start, 1)
+    _old, after = rest.split(end, 1)
+    page.write_text(f"{before}{start}\n{table}\n{end}{after}", encoding="utf-8")
 
 
 def hard_core_rate(samples, resolution):
@@ -201,11 +219,16 @@ def main(argv=None):
     parser.add_argument("--hard-core-only", action="store_true",
                         help="only the hard-core rows (1 and the Fig. 8 hard-core row), about a minute")
     parser.add_argument("--full", action="store_true", help="the Fig. 8 set at kappa = 250 in full (50,000 samples)")
+    parser.add_argument("--update-docs", action="store_true",
+                        help="write the table into docs/bath.md section 9 and docs/figures/bath/bench.txt")
     args = parser.parse_args(argv)
     quick = args.quick
     logging.getLogger("distributed").setLevel(logging.ERROR)
-    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; wavecontact {wavecontact.__version__}")
-    print("| quantity | value | note")
+    header = (f"`python benchmarks/bench_bath.py{' --quick' if quick else ''}{' --full' if args.full else ''}`: "
+              f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the start; wavecontact "
+              f"{wavecontact.__version__}")
+    print(header)
+    print("| quantity | value | note |")
     for resolution in (8, 4):
         rate, bias, bias_error = hard_core_rate(500 if quick else 5000, resolution)
         row(f"hard-core mode (gamma 0.6173, T_B/E_tr 1, nu_max 250), {resolution} points/period, CPU",
@@ -247,6 +270,8 @@ def main(argv=None):
     row("Dask LocalCluster, hard-core samples/s, 2 workers", f"{scaling[2]:,.0f} /s",
         f"speed-up {scaling[2] / scaling[1]:.2f}")
     row("Dask overhead per task (2 workers, trivial task)", f"{1e3 * scaling['overhead']:.2f} ms")
+    if args.update_docs:
+        update_docs(header)
     return 0
 
 
