@@ -1,6 +1,6 @@
 """Benchmark of the finite-element solver (issue 3), one command:
 
-    python benchmarks/bench_fem.py [--repeats 7]
+    python benchmarks/bench_fem.py [--repeats 7] [--only discretizations] [--update-docs]
 
 Prints Markdown tables:
 1. ns per element-step of the time loop (set-up excluded), P1 lumped, kappa = 100;
@@ -34,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from docs_block import run_and_write
 from peers.fem_scipy_loop import scipy_fem_run
 from timing import median_time
 
@@ -194,7 +195,15 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--only", choices=("discretizations",), help="print only this table")
+    parser.add_argument("--update-docs", action="store_true",
+                        help="also write the tables into docs/fem.md (between its bench-fem markers; not with --only)")
     args = parser.parse_args(argv)
+    argv_used = None if argv is None else ["benchmarks/bench_fem.py", *argv]
+    run_and_write(lambda: measure(args), "fem.md", "bench-fem", args.update_docs and not args.only, argv_used)
+
+
+def measure(args):
+    """Print the tables (only the discretizations table with ``--only discretizations``)."""
     print(f"# wavecontact FE benchmark ({platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, numba {wavecontact._jit.NUMBA_ENABLED})")
     wavecontact.collide(GAMMA, 100, solver="fem", elements=50)  # compile / load the kernels

@@ -1,6 +1,6 @@
 """Benchmark of the Markov chain of the translational energy (issue 12), one command:
 
-    python benchmarks/bench_markov.py [--repeats 3] [--steps 10000]
+    python benchmarks/bench_markov.py [--repeats 3] [--steps 10000] [--update-docs]
 
 Prints a Markdown table: wall time of one chain of STEPS collisions (the
 paper's Fig. 10 has 10,000) with each rule, median of repeats, against the
@@ -26,6 +26,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 sys.path.insert(1, str(Path(__file__).resolve().parents[1]))  # the checkout this script lives in
 
+from docs_block import run_and_write
 from timing import median_time
 
 from wavecontact.restitution_table import RestitutionTable
@@ -49,7 +50,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--steps", type=int, default=10_000)
+    parser.add_argument("--update-docs", action="store_true",
+                        help="also write the table into docs/markov.md (between its bench_markov markers)")
     args = parser.parse_args()
+    run_and_write(lambda: measure(args), "markov.md", "bench_markov", args.update_docs)
+
+
+def measure(args):
+    """Time the chains and print the table."""
     steps = args.steps
     markov_chains(GAMMA, rule="solve", steps=5, seed=0)  # compile or load the kernels
     rows = []

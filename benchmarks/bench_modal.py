@@ -1,6 +1,6 @@
 """Benchmark of the modal solver: the paper's Fig. 1 ring run and one collision vs scipy's solve_ivp.
 
-Run: ``python benchmarks/bench_modal.py [--collisions 4500] [--repeats 5] [--skip-ring] [--accuracy-only]``
+Run: ``python benchmarks/bench_modal.py [--collisions 4500] [--repeats 5] [--skip-ring] [--accuracy-only] [--update-docs]``
 
 Prints three tables (``--accuracy-only``: the first alone):
 
@@ -30,9 +30,11 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "peers"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import modal_solve_ivp
 import numpy as np
+from docs_block import captured_stdout, run_header, write_block
 
 import wavecontact
 from wavecontact.modal import RingSimulation
@@ -160,7 +162,10 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--skip-ring", action="store_true")
     parser.add_argument("--accuracy-only", action="store_true")
+    parser.add_argument("--update-docs", action="store_true",
+                        help="also write tables 1 and 2 into docs/modal.md (between its bench-modal markers)")
     args = parser.parse_args(argv)
+    header = run_header(None if argv is None else ["benchmarks/bench_modal.py", *argv])
 
     # compile (numba caches on disk) before any timing
     wavecontact.collide(GAMMA, 100, solver="modal", modes=10)
@@ -169,7 +174,14 @@ def main(argv=None):
     accuracy_table()
     if args.accuracy_only:
         return
+    with captured_stdout() as tee:
+        performance_tables(args)
+    if args.update_docs:
+        write_block("modal.md", "bench-modal", f"{header}\n\n```text\n{tee.copy.getvalue().strip()}\n```")
 
+
+def performance_tables(args):
+    """Print table 1 (the ring run, unless skipped) and table 2 (one collision against solve_ivp)."""
     if not args.skip_ring:
         ring = ring_run(args.collisions)
         print(f"\nRing run of Fig. 1: gamma={GAMMA}, kappa=4000, N_mod={MODES}, {args.collisions} collisions")

@@ -27,6 +27,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout this script lives in
 
+from docs_block import run_and_write
 from timing import median_time, wall_times
 
 import wavecontact
@@ -103,7 +104,14 @@ def table_map():
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=20)
+    parser.add_argument("--update-docs", action="store_true",
+                        help="also write the tables into docs/materials.md (between its bench-two-materials markers)")
     args = parser.parse_args()
+    run_and_write(lambda: measure(args), "materials.md", "bench-two-materials", args.update_docs)
+
+
+def measure(args):
+    """Time the solvers and print the tables."""
     wavecontact.collide(0.6, 100.0)  # load the compiled kernels
     wavecontact.collide(0.6, math.inf)
     print(f"Machine: {platform.machine()}, {os.cpu_count()} cores (shared), Python {platform.python_version()}, "

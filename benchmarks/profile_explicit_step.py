@@ -1,6 +1,6 @@
 """Where the general explicit step spends its time, one command:
 
-    python benchmarks/profile_explicit_step.py [--repeats 7]
+    python benchmarks/profile_explicit_step.py [--repeats 7] [--update-docs]
 
 Prints a Markdown table: CPU time (``time.process_time``, so that other jobs on a
 shared machine do not count) per element of one rod's step (``step_rod``) and of
@@ -16,6 +16,7 @@ import argparse
 import time
 
 import numpy as np
+from docs_block import run_and_write
 
 import wavecontact
 from wavecontact.fem import explicit_step
@@ -53,7 +54,15 @@ def profile_row(name, order, mass, elements, repeats):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--update-docs", action="store_true",
+                        help="also write the table into docs/fem.md (between its profile-explicit-step markers)")
     args = parser.parse_args(argv)
+    argv_used = None if argv is None else ["benchmarks/profile_explicit_step.py", *argv]
+    run_and_write(lambda: measure(args), "fem.md", "profile-explicit-step", args.update_docs, argv_used)
+
+
+def measure(args):
+    """Print the table."""
     print("| discretization | elements (long rod) | step: ns/element | stiffness alone | mass solve alone |")
     print("|---|---:|---:|---:|---:|")
     for name, order, mass in DISCRETIZATIONS:
