@@ -1,7 +1,10 @@
 """Regenerates the numbers and figures of docs/markov.md: ``python docs/markov_study.py [--workers 2]``.
 
 Writes docs/figures/markov_fig10.png, docs/figures/markov_cooling.png and
-docs/markov_study.json, and prints the tables that docs/markov.md quotes.
+docs/markov_study.json, and prints the tables that docs/markov.md shows.
+``--update-docs`` also writes those tables into docs/markov.md (blocks
+markov-fig10, markov-balance, markov-samples); ``--tables-only`` renders them
+from the stored docs/markov_study.json without running the study.
 """
 
 from __future__ import annotations
@@ -17,6 +20,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout this script lives in
+sys.path.insert(1, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+from docs_block import write_block
 
 from wavecontact.plotting.markov import plot_cooling, plot_stationary_distribution
 from wavecontact.studies.markov import markov_chains, symmetry_samples_needed, symmetry_test
@@ -39,11 +45,60 @@ def _glauber_contrast(scale, bins=6):
     return symmetry_samples_needed(np.outer(p_start, p_end), alpha=1e-3)
 
 
+def tables(out):
+    """The three Markdown tables of docs/markov.md from the study's results ``out``, by block name."""
+    pooled, first = out["fig10_pooled"], out["fig10_first_chain"]
+    means = ", ".join(f"{chain['mean_energy']:.3f}" for chain in out["fig10_per_chain"])
+    fig10 = "\n".join([
+        "| | chains pooled | first chain alone (the paper's Fig. 10 size) | Eq. 30 |",
+        "|---|---|---|---|",
+        (f"| mean `E_tr / T_B^0` | {pooled['mean_energy']:.3f} (standard error "
+        f"{pooled['mean_energy_standard_error']:.3f} from the {pooled['chains']} chains' spread) | "
+        f"{first['mean_energy']:.3f} | 1 |"),
+        (f"| fraction below `T_B^0` | {pooled['fraction_below_bath_temperature']:.3f} | "
+        f"{first['fraction_below_bath_temperature']:.3f} | {pooled['boltzmann_fraction_below']:.3f} |"),
+        (f"| KS p-value (thinned, every {pooled['ks_stride']}th state) | {pooled['ks_pvalue']:.2f} "
+        f"({pooled['ks_samples']} states) | {first['ks_pvalue']:.2f} ({first['ks_samples']} states) | |"),
+        "",
+        f"Means of the single chains: {means}.",
+    ])
+    solve, glauber = out["detailed_balance_solve"], out["detailed_balance_glauber"]
+    balance = "\n".join([
+        "| rule | transitions | Bowker statistic | p-value | KS p-value of `E'` (Eq. 32) |",
+        "|---|---|---|---|---|",
+        (f"| solve (`nu_max = 250`) | {solve['transitions']:,} | {solve['statistic']:.1f} | {solve['pvalue']:.2g} | "
+        f"{solve['stationarity_pvalue']:.2g} |"),
+        f"| Glauber | {glauber['transitions']:,} | {glauber['statistic']:.1f} | {glauber['pvalue']:.2g} | |",
+    ])
+    needed = {float(key.split("_")[2]): value for key, value in out["samples_needed"].items()}
+    samples = "\n".join([
+        "| temperature error `s` | " + " | ".join(f"{s:g}" for s in needed) + " |",
+        "|---|" + "---|" * len(needed),
+        "| transitions needed (0.1 % level, on average) | "
+        + " | ".join(f"{float(f'{n:.3g}'):,.0f}" for n in needed.values()) + " |",
+    ])
+    return {"markov-fig10": fig10, "markov-balance": balance, "markov-samples": samples}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--transitions", type=int, default=20_000)
+    parser.add_argument("--update-docs", action="store_true", help="write the tables into docs/markov.md")
+    parser.add_argument("--tables-only", action="store_true",
+                        help="do not run the study: render the tables from docs/markov_study.json")
     args = parser.parse_args()
+    if not args.tables_only:
+        run_study(args)
+    out = json.loads((HERE / "markov_study.json").read_text())
+    for name, table in tables(out).items():
+        print(f"\n{table}")
+        if args.update_docs:
+            write_block("markov.md", name, f"`python docs/markov_study.py` (docs/markov_study.json):\n\n{table}")
+
+
+def run_study(args):
+    """Run the chains, write docs/markov_study.json and the figures."""
     out = {}
     with concurrent.futures.ProcessPoolExecutor(args.workers) as pool:
         # Fig. 10: four chains of 10,000 solved collisions (gamma = 0.6, hard core, nu_max = 250)

@@ -49,6 +49,7 @@ CHEAP = {
 NOT_RUN = {
     r"^pip install": "installs the package (this checkout is already installed)",
     r"^python -m pytest": "the test suite itself",
+    r"--update-docs": "rewrites a block of a page in docs/ (run it by hand to refresh that page)",
 }
 PATH_OPTIONS = ("--out", "--plot", "--xt-plot", "--fields", "--page")
 SYNOPSIS = re.compile(r"\[|\.\.\.|\||<\w")
