@@ -53,6 +53,27 @@ def test_every_marked_block_has_a_generator_and_every_generator_a_block():
     assert marked == {name: block.page for name, block in BLOCKS.items()}
 
 
+SCRIPT_BLOCK = re.compile(r"<!-- (?P<name>[\w.-]+):(?:start|begin) -->\n(?P<body>.*?)<!-- (?P=name):end -->", re.DOTALL)
+
+
+def test_every_script_written_block_has_a_writer_and_names_its_command():
+    """Blocks that scripts write (`--update-docs`; not docs/generate.py's): non-empty and named by some
+    script in benchmarks/ or docs/; the benchmark blocks also start with the command that wrote them."""
+    scripts = "\n".join(path.read_text() for folder in ("benchmarks", "docs") for path in (ROOT / folder).glob("*.py"))
+    bodies = {}
+    for page in PAGES:
+        for match in SCRIPT_BLOCK.finditer(page.read_text()):
+            if not match["name"].startswith("generated:"):
+                bodies[match["name"]] = (page.name, match["body"].strip())
+    for name, (page, body) in bodies.items():
+        assert body, f"{page}: block {name} is empty"
+        assert re.search(rf"(?:[\"']|<!-- ){re.escape(name)}[\"':]", scripts), f"{page}: no script names block {name}"
+    for name in ("bench-fem", "profile-explicit-step", "bench-modal", "bench-two-materials", "bench_markov",
+                 "markov-fig10", "markov-balance", "markov-samples", "bench-bath"):
+        page, body = bodies[name]
+        assert body.startswith("`python "), f"{page}: block {name} does not start with its command"
+
+
 @pytest.mark.parametrize("name", sorted(n for n, b in BLOCKS.items() if b.cheap))
 def test_cheap_blocks_are_what_their_commands_print(name):
     fresh = generate.render(BLOCKS[name])
