@@ -57,7 +57,7 @@ def loop_cost(kappa, elements, repeats):
 
 
 def table_loop(repeats):
-    print("\n### Time loop, P1 lumped, kappa = 100 (target <= 2 ns per element-step)\n")
+    print("\n#### Time loop, P1 lumped, kappa = 100 (target <= 2 ns per element-step)\n")
     print(_LATTICE_NOTE + "\n")
     print("| elements (short rod) | elements (both) | steps | loop time (ms) | ns / element-step |")
     print("|---:|---:|---:|---:|---:|")
@@ -70,7 +70,7 @@ def table_loop(repeats):
 
 
 def table_peer(repeats, reference):
-    print("\n### Against the scikit-fem + scipy.sparse loop on the same mesh (target >= 20x)\n")
+    print("\n#### Against the scikit-fem + scipy.sparse loop on the same mesh (target >= 20x)\n")
     print("Runs of both alternate, so that both see the same load on a shared machine. " + _LATTICE_NOTE + "\n")
     print("| kappa | elements | ours: ns/el-step | peer: ns/el-step | speed-up per el-step | "
           "ours: error | peer: error |")
@@ -98,7 +98,7 @@ def table_peer(repeats, reference):
 
 
 def table_time_to_accuracy(repeats, reference):
-    print("\n### Time to |epsilon - delay| <= 1e-6 at kappa = 100 (target < 20 ms; whole collide call)\n")
+    print("\n#### Time to |epsilon - delay| <= 1e-6 at kappa = 100 (target < 20 ms; whole collide call)\n")
     print("| elements | error | wall time (ms), set-up included | of which set-up (ms) |")
     print("|---:|---:|---:|---:|")
     exact = reference[100]
@@ -113,7 +113,7 @@ def table_time_to_accuracy(repeats, reference):
 
 
 def table_stiffness(repeats, reference):
-    print("\n### Cost at kappa = 1e6 against kappa = 100, same mesh (target <= 3)\n")
+    print("\n#### Cost at kappa = 1e6 against kappa = 100, same mesh (target <= 3)\n")
     print("| elements | kappa | steps | loop time (ms) | error | cost ratio vs kappa = 100 |")
     print("|---:|---:|---:|---:|---:|---:|")
     for elements in (800, 3200):
@@ -135,7 +135,7 @@ PEER_ELEMENT_STEPS = 3e6  # per timed run of the peer (0.02 - 0.6 s)
 
 
 def table_discretizations(repeats, reference):
-    print("\n### General explicit path against the scikit-fem + scipy.sparse loop, kappa = 100 "
+    print("\n#### General explicit path against the scikit-fem + scipy.sparse loop, kappa = 100 "
           "(target <= 2 ns per element-step, >= 20x)\n")
     print("Both loops take the same step (ours: 'auto', the force scheme here) on the same kind of mesh (both rods "
           "meshed whole); the peer solves a consistent mass with scipy.sparse.linalg.splu factorized once. Timed over "
@@ -178,7 +178,7 @@ def table_discretizations(repeats, reference):
 
 
 def table_gap_quadrature(repeats):
-    print("\n### Gap quadrature of the characteristic scheme, P1 lumped, 800 elements\n")
+    print("\n#### Gap quadrature of the characteristic scheme, P1 lumped, 800 elements\n")
     print("| gamma | kappa | gap_quadrature | loop time (ms) | error |")
     print("|---:|---:|---|---:|---:|")
     for gamma, kappa in ((GAMMA, 100), (1.0, 1000)):
@@ -204,7 +204,7 @@ def main(argv=None):
 
 def measure(args):
     """Print the tables (only the discretizations table with ``--only discretizations``)."""
-    print(f"# wavecontact FE benchmark ({platform.processor() or platform.machine()}, "
+    print(f"wavecontact FE benchmark ({platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, numba {wavecontact._jit.NUMBA_ENABLED})")
     wavecontact.collide(GAMMA, 100, solver="fem", elements=50)  # compile / load the kernels
     reference = {kappa: wavecontact.collide(GAMMA, kappa, solver="delay").restitution for kappa in (100, 1e4, 1e6)}
