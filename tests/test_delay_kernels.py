@@ -63,3 +63,19 @@ def test_energy_split_walk_equals_bisection(gamma, kappa, rtol):
     ours = vibration_energy_gain(kappa, t, w, d1, d2, delays, empty.periods, empty.values, empty.slopes,
                                  NODES, WEIGHTS, 2)
     assert np.array_equal(ours, _split_by_bisection(kappa, t, w, d1, d2, delays))
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_sturdy_curvature_replaces_only_what_round_off_hides(compiled):
+    sturdy = kernels._sturdy_curvature if compiled else kernels._sturdy_curvature.py_func
+    # well conditioned: W'' = W' (g' - W') = 2 (5 - 2) = 6 whatever g'' says
+    assert sturdy(2.0, 1.0, 5.0, 7.0, 0.5, 3.0) == 6.0
+    # a force plateau at kappa ~ 1e6: g - W ~ 1e6 - 1e6 leaves W' = 8e5 uncertain by ~1e-4,
+    # so W'(g' - W') = 80 is round-off around g'' = 0, and g'' is taken
+    slope, g, w, drift = 8e5, 1.4e6, 1.4e6 - np.log(8e5), 1.4e6
+    assert sturdy(slope, g, slope + 1e-4, 0.0, w, drift) == 0.0
+    # ... but not a g'' that the exact formula rules out
+    exact = slope * ((slope + 1e-4) - slope)
+    assert sturdy(slope, g, slope + 1e-4, 1e5, w, drift) == exact
+    # no g'' (tabulated noise: NaN): the exact formula
+    assert sturdy(slope, g, slope + 1e-4, np.nan, w, drift) == exact

@@ -195,3 +195,20 @@ def test_initial_vibrations_enter_as_the_noise():
     assert 1.8 < -np.polyfit(np.log(elements), np.log(fem_errors), 1)[0] < 2.2
     assert fem_errors[-1] < 1e-6
     assert abs(wavecontact.solve(warm, "modal", modes=200).restitution - delay) < 1e-6
+
+
+@pytest.mark.parametrize("impedance_ratio", [1.0, 0.4, 0.1])
+@pytest.mark.parametrize("rtol", [1e-8, 1e-11])
+def test_stiff_force_plateau_meets_rtol_against_an_independent_integrator(impedance_ratio, rtol):
+    """kappa = 1e6 with Z2 <= Z1: the force sits on a plateau until the long rod's echo, where
+    W'' = W'(g' - W') is lost in round-off; the solver must still reach rtol, as Radau says."""
+    from wavecontact.delay.parameters import echoes_from_ratios
+    from wavecontact.delay.solver import solve_delay_equation
+
+    kappa = 1e6
+    delays, weights = echoes_from_ratios(impedance_ratio, 0.6)
+    with np.errstate(over="ignore"):
+        reference = radau_method_of_steps(delays, weights, kappa)
+    _t, w, _d1, error, _work, _a0 = solve_delay_equation(0.6, kappa, rtol=rtol, impedance_ratio=impedance_ratio)
+    assert error < 10.0 * rtol
+    assert abs(w[-1] / kappa - 1.0 - reference) < min(rtol, error)

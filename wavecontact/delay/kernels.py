@@ -260,7 +260,7 @@ def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
 
 @kernel(inline="always")
 def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb, direct_copies):
-    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)``.
+    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)`` and ``S''(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
     round-off) are skipped.  With ``direct_copies = K > 0`` the copies older
@@ -270,30 +270,35 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope
     """
     total = 0.0
     slope = 0.0
+    curvature = 0.0
     for i in range(delays.shape[0]):
         gamma_i = delays[i]
         rod_total = 0.0
         rod_slope = 0.0
+        rod_curvature = 0.0
         n = 1
         while True:
             u = s - n * gamma_i
             if u <= t_significant:
                 break
             if direct_copies > 0 and n > direct_copies:
-                value, derivative, _c = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
-                                                 u + gamma_i)
+                value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
+                                                     u + gamma_i)
                 rod_total += value
                 if want_slope:
                     rod_slope += derivative
+                    rod_curvature += second
                 break
-            value, derivative, _c = hermite5(t, w, d1, d2, last, u)
+            value, derivative, second = hermite5(t, w, d1, d2, last, u)
             rod_total += value
             if want_slope:
                 rod_slope += derivative
+                rod_curvature += second
             n += 1
         total += weights[i] * rod_total
         slope += weights[i] * rod_slope
-    return total, slope
+        curvature += weights[i] * rod_curvature
+    return total, slope, curvature
 
 
 @kernel
@@ -306,12 +311,50 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
 
 
 @kernel(inline="always")
+def _series_curvature(s, freq, cos_amp, sin_amp):
+    """``Q''(s)`` of the Fourier series (Eq. 17)."""
+    ddq = 0.0
+    for j in range(freq.shape[0]):
+        ddq -= freq[j] * freq[j] * (cos_amp[j] * math.cos(freq[j] * s) + sin_amp[j] * math.sin(freq[j] * s))
+    return ddq
+
+
+@kernel(inline="always")
 def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
               tables, table_slopes, want_slope, comb, direct_copies):
-    memory, memory_slope = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb,
-                                      direct_copies)
+    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; the derivatives only if ``want_slope``."""
+    memory, memory_slope, memory_curvature = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant,
+                                                        want_slope, comb, direct_copies)
     q, dq = noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes)
-    return kappa * s - a0 - memory + q, kappa - memory_slope + dq
+    gpp = math.nan
+    if want_slope and periods.shape[0] == 0:
+        gpp = _series_curvature(s, freq, cos_amp, sin_amp) - memory_curvature
+    return kappa * s - a0 - memory + q, kappa - memory_slope + dq, gpp
+
+
+@kernel(inline="always")
+def _sturdy_curvature(slope1, g1, gp1, gpp1, w1, drift):
+    """``W''`` at the end of a step, from ``W'' = W' (g' - W')`` unless round-off hides it.
+
+    ``W' = e^{g - W}`` carries the round-off of ``g - W`` (numbers up to
+    ``kappa`` times a few), so ``g' - W'`` is a difference of two large
+    numbers, each uncertain by ``W'`` times that round-off: the exact
+    formula is uncertain by ``floor`` below.  Where the contact force is
+    quasi-static (a force plateau, ``W'`` following ``g'`` at a relaxation
+    rate ``W'``), ``W''`` is ``g''`` to within the much smaller ``(W''/W')'``,
+    and ``g''`` (delayed curvatures only) carries no such round-off.  That
+    value is taken only where it agrees with the exact formula to within the
+    latter's round-off, so ``W''`` never moves by more than its own
+    uncertainty; without a ``g''`` (tabulated noise: NaN) the exact formula is kept.
+    """
+    curvature = slope1 * (gp1 - slope1)
+    if not math.isfinite(gpp1):
+        return curvature
+    unit = 2.220446049250313e-16
+    floor = slope1 * (slope1 * 8.0 * unit * (abs(g1) + abs(w1) + abs(drift)) + 8.0 * unit * (abs(gp1) + abs(drift)))
+    if abs(gpp1 - curvature) <= floor:
+        return gpp1
+    return curvature
 
 
 @kernel
@@ -424,7 +467,7 @@ def integrate_delay_equation(
 
     t[0] = 0.0
     w[0] = 0.0
-    g_now, gp_now = _exponent(
+    g_now, gp_now, _gpp = _exponent(
         0.0, kappa, a0, t, w, d1, d2, 0, delays, weights, math.inf, freq, cos_amp, sin_amp, periods, tables,
         table_slopes, True, comb, direct_copies,
     )
@@ -494,7 +537,7 @@ def integrate_delay_equation(
             break
 
         t1 = t0 + h
-        g1, gp1 = _exponent(
+        g1, gp1, gpp1 = _exponent(
             t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
             tables, table_slopes, True, comb,
             direct_copies,
@@ -517,7 +560,7 @@ def integrate_delay_equation(
                 s = math.log1p(x * math.expm1(z)) / a
             else:
                 s = h * x
-            gs, _unused = _exponent(
+            gs, _unused, _unused2 = _exponent(
                 t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
                 periods, tables, table_slopes, False, comb, direct_copies,
             )
@@ -543,7 +586,7 @@ def integrate_delay_equation(
         increment_share = math.exp(log_integral - w1)
         error_quadrature = increment_share * abs(1.0 - sum_g / sum_k)
         slope1 = math.exp(g1 - w1)
-        curvature1 = slope1 * (gp1 - slope1)
+        curvature1 = _sturdy_curvature(slope1, g1, gp1, gpp1, w1, kappa * t1)
         top = 12.0 * (w[last] - w1) + 6.0 * h * (d1[last] + slope1) + h * h * (d2[last] - curvature1)
         error_interpolation = _QUARTIC_GAP * abs(top)
         error = error_quadrature + error_interpolation
