@@ -26,19 +26,36 @@ docs/bath.md); :func:`hard_core_noise` states it by a second run at ``h / 2``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._jit import kernel
 from .kernels import table_value
 
-__all__ = ["STATUS_MAX_POINTS", "STATUS_OK", "max_plus_recursion"]
+__all__ = ["STATUS_MAX_POINTS", "STATUS_OK", "GridRun", "hard_core_noise", "max_plus_recursion", "parabola_peak",
+           "run_grid"]
 
 STATUS_OK = 0
 STATUS_MAX_POINTS = 1
 # rod 2's table: nodes per period of its fastest mode (cubic Hermite: relative error of that
 # mode's amplitude ~ (2 pi / 8)^4 / 384 = 1e-3, and that amplitude is 1/nu_max of the first's)
 ROD2_TABLE_POINTS = 8
+
+
+@kernel(inline="always")
+def parabola_peak(f_older, f_old, value):
+    """Peak of ``f`` between three equally spaced nodes whose middle value is the largest.
+
+    The parabola through the three values finds the maximum that the nodes miss (error
+    ``h^3`` instead of ``h^2`` for smooth ``f``); ``-inf`` where the middle value is not a
+    peak or a value was not read.
+    """
+    if f_old > -math.inf and f_older > -math.inf and f_old >= f_older and f_old >= value:
+        curvature = f_older - 2.0 * f_old + value
+        if curvature < 0.0:
+            return f_old - (value - f_older) ** 2 / (8.0 * curvature)
+    return -math.inf
 
 
 @kernel
@@ -95,15 +112,10 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
             # only here can the noise lift f above the running maximum: read it
             q2, _slope = table_value(t - t0, q2_period, q2_values, q2_slopes)
             value = bracket + q1_table[k % n1] + q2
-            if f_old > -math.inf and f_older > -math.inf and f_old >= f_older and f_old >= value:
-                # f peaked between the nodes k-2 and k: the parabola through the three values
-                # finds the peak that the nodes miss (error h^3 instead of h^2 for smooth f)
-                curvature = f_older - 2.0 * f_old + value
-                if curvature < 0.0:
-                    peak = f_old - (value - f_older) ** 2 / (8.0 * curvature)
-                    if peak > running:
-                        running = peak
-                        w[k - 1] = peak
+            peak = parabola_peak(f_older, f_old, value)
+            if peak > running:
+                running = peak
+                w[k - 1] = peak
             running = max(running, value)
             quiet = 0
         elif running > 0.0:
@@ -158,9 +170,35 @@ def hard_core_noise(gamma: float, vibrations, tau_free: float, points_per_period
     t, w : ndarray
         Grid and ``w`` on it; ``epsilon = w[-1] - 1``.
     """
+    grid = run_grid(gamma, vibrations, 0 if vibrations is None else vibrations.modes, tau_free, points_per_period,
+                    min_points, max_points)
+    return grid.t0 + grid.h * np.arange(grid.count), grid.w[:grid.count]
+
+
+@dataclass(frozen=True)
+class GridRun:
+    """One run of :func:`max_plus_recursion`: the grid, the noise read on it and the filled arrays."""
+
+    h: float
+    n1: int
+    t0: float
+    count: int
+    w: np.ndarray
+    c1: np.ndarray
+    c2: np.ndarray
+    q1: np.ndarray
+    rod2_table: tuple  # (period, values, slopes) of rod 2's Hermite table
+
+
+def run_grid(gamma: float, vibrations, modes: int, tau_free: float, points_per_period: int, min_points: int,
+             max_points: int, what: str = "hard-core recursion") -> GridRun:
+    """Tabulate the noise of ``vibrations`` (None: cold) on the grid and run the recursion until it settles.
+
+    ``n_1 = max(points_per_period modes, min_points)`` grid points per ``Gamma_1``; the work
+    arrays grow (by 4) up to ``max_points``, beyond which :class:`SolverFailure` names ``what``.
+    """
     from ..errors import SolverFailure
 
-    modes = 0 if vibrations is None else vibrations.modes
     g1, g2 = 1.0 + gamma, 1.0 + 1.0 / gamma
     n1 = max(points_per_period * modes, min_points)
     h = g1 / n1
@@ -181,7 +219,7 @@ def hard_core_noise(gamma: float, vibrations, tau_free: float, points_per_period
         c2 = np.empty(capacity)
         count, status = max_plus_recursion(h, n1, g2, tau_free, t0, q1, p2, q2, s2, reach, capacity, w, c1, c2)
         if status == STATUS_OK:
-            return t0 + h * np.arange(count), w[:count]
+            return GridRun(h, n1, t0, count, w, c1, c2, q1, (p2, q2, s2))
         if capacity >= max_points:
-            raise SolverFailure(f"hard-core recursion did not settle within {max_points} grid points")
+            raise SolverFailure(f"{what} did not settle within {max_points} grid points")
         capacity = min(max_points, 4 * capacity)

@@ -47,6 +47,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..errors import InvalidParameterError, SolverFailure
+from .stochastic_hardcore import parabola_peak
 
 __all__ = ["DEFAULT_POINTS_PER_PERIOD", "HardCoreGrid", "cached_grid", "hard_core_restitution", "hard_core_restitutions",
            "max_plus_batch"]
@@ -91,17 +92,13 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, m, capacity, a1, a2):
             f3 = f2_ * f
             value = rough + ((2.0 * f3 - 3.0 * f2_ + 1.0) * q2v[j0] + (f3 - 2.0 * f2_ + f) * q2s[j0]
                              + (3.0 * f2_ - 2.0 * f3) * q2v[j1] + (f3 - f2_) * q2s[j1])
-            if f_old > -math.inf and f_older > -math.inf and f_old >= f_older and f_old >= value:
-                # f peaked between nodes k-2 and k: the parabola through the three values finds the peak
-                curvature = f_older - 2.0 * f_old + value
-                if curvature < 0.0:
-                    peak = f_old - (value - f_older) ** 2 / (8.0 * curvature)
-                    if peak > running:
-                        running = peak
-                        a1[k - 1] = peak + c1_old
-                        a2[k - 1] = peak + c2_old
-                        last = k - 1
-                        stop = -1
+            peak = parabola_peak(f_older, f_old, value)  # f peaked between nodes k-2 and k
+            if peak > running:
+                running = peak
+                a1[k - 1] = peak + c1_old
+                a2[k - 1] = peak + c2_old
+                last = k - 1
+                stop = -1
             if value > running:
                 running = value
                 last = k

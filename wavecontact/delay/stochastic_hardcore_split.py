@@ -29,15 +29,13 @@ compare it with the delay solver's split at large finite ``kappa``.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .._jit import kernel
 from ..bath.model import ThermalBath
-from ..errors import InvalidParameterError, SolverFailure
+from ..errors import InvalidParameterError
 from .kernels import table_value
-from .stochastic_hardcore import ROD2_TABLE_POINTS, STATUS_OK, _grid_noise, max_plus_recursion
+from .stochastic_hardcore import run_grid
 
 __all__ = ["MAX_GRID_POINTS", "hard_core_collision"]
 
@@ -95,30 +93,13 @@ def hard_core_collision(gamma, temperature_ratio, seed, *, bath_modes=250, resol
     if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 4096:
         raise InvalidParameterError(f"resolution must be an integer in [2, 4096], got {resolution!r}")
     lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # mu = 1/2, V = 1: E_tr = 1/4
-    g1, g2 = 1.0 + gamma, 1.0 + 1.0 / gamma
-    n1 = max(int(resolution) * bath.modes, 256)
-    h = g1 / n1
-    tau_free = 0.0
-    if bath.is_cold:
-        q1, (p2, q2, s2), reach, t0 = np.zeros(n1), (g2, np.zeros(1), np.zeros(1)), 0.0, -h
-    else:
-        vibrations = bath.draw(lengths, seed)
-        coefficients = vibrations.noise_coefficients(1.0)
-        bound = sum(float(np.sum(np.hypot(a, b))) for _o, a, b in coefficients)
-        t0 = tau_free - h * (math.ceil(bound / h) + 1)
-        q1, (p2, q2, s2), reach = _grid_noise(coefficients, gamma, tau_free, t0, n1, ROD2_TABLE_POINTS)
-    capacity = int(min(MAX_GRID_POINTS, max(4 * n1, (2.0 * reach + 8.0 * (g1 + g2)) / h)))
-    while True:
-        w, c1, c2 = np.empty(capacity), np.empty(capacity), np.empty(capacity)
-        count, status = max_plus_recursion(h, n1, g2, tau_free, t0, q1, p2, q2, s2, reach, capacity, w, c1, c2)
-        if status == STATUS_OK:
-            break
-        if capacity >= MAX_GRID_POINTS:
-            raise SolverFailure(f"hard-core collision did not settle within {MAX_GRID_POINTS} grid points "
-                                f"(gamma {gamma:g}, T_B/E_tr {pair})")
-        capacity = min(MAX_GRID_POINTS, 4 * capacity)
+    vibrations = None if bath.is_cold else bath.draw(lengths, seed)
+    grid = run_grid(gamma, vibrations, bath.modes, 0.0, int(resolution), 256, MAX_GRID_POINTS,
+                    what=f"hard-core collision (gamma {gamma:g}, T_B/E_tr {pair})")
+    count, w = grid.count, grid.w
+    g1 = 1.0 + gamma
     w_end = float(w[count - 1])
-    split = stieltjes_split(count, h, n1, t0, w, c1, c2, q1, p2, q2, s2)
+    split = stieltjes_split(count, grid.h, grid.n1, grid.t0, w, grid.c1, grid.c2, grid.q1, *grid.rod2_table)
     eps2 = (w_end - 1.0) ** 2
     gain_1 = w_end + split - w_end**2 / g1
     gain_2 = (1.0 - eps2) - gain_1
