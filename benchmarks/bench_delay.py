@@ -30,7 +30,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout this script lives in
 
-from timing import median_time
+from timing import median_cpu_time, median_time
 
 import wavecontact
 from wavecontact.delay.solver import solve_delay_equation
@@ -134,29 +134,19 @@ BREAKDOWN_ROWS = ((20.0, 1e-3), (20.0, 1e-7), (100.0, 1e-3), (100.0, 1e-5), (1e4
                   (1e6, 1e-3), (1e6, 1e-11), (math.inf, 1e-3))
 
 
-def cpu_median(function, repeats):
-    """Median CPU time (s) of ``repeats`` calls: per-core cost, less disturbed by other jobs than wall time."""
-    times = []
-    for _ in range(repeats):
-        started = time.process_time()
-        function()
-        times.append(time.process_time() - started)
-    return float(np.median(times))
-
-
 def table_breakdown(repeats):
     print("\n### Where one warm `collide(0.6, kappa, rtol=...)` spends its time (CPU ms, medians)\n")
     print("| kappa | rtol | steps | whole call | integration | energy split | rest (scene, options, result) |")
     print("|---|---|---|---|---|---|---|")
     for kappa, rtol in BREAKDOWN_ROWS:
         steps = wavecontact.collide(0.6, kappa, rtol=rtol).work["steps"]
-        whole = cpu_median(lambda k=kappa, r=rtol: wavecontact.collide(0.6, k, rtol=r), repeats)
+        whole = median_cpu_time(lambda k=kappa, r=rtol: wavecontact.collide(0.6, k, rtol=r), repeats)
         if math.isinf(kappa):
             print(f"| inf | (hard core) | {steps} knots | {1e3 * whole:.3f} | | | |")
             continue
-        no_split = cpu_median(lambda k=kappa, r=rtol: wavecontact.collide(0.6, k, rtol=r, energy_split=False),
+        no_split = median_cpu_time(lambda k=kappa, r=rtol: wavecontact.collide(0.6, k, rtol=r, energy_split=False),
                               repeats)
-        integration = cpu_median(lambda k=kappa, r=rtol: solve_delay_equation(0.6, k, rtol=r), repeats)
+        integration = median_cpu_time(lambda k=kappa, r=rtol: solve_delay_equation(0.6, k, rtol=r), repeats)
         print(f"| {kappa:g} | {rtol:g} | {steps} | {1e3 * whole:.3f} | {1e3 * integration:.3f} | "
               f"{1e3 * (whole - no_split):.3f} | {1e3 * (no_split - integration):.3f} |")
 

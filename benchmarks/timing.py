@@ -5,14 +5,23 @@ import time
 import numpy as np
 
 
-def wall_times(function, repeats):
-    """Wall times (s) of ``repeats`` calls of ``function()``."""
+def _times(function, repeats, clock):
     times = []
     for _ in range(repeats):
-        started = time.perf_counter()
+        started = clock()
         function()
-        times.append(time.perf_counter() - started)
+        times.append(clock() - started)
     return np.asarray(times)
+
+
+def wall_times(function, repeats):
+    """Wall times (s) of ``repeats`` calls of ``function()``."""
+    return _times(function, repeats, time.perf_counter)
+
+
+def median_cpu_time(function, repeats):
+    """Median CPU time (s) of ``repeats`` calls: the per-core cost, less disturbed by other jobs than wall time."""
+    return float(np.median(_times(function, repeats, time.process_time)))
 
 
 def median_time(function, repeats):
