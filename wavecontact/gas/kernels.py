@@ -243,19 +243,25 @@ def _table_draw(u, ig, wg, ir, wr, i_s, ws, probability, uniform_levels, quantil
     g1 = min(ig + 1, quantiles.shape[0] - 1)
     r1 = min(ir + 1, quantiles.shape[1] - 1)
     s1 = min(i_s + 1, quantiles.shape[2] - 1)
-    eps2 = 0.0
-    gain = 0.0
-    for corner in range(8):
-        a = g1 if corner & 4 else ig
-        b = r1 if corner & 2 else ir
-        c = s1 if corner & 1 else i_s
-        weight = (wg if corner & 4 else 1.0 - wg) * (wr if corner & 2 else 1.0 - wr) * (ws if corner & 1 else 1.0 - ws)
-        eps2 += weight * ((1.0 - wu) * quantiles[a, b, c, lo] + wu * quantiles[a, b, c, lo + 1])
-        if per_level:
-            gain += weight * ((1.0 - wu) * share[a, b, c, lo] + wu * share[a, b, c, lo + 1])
-        else:
-            gain += weight * share[a, b, c, 0]
+    eps2 = (1.0 - ws) * _bilinear(quantiles, ig, g1, wg, ir, r1, wr, i_s, lo, wu) + ws * _bilinear(
+        quantiles, ig, g1, wg, ir, r1, wr, s1, lo, wu)
+    if per_level:
+        gain = (1.0 - ws) * _bilinear(share, ig, g1, wg, ir, r1, wr, i_s, lo, wu) + ws * _bilinear(
+            share, ig, g1, wg, ir, r1, wr, s1, lo, wu)
+    else:  # one share per grid point (a restitution table: no share axis, S = 1)
+        gain = (1.0 - wg) * ((1.0 - wr) * share[ig, ir, 0, 0] + wr * share[ig, r1, 0, 0]) + wg * (
+            (1.0 - wr) * share[g1, ir, 0, 0] + wr * share[g1, r1, 0, 0])
     return eps2, gain
+
+
+@kernel
+def _bilinear(array, ig, g1, wg, ir, r1, wr, c, lo, wu):
+    """``array[:, :, c]`` linear in the level (``lo``, ``wu``) and bilinear in the first two axes."""
+    q00 = (1.0 - wu) * array[ig, ir, c, lo] + wu * array[ig, ir, c, lo + 1]
+    q01 = (1.0 - wu) * array[ig, r1, c, lo] + wu * array[ig, r1, c, lo + 1]
+    q10 = (1.0 - wu) * array[g1, ir, c, lo] + wu * array[g1, ir, c, lo + 1]
+    q11 = (1.0 - wu) * array[g1, r1, c, lo] + wu * array[g1, r1, c, lo + 1]
+    return (1.0 - wg) * ((1.0 - wr) * q00 + wr * q01) + wg * ((1.0 - wr) * q10 + wr * q11)
 
 
 @kernel

@@ -11,19 +11,23 @@ A rule says how much of a colliding pair's translational energy
     at the pair's length ratio and temperature ratio; the lost energy
     (negative when the baths give energy back) is split between the two
     rods' baths by the table's ``rod1_share``.  Runs inside the kernel.
+:class:`VibrationLaw`
+    the default vibration rule: ``epsilon^2`` and the short rod's gain drawn from the
+    :class:`~wavecontact.gas.collision_law.CollisionLaw` at the pair's length ratio, its
+    ``x = E_tr / (E_tr + T_pair)`` and the short rod's share ``s = T_short / (T_short + T_long)`` of the
+    bath temperature; with a contact stiffness (``GasSimulation(contact_stiffness=alpha)``) blended with
+    the soft (finite-kappa) law at each collision's ``kappa = alpha V l``.  Runs inside the kernel.
 :class:`VibrationSolve`
     the same, but each collision asks a Python callable for
     ``(epsilon^2, share)``: the hook for solving a stochastic collision per
-    event (slow; the table is its tabulated form).
+    event (slow; the law is its tabulated form).
 
-Approximations of the vibration rules (see ``docs/gas.md``): the table is
-computed at one hardness ``kappa`` although the true ``kappa = alpha V l / c``
-grows with the impact speed (harmless where the law no longer depends on
-kappa, above about 50); the table assumes both rods at one bath temperature,
-so a pair uses the mean of its two temperatures; a pair meeting at a
-temperature ratio outside the table's grid stops the run (status
-``off_table``: the table is never extrapolated or clipped); a draw that
-would take more energy from a bath than it holds is capped (counted).
+Approximations of the vibration rules (see ``docs/gas.md``, "Approximations of the vibration rule"): the
+law is tabulated (quantiles, conditional mean gains per level, linear interpolation between grid points);
+without a contact stiffness every collision is in the hard-core limit; below the law's last ``x`` row, and
+below its softest ``kappa`` row, the last row's law is used (counted); a draw that would take more energy
+from a bath than it holds is capped (counted).  :class:`VibrationTable` (the older restitution-table rule)
+assumes both rods at the pair's mean temperature and stops the run (status ``off_table``) outside its grid.
 """
 
 from __future__ import annotations
