@@ -30,6 +30,7 @@ from wavecontact.gas.collision_law import (
     level_means,
     load_law,
     point_samples,
+    soft_corrections,
 )
 
 LAW = default_law()
@@ -82,7 +83,8 @@ def test_kernel_draw_matches_the_law_and_reaches_below_its_last_row():
 
 def test_kernel_blend_over_kappa_matches_the_plain_python_statement():
     hard = LAW.kernel_arrays()
-    soft = SOFT.arrays()
+    soft = VibrationLaw(LAW, SOFT).soft_arrays()
+    corrections = soft_corrections(LAW, SOFT)
     rng = np.random.default_rng(np.random.SeedSequence(6))
     for kappa in (3.0, 10.0, 17.0, 30.0, 55.0, 100.0, 400.0, 1e5):
         for _ in range(20):
@@ -91,8 +93,8 @@ def test_kernel_blend_over_kappa_matches_the_plain_python_statement():
             _below, ir, wr, i_s, ws = kernels._law_point(lx, s, hard[1], hard[2])
             e_hard, g_hard = kernels._table_draw(u, ig, wg, ir, wr, i_s, ws, hard[3], True, hard[4][0], hard[5][0],
                                                  True)
-            eps2, gain, softer, _ = kernels._soft_draw(u, g, kappa, lx, s, e_hard, g_hard, *soft)
-            expected = blend_draw(LAW, SOFT, g, 10.0**lx, u, s, kappa)
+            eps2, gain, softer, _below, _floored = kernels._soft_draw(u, g, kappa, lx, s, e_hard, g_hard, *soft)
+            expected = blend_draw(LAW, SOFT, g, 10.0**lx, u, s, kappa, corrections)
             assert eps2 == pytest.approx(expected[0], rel=1e-9, abs=1e-12)
             assert gain == pytest.approx(expected[1], rel=1e-9, abs=1e-12)
             assert softer == expected[2] == (kappa < SOFT.kappa[0])
@@ -141,12 +143,14 @@ def test_law_agrees_with_direct_hard_core_solves(gamma, log_x, share):
 @pytest.mark.slow
 @pytest.mark.parametrize(("gamma", "log_x", "share", "kappa"), [(0.7, -0.7, 0.25, 20.0), (0.9, -2.5, 0.75, 50.0)])
 def test_soft_law_agrees_with_direct_finite_kappa_solves(gamma, log_x, share, kappa):
-    """Finite-kappa delay solves (each rod at its own temperature) against the blended law between grid
-    points in every variable: KS on eps^2 and the mean gain within three standard errors."""
+    """Finite-kappa delay solves (each rod at its own temperature) against the law (hard-core draw plus the
+    soft law's correction) between grid points in every variable: KS on eps^2 and the mean gain within
+    three standard errors."""
     n = 30
     eps2, gain = point_samples(gamma, log_x, n, 98, bath_modes=SOFT.bath_modes, short_share=share, kappa=kappa)
     levels = (np.arange(SOFT.samples_per_point) + 0.5) / SOFT.samples_per_point
-    draws = np.array([blend_draw(LAW, SOFT, gamma, 10.0**log_x, u, share, kappa)[:2] for u in levels])
+    corrections = soft_corrections(LAW, SOFT)
+    draws = np.array([blend_draw(LAW, SOFT, gamma, 10.0**log_x, u, share, kappa, corrections)[:2] for u in levels])
     assert stats.ks_2samp(eps2, draws[:, 0]).pvalue > 1e-3
     m_direct, s_direct = _mean_and_sem(gain)
     assert abs(draws[:, 1].mean() - m_direct) < 3.0 * s_direct * math.sqrt(1.0 + n / SOFT.samples_per_point)

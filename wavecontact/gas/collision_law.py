@@ -25,8 +25,9 @@ Per ``(kappa, gamma, x, s)`` the :class:`CollisionLaw` holds
 Two laws ship with the package: the hard-core law (``kappa = inf``, fine grid,
 samples from :func:`wavecontact.gas.hardcore_collision.hard_core_collision`)
 and the soft law (a few finite ``kappa``, coarse grid, samples from the
-finite-kappa delay solve with its per-rod energy split).  The gas blends them
-per collision at the collision's own ``kappa = alpha V l`` (:func:`blend_draw`).
+finite-kappa delay solve with its per-rod energy split).  The gas adds the soft
+law's change against the hard core, interpolated in kappa, to the hard-core
+draw at the collision's own ``kappa = alpha V l`` (:func:`blend_draw`).
 
 Grid in ``log10 x`` from ``log_x[0]`` to 0.  Below the last row the rule uses
 the last row's law (counted, ``GasResult.beyond_law``).  Files: ``.npz`` with a
@@ -48,7 +49,7 @@ from ..io.files import atomic_write
 
 __all__ = ["DEFAULT_LAW_FILE", "DEFAULT_SOFT_LAW_FILE", "LAW_ARRAYS", "LOG_X_MIN", "REGENERATE", "REGENERATE_SOFT",
            "CollisionLaw", "blend_draw", "build_collision_law", "default_law", "default_soft_law", "kappa_variable",
-           "law_from_arrays", "load_law", "solve_collision"]
+           "law_from_arrays", "load_law", "soft_corrections", "solve_collision"]
 
 SCHEMA_NAME = "wavecontact.collision_law"
 SCHEMA_VERSION = 2  # 2: kappa and short-rod-share axes
@@ -188,11 +189,12 @@ class CollisionLaw:
             values.append((i, w))
         return values
 
-    def draw(self, gamma, x, u, short_share=0.5, row=0):
+    def draw(self, gamma, x, u, short_share=0.5, row=0, arrays=None):
         """``(epsilon^2, gain_short)`` at level ``u`` for a pair at ``(gamma, x, s)``, kappa row ``row``.
 
         Linear in the level, trilinear in ``(gamma, log10 x, s)``; a plain-Python statement of what the gas
-        kernel computes.
+        kernel computes.  ``arrays``: another pair of arrays on this law's grid to evaluate instead (the
+        soft law's corrections, :func:`soft_corrections`).
         """
         (ig, wg), (ix, wx), (i_s, ws) = self._weights(gamma, x, short_share)
         top = self.probability.size - 1
@@ -200,7 +202,8 @@ class CollisionLaw:
             int(np.clip(np.searchsorted(self.probability, u, side="right") - 1, 0, top - 1))
         wu = min(max((u - self.probability[k]) / (self.probability[k + 1] - self.probability[k]), 0.0), 1.0)
         out = []
-        for array in (self.eps2_quantiles[row], self.gain_short[row]):
+        for array in (self.eps2_quantiles[row], self.gain_short[row]) if arrays is None else (arrays[0][row],
+                                                                                                arrays[1][row]):
             total = 0.0
             for dg, fg in ((0, 1 - wg), (1, wg)):
                 for dx, fx in ((0, 1 - wx), (1, wx)):
@@ -273,26 +276,53 @@ def default_soft_law() -> CollisionLaw:
     return _shipped(DEFAULT_SOFT_LAW_FILE)
 
 
-def blend_draw(hard: CollisionLaw, soft: CollisionLaw, gamma, x, u, short_share, kappa):
+def soft_corrections(hard: CollisionLaw, soft: CollisionLaw):
+    """What softness changes: the soft law's ``(eps2, gain)`` quantile rows minus the hard-core law's at the soft
+    law's grid points and levels, arrays of the soft law's shape.
+
+    The gas adds these (interpolated on the soft law's coarse grid) to the hard-core draw on its fine grid,
+    so the strong dependence on ``(gamma, x, s)`` that both laws share comes from the fine grid and only the
+    change with ``kappa`` from the coarse one.
+    """
+    d_eps, d_gain = np.empty(soft.shape), np.empty(soft.shape)
+    for g, gamma in enumerate(soft.gamma):
+        for b, log_x in enumerate(soft.log_x):
+            for c, share in enumerate(soft.short_share):
+                for p, u in enumerate(soft.probability):
+                    e_hard, g_hard = hard.draw(gamma, 10.0**log_x, u, share)
+                    d_eps[:, g, b, c, p] = soft.eps2_quantiles[:, g, b, c, p] - e_hard
+                    d_gain[:, g, b, c, p] = soft.gain_short[:, g, b, c, p] - g_hard
+    return d_eps, d_gain
+
+
+def blend_draw(hard: CollisionLaw, soft: CollisionLaw, gamma, x, u, short_share, kappa, corrections=None):
     """``(epsilon^2, gain_short, softer)`` at softness ``kappa``: the plain-Python form of the gas kernel's draw.
 
-    Linear in ``z = ln(kappa)/kappa`` (:func:`kappa_variable`) between the soft law's rows and, above its
-    stiffest row, between that row and the hard-core law (``z = 0``).  Below the softest row that row's law
-    is used and ``softer`` is True (the gas counts these draws).
+    The hard-core draw plus the soft law's correction (:func:`soft_corrections`), interpolated linearly in
+    ``z = ln(kappa)/kappa`` (:func:`kappa_variable`) between the soft rows and, above the stiffest, between
+    it and zero (the hard core, ``z = 0``).  Below the softest row that row's correction is used and
+    ``softer`` is True (the gas counts these draws).  ``epsilon^2`` is floored at 0.
     """
+    corrections = soft_corrections(hard, soft) if corrections is None else corrections
+    e_hard, g_hard = hard.draw(gamma, x, u, short_share)
     z = kappa_variable(kappa)
     rows = [kappa_variable(k) for k in soft.kappa]
-    if z <= rows[-1]:
-        weight = z / rows[-1]
-        e_hard, g_hard = hard.draw(gamma, x, u, short_share)
-        e_soft, g_soft = soft.draw(gamma, x, u, short_share, soft.kappa.size - 1)
-        return (1 - weight) * e_hard + weight * e_soft, (1 - weight) * g_hard + weight * g_soft, False
+    softer = False
     if kappa <= soft.kappa[0]:
-        return (*soft.draw(gamma, x, u, short_share, 0), kappa < soft.kappa[0])
-    r = max(i for i in range(len(rows)) if rows[i] >= z)
-    weight = (rows[r] - z) / (rows[r] - rows[r + 1])
-    lo, hi = soft.draw(gamma, x, u, short_share, r), soft.draw(gamma, x, u, short_share, r + 1)
-    return (1 - weight) * lo[0] + weight * hi[0], (1 - weight) * lo[1] + weight * hi[1], False
+        weights = {0: 1.0}
+        softer = kappa < soft.kappa[0]
+    elif z <= rows[-1]:
+        weights = {len(rows) - 1: z / rows[-1]}
+    else:
+        r = max(i for i in range(len(rows)) if rows[i] >= z)
+        w = (rows[r] - z) / (rows[r] - rows[r + 1])
+        weights = {r: 1.0 - w, r + 1: w}
+    d_eps = d_gain = 0.0
+    for r, w in weights.items():
+        e, g = soft.draw(gamma, x, u, short_share, r, arrays=corrections)
+        d_eps += w * e
+        d_gain += w * g
+    return max(e_hard + d_eps, 0.0), g_hard + d_gain, softer
 
 
 def level_means(order_values, values, probability):

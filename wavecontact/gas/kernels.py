@@ -61,9 +61,10 @@ STATUS_OFF_TABLE = 6  # a pair met at a temperature ratio outside the table: the
 # indices into the float64 ``scalars`` array
 T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, ENERGY_FLOOR, KINETIC_CARRY, KINETIC_REFERENCE = range(8)
 # indices into the int64 ``counters`` array (OFF_TABLE: for the law rule, the draws below its last row;
-# SOFTER: law rule with a contact stiffness, the draws softer than the soft law's softest row)
-COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED, SOFTER = 0, 1, 2, 3, 4
-COUNTERS = 5
+# SOFTER: law rule with a contact stiffness, the draws softer than the soft law's softest row; FLOORED: the
+# draws whose soft-corrected eps^2 came out negative and was set to 0)
+COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED, SOFTER, FLOORED = 0, 1, 2, 3, 4, 5
+COUNTERS = 6
 
 
 @kernel
@@ -280,37 +281,51 @@ def _law_point(log_x, short_share, log_x_grid, share_grid):
 
 @kernel
 def _soft_draw(u, gamma, kappa, log_x, short_share, eps2_hard, gain_hard, soft_kappa, soft_gamma, soft_log_x,
-               soft_share, soft_probability, soft_quantiles, soft_gains):
-    """Blend the hard-core draw with the soft law's rows at this collision's ``kappa`` (same level ``u``).
+               soft_share, soft_probability, soft_d_eps2, soft_d_gain):
+    """The hard-core draw plus the soft law's correction at this collision's ``kappa`` (same level ``u``).
 
-    Linear in ``z = ln(kappa)/kappa`` between the soft rows and, above the stiffest one, between it and the
-    hard core (``z = 0``); below the softest row that row's law.  Returns ``(eps2, gain, softer, below)``:
+    ``soft_d_eps2``, ``soft_d_gain``: per kappa row, the soft law minus the hard-core law on the soft law's
+    grid (:func:`wavecontact.gas.collision_law.soft_corrections`), interpolated linearly in
+    ``z = ln(kappa)/kappa`` between the rows and, above the stiffest, between it and zero (the hard core);
+    below the softest row that row's correction.  Returns ``(eps2, gain, softer, below, floored)``:
     ``softer`` when ``kappa`` lies below the softest row, ``below`` when the pair lies below the soft law's
-    last ``x`` row.
+    last ``x`` row, ``floored`` when the corrected ``eps2`` came out negative and was set to 0.
     """
     rows = soft_kappa.size
     ig, wg = _lookup(soft_gamma, gamma)
     below, ix, wx, i_s, ws = _law_point(log_x, short_share, soft_log_x, soft_share)
     uniform = False  # the level by a branch-free search (soft draws are a minority; no exactness test)
+    softer = False
     if kappa <= soft_kappa[0]:
-        eps2, gain = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_quantiles[0],
-                                 soft_gains[0], True)
-        return eps2, gain, kappa < soft_kappa[0], below
-    z = math.log(kappa) / kappa
-    z_last = math.log(soft_kappa[rows - 1]) / soft_kappa[rows - 1]
-    if z <= z_last:
-        weight = z / z_last
-        eps2, gain = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_quantiles[rows - 1],
-                                 soft_gains[rows - 1], True)
-        return (1.0 - weight) * eps2_hard + weight * eps2, (1.0 - weight) * gain_hard + weight * gain, False, below
-    r = _bracket(soft_kappa, kappa)
-    z_lo = math.log(soft_kappa[r]) / soft_kappa[r]
-    z_hi = math.log(soft_kappa[r + 1]) / soft_kappa[r + 1]
-    weight = (z_lo - z) / (z_lo - z_hi)
-    e0, g0 = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_quantiles[r], soft_gains[r], True)
-    e1, g1 = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_quantiles[r + 1],
-                         soft_gains[r + 1], True)
-    return (1.0 - weight) * e0 + weight * e1, (1.0 - weight) * g0 + weight * g1, False, below
+        r = 0
+        weight_hi = 0.0
+        weight_lo = 1.0
+        softer = kappa < soft_kappa[0]
+    else:
+        z = math.log(kappa) / kappa
+        z_last = math.log(soft_kappa[rows - 1]) / soft_kappa[rows - 1]
+        if z <= z_last:
+            r = rows - 1
+            weight_lo = z / z_last
+            weight_hi = 0.0
+        else:
+            r = _bracket(soft_kappa, kappa)
+            z_lo = math.log(soft_kappa[r]) / soft_kappa[r]
+            z_hi = math.log(soft_kappa[r + 1]) / soft_kappa[r + 1]
+            weight_hi = (z_lo - z) / (z_lo - z_hi)
+            weight_lo = 1.0 - weight_hi
+    d_eps, d_gain = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_d_eps2[r],
+                                soft_d_gain[r], True)
+    d_eps *= weight_lo
+    d_gain *= weight_lo
+    if weight_hi > 0.0:
+        e1, g1 = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_d_eps2[r + 1],
+                             soft_d_gain[r + 1], True)
+        d_eps += weight_hi * e1
+        d_gain += weight_hi * g1
+    eps2 = eps2_hard + d_eps
+    floored = eps2 < 0.0
+    return max(eps2, 0.0), gain_hard + d_gain, softer, below, floored
 
 
 @kernel
@@ -384,7 +399,8 @@ def run_events(
         ``kappa = alpha V l`` with ``V`` the approach speed and ``l = 2 l_i l_j / (l_i + l_j)``
         (``= 2 mu``: masses equal lengths).  0: hard core (the soft arrays are not used).
     soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains : ndarray
-        The soft (finite-kappa) collision law: its kappa rows, grids, levels, and arrays ``(K, G, X, S, P)``.
+        The soft (finite-kappa) collision law: its kappa rows, grids, levels, and its corrections to the
+        hard-core law, arrays ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`).
     uniforms : ndarray
         Levels in [0, 1), one per collision of the table rule.
     pending : ndarray, shape (3,)
@@ -492,12 +508,14 @@ def run_events(
                                   probability, uniform_levels, quantiles, share, True)
             if stiffness > 0.0:
                 kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
-                eps2, s, softer, below_soft = _soft_draw(
+                eps2, s, softer, below_soft, floored = _soft_draw(
                     uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft_kappa, soft_gamma,
                     soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains)
                 below = below or below_soft
                 if softer:
                     counters[SOFTER] += 1
+                if floored:
+                    counters[FLOORED] += 1
             if below:
                 counters[OFF_TABLE] += 1
             s *= scale

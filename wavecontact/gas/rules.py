@@ -34,13 +34,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..errors import InvalidParameterError, require_finite
 from ..restitution_table import RestitutionTable
 from . import kernels
-from .collision_law import CollisionLaw
+from .collision_law import CollisionLaw, soft_corrections
 
 __all__ = ["FixedRestitution", "VibrationLaw", "VibrationSolve", "VibrationTable", "rule_from_description"]
 
@@ -147,9 +148,16 @@ class VibrationLaw:
         _z, log_x, share, probability, quantiles, gains = self.law.kernel_arrays()
         return log_x, share, probability, quantiles[0], gains[0]
 
+    @cached_property
+    def _soft_arrays(self):
+        d_eps, d_gain = soft_corrections(self.law, self.soft_law)
+        kappa, gamma, log_x, share, probability = self.soft_law.arrays()[:5]
+        return kappa, gamma, log_x, share, probability, d_eps, d_gain
+
     def soft_arrays(self):
-        """The soft law's ``(kappa, gamma, log_x, short_share, probability, eps2_quantiles, gain_short)``."""
-        return self.soft_law.arrays() if self.soft_law is not None else kernels.empty_soft_law()
+        """The soft law's ``(kappa, gamma, log_x, short_share, probability)`` and its corrections to the hard-core
+        law ``(d_eps2, d_gain)`` (:func:`~wavecontact.gas.collision_law.soft_corrections`), for the kernel."""
+        return self._soft_arrays if self.soft_law is not None else kernels.empty_soft_law()
 
     def gamma_grid(self):
         return self.law.gamma

@@ -80,6 +80,9 @@ class GasResult:
     softer_than_law : int
         Law rule with a contact stiffness: draws at a ``kappa`` below the soft law's softest row, which took
         that row's law.
+    soft_floored : int
+        Law rule with a contact stiffness: draws whose soft-corrected ``eps^2`` came out negative (hard-core
+        draw plus an interpolated correction) and was set to 0.
     contact_stiffness : float or None
         ``alpha`` of the run (None: hard core).
     energy_drift : float
@@ -103,6 +106,7 @@ class GasResult:
     rule: dict = field(default_factory=dict)
     beyond_law: int = 0
     softer_than_law: int = 0
+    soft_floored: int = 0
     contact_stiffness: float | None = None
 
     @property
@@ -140,6 +144,7 @@ class GasResult:
             "bath_limited_fraction": self.bath_limited / self.collisions if self.collisions else 0.0,
             "beyond_law": self.beyond_law,
             "softer_than_law": self.softer_than_law,
+            "soft_floored": self.soft_floored,
             "contact_stiffness": self.contact_stiffness,
             "rule": self.rule,
         }
@@ -519,7 +524,8 @@ class GasSimulation:
             energy_drift=(total - self.initial_energy) / self.initial_energy if self.initial_energy > 0 else 0.0,
             rule=self.rule.describe(),
             beyond_law=int(self.counters[kernels.OFF_TABLE]) if self.rule.code == kernels.RULE_LAW else 0,
-            softer_than_law=int(self.counters[kernels.SOFTER]), contact_stiffness=self.contact_stiffness,
+            softer_than_law=int(self.counters[kernels.SOFTER]), soft_floored=int(self.counters[kernels.FLOORED]),
+            contact_stiffness=self.contact_stiffness,
         )
 
     # ------------------------------------------------------------ checkpoint
