@@ -226,8 +226,9 @@ def soft_law():
     say()
     say(f"Finite-kappa delay solves with each rod's energy split, kappa = {', '.join(f'{k:g}' for k in SOFT.kappa)}, "
         f"{SOFT.samples_per_point} solves per point (`wavecontact/data/collision_law_soft.npz`). A gas collision "
-        "has kappa = alpha V l; the rule interpolates linearly in z = ln(kappa)/kappa between these rows and, "
-        "above the stiffest, between it and the hard-core law (z = 0).")
+        "has kappa = alpha V l; the rule adds to the hard-core draw the soft law's change against the hard core, "
+        "interpolated linearly in z = ln(kappa)/kappa between these rows and, above the stiffest, between it and "
+        "zero (the hard core, z = 0).")
     say()
     say("Cold collisions at gamma = 0.6: the rule's eps against the independent reference values of MODEL.md "
         "section 5 (rows marked * are the law's own rows).")

@@ -66,8 +66,8 @@ def add_parser(subparsers):
     p.add_argument("--contact-stiffness", type=_positive("contact-stiffness"), metavar="ALPHA",
                    help="alpha of the exponential contact V(r) = B exp(-alpha r), an inverse length in the units of "
                    "the rod lengths (vibration rule only): each collision then has its own softness kappa = alpha V l "
-                   "(V the approach speed, l = 2 l_i l_j/(l_i + l_j), wave speed 1) and draws from the soft "
-                   "(finite-kappa) law blended with the hard-core law; softer than kappa 10 it uses the kappa-10 row "
+                   "(V the approach speed, l = 2 l_i l_j/(l_i + l_j), wave speed 1): the hard-core draw plus the soft "
+                   "(finite-kappa) law's correction at that kappa; softer than kappa 10 the kappa-10 correction "
                    "(counted as softer_than_law). Default: every collision in the hard-core limit")
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
