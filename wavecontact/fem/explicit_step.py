@@ -57,7 +57,21 @@ T_CHAIN_FORWARD = 9  # y_i = r_i + f_i y_(i-1), f_0 = 0
 T_CHAIN_BACKWARD = 10  # x_i = y_i / D_i + g_i x_(i+1), g_(m-1) = 0
 T_CHAIN_INVERSE = 11  # 1 / D_i
 T_CHAIN_BURN_IN = 12  # [0]: burn-in length w of each chain (0: the system is solved by the twisted sweeps)
-T_ROWS = 13
+# condensed P2 step from the displacements, per element e (vertices 2e, 2e + 2, midpoint 2e + 1; see
+# _condensed_step): with da = u_2e - u_(2e+1) and dc = u_(2e+2) - u_(2e+1), the midpoint's share
+# s_e = -(T_P_MID_LEFT da + T_P_MID_RIGHT dc) and the element's parts of the condensed right-hand sides of
+# its two vertices, T_P_LEFT_A da + T_P_LEFT_C dc and T_P_RIGHT_A da + T_P_RIGHT_C dc
+T_P_MID_LEFT = 13  # K[j, j - 1] / M[j, j] (j = 2e + 1)
+T_P_MID_RIGHT = 14  # K[j, j + 1] / M[j, j]
+T_P_LEFT_A = 15
+T_P_LEFT_C = 16
+T_P_RIGHT_A = 17
+T_P_RIGHT_C = 18
+T_P_BACK_LEFT = 19  # M[j, j - 1] / M[j, j]: the midpoint's acceleration is s_e - this x_e - T_P_BACK_RIGHT x_(e+1)
+T_P_BACK_RIGHT = 20  # M[j, j + 1] / M[j, j]
+T_P_SHARE = 21  # scratch: s_e
+T_P_CARRY = 22  # scratch: element e's part of vertex e + 1
+T_ROWS = 23
 TWISTED_MIN = 8  # smaller systems take the plain sweeps (same table)
 CHAINS = 8  # independent recurrences of the chained solve
 CHAIN_TOLERANCE = 2.0**-64  # what a chain may inherit from the value it was started with, relative
@@ -182,7 +196,39 @@ def prepare_mass(disc) -> tuple:
     table[T_MID_INVERSE, : mids.size] = inverse
     table[T_MID_LEFT, : mids.size] = left
     table[T_MID_RIGHT, : mids.size] = right
+    _condensed_step_rows(disc.stiffness_bands, inverse, left, right, table)
     return MASS_CONDENSED, table
+
+
+def _condensed_step_rows(bands: np.ndarray, inverse: np.ndarray, left: np.ndarray, right: np.ndarray,
+                         table: np.ndarray) -> None:
+    """Per-element rows ``T_P_*`` of :func:`_condensed_step` from the stiffness bands and the midpoint masses.
+
+    With ``k_l = K[2e, 2e+1]``, ``k_r = K[2e+1, 2e+2]`` and ``k_f = K[2e, 2e+2]``, element ``e``'s part
+    of the force ``-K u`` is ``(k_l + k_f) da - k_f dc`` on its left vertex, ``-k_f da + (k_r + k_f) dc``
+    on its right vertex and ``-(k_l da + k_r dc)`` on its midpoint; condensing the midpoint subtracts
+    ``M[2e+1, 2e] s_e`` and ``M[2e+1, 2e+2] s_e`` from the two vertices (``s_e``: the midpoint force
+    over ``M[2e+1, 2e+1]``).  ``inverse``, ``left``, ``right``: ``1 / M[j, j]``, ``M[j, j-1]``,
+    ``M[j, j+1]`` per midpoint ``j = 2e + 1``.
+    """
+    elements = inverse.size
+    near_left = bands[1, 0 : 2 * elements : 2]
+    near_right = bands[1, 1 : 2 * elements : 2]
+    far = bands[2, 0 : 2 * elements : 2]
+    mid_left = near_left * inverse
+    mid_right = near_right * inverse
+    rows = {
+        T_P_MID_LEFT: mid_left,
+        T_P_MID_RIGHT: mid_right,
+        T_P_LEFT_A: near_left + far + left * mid_left,
+        T_P_LEFT_C: -far + left * mid_right,
+        T_P_RIGHT_A: -far + right * mid_left,
+        T_P_RIGHT_C: near_right + far + right * mid_right,
+        T_P_BACK_LEFT: left * inverse,
+        T_P_BACK_RIGHT: right * inverse,
+    }
+    for row, values in rows.items():
+        table[row, :elements] = values
 
 
 @kernel(fastmath=False)
@@ -533,6 +579,54 @@ def _condensed_vertex_solve(table, r):
 
 
 @kernel(fastmath=False)
+def _condensed_step(u, v, table, dt):
+    """Consistent P2 step ``v += dt M^-1 (-K u)``, ``u += dt v`` with the midpoints condensed (``T_P_*`` rows).
+
+    Three passes, the first and the last element-wise with no dependence
+    between elements, so that the compiler vectorizes them: (1) each
+    element's two differences ``da, dc`` give its midpoint share ``s_e`` and
+    its parts of its two vertices' condensed right-hand sides; (2) the
+    tridiagonal vertex solve; (3) each midpoint's acceleration ``s_e - b_l
+    x_e - b_r x_(e+1)`` and the update of every node.
+    """
+    elements = (u.size - 1) // 2
+    share = table[T_P_SHARE]
+    carry = table[T_P_CARRY]
+    vertex = table[T_WORK + 1]
+    mid_left = table[T_P_MID_LEFT]
+    mid_right = table[T_P_MID_RIGHT]
+    left_a = table[T_P_LEFT_A]
+    left_c = table[T_P_LEFT_C]
+    right_a = table[T_P_RIGHT_A]
+    right_c = table[T_P_RIGHT_C]
+    for e in range(elements):
+        middle = u[2 * e + 1]
+        da = u[2 * e] - middle
+        dc = u[2 * e + 2] - middle
+        share[e] = -(mid_left[e] * da + mid_right[e] * dc)
+        vertex[e] = left_a[e] * da + left_c[e] * dc
+        carry[e] = right_a[e] * da + right_c[e] * dc
+    vertex[elements] = carry[elements - 1]
+    for e in range(1, elements):
+        vertex[e] += carry[e - 1]
+    _tridiagonal_solve(table, vertex, elements + 1)
+    back_left = table[T_P_BACK_LEFT]
+    back_right = table[T_P_BACK_RIGHT]
+    for e in range(elements):
+        left = vertex[e]
+        middle = share[e] - back_left[e] * left - back_right[e] * vertex[e + 1]
+        velocity = v[2 * e] + dt * left
+        v[2 * e] = velocity
+        u[2 * e] += dt * velocity
+        velocity = v[2 * e + 1] + dt * middle
+        v[2 * e + 1] = velocity
+        u[2 * e + 1] += dt * velocity
+    velocity = v[2 * elements] + dt * vertex[elements]
+    v[2 * elements] = velocity
+    u[2 * elements] += dt * velocity
+
+
+@kernel(fastmath=False)
 def elastic_acceleration(u, bands, kind, table, out):
     """``out = M^-1 (-K u)`` (length/time^2)."""
     _stiffness_forces(u, bands, out)
@@ -545,6 +639,9 @@ def step_rod(u, v, a, bands, kind, table, dt):
     if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
         _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
         return
+    if kind == MASS_CONDENSED:
+        _condensed_step(u, v, table, dt)
+        return
     _stiffness_forces(u, bands, a)
     if kind == MASS_LUMPED:  # the mass and the update in one pass
         inverse = table[0]
@@ -552,26 +649,6 @@ def step_rod(u, v, a, bands, kind, table, dt):
             velocity = v[i] + dt * (a[i] * inverse[i])
             v[i] = velocity
             u[i] += dt * velocity
-        return
-    if kind == MASS_CONDENSED:  # the midpoints' accelerations and the update in one pass
-        vertex = _condensed_vertex_solve(table, a)
-        mid_inverse = table[T_MID_INVERSE]
-        mid_left = table[T_MID_LEFT]
-        mid_right = table[T_MID_RIGHT]
-        for e in range((u.size - 1) // 2):
-            j = 2 * e + 1
-            left = vertex[e]
-            middle = (a[j] - mid_left[e] * left - mid_right[e] * vertex[e + 1]) * mid_inverse[e]
-            velocity = v[j - 1] + dt * left
-            v[j - 1] = velocity
-            u[j - 1] += dt * velocity
-            velocity = v[j] + dt * middle
-            v[j] = velocity
-            u[j] += dt * velocity
-        last = u.size - 1
-        velocity = v[last] + dt * vertex[last // 2]
-        v[last] = velocity
-        u[last] += dt * velocity
         return
     mass_acceleration(kind, table, a)
     for i in range(u.size):
