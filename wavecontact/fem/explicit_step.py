@@ -623,7 +623,7 @@ def _condensed_step(u, v, table, dt):
     between elements, so that the compiler vectorizes them: (1) each
     element's two differences ``da, dc`` give its midpoint share ``s_e`` and
     its parts of its two vertices' condensed right-hand sides (already
-    scaled for the solve); (2) the
+    scaled for the solve), summed per vertex in a short second loop; (2) the
     tridiagonal vertex solve; (3) each midpoint's acceleration ``s_e - b_l
     x_e - b_r x_(e+1)`` and the update of every node.
     """
@@ -688,16 +688,10 @@ def step_rod(u, v, a, bands, kind, table, dt):
             v[i] = velocity
             u[i] += dt * velocity
         return
+    # lumped P1, or lumped P2 on fewer than 5 nodes: the mass and the update in one pass
     _stiffness_forces(u, bands, a)
-    if kind == MASS_LUMPED:  # the mass and the update in one pass
-        inverse = table[0]
-        for i in range(u.size):
-            velocity = v[i] + dt * (a[i] * inverse[i])
-            v[i] = velocity
-            u[i] += dt * velocity
-        return
-    mass_acceleration(kind, table, a)
+    inverse = table[0]
     for i in range(u.size):
-        velocity = v[i] + dt * a[i]
+        velocity = v[i] + dt * (a[i] * inverse[i])
         v[i] = velocity
         u[i] += dt * velocity
