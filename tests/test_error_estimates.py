@@ -9,6 +9,7 @@ import pytest
 from wavecontact import collide, two_rods
 from wavecontact.cli import main
 from wavecontact.errors import AccuracyError
+from wavecontact.fem import error_estimate
 from wavecontact.fem import solver as fem_solver
 
 DISCRETIZATIONS = ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
@@ -70,7 +71,7 @@ def _fem_estimate(gamma, kappa, elements, order, mass, errors):
 
 def test_fem_rule_is_safety_times_the_error_of_a_clean_power_law():
     # e(N) = e* + C N^-p exactly: Richardson with the right order returns |C N^-p| (times the safety)
-    safety = fem_solver.ESTIMATE_SAFETY
+    safety = error_estimate.ESTIMATE_SAFETY
     # resolved (alpha V h / c = 20 * 0.8 / 64 = 0.25): the declared order 2
     errors = [3e-5 * 2.0 ** (2 * i) for i in range(3)]
     estimate, rule = _fem_estimate(0.6, 20.0, 64, 2, "consistent", errors)
@@ -99,9 +100,9 @@ def test_fem_rule_guards_runs_that_do_not_converge_monotonically():
 
 def test_fem_rule_has_a_floor_at_the_characteristic_quadrature_level():
     estimate, _ = _fem_estimate(0.6, 20.0, 800, 1, "lumped", [1e-13, 0.0, 1e-13])
-    assert estimate == fem_solver.CHARACTERISTIC_FLOOR
+    assert estimate == error_estimate.CHARACTERISTIC_FLOOR
     estimate, _ = _fem_estimate(0.6, 20.0, 800, 2, "lumped", [1e-15, 0.0, 1e-15])
-    assert estimate == fem_solver.ROUNDING_FLOOR
+    assert estimate == error_estimate.ROUNDING_FLOOR
 
 
 @pytest.mark.parametrize("gamma, kappa, elements, order, mass", [
