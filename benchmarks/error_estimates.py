@@ -3,12 +3,16 @@
 One command::
 
     python benchmarks/error_estimates.py [--samples 200] [--seed 2026] [--solver fem modal]
-        [--max-work 2e10] [--update-docs]
+        [--max-work 2e10] [--save FILE] [--update-docs]
 
 (``--part K/N --verbose > part_K.txt`` in N processes, then ``--summarize part_*.txt``, gives
-the same table.)  ``--update-docs`` writes the table of one solver into docs/error_estimates.md
-(the block ``sweep:SOLVER:SEED``); the FE tables there come from
-``--solver fem --seed S --max-work 2e10 --update-docs`` for S = 2027, 2028, 2029.
+the same table.)  ``--save FILE`` also stores every sample (options, the restitutions of the
+estimate's runs, the reference and its estimate) as one JSON object a line; ``--offline FILE``
+re-applies the library's FE rule (:mod:`wavecontact.fem.error_estimate`, a pure function of
+those runs) to a stored sweep in seconds instead of solving.  ``--update-docs`` writes the table
+of one solver into docs/error_estimates.md (the block ``sweep:SOLVER:SEED``); the FE tables there
+come from ``--solver fem --seed S --offline benchmarks/sweeps/fem_S.jsonl --update-docs`` for
+S = 2027 ... 2030, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
@@ -40,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import json
 import math
 import os
@@ -151,6 +156,8 @@ def main(argv=None) -> int:
     parser.add_argument("--offline", nargs="+", metavar="FILE",
                         help="re-apply the library's FE rule to the levels stored by --save (or --verbose) "
                              "instead of running, and print the table")
+    parser.add_argument("--misses", action="store_true",
+                        help="also list the FE collisions the estimate does not bound or is not within 10x of")
     parser.add_argument("--update-docs", action="store_true",
                         help="also write the table into docs/error_estimates.md (block sweep:SOLVER:SEED, one solver)")
     args = parser.parse_args(argv)
@@ -161,29 +168,30 @@ def main(argv=None) -> int:
         return _report({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver}, args)
     part, parts = (int(x) for x in args.part.split("/"))
     tables = {}
-    save = open(args.save, "w", encoding="utf-8") if args.save else None  # noqa: SIM115 - written row by row
-    for solver in args.solver:
-        streams = [np.random.default_rng(s) for s in np.random.SeedSequence(args.seed).spawn(args.samples)]
-        rows = []
-        for index, stream in enumerate(streams):
-            if index % parts != part - 1:
-                continue
-            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream), args.max_work)}
-            rows.append(row)
-            if args.verbose:
-                print(row, flush=True)
-            if save is not None:
-                save.write(json.dumps(row) + "\n")
-                save.flush()
-        tables[solver] = rows
-    if save is not None:
-        save.close()
+    with open(args.save, "w", encoding="utf-8") if args.save else contextlib.nullcontext() as save:
+        for solver in args.solver:
+            streams = [np.random.default_rng(s) for s in np.random.SeedSequence(args.seed).spawn(args.samples)]
+            rows = []
+            for index, stream in enumerate(streams):
+                if index % parts != part - 1:
+                    continue
+                row = {"solver": solver, "index": index,
+                       **run_sample(solver, draw(solver, index, stream), args.max_work)}
+                rows.append(row)
+                if args.verbose:
+                    print(row, flush=True)
+                if save is not None:
+                    save.write(json.dumps(row) + "\n")
+                    save.flush()
+            tables[solver] = rows
     return _report(tables, args)
 
 
 def _report(tables: dict, args) -> int:
     lines = table_lines(tables)
     print("\n".join(lines), flush=True)
+    if getattr(args, "misses", False):
+        print("\n".join(miss_lines(tables.get("fem", []))), flush=True)
     if args.update_docs:
         if len(tables) != 1:
             raise SystemExit("--update-docs writes one solver's table: give one --solver")
@@ -207,6 +215,26 @@ def rough(row: dict) -> bool:
     (``diagnostics["error_estimate_rough"]``, which ``tolerance=`` refuses): a function of
     gamma, kappa and the options only."""
     return bool(FEM.rough_estimate(two_rods(row["gamma"], row["kappa"]), FEM.options(row["options"])))
+
+
+def miss_lines(rows: list) -> list:
+    """One line per solved FE sample outside the coverage or the factor 10: its options, the regime
+    ``x = alpha V h / c``, error, estimate, their ratio, the errors of the estimate's runs and the rough flag."""
+    lines = ["index | discretization | N | x | error | estimate | ratio | errors of the runs N, N/2, ... | flag"]
+    for r in rows:
+        if r["status"] != "ok":
+            continue
+        covered = r["error"] <= r["estimate"] + r["reference_estimate"]
+        sharp = r["error"] <= SHARP_ABOVE or 0.1 <= r["estimate"] / r["error"] <= 10.0
+        if covered and sharp:
+            continue
+        o = r["options"]
+        x = r["kappa"] * (1.0 + r["gamma"]) / (2.0 * o["elements"])
+        runs = " ".join(f"{value - r['reference']:+.2e}" for _, value in r["levels"])
+        lines.append(f"{r['index']} | P{o['order']} {o['mass']} | {o['elements']} | {x:.3g} | {r['error']:.2e} | "
+                     f"{r['estimate']:.2e} | {r['estimate'] / r['error']:.3g} | {runs} | "
+                     f"{'rough' if rough(r) else ''}{'' if covered else ' not bounded'}")
+    return lines
 
 
 def estimate_share(rows: list) -> tuple:
