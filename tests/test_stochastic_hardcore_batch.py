@@ -168,3 +168,19 @@ def test_threads_sharing_one_cached_grid_give_the_serial_samples():
                                  zip(temperatures, blocks)))
     for one, other in zip(serial, threaded):
         assert np.array_equal(one, other)
+
+
+def test_collide_returns_the_ensembles_sample_bit_for_bit():
+    # collide(kappa=inf) answers from the grid at twice its hard_core_resolution: the ensemble's
+    # sample of the same seed at that resolution, whatever the batch it came in
+    import wavecontact
+
+    gamma, temperature = 0.6173, 0.8
+    samples = ensemble(gamma, math.inf, temperature, 6, 5, bath_modes=40, batch_size=4,
+                       hard_core_resolution=16).restitution
+    for j in range(6):
+        result = wavecontact.collide(gamma, math.inf, bath_temperature=temperature, bath_modes=40,
+                                     seed=sample_seed(5, j), hard_core_resolution=8)
+        assert result.restitution == samples[j]
+        # the history from the per-sample grid ends where the batched grid does, to the grid's error
+        assert abs(result.relative_velocity[-1] - result.restitution) < 1e-3

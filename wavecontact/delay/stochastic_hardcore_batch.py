@@ -333,7 +333,7 @@ class HardCoreGrid:
     modes : int
         Bath modes per rod ``nu_max`` (>= 1).
     points_per_period : int
-        Grid points per period of rod 1's fastest bath mode, in [2, 4096]
+        Grid points per period of rod 1's fastest bath mode, in [2, 8192]
         (``n_1 = max(points_per_period nu_max, min_points)`` points per ``Gamma_1``).
     min_points : int
         Least grid points per ``Gamma_1``.
@@ -351,9 +351,9 @@ class HardCoreGrid:
         if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or not 1 <= modes <= MAX_BATH_MODES:
             raise InvalidParameterError(f"bath modes (nu_max) must be an integer in [1, {MAX_BATH_MODES}], got {modes!r}")
         if isinstance(points_per_period, bool) or not isinstance(points_per_period, (int, np.integer)) \
-                or not 2 <= points_per_period <= 4096:
+                or not 2 <= points_per_period <= 8192:
             raise InvalidParameterError(
-                f"hard_core_resolution (points per period) must be an integer in [2, 4096], got {points_per_period!r}")
+                f"hard_core_resolution (points per period) must be an integer in [2, 8192], got {points_per_period!r}")
         self.gamma = float(gamma)
         self.modes = int(modes)
         self.lengths = (0.5 * (1.0 + self.gamma), 0.5 * (1.0 + self.gamma) / self.gamma)
