@@ -81,7 +81,7 @@ def _uint32_words(value: int) -> list:
 
 
 def _mix_pool(columns: list) -> list:
-    """``SeedSequence.mix_entropy``: the 4-word pool from entropy words (uint32 arrays or ints)."""
+    """``SeedSequence.mix_entropy``: the 4-word pool from entropy words (uint32 scalars or arrays, which broadcast)."""
     hash_const = _INIT_A
 
     def hashmix(value):
@@ -95,7 +95,7 @@ def _mix_pool(columns: list) -> list:
         result = np.uint32(_MIX_MULT_L) * x - np.uint32(_MIX_MULT_R) * y
         return result ^ (result >> np.uint32(_XSHIFT))
 
-    pool = [hashmix(columns[i] if i < len(columns) else np.zeros_like(columns[0])) for i in range(_POOL_SIZE)]
+    pool = [hashmix(columns[i] if i < len(columns) else np.uint32(0)) for i in range(_POOL_SIZE)]
     for i_src in range(_POOL_SIZE):
         for i_dst in range(_POOL_SIZE):
             if i_src != i_dst:
@@ -111,10 +111,10 @@ def _pcg_words(pool: list, count: int) -> np.ndarray:
     hash_const = _INIT_B
     words = []
     for i_dst in range(8):
-        value = np.broadcast_to(pool[i_dst % _POOL_SIZE], (count,)).astype(np.uint32) ^ np.uint32(hash_const)
+        value = pool[i_dst % _POOL_SIZE] ^ np.uint32(hash_const)
         hash_const = (hash_const * _MULT_B) & _MASK32
         value = value * np.uint32(hash_const)
-        words.append((value ^ (value >> np.uint32(_XSHIFT))).astype(np.uint64))
+        words.append(np.broadcast_to(value ^ (value >> np.uint32(_XSHIFT)), (count,)).astype(np.uint64))
     return np.stack([words[2 * i] | (words[2 * i + 1] << np.uint64(32)) for i in range(4)], axis=1)
 
 
@@ -143,7 +143,7 @@ def spawned_states(seed: int, start: int, stop: int) -> np.ndarray:
             child = [np.arange(start, stop, dtype=np.uint64).astype(np.uint32)]
         else:  # keys of several words: the general path, one SeedSequence per child
             return seed_states([np.random.SeedSequence(seed, spawn_key=(j,)) for j in range(start, stop)])
-        columns = [np.full(count, word, dtype=np.uint32) for word in run] + child
+        columns = [np.uint32(word) for word in run] + child  # the seed's words are the same for every child
         return _pcg_words(_mix_pool(columns), count)
 
 

@@ -279,6 +279,22 @@ def max_plus_batch(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, start
 
 
 @kernel
+def _noise_coefficients(normals, temperatures, energy, length1, length2, omega1, omega2, sign1, sign2, a1, b1, a2, b2):
+    """The noise coefficients of every sample, in the arithmetic of ``ThermalBath.draw`` and
+    ``BathRealisation.noise_coefficients(1.0)`` (so the same numbers)."""
+    for s in range(normals.shape[0]):
+        root1 = math.sqrt(temperatures[s, 0] * energy / length1)
+        root2 = math.sqrt(temperatures[s, 1] * energy / length2)
+        for nu in range(normals.shape[3]):
+            spread, factor = root1 / omega1[nu], 1.0 * math.sqrt(2.0) * sign1[nu]
+            a1[s, nu] = factor * (normals[s, 0, 0, nu] * spread)
+            b1[s, nu] = factor * (normals[s, 0, 1, nu] * spread)
+            spread, factor = root2 / omega2[nu], 1.0 * math.sqrt(2.0) * sign2[nu]
+            a2[s, nu] = factor * (normals[s, 1, 0, nu] * spread)
+            b2[s, nu] = factor * (normals[s, 1, 1, nu] * spread)
+
+
+@kernel
 def _spectra(a1, b1, a2, b2, scale1, scale2, slope_factor, spectrum1, spectrum2):
     """Fill the half spectra of rod 1's table and of rod 2's values and slopes (bins 1..nu_max).
 
@@ -379,12 +395,11 @@ class HardCoreGrid:
         The arithmetic of :meth:`ThermalBath.draw` followed by
         ``BathRealisation.noise_coefficients(1.0)``, elementwise.
         """
-        out = []
-        for i in range(2):
-            spread = np.sqrt(temperatures[:, i:i + 1] * _TRANSLATIONAL_ENERGY / self.lengths[i]) / self._omega[i]
-            factor = 1.0 * math.sqrt(2.0) * self._signs[i]
-            out.append(factor * (normals[:, i, 0] * spread))
-            out.append(factor * (normals[:, i, 1] * spread))
+        count = normals.shape[0]
+        out = [_work(f"coefficients {name}", (max(count, BLOCK), self.modes))[:count] for name in ("a1", "b1", "a2", "b2")]
+        _noise_coefficients(np.ascontiguousarray(normals), np.ascontiguousarray(temperatures, dtype=float),
+                            _TRANSLATIONAL_ENERGY, self.lengths[0], self.lengths[1], self._omega[0], self._omega[1],
+                            self._signs[0], self._signs[1], *out)
         return out
 
     def tables(self, a1, b1, a2, b2):
