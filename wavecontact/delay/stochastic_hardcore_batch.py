@@ -229,6 +229,51 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, m, cap
     return running, capacity, STATUS_FULL
 
 
+@kernel(inline="always")
+def _top_of_rod1(q1, a1, begin, end, offset, n1, last, rise1):
+    """``max_j q_1 - u_1`` over nodes ``begin .. end - 1`` (four running maxima of the same numbers, one loop)."""
+    if end <= begin:
+        return -math.inf
+    noise = q1[begin + offset:end + offset]
+    memory = a1[begin - n1:end - n1]
+    start = begin - last
+    t0 = t1 = t2 = t3 = -math.inf
+    count = end - begin
+    i = 0
+    while i + 4 <= count:
+        t0 = max(t0, noise[i] - memory[i] + (start + i) * rise1)
+        t1 = max(t1, noise[i + 1] - memory[i + 1] + (start + i + 1) * rise1)
+        t2 = max(t2, noise[i + 2] - memory[i + 2] + (start + i + 2) * rise1)
+        t3 = max(t3, noise[i + 3] - memory[i + 3] + (start + i + 3) * rise1)
+        i += 4
+    for k in range(i, count):
+        t0 = max(t0, noise[k] - memory[k] + (start + k) * rise1)
+    return max(max(t0, t1), max(t2, t3))
+
+
+@kernel(inline="always")
+def _low_of_rod2(a2, begin, end, j2, f2, last, rise2):
+    """``min_j u_2`` over nodes ``begin .. end - 1`` (like :func:`_top_of_rod1`)."""
+    if end <= begin:
+        return math.inf
+    g2 = 1.0 - f2
+    before = a2[begin - j2 - 1:end - j2 - 1]
+    after = a2[begin - j2:end - j2]
+    start = begin - last
+    t0 = t1 = t2 = t3 = math.inf
+    count = end - begin
+    i = 0
+    while i + 4 <= count:
+        t0 = min(t0, f2 * before[i] + g2 * after[i] - (start + i) * rise2)
+        t1 = min(t1, f2 * before[i + 1] + g2 * after[i + 1] - (start + i + 1) * rise2)
+        t2 = min(t2, f2 * before[i + 2] + g2 * after[i + 2] - (start + i + 2) * rise2)
+        t3 = min(t3, f2 * before[i + 3] + g2 * after[i + 3] - (start + i + 3) * rise2)
+        i += 4
+    for k in range(i, count):
+        t0 = min(t0, f2 * before[k] + g2 * after[k] - (start + k) * rise2)
+    return min(min(t0, t1), min(t2, t3))
+
+
 @kernel
 def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
     """First node from which ``f <= w`` holds for every later node if ``w`` stays constant (or a far node).
@@ -245,15 +290,12 @@ def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
     for part in range(2):
         begin, end = (last, last + n1 - i0) if part == 0 else (last + n1 - i0, last + n1)
         offset = i0 - last if part == 0 else i0 - last - n1
-        for j in range(max(begin, n1), end):
-            top1 = max(top1, q1[j + offset] - a1[j - n1] + (j - last) * rise1)
+        top1 = max(top1, _top_of_rod1(q1, a1, max(begin, n1), end, offset, n1, last, rise1))
         for j in range(begin, min(end, n1)):  # before node n1 rod 1's memory is empty
             top1 = max(top1, q1[j + offset] + (j - last) * rise1)
     # rod 2: the least u_2 over the next period
-    low2 = math.inf
     rise2 = w / (j2 + f2)
-    for j in range(max(last, j2 + 1), last + j2 + 2):
-        low2 = min(low2, f2 * a2[j - j2 - 1] + (1.0 - f2) * a2[j - j2] - (j - last) * rise2)
+    low2 = _low_of_rod2(a2, max(last, j2 + 1), last + j2 + 2, j2, f2, last, rise2)
     if last <= j2:
         low2 = min(low2, -(j2 - last) * rise2)  # nodes before j2 + 1: no memory yet (u_2 <= 0 there)
     excess = (last - m) * h + top1 + reach2 - low2 - w
