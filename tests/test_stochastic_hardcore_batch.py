@@ -198,3 +198,18 @@ def test_default_grid_bias_is_far_below_a_fig8_standard_error():
     spread = {r: float(np.std(eps[r] - eps[64]) / math.sqrt(len(seeds))) for r in (4, 8)}
     assert abs(bias[8]) + 3.0 * spread[8] < 1e-3
     assert abs(bias[8]) < abs(bias[4])
+
+
+def test_rod2_table_adds_an_unbiased_error_below_the_grids():
+    # rod 2's Hermite table at half the grid's points per period against one eight times finer (same grid):
+    # no mean shift beyond four standard errors, and per sample smaller than the grid's own error
+    # (the default grid against 64 points per period)
+    seeds = SpawnedSeeds(31, 0, 300)
+    normals = np.array([np.random.default_rng(s).standard_normal((2, 2, 250)) for s in seeds])
+    temperatures = np.ones((len(seeds), 2))
+    default = HardCoreGrid(0.6173, 250).restitutions(normals, temperatures)
+    fine_table = HardCoreGrid(0.6173, 250, rod2_points=32).restitutions(normals, temperatures)
+    fine_grid = HardCoreGrid(0.6173, 250, 64).restitutions(normals, temperatures)
+    table = default - fine_table
+    assert abs(table.mean()) < 4.0 * table.std() / math.sqrt(table.size)
+    assert np.median(np.abs(table)) < np.median(np.abs(default - fine_grid))

@@ -397,10 +397,13 @@ class HardCoreGrid:
         Least grid points per ``Gamma_1``.
     max_points : int
         Refuse a sample longer than this many grid points.
+    rod2_points : int, optional
+        Nodes of rod 2's Hermite table per period of its fastest mode (rounded up to a power of two
+        per table); default half of ``points_per_period``.
     """
 
     def __init__(self, gamma: float, modes: int, points_per_period: int = DEFAULT_POINTS_PER_PERIOD,
-                 min_points: int = 256, max_points: int = 50_000_000):
+                 min_points: int = 256, max_points: int = 50_000_000, rod2_points: int | None = None):
         from ..bath.model import MAX_BATH_MODES
         from ..bath.noise import table_points
 
@@ -421,9 +424,11 @@ class HardCoreGrid:
         d2 = self.periods[1] / self.h
         self.j2 = int(d2)
         self.f2 = d2 - self.j2
-        # rod 2's Hermite table: as many nodes per period of its fastest mode as the grid has for rod 1's
-        # (rod 2's modes are slower by gamma); a power of two
-        self.n2 = table_points(self.modes, int(points_per_period))
+        # rod 2's Hermite table: half as many nodes per period of its fastest mode as the grid has for
+        # rod 1's (a power of two).  The noise is read there only near candidate maxima, and the
+        # interpolation error it adds is unbiased and below the grid's own (test_rod2_table_*)
+        self.n2 = table_points(self.modes, max(2, int(points_per_period) // 2) if rod2_points is None
+                               else int(rod2_points))
         self.r2 = self.h * self.n2 / self.periods[1]  # rod 2's table index per grid step
         self.max_points = int(max_points)
         nu = np.arange(1, self.modes + 1)
