@@ -213,3 +213,19 @@ def test_rod2_table_adds_an_unbiased_error_below_the_grids():
     table = default - fine_table
     assert abs(table.mean()) < 4.0 * table.std() / math.sqrt(table.size)
     assert np.median(np.abs(table)) < np.median(np.abs(default - fine_grid))
+
+
+def test_plain_python_kernels_give_the_compiled_samples():
+    # WAVECONTACT_PURE_PYTHON=1 runs the streams, bounds, chunks and certificate as plain Python
+    import os
+    import subprocess
+    import sys
+
+    code = ("from wavecontact.delay.stochastic_hardcore_batch import hard_core_restitutions;"
+            "from wavecontact.bath.streams import SpawnedSeeds;"
+            "print(hard_core_restitutions(0.6173, 1.0, SpawnedSeeds(3, 0, 3), modes=12).tobytes().hex())")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, WAVECONTACT_PURE_PYTHON="1")
+    pure = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True, cwd=root)
+    compiled = hard_core_restitutions(0.6173, 1.0, SpawnedSeeds(3, 0, 3), modes=12)
+    assert bytes.fromhex(pure.stdout.strip()) == compiled.tobytes()
