@@ -9,7 +9,8 @@ organised for blocks of samples, with no Python work per grid node or per table 
 * the bath of sample ``j`` is ``standard_normal((2, 2, nu_max))`` from
   ``numpy.random.default_rng(seed_j)``, the same numbers as
   :meth:`wavecontact.bath.ThermalBath.draw`, so a sample here is the same
-  realisation that drives the other solvers;
+  realisation that drives the other solvers; :mod:`wavecontact.bath.streams`
+  draws them without a ``SeedSequence`` and ``Generator`` object per sample;
 * the noise tables of the whole block come from one 2-D inverse real FFT per
   table; the time origin is the nominal contact time (node ``k`` sits at
   ``(k - m) h``), so no phase factors are needed, and every operation on the
@@ -18,7 +19,12 @@ organised for blocks of samples, with no Python work per grid node or per table 
 * one compiled kernel runs the recursion of every sample.  ``A_i = w + C_i``
   is kept instead of ``w`` and ``C_i``: rod 1's memory is ``A_1[k - n_1]``,
   rod 2's a fixed linear interpolation between ``A_2[k - j_2 - 1]`` and
-  ``A_2[k - j_2]`` (``Gamma_2 / h = j_2 + f_2``).
+  ``A_2[k - j_2]`` (``Gamma_2 / h = j_2 + f_2``);
+* rod 2's noise (a cubic Hermite table) is read only at nodes where
+  ``t - C_1 - C_2 + q_1`` plus an upper bound of the table on the node's cell
+  can reach ``w`` (and at the node after such a node, for the parabola);
+  stretches where a bound over blocks of cells rules out any rise are stepped
+  as chunks in a vectorised loop that only stores ``A_i = w + C_i``.
 
 The run stops on a certificate, not on a waiting time.  Once ``w = W`` has
 stayed constant since node ``L``, the comb sums obey ``C_1[k + n_1] = C_1[k] + W``
