@@ -3,7 +3,8 @@
     python benchmarks/profile_bath_sample.py [--kappa 250] [--modes 250] [--samples 6]
     python benchmarks/profile_bath_sample.py --hard-core [--modes 250] [--resolution 8]
 
-``--hard-core``: the pieces of the batched stochastic hard-core sampler (kappa = inf) per
+``--hard-core``: what NumPy's per-sample objects cost (SeedSequence children, Generators,
+the normals), then the pieces of the batched stochastic hard-core sampler (kappa = inf) per
 sample, CPU microseconds (medians of repeats over blocks of 256 samples): the seed words,
 the 1000 normals, the noise coefficients, the FFT tables with their bounds, the recursion
 kernel, and the whole ``ensemble`` call; and the grid nodes a sample takes.
@@ -101,7 +102,34 @@ def hard_core_pieces(modes, resolution, samples=256, repeats=15):
     return out, float(np.mean(nodes)), grid
 
 
+def numpy_object_costs(modes, samples=2000, repeats=5):
+    """CPU microseconds per sample of NumPy's per-sample objects, the path bath/streams.py replaces."""
+    seed = 1
+    children = [np.random.SeedSequence(seed, spawn_key=(j,)) for j in range(samples)]
+    generator = np.random.default_rng(0)
+    out = np.empty(4 * modes)
+    pieces = {
+        "SeedSequence(seed).spawn(n), per child": lambda: np.random.SeedSequence(seed).spawn(samples),
+        "SeedSequence(seed, spawn_key=(j,)) built directly": lambda: [
+            np.random.SeedSequence(seed, spawn_key=(j,)) for j in range(samples)],
+        "default_rng(child)": lambda: [np.random.default_rng(c) for c in children],
+        "Generator(PCG64(child))": lambda: [np.random.Generator(np.random.PCG64(c)) for c in children],
+        "child.generate_state(4, uint64) (what PCG64 seeds from)": lambda: [
+            c.generate_state(4, np.uint64) for c in children],
+        f"Generator.standard_normal(out=...) of {4 * modes}, one call": lambda: [
+            generator.standard_normal(out=out) for _ in range(samples)],
+    }
+    return {name: 1e6 * float(np.median([cpu(function) for _ in range(repeats)])) / samples
+            for name, function in pieces.items()}
+
+
 def main_hard_core(args):
+    print("NumPy's per-sample objects (the path before bath/streams.py); CPU us per sample, medians")
+    print("| piece | CPU us per sample |")
+    print("|---|---|")
+    for name, value in numpy_object_costs(args.modes).items():
+        print(f"| {name} | {value:.1f} |")
+    print()
     pieces, nodes, grid = hard_core_pieces(args.modes, args.resolution)
     print(f"hard-core mode: gamma {GAMMA}, T_B/E_tr 1, nu_max {args.modes}, {args.resolution} points per period "
           f"(n_1 = {grid.n1} nodes per Gamma_1, rod 2's table {grid.n2}); CPU us per sample, medians")
