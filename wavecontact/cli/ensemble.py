@@ -102,6 +102,10 @@ def run(args) -> int:
         print(f"gamma = {result.spec.gamma:g}, kappa = {summary['kappa']}, T_B/E_tr = {args.temperature}, "
               f"nu_max = {result.spec.bath_modes}, {summary['samples']} samples (seed {result.spec.seed})")
         print(f"mean epsilon = {summary['mean']:.5f} +- {summary['standard_error']:.5f}")
+        if result.grid_bias is not None:
+            bias = result.grid_bias
+            print(f"grid bias of the mean = {bias.value:.2e} +- {bias.standard_error:.1e} ({bias.samples} samples rerun "
+                  f"at {bias.check_resolution} points per period); total error of the mean = {result.total_error:.5f}")
         print(f"std  epsilon = {summary['std']:.5f} +- {summary['std_standard_error']:.5f}")
         print(f"mean epsilon^2 = {summary['mean_eps2']:.5f}")
     return 0

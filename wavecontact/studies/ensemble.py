@@ -22,15 +22,16 @@ from pathlib import Path
 import numpy as np
 
 from ..bath.model import ThermalBath
-from ..errors import InvalidParameterError, WavecontactError
+from ..errors import AccuracyError, InvalidParameterError, WavecontactError
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..progress import Progress
 from ..scene import validate_gamma_kappa
 
-__all__ = ["MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "ensemble", "run_batch", "sample_collision",
-           "sample_restitution", "sample_seed"]
+__all__ = ["GRID_BIAS_SAMPLES", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "GridBias", "ensemble",
+           "grid_bias", "grid_bias_indices", "run_batch", "sample_collision", "sample_restitution", "sample_seed"]
 
 MAX_SAMPLES = 10_000_000
+GRID_BIAS_SAMPLES = 64  # least number of hard-core samples rerun on the finer grid to state the grid bias
 _BATCH_SCHEMA = "wavecontact.ensemble_batch"
 _SCHEMA = "wavecontact.ensemble"
 _VERSION = 1
@@ -163,6 +164,92 @@ def _hard_core_batch(spec: EnsembleSpec, start: int, stop: int) -> np.ndarray:
                                                        resolution)
 
 
+def _resolution(spec: EnsembleSpec) -> int:
+    from ..delay.stochastic_hardcore_batch import DEFAULT_POINTS_PER_PERIOD
+
+    return spec.options.get("hard_core_resolution", DEFAULT_POINTS_PER_PERIOD)
+
+
+@dataclass(frozen=True)
+class GridBias:
+    """The hard-core grid's bias of an ensemble mean, from a subset rerun on a finer grid.
+
+    Attributes
+    ----------
+    value : float
+        Estimated bias of the mean epsilon (dimensionless; the grid's epsilon minus the
+        exact limit's, averaged), ``factor * mean(eps_r - eps_check)`` over the subset.
+    standard_error : float
+        Standard error of ``value`` (from the spread of the paired differences).
+    samples : int
+        Size of the subset (every ``stride``-th sample, from sample 0).
+    stride : int
+    resolution, check_resolution : int
+        Points per period of the ensemble's grid and of the finer check grid.
+    factor : float
+        ``h_r / (h_r - h_check)`` (2 when the grid step halves): the first-order
+        error of ``eps_r`` in units of the paired difference.
+    check_restitution : ndarray
+        epsilon of the subset on the check grid (the subset's own values are
+        ``restitution[::stride]``).
+    """
+
+    value: float
+    standard_error: float
+    samples: int
+    stride: int
+    resolution: int
+    check_resolution: int
+    factor: float
+    check_restitution: np.ndarray
+
+
+def grid_bias_indices(samples: int) -> np.ndarray:
+    """The samples rerun to state the grid bias: every ``k``-th from 0, ``k = max(1, samples // 64)``
+    (64 to 127 of them, or all if fewer than 128)."""
+    return np.arange(0, samples, max(1, samples // GRID_BIAS_SAMPLES))
+
+
+def _check_resolution(grid_points, modes: int, resolution: int) -> int:
+    """Points per period of the check grid: twice as many grid points per ``Gamma_1`` where
+    the cap allows, else half as many (``grid_points(r)``: points per ``Gamma_1`` at ``r``)."""
+    finer = min(8192, -(-2 * grid_points(resolution) // modes))
+    if grid_points(finer) > grid_points(resolution):
+        return finer
+    return max(2, resolution // 2)
+
+
+def grid_bias(spec: EnsembleSpec, restitution: np.ndarray) -> GridBias:
+    """State the hard-core grid's bias of the mean of ``restitution`` (the samples of ``spec``).
+
+    The samples of :func:`grid_bias_indices` run again, same seeds, on a grid with twice as
+    many points per ``Gamma_1``.  The grid's error is first order in its step ``h``, so
+    ``eps_r - eps_exact ~ (h_r / (h_r - h_check)) (eps_r - eps_check)`` per sample; the mean of
+    that over the subset estimates the bias of the ensemble mean, and the spread of the paired
+    differences gives its standard error.  Cost: 64 to 127 samples at about 1.7 times a
+    sample's cost (docs/bath.md section 3).
+    """
+    from ..delay.stochastic_hardcore_batch import cached_grid
+    from ..solvers import get_solver
+
+    resolution = _resolution(spec)
+    modes = spec.bath_modes
+
+    def grid_points(r):
+        return cached_grid(spec.gamma, modes, int(r)).n1
+
+    check = _check_resolution(grid_points, modes, resolution)
+    factor = grid_points(check) / (grid_points(check) - grid_points(resolution))
+    indices = grid_bias_indices(restitution.size)
+    stride = int(indices[1] - indices[0]) if indices.size > 1 else 1
+    checked = get_solver("delay").hard_core_thermal_batch(
+        spec.gamma, spec.temperature, [sample_seed(spec.seed, j) for j in indices], modes, check)
+    differences = factor * (restitution[indices] - checked)
+    error = float(np.std(differences, ddof=1)) / math.sqrt(indices.size) if indices.size > 1 else math.inf
+    return GridBias(float(np.mean(differences)), error, int(indices.size), stride, int(resolution), int(check),
+                    float(factor), checked)
+
+
 def sample_restitution(spec: EnsembleSpec, index: int) -> float:
     """epsilon of sample ``index`` of ``spec`` (one collision)."""
     return sample_collision(spec, index)[0]
@@ -192,11 +279,24 @@ class EnsembleResult:
     vibration_energy_gain : ndarray (n, 2)
         Each rod's vibrational gain per sample (units with ``E_tr = 1/4``;
         zeros unless ``spec.energy_split``).
+    grid_bias : GridBias or None
+        The hard-core grid's bias of :attr:`mean`, stated from a subset rerun
+        on a finer grid (``kappa = inf`` only; None otherwise).
     """
 
     spec: EnsembleSpec
     restitution: np.ndarray
     vibration_energy_gain: np.ndarray | None = None
+    grid_bias: GridBias | None = None
+
+    @property
+    def total_error(self) -> float:
+        """The mean's total error estimate: ``sqrt(SE^2 + bias^2 + SE_bias^2)`` with the stated grid bias
+        (hard core), else the standard error alone (sampling error only)."""
+        if self.grid_bias is None:
+            return self.standard_error
+        bias = self.grid_bias
+        return math.sqrt(self.standard_error**2 + bias.value**2 + bias.standard_error**2)
 
     @property
     def rod1_share(self) -> float:
@@ -270,8 +370,12 @@ class EnsembleResult:
         """Write ``samples.npz`` (every epsilon, in sample order) and ``summary.json`` into ``out``."""
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
+        extra = {}
+        if self.grid_bias is not None:
+            extra = {"grid_bias_indices": grid_bias_indices(self.restitution.size),
+                     "grid_bias_check_restitution": self.grid_bias.check_restitution}
         _atomic_savez(out / "samples.npz", restitution=self.restitution,
-                      vibration_energy_gain=self.vibration_energy_gain)
+                      vibration_energy_gain=self.vibration_energy_gain, **extra)
         tmp = out / "summary.json.part"
         tmp.write_text(json.dumps(self.summary(), indent=1))
         os.replace(tmp, out / "summary.json")
@@ -279,10 +383,16 @@ class EnsembleResult:
 
     def summary(self) -> dict:
         spec = self.spec
+        bias = self.grid_bias
         return {
             "mean": self.mean,
             "std": self.std,
             "standard_error": self.standard_error,
+            "grid_bias": None if bias is None else bias.value,
+            "grid_bias_standard_error": None if bias is None else bias.standard_error,
+            "grid_bias_samples": 0 if bias is None else bias.samples,
+            "grid_bias_check_resolution": None if bias is None else bias.check_resolution,
+            "total_error": self.total_error,
             "std_standard_error": self.std_standard_error,
             "mean_eps2": float(np.mean(self.restitution**2)),
             "samples": int(self.restitution.size),
@@ -378,7 +488,8 @@ def _executor_for(executor):
 
 
 def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", bath_modes=250, executor=None,
-             batch_size=256, out=None, progress=False, energy_split=False, **options) -> EnsembleResult:
+             batch_size=256, out=None, progress=False, energy_split=False, tolerance=None,
+             **options) -> EnsembleResult:
     """Collide ``samples`` independent realisations of the thermal bath.
 
     Parameters
@@ -406,15 +517,28 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         Show a progress bar (tqdm) on stderr.
     energy_split : bool
         Keep each rod's vibrational gain per sample (finite kappa only).
+    tolerance : float or None
+        Hard-core mode only: largest acceptable grid bias of the mean (the stated
+        bias plus two of its standard errors); a larger one raises
+        :class:`~wavecontact.errors.AccuracyError` with a ``hard_core_resolution``
+        that should meet it (the samples are kept on ``out`` all the same).
     **options
-        Solver options (e.g. ``rtol=1e-6``).
+        Solver options (e.g. ``rtol=1e-6``; ``hard_core_resolution`` for ``kappa = inf``).
 
     Returns
     -------
     EnsembleResult
+        With the hard-core mode, its ``grid_bias`` states the grid's bias of the mean
+        (every ``samples // 64``-th sample rerun on a grid twice as fine).
     """
     spec = EnsembleSpec(gamma, kappa, bath_temperature, samples, seed, bath_modes, solver, dict(options), batch_size,
                         energy_split)
+    if tolerance is not None:
+        if not _hard_core(spec):
+            raise InvalidParameterError("tolerance (the grid bias of the mean) applies to the hard-core mode "
+                                        "(kappa = inf) only; finite kappa takes rtol")
+        if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0.0 < tolerance < math.inf:
+            raise InvalidParameterError(f"tolerance must be a number in (0, inf), got {tolerance!r}")
     done = {} if out is None else _prepare_output(out, spec)
     todo = [(a, b) for a, b in spec.batches() if a not in done]
     fields = asdict(spec)
@@ -440,4 +564,22 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         bar.close()
     values = np.concatenate([done[a][0] for a, _b in spec.batches()])
     gains = np.concatenate([done[a][1] for a, _b in spec.batches()])
-    return EnsembleResult(spec, values, gains)
+    result = EnsembleResult(spec, values, gains, grid_bias(spec, values) if _hard_core(spec) else None)
+    if tolerance is not None:
+        _check_tolerance(result, float(tolerance))
+    return result
+
+
+def _check_tolerance(result: EnsembleResult, tolerance: float) -> None:
+    """AccuracyError if the stated grid bias (plus two of its standard errors) exceeds ``tolerance``."""
+    bias = result.grid_bias
+    reach = abs(bias.value) + 2.0 * bias.standard_error
+    if reach <= tolerance:
+        return
+    # first order: the bias falls like the grid step
+    needed = min(8192, max(bias.resolution + 1, math.ceil(bias.resolution * reach / tolerance)))
+    advice = f"hard_core_resolution={needed}"
+    raise AccuracyError(
+        f"ensemble: grid bias {bias.value:.2g} +- {bias.standard_error:.2g} of the mean epsilon exceeds "
+        f"tolerance={tolerance:g} at hard_core_resolution={bias.resolution}; try {advice}",
+        result=result, advice=advice)
