@@ -16,15 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .noise_kernels import table_bounds
 
 __all__ = ["POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19", "covariance_series", "noise_tables", "table_points"]
 
 NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
 POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
 BOUND_BLOCK = 64  # table cells per entry of the block maxima (NoiseTables.block_max)
-# |H10|, |H11| <= 4/27 on [0, 1]: the cubic Hermite interpolant of a cell exceeds the larger
-# end value by at most 4/27 h (|m0| + |m1|)
-_HERMITE_SLOPE_BOUND = 4.0 / 27.0
 
 
 def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
@@ -82,18 +80,20 @@ def block_maxima(periods, values, slopes, block: int = BOUND_BLOCK) -> np.ndarra
     -------
     ndarray (R, n / block)
     """
-    values = np.asarray(values, dtype=float)
+    return _bounds(periods, values, slopes, block)[0]
+
+
+def _bounds(periods, values, slopes, block=BOUND_BLOCK):
+    """``(block_max, curvature)`` of :func:`wavecontact.bath.noise_kernels.table_bounds` (empty rows allowed)."""
+    values = np.ascontiguousarray(values, dtype=float)
     rows, n = values.shape
     if rows == 0:
-        return np.zeros((0, 1))
+        return np.zeros((0, 1)), np.zeros(0)
     block = min(block, n)
     if n % block:
         raise InvalidParameterError(f"noise table length {n} is not a multiple of the bound block {block}")
-    step = (np.asarray(periods, dtype=float) / n)[:, None]
-    magnitude = np.abs(slopes)
-    cells = (np.maximum(values, np.roll(values, -1, axis=1))
-             + _HERMITE_SLOPE_BOUND * step * (magnitude + np.roll(magnitude, -1, axis=1)))
-    return cells.reshape(rows, n // block, block).max(axis=2)
+    return table_bounds(np.ascontiguousarray(periods, dtype=float), values,
+                        np.ascontiguousarray(slopes, dtype=float), block)
 
 
 def _harmonic_series(a, b, period, shift, n, slopes=True):
@@ -107,14 +107,6 @@ def _harmonic_series(a, b, period, shift, n, slopes=True):
         return values, None
     spectrum[1:a.size + 1] *= 2j * math.pi * nu / period
     return values, np.fft.irfft(spectrum, n)
-
-
-def _curvature_peak(a, b, period, n):
-    """Largest ``|q''|`` over ``n`` nodes of a period (the nodes are dense: ``n >= 16 x`` modes)."""
-    nu = np.arange(1, a.size + 1)
-    spectrum = np.zeros(n // 2 + 1, dtype=complex)
-    spectrum[1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
-    return float(np.max(np.abs(np.fft.irfft(spectrum, n)))) if a.size else 0.0
 
 
 def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0,
@@ -138,8 +130,8 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
     modes = max(a.size for _omega, a, _b in coefficients)
     n = table_points(modes, points_per_period)
     shift = origin - contact_time
-    # one inverse FFT for all rows: per rod the values, the slopes and the (unshifted) curvature
-    spectra = np.zeros((3 * len(coefficients), n // 2 + 1), dtype=complex)
+    # one inverse FFT for all rows: per rod the values and the slopes
+    spectra = np.zeros((2 * len(coefficients), n // 2 + 1), dtype=complex)
     bound = 0.0
     for i, ((omega, a, b), period) in enumerate(zip(coefficients, periods)):
         a, b, period = np.asarray(a, float), np.asarray(b, float), float(period)
@@ -147,19 +139,19 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
         harmonics = 2 * math.pi * nu / period
         if a.size and not np.all(np.abs(omega - harmonics) <= 1e-8 + 1e-12 * np.abs(harmonics)):
             raise InvalidParameterError("noise frequencies must be the harmonics of the given period")
-        # as _harmonic_series and _curvature_peak compute them
+        # as _harmonic_series computes them
         values = 0.5 * n * ((a - 1j * b) * np.exp(2j * math.pi * nu * shift / period))
-        spectra[3 * i, 1:a.size + 1] = values
-        spectra[3 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
-        spectra[3 * i + 2, 1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
+        spectra[2 * i, 1:a.size + 1] = values
+        spectra[2 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
         bound += float(np.sum(omega * np.hypot(a, b)))
     rows = np.fft.irfft(spectra, n, axis=1)
-    # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
-    # denser by default), with 10 % for what falls between them
-    curvature = 0.0
-    for i, (_omega, a, _b) in enumerate(coefficients):
-        curvature += 1.1 * float(np.max(np.abs(rows[3 * i + 2]))) if a.size else 0.0
-    return NoiseTables(np.asarray(periods, dtype=float), rows[0::3].copy(), rows[1::3].copy(), bound, curvature)
+    periods = np.asarray(periods, dtype=float)
+    values, slopes = rows[0::2].copy(), rows[1::2].copy()
+    block_max, peaks = _bounds(periods, values, slopes)
+    # the largest curvature, one sample per cell (the slope change over the cell; 4 cells per
+    # period of the fastest mode at least, denser by default), with 10 % for what falls between
+    curvature = 1.1 * float(np.sum(peaks))
+    return NoiseTables(periods, values, slopes, bound, curvature, block_max)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:

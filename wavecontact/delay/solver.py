@@ -23,13 +23,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..bath.noise import NoiseTables
-from ..bath.scene import scene_noise
+from ..bath.model import seed_sequence
+from ..bath.noise import NoiseTables, noise_tables
+from ..bath.scene import scene_noise, start_gap
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
-from ..scene import Scene
+from ..scene import Scene, two_rods
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
 from .energy_split import NODES, WEIGHTS, vibration_energy_gain
@@ -255,6 +256,61 @@ class DelaySolver(SolverBase):
         w = _integrate(params.time_ratio, params.kappa, options.rtol, initial_gap, options.end_time, None,
                        options.max_steps, params.impedance_ratio, tables)[1]
         return float(w[-1] / params.kappa - 1.0)
+
+    def thermal_restitutions(self, gamma: float, kappa: float, bath, seeds, options=None) -> tuple:
+        """epsilon and its error estimate for many finite-kappa thermal collisions of the paper's rods.
+
+        Sample ``j`` is what :meth:`thermal_restitution` gives, bit for bit, for
+        ``thermal_scene(gamma, kappa, bath, seeds[j])``: the same draw, start gap,
+        noise tables and integration, with the scene object, the option checks and the
+        cost checks done once for all seeds (an ensemble's batch).
+
+        Parameters
+        ----------
+        gamma, kappa : float
+            Length ratio in ``[GAMMA_MIN, 1]`` and a finite softness.
+        bath : wavecontact.bath.ThermalBath
+            Temperature(s) ``T_B / E_tr`` and ``nu_max``.
+        seeds : sequence of int or numpy.random.SeedSequence
+            One realisation per seed (:meth:`ThermalBath.draw`).
+        options : mapping or DelayOptions, optional
+            Validated as :class:`DelayOptions`; ``noise`` must stay None.
+
+        Returns
+        -------
+        restitution, error_estimate : ndarray
+            Per seed: epsilon (dimensionless) and the solver's estimate of its error
+            (the sum of the local error estimates, :func:`solve_delay_equation`).
+        """
+        options = self.options(options)
+        prototype = two_rods(gamma, kappa)  # the rods, contact and parameters of every sample (cold)
+        params = _check_scene(prototype)
+        self.estimate_cost(prototype, options)
+        if math.isinf(params.kappa) or isinstance(prototype.contact, Hard):
+            raise UnsupportedSceneError("thermal_restitutions needs a finite kappa (kappa = inf: "
+                                        "hard_core_thermal_batch)")
+        if options.noise is not None:
+            raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
+        contact, kappa = prototype.contact, params.kappa
+        lengths = tuple(rod.length for rod in prototype.rods)
+        gamma = prototype.metadata["two_rods"].gamma
+        periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
+        # _start's shift of the scaled gap: ln(B alpha^2 mu / Z_s^2)
+        shift = math.log(contact.strength * contact.alpha**2 * params.reduced_mass / params.series_impedance**2)
+        out = np.empty((2, len(seeds)))
+        for j, seed in enumerate(seeds):
+            vibrations = bath.draw(lengths, seed_sequence(seed))
+            initial_gap = options.initial_gap
+            if initial_gap is None:
+                initial_gap = contact.alpha * float(start_gap(vibrations, contact)) - shift
+            tables = noise_tables(vibrations.noise_coefficients(kappa), periods, float(initial_gap) / kappa, 0.0,
+                                  options.noise_resolution)
+            _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
+                                                            options.end_time, None, options.max_steps,
+                                                            params.impedance_ratio, tables)
+            out[0, j] = w[-1] / kappa - 1.0
+            out[1, j] = error
+        return out[0], out[1]
 
     def expected_order(self, options) -> float:
         """1: the error is proportional to (and below) the tolerance ``rtol``."""
