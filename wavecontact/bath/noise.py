@@ -23,6 +23,9 @@ __all__ = ["POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19"
 NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
 POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
 BOUND_BLOCK = 64  # table cells per entry of the block maxima (NoiseTables.block_max)
+CURVATURE_BLOCK = 16  # table cells per entry of the curvature bounds (NoiseTables.curvature_blocks)
+CURVATURE_MARGIN = 1.1  # one curvature sample per cell (4 cells per period of the fastest mode at least): 10 %
+# for what falls between the samples
 
 
 def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
@@ -40,7 +43,9 @@ class NoiseTables:
     ``block_max[i, k]`` bounds rod ``i``'s interpolated table from above on the
     cells ``k B .. (k + 1) B - 1`` (``B = n / block_max.shape[1]``), so that a
     solver can bound ``Q`` on any interval with a few operations
-    (:func:`wavecontact.delay.kernels.noise_upper_bound`).
+    (:func:`wavecontact.delay.kernels.noise_upper_bound`).  ``curvature_blocks[i, k]``
+    bounds ``|Q_i''|`` on the cells ``k C .. (k + 1) C - 1`` (``C = CURVATURE_BLOCK``, with
+    ``CURVATURE_MARGIN``), and ``curvature_bound`` is the sum of the rows' largest bounds.
     """
 
     periods: np.ndarray
@@ -49,10 +54,13 @@ class NoiseTables:
     slope_bound: float
     curvature_bound: float = 0.0
     block_max: np.ndarray = None
+    curvature_blocks: np.ndarray = None
 
     def __post_init__(self):
-        if self.block_max is None:
-            object.__setattr__(self, "block_max", block_maxima(self.periods, self.values, self.slopes))
+        if self.block_max is None or self.curvature_blocks is None:
+            block_max, curvature = _bounds(self.periods, self.values, self.slopes)
+            object.__setattr__(self, "block_max", block_max)
+            object.__setattr__(self, "curvature_blocks", curvature)
 
     @classmethod
     def empty(cls) -> NoiseTables:
@@ -60,7 +68,8 @@ class NoiseTables:
 
     @property
     def step_limit(self) -> float:
-        """Step over which ``Q`` departs from its secant by at most 1 (``max|Q''| h^2 / 8 <= 1``); 0 if no noise."""
+        """Step over which ``Q`` departs from its secant by at most ``NOISE_EXCURSION`` anywhere
+        (``max|Q''| h^2 / 8``); 0 if no noise.  Solvers use the local bounds ``curvature_blocks``."""
         return math.sqrt(8.0 * NOISE_EXCURSION / self.curvature_bound) if self.curvature_bound > 0.0 else 0.0
 
 
@@ -84,16 +93,20 @@ def block_maxima(periods, values, slopes, block: int = BOUND_BLOCK) -> np.ndarra
 
 
 def _bounds(periods, values, slopes, block=BOUND_BLOCK):
-    """``(block_max, curvature)`` of :func:`wavecontact.bath.noise_kernels.table_bounds` (empty rows allowed)."""
+    """``(block_max, curvature_blocks)``: :func:`wavecontact.bath.noise_kernels.table_bounds`, the
+    curvature samples times ``CURVATURE_MARGIN`` (empty rows allowed)."""
     values = np.ascontiguousarray(values, dtype=float)
     rows, n = values.shape
     if rows == 0:
-        return np.zeros((0, 1)), np.zeros(0)
+        return np.zeros((0, 1)), np.zeros((0, 1))
     block = min(block, n)
-    if n % block:
-        raise InvalidParameterError(f"noise table length {n} is not a multiple of the bound block {block}")
-    return table_bounds(np.ascontiguousarray(periods, dtype=float), values,
-                        np.ascontiguousarray(slopes, dtype=float), block)
+    curvature_block = min(CURVATURE_BLOCK, n)
+    if n % block or n % curvature_block:
+        raise InvalidParameterError(f"noise table length {n} is not a multiple of the bound blocks "
+                                    f"{block} and {curvature_block}")
+    block_max, curvature = table_bounds(np.ascontiguousarray(periods, dtype=float), values,
+                                        np.ascontiguousarray(slopes, dtype=float), block, curvature_block)
+    return block_max, CURVATURE_MARGIN * curvature
 
 
 def _harmonic_series(a, b, period, shift, n, slopes=True):
@@ -147,11 +160,8 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
     rows = np.fft.irfft(spectra, n, axis=1)
     periods = np.asarray(periods, dtype=float)
     values, slopes = rows[0::2].copy(), rows[1::2].copy()
-    block_max, peaks = _bounds(periods, values, slopes)
-    # the largest curvature, one sample per cell (the slope change over the cell; 4 cells per
-    # period of the fastest mode at least, denser by default), with 10 % for what falls between
-    curvature = 1.1 * float(np.sum(peaks))
-    return NoiseTables(periods, values, slopes, bound, curvature, block_max)
+    block_max, curvature = _bounds(periods, values, slopes)
+    return NoiseTables(periods, values, slopes, bound, float(np.sum(np.max(curvature, axis=1))), block_max, curvature)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:

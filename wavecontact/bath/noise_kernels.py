@@ -14,8 +14,8 @@ HERMITE_SLOPE_BOUND = 4.0 / 27.0
 
 
 @kernel
-def table_bounds(periods, values, slopes, block):
-    """Block maxima of each row's cubic Hermite interpolant and each row's largest slope change.
+def table_bounds(periods, values, slopes, block, curvature_block):
+    """Block maxima of each row's cubic Hermite interpolant and of its slope changes.
 
     Parameters
     ----------
@@ -23,26 +23,25 @@ def table_bounds(periods, values, slopes, block):
         Each row's period (time units).
     values, slopes : ndarray (R, n)
         Nodes ``j period / n`` of one period (a scaled length and its rate).
-    block : int
-        Cells per block, a divisor of ``n``.
+    block, curvature_block : int
+        Cells per block of the value bounds and of the curvature samples, divisors of ``n``.
 
     Returns
     -------
     block_max : ndarray (R, n / block)
         Upper bound of the interpolant on cells ``k block .. (k + 1) block - 1``.
-    curvature : ndarray (R,)
-        ``max_j |slopes[j + 1] - slopes[j]| / h`` over the period (``h = period / n``): by the
-        mean value theorem each term is the curvature at some point of cell ``j``.
+    curvature : ndarray (R, n / curvature_block)
+        ``max_j |slopes[j + 1] - slopes[j]| / h`` over the cells of each block (``h = period / n``):
+        by the mean value theorem each term is the curvature at some point of cell ``j``.
     """
     rows = values.shape[0]
     n = values.shape[1]
     blocks = n // block
     block_max = np.empty((rows, blocks))
-    curvature = np.zeros(rows)
+    curvature = np.zeros((rows, n // curvature_block))
     for i in range(rows):
         h = periods[i] / n
         reach = HERMITE_SLOPE_BOUND * h
-        peak = 0.0
         for k in range(blocks):
             best = -np.inf
             for j in range(k * block, (k + 1) * block):
@@ -54,7 +53,7 @@ def table_bounds(periods, values, slopes, block):
                 s0 = slopes[i, j]
                 s1 = slopes[i, j1]
                 best = max(best, max(v0, v1) + reach * (abs(s0) + abs(s1)))
-                peak = max(peak, abs(s1 - s0))
+                c = j // curvature_block
+                curvature[i, c] = max(curvature[i, c], abs(s1 - s0) / h)
             block_max[i, k] = best
-        curvature[i] = peak / h
     return block_max, curvature

@@ -65,6 +65,19 @@ KRONROD_WEIGHTS = 0.5 * np.array(
     ]
 )
 GAUSS_WEIGHTS = 0.5 * np.array([0.0, 5.0 / 9.0, 0.0, 8.0 / 9.0, 0.0, 5.0 / 9.0, 0.0])
+# Gauss-Lobatto 4 points with its Kronrod extension to 7 (Gander and Gautschi 2000), on [0, 1]; the end
+# nodes are the step's ends, where g is known, so a step costs 5 evaluations of g plus its end point
+# instead of 7 plus its end point (degree 9 instead of 11; the embedded rule has degree 5 in both)
+_LOBATTO_X = np.array([1.0, math.sqrt(2.0 / 3.0), 1.0 / math.sqrt(5.0), 0.0, -1.0 / math.sqrt(5.0),
+                       -math.sqrt(2.0 / 3.0), -1.0])
+LOBATTO_NODES = 0.5 * (1.0 + _LOBATTO_X)
+LOBATTO_KRONROD_WEIGHTS = 0.5 * np.array([11.0 / 210.0, 72.0 / 245.0, 125.0 / 294.0, 16.0 / 35.0, 125.0 / 294.0,
+                                          72.0 / 245.0, 11.0 / 210.0])
+LOBATTO_WEIGHTS = 0.5 * np.array([1.0 / 6.0, 0.0, 5.0 / 6.0, 0.0, 5.0 / 6.0, 0.0, 1.0 / 6.0])
+QUADRATURE_RULES = {
+    "gauss-kronrod": (KRONROD_NODES, KRONROD_WEIGHTS, GAUSS_WEIGHTS),
+    "lobatto-kronrod": (LOBATTO_NODES, LOBATTO_KRONROD_WEIGHTS, LOBATTO_WEIGHTS),
+}
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
@@ -221,6 +234,38 @@ def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
             else:
                 best = max(best, _cell_upper(values, slopes, j, h))
                 k += 1
+        total += best
+    return total
+
+
+@kernel
+def noise_curvature_bound(t0, t1, periods, tables, curvature_blocks):
+    """An upper bound of ``|Q''|`` of the tabulated noise (the sum of the rows) on ``[t0, t1]``.
+
+    Each row's bound is the largest of its per-block curvature bounds
+    (:class:`wavecontact.bath.noise.NoiseTables`) over the blocks that the
+    interval touches, one cell more on each side against round-off.
+    """
+    total = 0.0
+    blocks = curvature_blocks.shape[1]
+    n = tables.shape[1]
+    size = n // blocks
+    for i in range(periods.shape[0]):
+        h = periods[i] / n
+        first = int(t0 / h) - 1  # t0 >= 0
+        stop = int(t1 / h) + 2
+        best = 0.0
+        if stop - first >= n:
+            for k in range(blocks):
+                best = max(best, curvature_blocks[i, k])
+        else:
+            c = first
+            while c < stop:
+                j = c % n
+                if j < 0:
+                    j += n
+                best = max(best, curvature_blocks[i, j // size])
+                c += size - j % size  # the first cell of the next block
         total += best
     return total
 
@@ -383,7 +428,8 @@ def integrate_delay_equation(
     table_slopes,
     block_max,
     noise_rate,
-    noise_step,
+    noise_excursion,
+    curvature_blocks,
     t_end_min,
     t_limit,
     settle_time,
@@ -418,11 +464,13 @@ def integrate_delay_equation(
     noise_rate : float
         An upper bound of ``|Q'|`` from the tables (0 without tables; unused
         with tables, whose local bounds are sharper).
-    noise_step : float
-        Longest step wherever the force may become appreciable (0: no
-        limit): short enough that ``Q`` departs from its secant by less than
-        one unit of the exponent, so that no narrow rise of the noise slips
-        between the quadrature nodes of a step that looked force-free.
+    noise_excursion, curvature_blocks : float, ndarray
+        Wherever the force may become appreciable, a step is short enough that
+        the tabulated ``Q`` departs from its secant by at most ``noise_excursion``
+        units of the exponent (``max|Q''| h^2 / 8``, ``|Q''|`` bounded on the step
+        by the per-block bounds ``curvature_blocks``, shape ``(R, n / C)``;
+        :func:`noise_curvature_bound`), so that no narrow rise of the noise slips
+        between the quadrature nodes of a step that looked force-free (0: no limit).
     t_end_min : float
         Never stop before this time.
     t_limit : float
@@ -432,7 +480,8 @@ def integrate_delay_equation(
     max_steps : int
         Give up (status 1) after this many accepted steps.
     nodes, weights_k, weights_g : ndarray
-        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and Gauss weights).
+        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and embedded weights; one of
+        :data:`QUADRATURE_RULES`).  Nodes at 0 and 1 take ``g`` from the step's ends.
     direct_copies : int
         0: every delayed copy of ``W`` is interpolated on its own.  ``K > 0``:
         copies older than ``K`` round trips come from running comb sums, one
@@ -501,11 +550,13 @@ def integrate_delay_equation(
         if tabulated:
             # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
             # step is free or it is not (a free step is the proposed one in either branch below)
-            q0 = 0.0
-            for i in range(periods.shape[0]):
-                q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
-            free = span_is_free(t0, h, negligible - (g_now - w[last]), series_rate, periods, tables,
-                                table_slopes, block_max, q0)
+            distance = negligible - (g_now - w[last])
+            free = False
+            if distance > 0.0 and series_rate * h < distance:  # else span_is_free is False at once
+                q0 = 0.0
+                for i in range(periods.shape[0]):
+                    q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
+                free = span_is_free(t0, h, distance, series_rate, periods, tables, table_slopes, block_max, q0)
             h_free = h if free else 0.0
         else:
             h_free = (negligible - (g_now - w[last])) / exponent_rate
@@ -529,8 +580,10 @@ def integrate_delay_equation(
             free = h_free > h
         if free:
             h = min(h_wanted, h_free)
-        elif noise_step > 0.0:
-            h = min(h, noise_step)
+        elif tabulated and noise_excursion > 0.0:
+            curvature = noise_curvature_bound(t0, t0 + h, periods, tables, curvature_blocks)
+            if curvature > 0.0:
+                h = min(h, math.sqrt(8.0 * noise_excursion / curvature))
         h = min(h, h_max)
         if h < 1e-14 * max(1.0, abs(t0)):
             status = STATUS_STEP_UNDERFLOW
@@ -546,24 +599,35 @@ def integrate_delay_equation(
         # nodes of the transformed rule: e^{a s} ds becomes uniform
         z = a * h
         if z > _LINEAR_THRESHOLD:
-            log_base = g1 + math.log(-math.expm1(-z) / a)
+            em = math.expm1(-z)
+            log_base = g1 + math.log(-em / a)
         elif z < -_LINEAR_THRESHOLD:
-            log_base = g_now + math.log(-math.expm1(z) / (-a))
+            em = math.expm1(z)
+            log_base = g_now + math.log(-em / (-a))
         else:
+            em = 0.0
             log_base = g_now + math.log(h)
         r_max = -math.inf
         for j in range(nodes.shape[0]):
             x = nodes[j]
-            if z > _LINEAR_THRESHOLD:
-                s = h + math.log1p((1.0 - x) * math.expm1(-z)) / a
-            elif z < -_LINEAR_THRESHOLD:
-                s = math.log1p(x * math.expm1(z)) / a
+            if x == 0.0:  # a node at a step end (Lobatto rules): g is known there
+                s = 0.0
+                gs = g_now
+            elif x == 1.0:
+                s = h
+                gs = g1
             else:
-                s = h * x
-            gs, _unused, _unused2 = _exponent(
-                t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
-                periods, tables, table_slopes, False, comb, direct_copies,
-            )
+                if z > _LINEAR_THRESHOLD:
+                    s = h + math.log1p((1.0 - x) * em) / a
+                elif z < -_LINEAR_THRESHOLD:
+                    s = math.log1p(x * em) / a
+                else:
+                    s = h * x
+                gs, _unused, _unused2 = _exponent(
+                    t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
+                    periods, tables, table_slopes, False, comb, direct_copies,
+                )
+                evaluations += 1
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)
             elif z < -_LINEAR_THRESHOLD:
@@ -571,7 +635,7 @@ def integrate_delay_equation(
             else:
                 gx[j] = gs - g_now
             r_max = max(r_max, gx[j])
-        evaluations += 1 + nodes.shape[0]
+        evaluations += 1
         sum_k = 0.0
         sum_g = 0.0
         for j in range(nodes.shape[0]):

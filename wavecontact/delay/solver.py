@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..bath.model import seed_sequence
-from ..bath.noise import NoiseTables, noise_tables
+from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_tables
 from ..bath.scene import scene_noise, start_gap
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
@@ -87,6 +87,10 @@ class DelayOptions(SolverOptions):
         None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath "
         "or the scene's thermal vibrations", kind="object", allow_none=True, check=_noise)
     max_steps: int = option(2_000_000, "safety limit on accepted steps", kind="int", low=10, high=10**9)
+    quadrature: str = option(
+        "gauss-kronrod", "rule of each step: Gauss-Kronrod (3, 7), or Lobatto-Kronrod (4, 7), whose end nodes are "
+        "the step's ends (6 evaluations of the exponent a step instead of 8; ensembles)", kind="choice",
+        choices=tuple(kernels.QUADRATURE_RULES))
     noise_resolution: int = option(
         32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
         kind="int", low=4, high=1024)
@@ -143,7 +147,7 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     return t, w, d1, error, work, a0
 
 
-def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_ratio, tables):
+def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_ratio, tables, quadrature="gauss-kronrod"):
     """The kernel call behind :func:`solve_delay_equation`, for options already validated (DelayOptions)."""
     noise = COLD if noise is None else noise
     tables = _NO_TABLES if tables is None else tables
@@ -158,9 +162,10 @@ def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_rat
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
     t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
-        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound), float(tables.step_limit),
+        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound),
+        NOISE_EXCURSION, tables.curvature_blocks,
         float(t_end_min), float(t_limit), settle, max_steps,
-        kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
+        *kernels.QUADRATURE_RULES[quadrature],
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
     )
     if status != kernels.STATUS_OK:
@@ -254,7 +259,7 @@ class DelaySolver(SolverBase):
             raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
         initial_gap, tables = _start(scene, params, options)
         w = _integrate(params.time_ratio, params.kappa, options.rtol, initial_gap, options.end_time, None,
-                       options.max_steps, params.impedance_ratio, tables)[1]
+                       options.max_steps, params.impedance_ratio, tables, options.quadrature)[1]
         return float(w[-1] / params.kappa - 1.0)
 
     def thermal_restitutions(self, gamma: float, kappa: float, bath, seeds, options=None) -> tuple:
@@ -307,7 +312,7 @@ class DelaySolver(SolverBase):
                                   options.noise_resolution)
             _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
                                                             options.end_time, None, options.max_steps,
-                                                            params.impedance_ratio, tables)
+                                                            params.impedance_ratio, tables, options.quadrature)
             out[0, j] = w[-1] / kappa - 1.0
             out[1, j] = error
         return out[0], out[1]
@@ -356,7 +361,7 @@ class DelaySolver(SolverBase):
         initial_gap, tables = _start(scene, params, options)
         t, w, d1, d2, error, work, a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
                                                    options.end_time, options.noise, options.max_steps,
-                                                   params.impedance_ratio, tables)
+                                                   params.impedance_ratio, tables, options.quadrature)
         unit = params.time_unit
         extra = {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa * unit, "velocity_increase_slope": d1,
                  "delay_parameters": _as_dict(params)}
