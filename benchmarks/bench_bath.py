@@ -10,9 +10,12 @@
 Rows:
 1. the stochastic hard-core mode (kappa = inf): samples per CPU second on one core at 8 (the default) and
    4 grid points per period of the fastest mode, with the mean error against 32 points on the same samples;
-2. one finite-kappa sample as an ensemble computes it (rtol 1e-6, no energy split), CPU ms
-   (median over samples) against kappa (nu_max 250) and nu_max (kappa 250); and one
-   ``collide()`` with its defaults (rtol 1e-11, energy split) for comparison;
+2. one finite-kappa sample as an ensemble computes it (its defaults ENSEMBLE_DELAY_OPTIONS: rtol
+   1e-3, Lobatto-Kronrod rule; no energy split; batches of 64 samples), CPU ms per sample (median
+   of 3 batches) against kappa (nu_max 250) and nu_max (kappa 250); at kappa 250 also at rtol 1e-6
+   with the Gauss-Kronrod rule (the setting before), and one ``collide()`` with its defaults
+   (rtol 1e-11, energy split) for comparison (benchmarks/ensemble_accuracy.py measures what the
+   tolerance costs in accuracy);
 3. the Fig. 8 set (2 gamma x 10 T_B/E_tr x 2500 = 50,000 collisions, nu_max = 250) through
    the parallel path (2 local worker processes): hard-core mode in full; kappa = 250 on
    100 samples a point (2,000), extrapolated, or in full with --full;
@@ -36,6 +39,7 @@ import resource
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +55,7 @@ from wavecontact.bath import ThermalBath
 from wavecontact.bath.collide import thermal_scene
 from wavecontact.bath.scene import scene_noise
 from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
-from wavecontact.studies.ensemble import EnsembleSpec, ensemble, sample_collision
+from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS, EnsembleSpec, ensemble, run_batch
 
 GAMMA = 0.6173
 
@@ -95,15 +99,17 @@ def hard_core_rate(samples, resolution):
     return samples / sorted(seconds)[1], float(difference.mean()), float(difference.std() / math.sqrt(subset))
 
 
-def delay_sample_cpu(kappa, modes, count=8, temperature=1.0):
-    """Median CPU seconds of one ensemble sample (``sample_collision``: rtol 1e-6, no energy split)."""
-    spec = EnsembleSpec(GAMMA, kappa, temperature, count, 3, bath_modes=modes, options={"rtol": 1e-6})
-    sample_collision(spec, 0)  # kernels ready
+def delay_sample_cpu(kappa, modes, count=64, temperature=1.0, options=None):
+    """CPU seconds per ensemble sample (``run_batch`` of ``count`` samples, median of 3 batches;
+    the ensemble's default options unless ``options``, no energy split)."""
+    spec = EnsembleSpec(GAMMA, kappa, temperature, 3 * count, 3, bath_modes=modes, options=options or {})
+    fields = asdict(spec)
+    run_batch(fields, 0, 2)  # kernels ready
     times = []
-    for j in range(count):
+    for start in range(0, 3 * count, count):
         started = time.process_time()
-        sample_collision(spec, j)
-        times.append(time.process_time() - started)
+        run_batch(fields, start, start + count)
+        times.append((time.process_time() - started) / count)
     return float(np.median(times))
 
 
@@ -130,10 +136,8 @@ def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEM
     the CPU of a pool that only starts up and warms its kernels is measured
     first and subtracted.
     """
-    options = {} if math.isinf(kappa) else {"rtol": 1e-6}
-
     def warm(pool):
-        ensemble(GAMMA, kappa, 1.0, 4, 0, executor=pool, batch_size=1, **options)  # workers import and load kernels
+        ensemble(GAMMA, kappa, 1.0, 4, 0, executor=pool, batch_size=1)  # workers import and load kernels
 
     before = _children_cpu()
     with ProcessPoolExecutor(2) as pool:
@@ -146,7 +150,7 @@ def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEM
         for a, gamma in enumerate(gammas):
             for b, temperature in enumerate(temperatures):
                 ensemble(gamma, kappa, temperature, samples, 8 + 1000 * a + b, executor=pool,
-                         batch_size=max(1, min(256, samples // 4)), **options)
+                         batch_size=max(1, min(256, samples // 4)))
         wall = time.perf_counter() - started
     cpu = _children_cpu() - before - start_up
     return wall, len(gammas) * len(temperatures) * samples, cpu
@@ -169,8 +173,8 @@ def peers(modes=50, kappa=100.0, seed=3):
     """One realisation: wavecontact's delay solver, JiTCDDE with input, solve_ivp DOP853 on the modal system."""
     scene = thermal_scene(GAMMA, kappa, ThermalBath(1.0, modes), seed)
     reference = solve(scene, "delay", rtol=1e-11).restitution
-    ours = solve(scene, "delay", rtol=1e-6, energy_split=False)
-    ours_time = median_time(lambda: solve(scene, "delay", rtol=1e-6, energy_split=False), 5)
+    ours = solve(scene, "delay", energy_split=False, **ENSEMBLE_DELAY_OPTIONS)  # as an ensemble sample
+    ours_time = median_time(lambda: solve(scene, "delay", energy_split=False, **ENSEMBLE_DELAY_OPTIONS), 5)
     # the delay solver's own accuracy at this tolerance: its error estimate, checked against the reference
     out = {"reference": reference, "ours": (ours.restitution, ours_time)}
     a0 = kappa * scene.gaps[0]
@@ -236,12 +240,16 @@ def main(argv=None):
     if args.hard_core_only:
         fig8_hard_core_row(quick)
         return 0
+    default = "ensemble defaults (rtol 1e-3, Lobatto-Kronrod), no energy split"
     for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4):
         row(f"delay sample, kappa {kappa:g}, nu_max 250 (CPU)", f"{1e3 * delay_sample_cpu(kappa, 250):.2f} ms",
-            "rtol 1e-6, no energy split; target 1.2 ms at kappa 250")
+            f"{default}; target 1.2 ms at kappa 250")
     for modes in (50, 250, 1000):
         row(f"delay sample, kappa 250, nu_max {modes} (CPU)", f"{1e3 * delay_sample_cpu(250.0, modes):.2f} ms",
-            "rtol 1e-6, no energy split")
+            default)
+    row("delay sample, kappa 250, nu_max 250, rtol 1e-6 Gauss-Kronrod (CPU)",
+        f"{1e3 * delay_sample_cpu(250.0, 250, options={'rtol': 1e-6, 'quadrature': 'gauss-kronrod'}):.2f} ms",
+        "the previous ensemble setting, for comparison")
     row("collide(0.6173, 250, T_B/E_tr 1, nu_max 250), its defaults (CPU)", f"{1e3 * collide_default_cpu():.2f} ms",
         "rtol 1e-11, energy split")
     fig8_hard_core_row(quick)
