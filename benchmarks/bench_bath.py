@@ -4,14 +4,15 @@
     python benchmarks/bench_bath.py --quick    # smaller sample counts
     python benchmarks/bench_bath.py --hard-core-only   # rows 1 and the Fig. 8 hard-core row
 
-    python benchmarks/bench_bath.py --full     # row 3 at kappa = 250 in full (50,000 samples, ~2 min
-                                               # on a quiet 2-core machine) instead of a subset
+    python benchmarks/bench_bath.py --full     # row 3 at kappa = 250 in full (50,000 samples, under
+                                               # 30 s on a quiet 2-core machine) instead of a subset
+    python benchmarks/bench_bath.py --kappa-250-only [--full]   # only the kappa = 250 rows of 2 and 3
 
 Rows:
 1. the stochastic hard-core mode (kappa = inf): samples per CPU second on one core at 8 (the default) and
    4 grid points per period of the fastest mode, with the mean error against 32 points on the same samples;
 2. one finite-kappa sample as an ensemble computes it (its defaults ENSEMBLE_DELAY_OPTIONS: rtol
-   1e-3, Lobatto-Kronrod rule; no energy split; batches of 64 samples), CPU ms per sample (median
+   1e-3, Lobatto-Kronrod rule, 16 noise table nodes a period; no energy split; batches of 64 samples), CPU ms per sample (median
    of 3 batches) against kappa (nu_max 250) and nu_max (kappa 250); at kappa 250 also at rtol 1e-6
    with the Gauss-Kronrod rule (the setting before), and one ``collide()`` with its defaults
    (rtol 1e-11, energy split) for comparison (benchmarks/ensemble_accuracy.py measures what the
@@ -58,6 +59,7 @@ from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
 from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS, EnsembleSpec, ensemble, run_batch
 
 GAMMA = 0.6173
+PREVIOUS = {"rtol": 1e-6, "quadrature": "gauss-kronrod", "noise_resolution": 32}  # the ensemble setting before
 
 
 ROWS: list = []  # the table as printed, for --update-docs
@@ -223,16 +225,22 @@ def main(argv=None):
     parser.add_argument("--hard-core-only", action="store_true",
                         help="only the hard-core rows (1 and the Fig. 8 hard-core row), about a minute")
     parser.add_argument("--full", action="store_true", help="the Fig. 8 set at kappa = 250 in full (50,000 samples)")
+    parser.add_argument("--kappa-250-only", action="store_true",
+                        help="only the finite-kappa rows at kappa 250 (one sample's cost, the Fig. 8 set)")
     parser.add_argument("--update-docs", action="store_true",
                         help="write the table into docs/bath.md section 9 and docs/figures/bath/bench.txt")
     args = parser.parse_args(argv)
     quick = args.quick
     logging.getLogger("distributed").setLevel(logging.ERROR)
-    header = (f"`python benchmarks/bench_bath.py{' --quick' if quick else ''}{' --full' if args.full else ''}`: "
+    flags = "".join(f" --{name}" for name, on in (("quick", quick), ("full", args.full), ("kappa-250-only", args.kappa_250_only)) if on)
+    header = (f"`python benchmarks/bench_bath.py{flags}`: "
               f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the start; wavecontact "
               f"{wavecontact.__version__}")
     print(header)
     print("| quantity | value | note |")
+    if args.kappa_250_only:
+        delay_rows(quick, args.full)
+        return 0
     for resolution in (8, 4):
         rate, bias, bias_error = hard_core_rate(500 if quick else 5000, resolution)
         row(f"hard-core mode (gamma 0.6173, T_B/E_tr 1, nu_max 250), {resolution} points/period, CPU",
@@ -240,26 +248,45 @@ def main(argv=None):
     if args.hard_core_only:
         fig8_hard_core_row(quick)
         return 0
-    default = "ensemble defaults (rtol 1e-3, Lobatto-Kronrod), no energy split"
-    for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4):
+    delay_rows(quick, args.full, sweep=True)
+    fig8_hard_core_row(quick)
+    peer_rows()
+    scaling = dask_scaling(400 if quick else 4000)
+    row("Dask LocalCluster, hard-core samples/s, 1 worker", f"{scaling[1]:,.0f} /s")
+    row("Dask LocalCluster, hard-core samples/s, 2 workers", f"{scaling[2]:,.0f} /s",
+        f"speed-up {scaling[2] / scaling[1]:.2f}")
+    row("Dask overhead per task (2 workers, trivial task)", f"{1e3 * scaling['overhead']:.2f} ms")
+    if args.update_docs:
+        update_docs(header)
+    return 0
+
+
+def delay_rows(quick, full, sweep=False):
+    """The finite-kappa rows: one sample's CPU cost (against kappa and nu_max with ``sweep``) and the
+    Fig. 8 set at kappa 250 through 2 worker processes (a subset, extrapolated, unless ``full``)."""
+    default = "ensemble defaults (rtol 1e-3, Lobatto-Kronrod, 16 noise nodes), no energy split"
+    for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4) if sweep else (250.0,):
         row(f"delay sample, kappa {kappa:g}, nu_max 250 (CPU)", f"{1e3 * delay_sample_cpu(kappa, 250):.2f} ms",
             f"{default}; target 1.2 ms at kappa 250")
-    for modes in (50, 250, 1000):
+    for modes in (50, 250, 1000) if sweep else ():
         row(f"delay sample, kappa 250, nu_max {modes} (CPU)", f"{1e3 * delay_sample_cpu(250.0, modes):.2f} ms",
             default)
     row("delay sample, kappa 250, nu_max 250, rtol 1e-6 Gauss-Kronrod (CPU)",
-        f"{1e3 * delay_sample_cpu(250.0, 250, options={'rtol': 1e-6, 'quadrature': 'gauss-kronrod'}):.2f} ms",
+        f"{1e3 * delay_sample_cpu(250.0, 250, options=PREVIOUS):.2f} ms",
         "the previous ensemble setting, for comparison")
-    row("collide(0.6173, 250, T_B/E_tr 1, nu_max 250), its defaults (CPU)", f"{1e3 * collide_default_cpu():.2f} ms",
-        "rtol 1e-11, energy split")
-    fig8_hard_core_row(quick)
-    per_point = 2500 if args.full else (10 if quick else 100)
+    if sweep:
+        row("collide(0.6173, 250, T_B/E_tr 1, nu_max 250), its defaults (CPU)",
+            f"{1e3 * collide_default_cpu():.2f} ms", "rtol 1e-11, energy split")
+    per_point = 2500 if full else (10 if quick else 100)
     seconds, count, cpu = fig8_parallel(250.0, per_point)
-    note = "" if args.full else (f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, "
+    note = "" if full else (f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, "
                                  f"{cpu / count * 50000 / 2:.0f} s at 2 full cores")
     row(f"Fig. 8 set at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
         f"{count / seconds / 2:,.0f} samples/s/core wall, {1e3 * cpu / count:.2f} ms CPU per sample{note}; "
         "target <= 30 s")
+
+
+def peer_rows():
     result = peers()
     reference = result.pop("reference")
     ours_time = result["ours"][1]
@@ -273,14 +300,6 @@ def main(argv=None):
         if len(value) == 3:
             note += f", compile {value[2]:.1f} s"
         row(f"peer, one sample (kappa 100, nu_max 50): {name}", f"{value[1]:.4f} s", note)
-    scaling = dask_scaling(400 if quick else 4000)
-    row("Dask LocalCluster, hard-core samples/s, 1 worker", f"{scaling[1]:,.0f} /s")
-    row("Dask LocalCluster, hard-core samples/s, 2 workers", f"{scaling[2]:,.0f} /s",
-        f"speed-up {scaling[2] / scaling[1]:.2f}")
-    row("Dask overhead per task (2 workers, trivial task)", f"{1e3 * scaling['overhead']:.2f} ms")
-    if args.update_docs:
-        update_docs(header)
-    return 0
 
 
 if __name__ == "__main__":

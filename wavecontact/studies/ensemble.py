@@ -36,9 +36,10 @@ MAX_SAMPLES = 10_000_000
 # from rtol 1e-10 by at most a few 1e-5 and their mean by about 1e-6, far below the ~6e-3 standard
 # error of a 2500-sample mean (docs/bath.md, "The thermal delay solve"; benchmarks/ensemble_accuracy.py).
 ENSEMBLE_RTOL = 1e-3
-# the delay solver's defaults in an ensemble at finite kappa (the end nodes of the Lobatto rule are the
-# step's ends: 6 evaluations of the exponent a step instead of 8, at the same measured accuracy)
-ENSEMBLE_DELAY_OPTIONS = {"rtol": ENSEMBLE_RTOL, "quadrature": "lobatto-kronrod"}
+# The delay solver's defaults in an ensemble at finite kappa: the end nodes of the Lobatto rule are the
+# step's ends (6 evaluations of the exponent a step instead of 8, at the same measured accuracy), and noise
+# tables with 16 nodes per period of the fastest mode move the samples by about 1e-6 (32: 6e-8).
+ENSEMBLE_DELAY_OPTIONS = {"rtol": ENSEMBLE_RTOL, "quadrature": "lobatto-kronrod", "noise_resolution": 16}
 _BATCH_SCHEMA = "wavecontact.ensemble_batch"
 _SCHEMA = "wavecontact.ensemble"
 _VERSION = 2  # 2: batches keep each sample's error estimate
@@ -70,8 +71,8 @@ class EnsembleSpec:
         Solver of each collision.
     options : dict
         Solver options (JSON values only).  The delay solver at finite kappa gets
-        ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = ENSEMBLE_RTOL``, the Lobatto-Kronrod rule)
-        where they are not given.
+        ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = ENSEMBLE_RTOL``, the Lobatto-Kronrod rule, 16 noise
+        table nodes per period of the fastest mode) where they are not given.
     batch_size : int
         Samples per task, in [1, 100000].
     energy_split : bool
