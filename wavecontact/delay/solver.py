@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..bath.model import seed_sequence
-from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_tables
-from ..bath.scene import scene_noise, start_gap
+from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_table_batch
+from ..bath.scene import EXPONENTIAL_MARGIN, end_reaches, scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
@@ -302,15 +302,22 @@ class DelaySolver(SolverBase):
         periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
         # _start's shift of the scaled gap: ln(B alpha^2 mu / Z_s^2)
         shift = math.log(contact.strength * contact.alpha**2 * params.reduced_mass / params.series_impedance**2)
+        # the draws, start gaps and noise spectra of all seeds at once, with the arithmetic of the
+        # per-scene path (ThermalBath.draw, start_gap, noise_coefficients, noise_tables)
+        q, r = bath.draw_amplitudes(lengths, [seed_sequence(seed) for seed in seeds])
+        if options.initial_gap is None:
+            margin = EXPONENTIAL_MARGIN / contact.alpha  # start_gap's margin for exponential contact
+            gaps = [contact.alpha * float(float(reach) + margin) - shift for reach in end_reaches(q, r)]
+        else:
+            gaps = [options.initial_gap] * len(seeds)
+        signs = ((-1.0) ** np.arange(1, bath.modes + 1), -np.ones(bath.modes))  # BathRealisation.contact_end_signs
+        factors = [kappa * math.sqrt(2.0) * sign for sign in signs]  # alpha = kappa (noise_coefficients)
+        a = np.stack([factors[i] * q[:, i] for i in range(2)], axis=1)
+        b = np.stack([factors[i] * r[:, i] for i in range(2)], axis=1)
+        contact_times = np.array([float(gap) / kappa for gap in gaps])
         out = np.empty((2, len(seeds)))
-        for j, seed in enumerate(seeds):
-            vibrations = bath.draw(lengths, seed_sequence(seed))
-            initial_gap = options.initial_gap
-            if initial_gap is None:
-                initial_gap = contact.alpha * float(start_gap(vibrations, contact)) - shift
-            tables = noise_tables(vibrations.noise_coefficients(kappa), periods, float(initial_gap) / kappa, 0.0,
-                                  options.noise_resolution)
-            _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
+        for j, tables in enumerate(noise_table_batch(a, b, periods, contact_times, 0.0, options.noise_resolution)):
+            _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, gaps[j],
                                                             options.end_time, None, options.max_steps,
                                                             params.impedance_ratio, tables, options.quadrature)
             out[0, j] = w[-1] / kappa - 1.0
