@@ -132,3 +132,20 @@ def test_curvature_blocks_bound_the_noise_curvature_on_any_interval():
         local.append(bound)
     # local: short intervals are bounded well below the period's maximum on average
     assert np.mean(local[:20]) < 0.8 * tables.curvature_bound
+
+
+def test_batched_tables_are_the_single_tables_bit_for_bit():
+    from wavecontact.bath.noise import noise_table_batch
+
+    bath = ThermalBath((0.4, 1.0), modes=50)
+    realisations = [bath.draw(LENGTHS, s) for s in range(3)]
+    coefficients = [v.noise_coefficients(80.0) for v in realisations]
+    a = np.array([[c[i][1] for i in range(2)] for c in coefficients])
+    b = np.array([[c[i][2] for i in range(2)] for c in coefficients])
+    contact_times = np.array([1.3, 2.9, 0.4])
+    batch = noise_table_batch(a, b, PERIODS, contact_times, 0.0, 16)
+    for k, c in enumerate(coefficients):
+        one = noise_tables(c, PERIODS, contact_times[k], 0.0, 16)
+        for name in ("values", "slopes", "block_max", "curvature_blocks"):
+            assert np.array_equal(getattr(batch[k], name), getattr(one, name))
+        assert (batch[k].slope_bound, batch[k].curvature_bound) == (one.slope_bound, one.curvature_bound)
