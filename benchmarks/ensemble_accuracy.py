@@ -1,6 +1,8 @@
 """How accurate must an ensemble sample be? One command, two tables (issue 11, docs/bath.md section 4).
 
-    python benchmarks/ensemble_accuracy.py [--samples 200] [--quick]
+    python benchmarks/ensemble_accuracy.py [--samples 200] [--quick] [--update-docs]
+
+``--update-docs`` writes the tables into docs/bath.md (between its ensemble-accuracy markers).
 
 Table 1: for Fig. 8 points (kappa = 250, nu_max = 250) the same samples (same seeds) are
 solved at the ensemble's defaults (``ENSEMBLE_DELAY_OPTIONS``: rtol 1e-3, Lobatto-Kronrod rule,
@@ -28,7 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from docs_block import run_and_write
 
 from wavecontact.bath import ThermalBath
 from wavecontact.delay import kernels
@@ -154,10 +159,16 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=200, help="samples per point of table 1 (default 200)")
     parser.add_argument("--quick", action="store_true", help="50 samples a point, 1 sample in table 2")
+    parser.add_argument("--update-docs", action="store_true",
+                        help="write the tables into docs/bath.md (its ensemble-accuracy block)")
     args = parser.parse_args(argv)
     samples = 50 if args.quick else args.samples
-    accuracy_table(samples)
-    claims_table(1 if args.quick else 3)
+
+    def tables():
+        accuracy_table(samples)
+        claims_table(1 if args.quick else 3)
+
+    run_and_write(tables, "bath.md", "ensemble-accuracy", args.update_docs)
     return 0
 
 
