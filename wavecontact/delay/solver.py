@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..bath.model import seed_sequence
-from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_table_batch
+from ..bath.model import ThermalBath, seed_sequence
+from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_table_batch, table_points
 from ..bath.scene import EXPONENTIAL_MARGIN, end_reaches, scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
@@ -288,6 +288,8 @@ class DelaySolver(SolverBase):
             (the sum of the local error estimates, :func:`solve_delay_equation`).
         """
         options = self.options(options)
+        if not isinstance(bath, ThermalBath):
+            raise InvalidParameterError("bath must be a wavecontact.bath.ThermalBath")
         prototype = two_rods(gamma, kappa)  # the rods, contact and parameters of every sample (cold)
         params = _check_scene(prototype)
         self.estimate_cost(prototype, options)
@@ -302,26 +304,18 @@ class DelaySolver(SolverBase):
         periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
         # _start's shift of the scaled gap: ln(B alpha^2 mu / Z_s^2)
         shift = math.log(contact.strength * contact.alpha**2 * params.reduced_mass / params.series_impedance**2)
-        # the draws, start gaps and noise spectra of all seeds at once, with the arithmetic of the
-        # per-scene path (ThermalBath.draw, start_gap, noise_coefficients, noise_tables)
-        q, r = bath.draw_amplitudes(lengths, [seed_sequence(seed) for seed in seeds])
-        if options.initial_gap is None:
-            margin = EXPONENTIAL_MARGIN / contact.alpha  # start_gap's margin for exponential contact
-            gaps = [contact.alpha * float(float(reach) + margin) - shift for reach in end_reaches(q, r)]
-        else:
-            gaps = [options.initial_gap] * len(seeds)
-        signs = ((-1.0) ** np.arange(1, bath.modes + 1), -np.ones(bath.modes))  # BathRealisation.contact_end_signs
-        factors = [kappa * math.sqrt(2.0) * sign for sign in signs]  # alpha = kappa (noise_coefficients)
-        a = np.stack([factors[i] * q[:, i] for i in range(2)], axis=1)
-        b = np.stack([factors[i] * r[:, i] for i in range(2)], axis=1)
-        contact_times = np.array([float(gap) / kappa for gap in gaps])
+        # chunks of seeds whose noise spectra take at most about 32 MB (2^21 complex numbers)
+        chunk = max(1, min(32, (1 << 21) // (2 * table_points(bath.modes, options.noise_resolution))))
         out = np.empty((2, len(seeds)))
-        for j, tables in enumerate(noise_table_batch(a, b, periods, contact_times, 0.0, options.noise_resolution)):
-            _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, gaps[j],
-                                                            options.end_time, None, options.max_steps,
-                                                            params.impedance_ratio, tables, options.quadrature)
-            out[0, j] = w[-1] / kappa - 1.0
-            out[1, j] = error
+        for start in range(0, len(seeds), chunk):
+            part = seeds[start:start + chunk]
+            for j, (gap, tables) in enumerate(_thermal_starts(bath, part, lengths, contact, shift, kappa, periods,
+                                                              options), start):
+                _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, gap,
+                                                                options.end_time, None, options.max_steps,
+                                                                params.impedance_ratio, tables, options.quadrature)
+                out[0, j] = w[-1] / kappa - 1.0
+                out[1, j] = error
         return out[0], out[1]
 
     def expected_order(self, options) -> float:
@@ -394,6 +388,26 @@ class DelaySolver(SolverBase):
 
 
 _PARAMETER_NAMES = tuple(f.name for f in dataclasses.fields(DelayParameters))
+
+
+def _thermal_starts(bath, seeds, lengths, contact, shift, kappa, periods, options) -> list:
+    """``(initial_gap, tables)`` of each seed's realisation: what :func:`_start` gives for its thermal scene.
+
+    The draws, start gaps and noise spectra of all seeds are formed at once, with the arithmetic of
+    the per-scene path (``ThermalBath.draw``, ``start_gap``, ``noise_coefficients``, ``noise_tables``).
+    """
+    q, r = bath.draw_amplitudes(lengths, [seed_sequence(seed) for seed in seeds])
+    if options.initial_gap is None:
+        margin = EXPONENTIAL_MARGIN / contact.alpha  # start_gap's margin for exponential contact
+        gaps = [contact.alpha * float(float(reach) + margin) - shift for reach in end_reaches(q, r)]
+    else:
+        gaps = [options.initial_gap] * len(seeds)
+    signs = ((-1.0) ** np.arange(1, bath.modes + 1), -np.ones(bath.modes))  # BathRealisation.contact_end_signs
+    factors = [kappa * math.sqrt(2.0) * sign for sign in signs]  # alpha = kappa (noise_coefficients)
+    a = np.stack([factors[i] * q[:, i] for i in range(2)], axis=1)
+    b = np.stack([factors[i] * r[:, i] for i in range(2)], axis=1)
+    contact_times = np.array([float(gap) / kappa for gap in gaps])
+    return list(zip(gaps, noise_table_batch(a, b, periods, contact_times, 0.0, options.noise_resolution)))
 
 
 def _start(scene: Scene, params: DelayParameters, options: DelayOptions) -> tuple:
