@@ -279,8 +279,9 @@ def delay_rows(quick, full, sweep=False):
             f"{1e3 * collide_default_cpu():.2f} ms", "rtol 1e-11, energy split")
     per_point = 2500 if full else (10 if quick else 100)
     seconds, count, cpu = fig8_parallel(250.0, per_point)
-    note = "" if full else (f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, "
-                                 f"{cpu / count * 50000 / 2:.0f} s at 2 full cores")
+    note = (f"; {cpu / 2:.0f} s at 2 full cores" if full else
+            f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, {cpu / count * 50000 / 2:.0f} s at 2 "
+            "full cores")
     row(f"Fig. 8 set at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
         f"{count / seconds / 2:,.0f} samples/s/core wall, {1e3 * cpu / count:.2f} ms CPU per sample{note}; "
         "target <= 30 s")
