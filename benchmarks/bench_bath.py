@@ -55,7 +55,7 @@ from wavecontact.api import solve
 from wavecontact.bath import ThermalBath
 from wavecontact.bath.collide import thermal_scene
 from wavecontact.bath.scene import scene_noise
-from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
+from wavecontact.studies.bath_figures import FIG8_TEMPERATURES, spread_against_temperature
 from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS, EnsembleSpec, ensemble, run_batch
 
 GAMMA = 0.6173
@@ -132,7 +132,8 @@ def _children_cpu():
 
 
 def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEMPERATURES):
-    """Wall seconds, sample count and worker CPU seconds (start-up excluded) of the Fig. 8 set on 2 processes.
+    """Wall seconds, sample count and worker CPU seconds (start-up excluded) of the Fig. 8 set on 2 processes,
+    run as ``wavecontact bath-figure 8 --workers 2`` runs it (``spread_against_temperature``, batches of 256).
 
     The workers' CPU time is read once they have exited (``RUSAGE_CHILDREN``);
     the CPU of a pool that only starts up and warms its kernels is measured
@@ -149,10 +150,7 @@ def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEM
     with ProcessPoolExecutor(2) as pool:
         warm(pool)
         started = time.perf_counter()
-        for a, gamma in enumerate(gammas):
-            for b, temperature in enumerate(temperatures):
-                ensemble(gamma, kappa, temperature, samples, 8 + 1000 * a + b, executor=pool,
-                         batch_size=max(1, min(256, samples // 4)))
+        spread_against_temperature(gammas, temperatures, kappa, samples, 8, executor=pool)  # bath-figure 8's path
         wall = time.perf_counter() - started
     cpu = _children_cpu() - before - start_up
     return wall, len(gammas) * len(temperatures) * samples, cpu
