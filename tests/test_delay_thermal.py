@@ -79,3 +79,17 @@ def test_ensemble_default_tolerance_moves_the_mean_far_less_than_its_standard_er
     assert np.all(np.abs(loose - tight) <= estimates)
     standard_error = tight.std(ddof=1) / np.sqrt(tight.size)
     assert abs(np.mean(loose - tight)) < 0.01 * standard_error
+
+
+def test_a_contact_that_comes_back_after_a_memory_period_is_not_missed():
+    # this realisation touches again about 4.8 time units after its first contact ended, more
+    # than one memory period (Gamma_1 + Gamma_2 = 4.24) later: a solver that stopped once W' had
+    # been negligible for one memory period returned epsilon = 0.265 instead of 0.464 at rtol 1e-3
+    from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS
+
+    scene = thermal_scene(0.6173, 250.0, ThermalBath(0.8, 250), sample_seed(15, 802))
+    tight = solve(scene, "delay", rtol=1e-9, energy_split=False)
+    for options in ({"rtol": 1e-3}, ENSEMBLE_DELAY_OPTIONS):
+        loose = solve(scene, "delay", energy_split=False, **options)
+        assert abs(loose.restitution - tight.restitution) <= loose.error_estimate
+    assert tight.restitution > 0.4

@@ -271,6 +271,53 @@ def noise_curvature_bound(t0, t1, periods, tables, curvature_blocks):
 
 
 @kernel
+def no_later_contact(t0, w_final, kappa, a0, t, w, d1, d2, last, delays, weights, periods, tables, block_max,
+                     negligible):
+    """True if, with ``W`` held at ``w_final`` from ``t0`` on, ``W'`` stays below ``e^negligible`` for good.
+
+    A certificate for stopping with tabulated noise, where a contact may come back long after the
+    last one.  With ``W`` constant, ``S_i(s + Gamma_i) = S_i(s) + W``, so ``u_i = S_i - W s / Gamma_i``
+    is ``Gamma_i``-periodic after ``t0``, like rod ``i``'s noise row, and
+    ``g - W = drift s - a0 - W + sum_i (Q_i - beta_i u_i)`` with ``drift = kappa - W sum_i beta_i / Gamma_i``.
+    Each row's ``Q_i - beta_i u_i`` is bounded over one period block by block (``block_max`` for
+    ``Q_i``; ``S_i`` never decreases), which bounds ``g - W`` for every later time once
+    ``drift < 0``.  Rows whose period is not their rod's round trip get no certificate (True:
+    the caller's own rule decides).
+    """
+    if periods.shape[0] != delays.shape[0]:
+        return True
+    drift = kappa
+    for i in range(delays.shape[0]):
+        if abs(periods[i] - delays[i]) > 1e-12 * delays[i]:
+            return True
+        drift -= w_final * weights[i] / delays[i]
+    if drift >= 0.0:
+        return False
+    bound = drift * t0 - a0 - w_final
+    n = tables.shape[1]
+    size = n // block_max.shape[1]
+    for i in range(delays.shape[0]):
+        gamma_i = delays[i]
+        beta = weights[i]
+        h = periods[i] / n
+        best = -math.inf
+        c = int(t0 / h)  # t0 >= 0: the cell that holds t0
+        while c * h <= t0 + gamma_i + h:
+            j = c % n
+            stop = c + size - j % size  # first cell of the next block
+            start = max(c * h, t0)
+            memory = 0.0  # S_i at the block's start (it only grows within the block)
+            m = 1
+            while start - m * gamma_i > t[0]:
+                memory += hermite5(t, w, d1, d2, last, start - m * gamma_i)[0]
+                m += 1
+            best = max(best, block_max[i, j // size] - beta * memory + beta * w_final * (stop * h) / gamma_i)
+            c = stop
+        bound += best
+    return bound < negligible
+
+
+@kernel
 def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_max, q0):
     """True if the force stays negligible on ``[t0, t0 + span]`` (tabulated noise).
 
@@ -702,7 +749,10 @@ def integrate_delay_equation(
             t_active = t1
         factor = 4.0 if error == 0.0 else min(4.0, 0.8 * (tol / error) ** 0.2)
         h *= max(0.2, factor)
-        if t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time:
+        # with tabulated noise a contact may come back later than one memory period: stop on a certificate
+        settled = t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time
+        if settled and (not tabulated or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
+                                                          periods, tables, block_max, negligible)):
             break
 
     tail = d1[last] * settle_time
