@@ -89,6 +89,8 @@ STATUS_TIME_LIMIT = 4
 _QUARTIC_GAP = 0.01728
 # below this |a h| the exponential change of variable is the identity to round-off
 _LINEAR_THRESHOLD = 1e-9
+# no_later_contact certifies only separations faster than this share of the approach speed
+SLOW_SEPARATION = 1e-3
 
 
 @kernel
@@ -281,8 +283,9 @@ def no_later_contact(t0, w_final, kappa, a0, t, w, d1, d2, last, delays, weights
     ``g - W = drift s - a0 - W + sum_i (Q_i - beta_i u_i)`` with ``drift = kappa - W sum_i beta_i / Gamma_i``.
     Each row's ``Q_i - beta_i u_i`` is bounded over one period block by block (``block_max`` for
     ``Q_i``; ``S_i`` never decreases), which bounds ``g - W`` for every later time once
-    ``drift < 0``.  Rows whose period is not their rod's round trip get no certificate (True:
-    the caller's own rule decides).
+    ``drift < 0``.  Rows whose period is not their rod's round trip get no certificate, nor do
+    rods that separate at less than ``SLOW_SEPARATION`` of the approach speed (``-drift / kappa``
+    is epsilon for one material): True, the caller's own rule decides.
     """
     if periods.shape[0] != delays.shape[0]:
         return True
@@ -292,7 +295,9 @@ def no_later_contact(t0, w_final, kappa, a0, t, w, d1, d2, last, delays, weights
             return True
         drift -= w_final * weights[i] / delays[i]
     if drift >= 0.0:
-        return False
+        return False  # the ends still approach on average: the force must come back
+    if drift > -SLOW_SEPARATION * kappa:
+        return True  # too slow a separation to certify within the time limit: one memory period decides
     bound = drift * t0 - a0 - w_final
     n = tables.shape[1]
     size = n // block_max.shape[1]
