@@ -230,6 +230,13 @@ class DelaySolver(SolverBase):
         return hard_core_restitutions(gamma, temperature, seeds, grid=cached_grid(float(gamma), int(modes),
                                                                                    int(resolution)))
 
+    def hard_core_grid_points(self, gamma: float, modes: int = 250, resolution: int = 8) -> int:
+        """Grid points per ``Gamma_1`` of the hard-core grid at ``resolution`` points per period of the
+        short rod's fastest bath mode (``max(resolution nu_max, 256)``): the step is ``(1 + gamma)`` over it."""
+        from .stochastic_hardcore_batch import cached_grid
+
+        return int(cached_grid(float(gamma), int(modes), int(resolution)).n1)
+
     def hard_core_thermal_split(self, gamma: float, temperature_ratio, seed, *, bath_modes: int = 250,
                                 resolution: int = 8, temperatures=None) -> tuple:
         """``(epsilon^2, gain_1, gain_2)`` of one hard-core thermal collision with each rod's share.

@@ -175,16 +175,14 @@ def _hard_core_batch(spec: EnsembleSpec, start: int, stop: int) -> np.ndarray:
     from ..bath.streams import SpawnedSeeds
     from ..solvers import get_solver
 
-    resolution = spec.options.get("hard_core_resolution", 8)
+    resolution = _resolution(spec)
     seeds = SpawnedSeeds(spec.seed, start, stop)  # sample_seed(spec.seed, j) for j in start..stop-1
     return get_solver("delay").hard_core_thermal_batch(spec.gamma, spec.temperature, seeds, spec.bath_modes,
                                                        resolution)
 
 
 def _resolution(spec: EnsembleSpec) -> int:
-    from ..delay.stochastic_hardcore_batch import DEFAULT_POINTS_PER_PERIOD
-
-    return spec.options.get("hard_core_resolution", DEFAULT_POINTS_PER_PERIOD)
+    return spec.options.get("hard_core_resolution", 8)  # the hard-core grid's default points per period
 
 
 @dataclass(frozen=True)
@@ -246,20 +244,20 @@ def grid_bias(spec: EnsembleSpec, restitution: np.ndarray) -> GridBias:
     differences gives its standard error.  Cost: 64 to 127 samples at about 1.7 times a
     sample's cost (docs/bath.md section 3).
     """
-    from ..delay.stochastic_hardcore_batch import cached_grid
     from ..solvers import get_solver
 
+    solver = get_solver("delay")
     resolution = _resolution(spec)
     modes = spec.bath_modes
 
     def grid_points(r):
-        return cached_grid(spec.gamma, modes, int(r)).n1
+        return solver.hard_core_grid_points(spec.gamma, modes, r)
 
     check = _check_resolution(grid_points, modes, resolution)
     factor = grid_points(check) / (grid_points(check) - grid_points(resolution))
     indices = grid_bias_indices(restitution.size)
     stride = int(indices[1] - indices[0]) if indices.size > 1 else 1
-    checked = get_solver("delay").hard_core_thermal_batch(
+    checked = solver.hard_core_thermal_batch(
         spec.gamma, spec.temperature, [sample_seed(spec.seed, j) for j in indices], modes, check)
     differences = factor * (restitution[indices] - checked)
     error = float(np.std(differences, ddof=1)) / math.sqrt(indices.size) if indices.size > 1 else math.inf
