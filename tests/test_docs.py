@@ -69,7 +69,8 @@ def test_every_script_written_block_has_a_writer_and_names_its_command():
         assert body, f"{page}: block {name} is empty"
         assert re.search(rf"(?:[\"']|<!-- ){re.escape(name)}[\"':]", scripts), f"{page}: no script names block {name}"
     for name in ("bench-fem", "profile-explicit-step", "bench-modal", "bench-two-materials", "bench_markov",
-                 "markov-fig10", "markov-balance", "markov-samples", "bench-bath"):
+                 "markov-fig10", "markov-balance", "markov-samples", "markov-cooling", "markov-defect", "bench-bath",
+                 "fem-cost-model", "bath-studies-boltzmann", "bath-studies-uptake"):
         page, body = bodies[name]
         assert body.startswith("`python "), f"{page}: block {name} does not start with its command"
 
@@ -356,3 +357,55 @@ def test_dispersive_table_shows_two_thirds_and_its_first_cell():
     assert len(rows) == 3 and all(abs(float(r[-1]) - 2 / 3) < 0.1 for r in rows)  # d ~ (c t h^2)^(1/3)
     (p2,) = [r for r in rows if r[0] == "P2 lumped"]
     assert p2[1] == f"{abs(wavecontact.collide(0.6, math.inf, solver='fem', elements=200, order=2).restitution - 0.6):.1e}"
+
+
+def _script_block(page: str, name: str) -> str:
+    """The body of a block that a script writes (``<!-- name:start -->``) on docs/``page``."""
+    text = (ROOT / "docs" / page).read_text()
+    match = re.search(rf"<!-- {re.escape(name)}:start -->\n(.*?)<!-- {re.escape(name)}:end -->", text, re.DOTALL)
+    assert match and match.group(1).strip(), f"docs/{page}: block {name} missing or empty"
+    return match.group(1)
+
+
+def _markdown_rows(text: str) -> list:
+    return [[c.strip() for c in line.strip("|").split("|")] for line in text.splitlines()
+            if line.startswith("|") and not line.startswith("|---")][1:]
+
+
+def test_fem_cost_model_block_counts_what_the_solver_runs():
+    """docs/fem.md section 4: the steps and nodes of each row are those of the FE solver's own run, and the
+    columns obey the model (loop = steps c_step + the checks' share)."""
+    rows = _markdown_rows(_script_block("fem.md", "fem-cost-model"))
+    assert len(rows) == 4
+    for contact, elements, nodes, steps, checks, loop, c_step, c_node, share, _set_up in rows:
+        kappa = math.inf if contact == "hard" else float(contact.split("=")[1])
+        result = wavecontact.collide(0.6, kappa, solver="fem", elements=int(elements))
+        assert int(steps) == result.work["steps"] - 1  # the timed runs stop one step before the stopping check
+        assert int(nodes) == sum(result.work["elements"]) + 2  # two P1 rods: elements + 1 nodes each
+        share = float(share.rstrip(" %")) / 100
+        assert float(steps) * float(c_step) * 1e-3 == pytest.approx((1 - share) * float(loop), rel=0.05, abs=0.01)
+        checks_ms = float(checks) * float(c_node) * float(nodes) * 1e-6
+        assert checks_ms == pytest.approx(share * float(loop), rel=0.1, abs=0.02)
+
+
+def test_markov_cooling_block_holds_the_deterministic_limits():
+    """docs/markov.md: after one collision from a cold bath the vibration rule leaves gamma^2 E_tr(0)
+    (epsilon = gamma exactly), Glauber's rule 0 (Eq. 36); both end near the Boltzmann mean."""
+    text = _script_block("markov.md", "markov-cooling")
+    start = float(re.search(r"`E_tr\(0\) = (\S+) T_B\^0`", text).group(1))
+    rows = _markdown_rows(text)
+    first = rows[0]
+    assert float(first[1].split()[0]) == pytest.approx(0.6**2 * start, abs=1e-4)
+    assert float(first[2]) == 0.0
+    vibration, glauber = (int(x) for x in rows[1][1:])
+    assert glauber == 1 and vibration > glauber  # Glauber's new energy does not depend on the old one
+    assert all(abs(float(x) - 1.0) < 0.15 for x in rows[2][1:])
+
+
+def test_markov_page_claims_about_the_boltzmann_defect_hold():
+    """docs/markov.md: at 250 modes the defect is below 0.01 per collision and below the Fig. 10 chains'
+    standard error; it falls as nu_max grows."""
+    rows = {int(r[0]): float(r[4]) for r in _markdown_rows(_script_block("markov.md", "bath-studies-boltzmann"))}
+    assert -0.01 < rows[250] < 0 and rows[8] < rows[32] < rows[128] < 0
+    pooled_error = float(re.search(r"standard error (\S+) from", _script_block("markov.md", "markov-fig10")).group(1))
+    assert abs(rows[250]) < pooled_error
