@@ -409,3 +409,10 @@ def test_markov_page_claims_about_the_boltzmann_defect_hold():
     assert -0.01 < rows[250] < 0 and rows[8] < rows[32] < rows[128] < 0
     pooled_error = float(re.search(r"standard error (\S+) from", _script_block("markov.md", "markov-fig10")).group(1))
     assert abs(rows[250]) < pooled_error
+
+
+def test_no_page_or_docstring_cites_the_specification_outside_the_repository():
+    """The pages and the package must not send a reader to MODEL.md, which is not in the repository."""
+    files = [*PAGES, *sorted((ROOT / "wavecontact").rglob("*.py"))]
+    citing = [str(f.relative_to(ROOT)) for f in files if "MODEL.md" in f.read_text(encoding="utf-8")]
+    assert not citing, f"these cite MODEL.md, which is not in the repository: {citing}"

@@ -99,7 +99,7 @@ ROUNDING_FLOOR = 1e-12
 # only 79 to 97 % of the sweeps' collisions (docs/error_estimates.md section 2): an order of
 # magnitude, which tolerance= does not accept
 TRUSTED_FROM = 32
-# Stable step in units of the element travel time h/c (MODEL.md 7), for the cost estimate
+# Stable step in units of the element travel time h/c (docs/fem.md section 2), for the cost estimate
 _STABLE_COURANT = {(1, "lumped"): 1.0, (1, "consistent"): 0.577, (2, "lumped"): 0.408, (2, "consistent"): 0.258}
 # Doubles held per node (state, masses, matrices, kernel buffers) and per step (histories)
 _BYTES_PER_NODE = 8 * 48
