@@ -69,6 +69,7 @@ def modes_dependence(pool, cases=CASES, seed=60):
     print("| gamma | T_B/E_tr | nu_max | samples | mean eps (SE) | std eps (SE) | grid: mean(eps_8 - eps_4) (SE) "
           "| mean extrapolated to h = 0 |")
     print("|---|---|---|---|---|---|---|---|")
+    found = {}
     for gamma, temperature, samples, modes in cases:
         for m in modes:
             fine = ensemble(gamma, math.inf, temperature, samples, seed, bath_modes=m, executor=pool,
@@ -81,6 +82,29 @@ def modes_dependence(pool, cases=CASES, seed=60):
             print(f"| {gamma} | {temperature:g} | {m} | {samples} | {fine.mean:.4f} ({fine.standard_error:.4f}) | "
                   f"{fine.std:.4f} ({fine.std_standard_error:.4f}) | {grid.mean():+.5f} "
                   f"({grid.std(ddof=1) / math.sqrt(subset):.5f}) | {extrapolated:.4f} |", flush=True)
+            found[gamma, temperature, m] = (fine.mean, fine.standard_error, fine.std, grid.mean())
+    _modes_summary(found)
+
+
+def _modes_summary(found):
+    """The changes of the mean between mode counts, in standard errors, and the grid's share against them."""
+    print()
+    for gamma, temperature in sorted({(g, t) for g, t, _ in found}, reverse=True):
+        rows = {m: v for (g, t, m), v in found.items() if (g, t) == (gamma, temperature)}
+        for low, high in ((50, 250), (250, 1000)):
+            if low in rows and high in rows:
+                change = rows[high][0] - rows[low][0]
+                error = math.hypot(rows[high][1], rows[low][1])
+                print(f"* gamma {gamma}, T_B/E_tr {temperature:g}: mean from {low} to {high} modes "
+                      f"{change:+.4f} +- {error:.4f} ({change / error:+.1f} standard errors).")
+        means = [rows[m][0] for m in rows if m >= 250]
+        stds = [rows[m][2] for m in rows]
+        print(f"* gamma {gamma}, T_B/E_tr {temperature:g}: means from 250 modes on within {max(means) - min(means):.4f} "
+              f"of each other; standard deviations within {max(stds) - min(stds):.4f} over all mode counts.")
+    grids = [abs(v[3]) for v in found.values()]
+    ratio = min(v[1] / abs(v[3]) for v in found.values() if v[3])
+    print(f"* Grid corrections |mean(eps_8 - eps_4)| from {min(grids):.0e} to {max(grids):.0e}; the standard error "
+          f"of each mean is at least {ratio:.0f} times its grid correction.")
 
 
 def _grid_errors(args):

@@ -416,3 +416,24 @@ def test_no_page_or_docstring_cites_the_specification_outside_the_repository():
     files = [*PAGES, *sorted((ROOT / "wavecontact").rglob("*.py"))]
     citing = [str(f.relative_to(ROOT)) for f in files if "MODEL.md" in f.read_text(encoding="utf-8")]
     assert not citing, f"these cite MODEL.md, which is not in the repository: {citing}"
+
+
+def test_bath_figure_outputs_on_the_page_are_the_stored_runs():
+    """docs/bath.md section 8 shows what `wavecontact bath-figure N` printed (docs/figures/bath/figN.txt),
+    and Fig. 8's table holds the numbers of the same run's JSON."""
+    import json
+
+    text = (ROOT / "docs" / "bath.md").read_text()
+    folder = ROOT / "docs" / "figures" / "bath"
+    for n in (4, 7, 8, 9):
+        shown = re.search(rf"!\[Fig. {n}\]\(figures/bath/fig{n}.png\)\n\n```\n(.*?)```", text, re.DOTALL)
+        assert shown, f"docs/bath.md shows no output under Fig. {n}"
+        assert shown.group(1).strip() == (folder / f"fig{n}.txt").read_text().strip(), f"Fig. {n} output differs"
+    record = json.loads((folder / "fig8.json").read_text())
+    rows = [line.split() for line in (folder / "fig8.txt").read_text().splitlines()[1:]]
+    for i, gamma in enumerate(record["gamma"]):
+        for j, temperature in enumerate(record["temperature"]):
+            (row,) = [r for r in rows if float(r[0]) == gamma and float(r[1]) == temperature]
+            assert row[2] == f"{record['mean'][i][j]:.4f}" and row[4] == f"{record['std'][i][j]:.4f}"
+            assert record["mean_error"][i][j] == pytest.approx(record["std"][i][j] / math.sqrt(record["samples"]),
+                                                               rel=0.01)
