@@ -70,7 +70,8 @@ def test_every_script_written_block_has_a_writer_and_names_its_command():
         assert re.search(rf"(?:[\"']|<!-- ){re.escape(name)}[\"':]", scripts), f"{page}: no script names block {name}"
     for name in ("bench-fem", "profile-explicit-step", "bench-modal", "bench-two-materials", "bench_markov",
                  "markov-fig10", "markov-balance", "markov-samples", "markov-cooling", "markov-defect", "bench-bath",
-                 "fem-cost-model", "bath-studies-boltzmann", "bath-studies-uptake"):
+                 "fem-cost-model", "bath-studies-boltzmann", "bath-studies-uptake", "bath-studies-grid",
+                 "bath-studies-modes", "bath-studies-kappa"):
         page, body = bodies[name]
         assert body.startswith("`python "), f"{page}: block {name} does not start with its command"
 
@@ -437,3 +438,19 @@ def test_bath_figure_outputs_on_the_page_are_the_stored_runs():
             assert row[2] == f"{record['mean'][i][j]:.4f}" and row[4] == f"{record['std'][i][j]:.4f}"
             assert record["mean_error"][i][j] == pytest.approx(record["std"][i][j] / math.sqrt(record["samples"]),
                                                                rel=0.01)
+
+
+def test_bath_page_claims_about_modes_and_kappa_hold():
+    """docs/bath.md sections 6-7: the mean changes from 250 to 1000 modes by a small fraction of the 0.025
+    once claimed, within about two standard errors; from kappa = 50 on the paired difference to the hard
+    core is within about two standard errors and below a 2500-sample point's standard error."""
+    modes = _script_block("bath.md", "bath-studies-modes")
+    changes = re.findall(r"T_B/E_tr 1: mean from 250 to 1000 modes ([-+][\d.]+) \+- ([\d.]+)", modes)
+    assert len(changes) == 2
+    for change, error in changes:
+        assert abs(float(change)) < 0.025 / 4 and abs(float(change)) < 2.5 * float(error)
+    for row in _markdown_rows(_script_block("bath.md", "bath-studies-kappa")):
+        if row[0] in ("50", "100", "250"):
+            std = float(row[2])
+            difference, error = (float(x) for x in row[3].replace("(", " ").replace(")", " ").split())
+            assert abs(difference) < 2.2 * error and abs(difference) < std / 50, row[0]
