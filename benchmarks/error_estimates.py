@@ -3,12 +3,16 @@
 One command::
 
     python benchmarks/error_estimates.py [--samples 200] [--seed 2026] [--solver fem modal]
-        [--max-work 2e10] [--update-docs]
+        [--max-work 2e10] [--save FILE] [--update-docs]
 
 (``--part K/N --verbose > part_K.txt`` in N processes, then ``--summarize part_*.txt``, gives
-the same table.)  ``--update-docs`` writes the table of one solver into docs/error_estimates.md
-(the block ``sweep:SOLVER:SEED``); the FE tables there come from
-``--solver fem --seed S --max-work 2e10 --update-docs`` for S = 2027, 2028, 2029.
+the same table.)  ``--save FILE`` also stores every sample (options, the restitutions of the
+estimate's runs, the reference and its estimate) as one JSON object a line; ``--offline FILE``
+re-applies the library's FE rule (:mod:`wavecontact.fem.error_estimate`, a pure function of
+those runs) to a stored sweep in seconds instead of solving.  ``--update-docs`` writes the table
+of one solver into docs/error_estimates.md (the block ``sweep:SOLVER:SEED``); the FE tables there
+come from ``--solver fem --seed S --offline benchmarks/sweeps/fem_S.jsonl --update-docs`` for
+S = 2027 ... 2030, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
@@ -40,19 +44,22 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
+import json
 import math
 import os
 import time
 
 import numpy as np
 
-from wavecontact import collide
+from wavecontact import collide, two_rods
 from wavecontact.errors import LimitError, SolverFailure
+from wavecontact.fem.solver import SOLVER as FEM
+from wavecontact.solvers.base import excess_bound
 
 DISCRETIZATIONS = ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
 DOCS_PAGE = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "docs", "error_estimates.md")
 SHARP_ABOVE = 1e-10
-COARSE_BELOW = 32  # elements: with an unresolved contact, the run at N/4 then has fewer than 8
 
 
 def draw(solver: str, index: int, stream: np.random.Generator) -> dict:
@@ -84,10 +91,35 @@ def run_sample(solver: str, sample: dict, max_work: float | None = None) -> dict
     out.update(status="ok", error=abs(result.restitution - reference.restitution),
                estimate=result.error_estimate, reference_estimate=reference.error_estimate,
                restitution=result.restitution, reference=reference.restitution,
-               levels=result.diagnostics.get("error_estimate_levels", []),
+               levels=[list(level) for level in result.diagnostics.get("error_estimate_levels", [])],
+               scheme=result.extra.get("contact_scheme", ""),
                estimate_seconds=result.diagnostics["error_estimate_seconds"], solve_seconds=result.wall_time_s,
                seconds=time.perf_counter() - start)
     return out
+
+
+def load_rows(name: str) -> list:
+    """The samples stored in ``name``: one JSON object a line (``--save``) or the dicts ``--verbose`` prints."""
+    rows = []
+    with open(name, encoding="utf-8") as handle:
+        for line in handle:
+            if line.startswith("{"):
+                rows.append(json.loads(line) if line.startswith('{"') else
+                            ast.literal_eval(line.replace("inf", "1e999")))
+    return rows
+
+
+def reapply(row: dict) -> dict:
+    """``row`` with ``estimate`` (and ``rough``) recomputed by the library's FE rule from its stored levels,
+    exactly as ``collide`` would from the same runs (the rule is a pure function of them)."""
+    if row["status"] != "ok":
+        return row
+    scene = two_rods(row["gamma"], row["kappa"])
+    options = FEM.estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
+    levels = [tuple(level) for level in row["levels"]]
+    estimate, rule = FEM.estimate_from_levels(scene, options, levels)
+    return {**row, "estimate": excess_bound(estimate, row["restitution"], cold=True), "rule": rule,
+            "rough": FEM.rough_estimate(scene, options)}
 
 
 def summarize(rows: list) -> dict:
@@ -119,34 +151,47 @@ def main(argv=None) -> int:
                         help="run only the K-th of N slices of the samples (same streams; to use N processes)")
     parser.add_argument("--summarize", nargs="+", metavar="FILE",
                         help="print the table from the --verbose output of earlier runs instead of running")
+    parser.add_argument("--save", metavar="FILE",
+                        help="also write every sample (levels, reference, estimate) to FILE, one JSON object a line")
+    parser.add_argument("--offline", nargs="+", metavar="FILE",
+                        help="re-apply the library's FE rule to the levels stored by --save (or --verbose) "
+                             "instead of running, and print the table")
+    parser.add_argument("--misses", action="store_true",
+                        help="also list the FE collisions the estimate does not bound or is not within 10x of")
     parser.add_argument("--update-docs", action="store_true",
                         help="also write the table into docs/error_estimates.md (block sweep:SOLVER:SEED, one solver)")
     args = parser.parse_args(argv)
-    if args.summarize:
-        rows = []
-        for name in args.summarize:
-            with open(name, encoding="utf-8") as handle:
-                rows += [ast.literal_eval(line.replace("inf", "1e999")) for line in handle if line.startswith("{")]
+    if args.summarize or args.offline:
+        rows = [row for name in args.summarize or args.offline for row in load_rows(name)]
+        if args.offline:
+            rows = [reapply(row) for row in rows if row["solver"] == "fem"]
         return _report({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver}, args)
     part, parts = (int(x) for x in args.part.split("/"))
     tables = {}
-    for solver in args.solver:
-        streams = [np.random.default_rng(s) for s in np.random.SeedSequence(args.seed).spawn(args.samples)]
-        rows = []
-        for index, stream in enumerate(streams):
-            if index % parts != part - 1:
-                continue
-            row = {"solver": solver, "index": index, **run_sample(solver, draw(solver, index, stream), args.max_work)}
-            rows.append(row)
-            if args.verbose:
-                print(row, flush=True)
-        tables[solver] = rows
+    with open(args.save, "w", encoding="utf-8") if args.save else contextlib.nullcontext() as save:
+        for solver in args.solver:
+            streams = [np.random.default_rng(s) for s in np.random.SeedSequence(args.seed).spawn(args.samples)]
+            rows = []
+            for index, stream in enumerate(streams):
+                if index % parts != part - 1:
+                    continue
+                row = {"solver": solver, "index": index,
+                       **run_sample(solver, draw(solver, index, stream), args.max_work)}
+                rows.append(row)
+                if args.verbose:
+                    print(row, flush=True)
+                if save is not None:
+                    save.write(json.dumps(row) + "\n")
+                    save.flush()
+            tables[solver] = rows
     return _report(tables, args)
 
 
 def _report(tables: dict, args) -> int:
     lines = table_lines(tables)
     print("\n".join(lines), flush=True)
+    if getattr(args, "misses", False):
+        print("\n".join(miss_lines(tables.get("fem", []))), flush=True)
     if args.update_docs:
         if len(tables) != 1:
             raise SystemExit("--update-docs writes one solver's table: give one --solver")
@@ -163,6 +208,33 @@ def regime(row: dict) -> str:
     if resolution <= 1.0:
         return "alpha V h/c <= 1"
     return "alpha V h/c in (1, 30]" if resolution <= 30.0 else "alpha V h/c > 30"
+
+
+def rough(row: dict) -> bool:
+    """Whether the library flags the sample's estimate as an order of magnitude
+    (``diagnostics["error_estimate_rough"]``, which ``tolerance=`` refuses): a function of
+    gamma, kappa and the options only."""
+    return bool(FEM.rough_estimate(two_rods(row["gamma"], row["kappa"]), FEM.options(row["options"])))
+
+
+def miss_lines(rows: list) -> list:
+    """One line per solved FE sample outside the coverage or the factor 10: its options, the regime
+    ``x = alpha V h / c``, error, estimate, their ratio, the errors of the estimate's runs and the rough flag."""
+    lines = ["index | discretization | N | x | error | estimate | ratio | errors of the runs N, N/2, ... | flag"]
+    for r in rows:
+        if r["status"] != "ok":
+            continue
+        covered = r["error"] <= r["estimate"] + r["reference_estimate"]
+        sharp = r["error"] <= SHARP_ABOVE or 0.1 <= r["estimate"] / r["error"] <= 10.0
+        if covered and sharp:
+            continue
+        o = r["options"]
+        x = r["kappa"] * (1.0 + r["gamma"]) / (2.0 * o["elements"])
+        runs = " ".join(f"{value - r['reference']:+.2e}" for _, value in r["levels"])
+        lines.append(f"{r['index']} | P{o['order']} {o['mass']} | {o['elements']} | {x:.3g} | {r['error']:.2e} | "
+                     f"{r['estimate']:.2e} | {r['estimate'] / r['error']:.3g} | {runs} | "
+                     f"{'rough' if rough(r) else ''}{'' if covered else ' not bounded'}")
+    return lines
 
 
 def estimate_share(rows: list) -> tuple:
@@ -190,9 +262,9 @@ def table_lines(tables: dict) -> list:
                                               == (order, mass)]
             for name in ("alpha V h/c <= 1", "alpha V h/c in (1, 30]", "alpha V h/c > 30", "hard contact"):
                 groups[name] = [r for r in rows if regime(r) == name]
-            coarse = [r for r in rows if r["options"]["elements"] < COARSE_BELOW and regime(r) != "alpha V h/c <= 1"]
-            groups[f"of these, N < {COARSE_BELOW}"] = coarse
-            groups["all but these"] = [r for r in rows if r not in coarse]
+            flagged = [r for r in rows if r["status"] == "ok" and rough(r)]
+            groups["flagged rough"] = flagged
+            groups["not flagged"] = [r for r in rows if r not in flagged]
         for name, group in groups.items():
             s = summarize(group)
             lines.append(f"| {name} | {s['solved']} | {s['coverage']:.3f} | {s['within10']:.3f} | {s['sharp_count']} "

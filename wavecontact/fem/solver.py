@@ -22,6 +22,8 @@ from ..limits import Cost
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
+from .error_estimate import ESTIMATE_SAFETY, RESOLVED_BELOW
+from .error_estimate import estimate_from_levels as _estimate_from_levels
 from .simulation import build_setup, run_collision
 
 __all__ = ["EXPECTED_ORDER", "SOLVER", "FemOptions", "FemSolver"]
@@ -71,34 +73,17 @@ class FemOptions(SolverOptions):
 # massless-end interface (first order in h, stable for any stiffness).  Tests compare a log-log
 # fit with these.
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 2, (2, "lumped"): 2, (2, "consistent"): 2}
-# The error estimate (docs/error_estimates.md section 1): Richardson against the runs at N/2 and
-# N/4 elements, with an order that depends on how well the facing elements resolve the contact,
-# x = alpha V h / c (h: element length on the shorter rod at N):
-# * x <= RESOLVED_BELOW: the declared order (the force scheme converges at it from the coarsest meshes on);
-# * RESOLVED_BELOW < x <= OBSERVED_BELOW: the order observed on N/4, N/2, N where the three runs converge
-#   monotonically (the contact becomes resolved within the sequence, so the order rises towards the
-#   declared one), clamped to [UNRESOLVED_ORDER, declared];
-# * above, for hard and penalty contact, and where the runs do not converge monotonically:
-#   UNRESOLVED_ORDER (the front of an unresolved impact spreads over about h^(2/3), docs/fem.md section 3);
-#   where not monotone the coarser pair's difference, carried to N at that order, bounds it from below.
-# P1 lumped at Courant 1 (the characteristic interface) converges faster than that where unresolved:
-# its order is taken in [P1_LUMPED_UNRESOLVED_ORDER, declared], and no estimate is below the floor of
-# its sub-step gap quadrature (CHARACTERISTIC_FLOOR; docs/fem.md section 7: about 6e-10 at 800 elements,
-# up to 1.2e-8 for the softest contact).  The thresholds, orders and ESTIMATE_SAFETY were chosen on
-# the sweeps of seeds 2026 and 2027, the coarser runs' scheme (FemSolver._error_estimate) on the misses
-# of seed 2028, and the whole rule checked once on seed 2029 (benchmarks/error_estimates.py).
-UNRESOLVED_ORDER = 2.0 / 3.0
-P1_LUMPED_UNRESOLVED_ORDER = 1.5
-RESOLVED_BELOW = 1.0
-OBSERVED_BELOW = 30.0
-ESTIMATE_SAFETY = 2.0
-CHARACTERISTIC_FLOOR = 2e-9
-ROUNDING_FLOOR = 1e-12
+# The error estimate (docs/error_estimates.md section 1) is the pure function
+# error_estimate.estimate_from_levels of the coarser runs' restitutions.
 # Fewer elements than this with an unresolved or hard contact: the run at N/4 has fewer than 8
 # elements, the errors (up to 1e-2) are in no asymptotic regime, and the estimate bounds them in
 # only 79 to 97 % of the sweeps' collisions (docs/error_estimates.md section 2): an order of
 # magnitude, which tolerance= does not accept
 TRUSTED_FROM = 32
+# P1 lumped on the characteristic lattice with alpha V dt above this (dt = h / c) and both far-end echoes
+# within one step (gamma near 1): epsilon is low by about 0.7 / kappa on every mesh until alpha V dt falls
+# below it (docs/fem.md section 7), a plateau the coarser runs cannot see
+PLATEAU_ABOVE = 10.0
 # Stable step in units of the element travel time h/c (docs/fem.md section 2), for the cost estimate
 _STABLE_COURANT = {(1, "lumped"): 1.0, (1, "consistent"): 0.577, (2, "lumped"): 0.408, (2, "consistent"): 0.258}
 # Doubles held per node (state, masses, matrices, kernel buffers) and per step (histories)
@@ -128,10 +113,17 @@ class FemSolver(SolverBase):
         scheme='auto' a coarser mesh may no longer resolve the contact and switch from the force
         scheme (second order) to the massless-end interface (first order, errors near 1e-3), and the
         difference of two schemes says nothing about the finer run's error."""
-        used = fields.get("extra", {}).get("contact_scheme")
+        return super()._error_estimate(scene, self.estimate_options(options, fields.get("extra", {})), fields)
+
+    @staticmethod
+    def estimate_options(options: FemOptions, extra: dict) -> FemOptions:
+        """The options of the coarser runs: the requested ones with ``scheme='auto'`` replaced by the
+        contact scheme the requested run used (``extra['contact_scheme']``) where that is the force
+        scheme or the massless-end interface."""
+        used = extra.get("contact_scheme")
         if options.scheme == "auto" and used in ("force", "interface"):
-            options = options.replace(scheme=used)
-        return super()._error_estimate(scene, options, fields)
+            return options.replace(scheme=used)
+        return options
 
     def coarser_options(self, options: FemOptions):
         """Half the elements (a user mesh ``nodes`` has no coarser twin: no estimate)."""
@@ -155,42 +147,13 @@ class FemSolver(SolverBase):
                 and options.courant in (None, 1.0) and options.dt is None and options.gap_quadrature == "substeps"
                 and isinstance(scene.contact, Exponential))
 
-    def estimate_order(self, scene: Scene, options: FemOptions) -> float:
-        """The declared order where ``alpha V h / c <= RESOLVED_BELOW``, else the unresolved one
-        (the lower end of the band :meth:`estimate_from_levels` uses)."""
-        declared = self.expected_order(options)
-        if self.contact_resolution(scene, options) <= RESOLVED_BELOW:
-            return declared
-        return P1_LUMPED_UNRESOLVED_ORDER if self._characteristic(scene, options) else UNRESOLVED_ORDER
-
     def estimate_from_levels(self, scene: Scene, options: FemOptions, levels: list) -> tuple:
-        """Richardson with the regime's order (see the comment above :data:`UNRESOLVED_ORDER`).
+        """``(estimate, rule)`` by :func:`wavecontact.fem.error_estimate.estimate_from_levels`.
 
-        ``levels``: ``(elements, restitution)`` at N, N/2 and (if it ran) N/4.
+        ``levels``: ``(elements, restitution)`` at N, N/2 and (where it ran) N/4.
         """
-        declared = self.expected_order(options)
-        lowest = self.estimate_order(scene, options)
-        (n0, e0), (n1, e1) = levels[0], levels[1]
-        d0, ratio0 = e0 - e1, n0 / n1
-        monotone = False
-        if len(levels) > 2:
-            n2, e2 = levels[2]
-            d1, ratio1 = e1 - e2, n1 / n2
-            monotone = d0 * d1 > 0.0 and abs(d1) > abs(d0)
-        x = self.contact_resolution(scene, options)
-        if x <= RESOLVED_BELOW:
-            order, how = declared, "declared"
-        elif x <= OBSERVED_BELOW and monotone:
-            observed = math.log(abs(d1) / abs(d0)) / math.log(ratio1)
-            order, how = min(max(observed, lowest), declared), f"observed {observed:.3g}, clamped"
-        else:
-            order, how = lowest, "unresolved contact" if monotone or len(levels) < 3 else "not monotone"
-        estimate = ESTIMATE_SAFETY * abs(d0) / (ratio0**order - 1.0)
-        if len(levels) > 2 and not monotone and x > RESOLVED_BELOW:
-            estimate = max(estimate, ESTIMATE_SAFETY * abs(d1) / (ratio1**order - 1.0) / ratio0**order)
-        floor = CHARACTERISTIC_FLOOR if self._characteristic(scene, options) and x < math.inf else ROUNDING_FLOOR
-        return (max(estimate, floor),
-                f"order {order:.3g} ({how}; alpha V h / c = {x:.3g}), safety {ESTIMATE_SAFETY:g}, floor {floor:g}")
+        return _estimate_from_levels(levels, self.contact_resolution(scene, options), self.expected_order(options),
+                                     self._characteristic(scene, options))
 
     def rough_estimate(self, scene: Scene, options: FemOptions) -> str:
         """Advice where the estimate is an order of magnitude: fewer than :data:`TRUSTED_FROM`
@@ -201,6 +164,13 @@ class FemSolver(SolverBase):
                 and self.contact_resolution(scene, options) > RESOLVED_BELOW):
             return (f"with fewer than {TRUSTED_FROM} elements and an unresolved contact it is an order of magnitude, "
                     f"not a bound; try elements={TRUSTED_FROM} or more")
+        x = self.contact_resolution(scene, options)
+        if self._characteristic(scene, options) and PLATEAU_ABOVE < x < math.inf:
+            travel = [rod.length / rod.wave_speed for rod in scene.rods]
+            if 2.0 * abs(travel[0] - travel[1]) < min(travel) / options.elements:
+                return ("both far-end echoes return within one step and the contact is not resolved: the error has a "
+                        "plateau the coarser runs do not see (docs/fem.md section 7); "
+                        f"try elements={math.ceil(options.elements * x / PLATEAU_ABOVE)} or solver='delay'")
         return ""
 
     def estimate_cost(self, scene: Scene, options: FemOptions) -> Cost | None:

@@ -279,6 +279,14 @@ def richardson_estimate(values, order: float, ratio: float = 2.0, safety: float 
     return max(safety * max(differences) / (ratio**order - 1.0), ERROR_FLOOR)
 
 
+def excess_bound(estimate: float, restitution: float, cold: bool) -> float:
+    """The estimate raised to at least ``restitution - 1`` where a cold collision came out above 1
+    (it cannot gain energy: the excess is error, whatever the estimate said); NaN stays NaN."""
+    if restitution > 1.0 and cold and not math.isnan(estimate):
+        return max(estimate, restitution - 1.0)
+    return estimate
+
+
 def _tolerance(value):
     if value is None:
         return None
@@ -452,9 +460,7 @@ class SolverBase:
         restitution = float(fields["restitution"])
         rough = self.rough_estimate(scene, options) if levels else ""
         cold = scene.is_cold and getattr(scene, "vibrations", None) is None and getattr(options, "noise", None) is None
-        if restitution > 1.0 and cold and not math.isnan(estimate):
-            # a cold collision cannot gain energy: the excess over 1 is error, whatever the estimate said
-            estimate = max(estimate, restitution - 1.0)
+        estimate = excess_bound(estimate, restitution, cold)
         time_, force = np.asarray(fields["time"], dtype=float), fields.get("contact_force")
         start, duration = contact_window(time_, force, fields.get("force_sampling", "point"))
         result = CollisionResult(

@@ -1,0 +1,130 @@
+"""The FE solver's a posteriori error estimate: a pure function of the coarser runs' restitutions.
+
+After the requested run on ``N`` elements the FE solver runs the same collision on ``N/2``
+and ``N/4`` elements (same contact scheme) and turns the restitutions into an
+estimate of ``|epsilon(N) - epsilon_exact|`` with :func:`estimate_from_levels`.  The rule
+depends only on those restitutions and on three numbers known before the run: the contact
+resolution ``x = alpha V h / c`` at ``N``, the declared order and whether the run uses the
+characteristic interface of P1 lumped.  The benchmark (``benchmarks/error_estimates.py
+--offline``) re-applies it to stored sweeps; docs/error_estimates.md section 1 argues it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+__all__ = [
+    "CHARACTERISTIC_FLOOR",
+    "CROSSING_RATIO",
+    "ESTIMATE_SAFETY",
+    "LATTICE_STEP_BELOW",
+    "OBSERVED_BELOW",
+    "P1_LUMPED_PARTLY_RESOLVED_ORDER",
+    "P1_LUMPED_UNRESOLVED_ORDER",
+    "QUADRATURE_NOISE_BELOW",
+    "RESOLVED_BELOW",
+    "ROUNDING_FLOOR",
+    "UNRESOLVED_ORDER",
+    "estimate_from_levels",
+]
+
+#: order of an unresolved impact, whose front spreads over about h^(2/3) (docs/fem.md section 3)
+UNRESOLVED_ORDER = 2.0 / 3.0
+#: orders of P1 lumped on the characteristic lattice where the contact is not resolved.  Where
+#: alpha V dt = x > LATTICE_STEP_BELOW the lattice holds the incoming rate constant over a step
+#: (docs/fem.md section 7) and its errors fall by 2.0 to 2.3 per halving of h (first order); between
+#: RESOLVED_BELOW and that the contact is partly resolved within a step and they fall faster, by about 3
+#: per halving (the sweeps of seeds 2027-2029, docs/error_estimates.md section 1)
+P1_LUMPED_UNRESOLVED_ORDER = 1.0
+P1_LUMPED_PARTLY_RESOLVED_ORDER = 1.5
+LATTICE_STEP_BELOW = 10.0
+#: x = alpha V h / c at or below which the declared order holds from the coarsest meshes on
+RESOLVED_BELOW = 1.0
+#: x up to which the order observed on the runs is used (the contact becomes resolved within them)
+OBSERVED_BELOW = 30.0
+#: factor on the Richardson extrapolation of the error
+ESTIMATE_SAFETY = 2.0
+#: a coarser difference more than this many times the finer one, of the other sign, is a fast
+#: convergence that crossed the limit between the coarser runs, not a finer pair agreeing by accident
+CROSSING_RATIO = 10.0
+#: the sub-step gap quadrature of the characteristic interface leaves errors of about this size
+#: where the differences of the runs do not show them (docs/fem.md section 7)
+CHARACTERISTIC_FLOOR = 1e-9
+#: on the characteristic lattice, differences of the runs that change sign below this size are the
+#: quadrature's noise (its errors reach about 1e-8, docs/fem.md section 7), not a convergence
+QUADRATURE_NOISE_BELOW = 1e-7
+#: round-off of a run of many steps in an O(1) restitution
+ROUNDING_FLOOR = 1e-12
+
+
+def estimate_from_levels(levels, resolution: float, declared: float, characteristic: bool) -> tuple:
+    """``(estimate, rule)``: the error of the first level's restitution.
+
+    Richardson extrapolation ``SAFETY |d0| / (r**p - 1)`` of the finest difference
+    ``d0 = eps(N) - eps(N/2)`` (``r = N / (N/2)``) with an order ``p`` chosen by the regime
+    ``x = alpha V h / c`` (docs/error_estimates.md section 1):
+
+    * ``x <= RESOLVED_BELOW``: the declared order;
+    * ``RESOLVED_BELOW < x <= OBSERVED_BELOW`` (not the characteristic lattice), where the runs
+      converge monotonically: the order observed on the three finest runs, clamped to
+      ``[UNRESOLVED_ORDER, declared]``;
+    * otherwise :data:`UNRESOLVED_ORDER`; on the characteristic lattice
+      :data:`P1_LUMPED_PARTLY_RESOLVED_ORDER` up to ``x = LATTICE_STEP_BELOW``, then
+      :data:`P1_LUMPED_UNRESOLVED_ORDER`.
+
+    Further coarser levels, if given, are not used.  Two guards: where ``x > RESOLVED_BELOW`` and the runs do not converge monotonically, the
+    next coarser difference carried down to ``N`` is a second lower bound (two runs may agree by
+    accident), except where that difference is of the other sign and more than
+    :data:`CROSSING_RATIO` times larger (a fast convergence that crossed the limit); on the
+    characteristic lattice, where the two finest differences change sign below
+    :data:`QUADRATURE_NOISE_BELOW` (the quadrature's noise), the larger of them.  Floors: :data:`CHARACTERISTIC_FLOOR` (characteristic lattice, finite
+    stiffness) or :data:`ROUNDING_FLOOR`.
+
+    Parameters
+    ----------
+    levels : sequence of (int, float)
+        ``(elements, restitution)`` of the requested run first, then of the coarser runs
+        (each about half the elements of the previous one; at least one).
+    resolution : float
+        ``alpha V h / c`` at the requested mesh (dimensionless; inf for hard and penalty contact).
+    declared : float
+        The discretization's order where the contact is resolved.
+    characteristic : bool
+        Whether the run uses the characteristic interface with the sub-step gap quadrature
+        (P1 lumped, Courant number 1, exponential contact).
+
+    Returns
+    -------
+    tuple of (float, str)
+        The estimate of ``|epsilon - epsilon_exact|`` (dimensionless) and a one-line account
+        of the rule that produced it.
+    """
+    x = resolution
+    if not characteristic:
+        lowest = UNRESOLVED_ORDER
+    else:
+        lowest = P1_LUMPED_PARTLY_RESOLVED_ORDER if x <= LATTICE_STEP_BELOW else P1_LUMPED_UNRESOLVED_ORDER
+    elements = [n for n, _ in levels]
+    values = [value for _, value in levels]
+    d = [a - b for a, b in itertools.pairwise(values)]
+    ratio = [a / b for a, b in itertools.pairwise(elements)]
+    monotone = len(d) > 1 and d[0] * d[1] > 0.0 and abs(d[1]) > abs(d[0])
+    if x <= RESOLVED_BELOW:
+        order, how = declared, "declared"
+    elif x <= OBSERVED_BELOW and monotone and not characteristic:
+        observed = math.log(abs(d[1]) / abs(d[0])) / math.log(ratio[1])
+        order, how = min(max(observed, lowest), declared), f"observed {observed:.3g}, clamped"
+    else:
+        order, how = lowest, "unresolved contact" if monotone or len(d) < 2 else "not monotone"
+    estimate = ESTIMATE_SAFETY * abs(d[0]) / (ratio[0] ** order - 1.0)
+    if len(d) > 1:
+        crossing = d[0] * d[1] < 0.0 and abs(d[1]) > CROSSING_RATIO * abs(d[0])
+        if x > RESOLVED_BELOW and not monotone and not crossing:
+            carried = ESTIMATE_SAFETY * abs(d[1]) / (ratio[1] ** order - 1.0) / ratio[0] ** order
+            estimate, how = max(estimate, carried), how + ", coarser pair carried down"
+        if characteristic and d[0] * d[1] < 0.0 and max(abs(d[0]), abs(d[1])) < QUADRATURE_NOISE_BELOW:
+            estimate, how = max(estimate, abs(d[0]), abs(d[1])), how + ", quadrature noise"
+    floor = CHARACTERISTIC_FLOOR if characteristic and x < math.inf else ROUNDING_FLOOR
+    return (max(estimate, floor),
+            f"order {order:.3g} ({how}; alpha V h / c = {x:.3g}), safety {ESTIMATE_SAFETY:g}, floor {floor:g}")
