@@ -92,6 +92,14 @@ def test_masking_hides_wall_times_only():
     assert "0.64669776105   6.7e-07" in masked and "13.243" not in masked and "1.2e+05 element_steps" in masked
 
 
+def test_masking_ignores_the_padding_of_a_time_of_another_width():
+    block = BLOCKS["convergence-kappa-20"]
+    fast = "      100   0.753013094070  1.472e-07    2.79           3.377       830"
+    slow = "      100   0.753013094070  1.472e-07    2.79          29.974       830"
+    assert generate.mask(block, fast) == generate.mask(block, slow)
+    assert generate.mask(block, fast) != generate.mask(block, fast.replace("1.472e-07", "1.473e-07"))
+
+
 def _converge_rows(text: str) -> dict:
     """``{(label, elements): restitution text}`` of a `wavecontact converge` output."""
     rows, label = {}, None
@@ -454,3 +462,12 @@ def test_bath_page_claims_about_modes_and_kappa_hold():
             std = float(row[2])
             difference, error = (float(x) for x in row[3].replace("(", " ").replace(")", " ").split())
             assert abs(difference) < 2.2 * error and abs(difference) < std / 50, row[0]
+
+
+def test_usage_page_shows_the_help_of_every_subcommand():
+    import argparse
+
+    (sub,) = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
+    text = block_text("usage-help")
+    for name in sub.choices:
+        assert f"$ wavecontact {name} --help\n" in text, f"docs/usage.md does not show `wavecontact {name} --help`"
