@@ -2,7 +2,8 @@
 
     python benchmarks/bench_bath.py            # everything (several minutes on a shared 2-core machine)
     python benchmarks/bench_bath.py --quick    # smaller sample counts
-    python benchmarks/bench_bath.py --hard-core-only   # rows 1 and the Fig. 8 hard-core row
+    python benchmarks/bench_bath.py --hard-core-only   # rows 1 and the Fig. 8 hard-core row (about a minute);
+                                                       # with --update-docs it replaces only those rows
 
     python benchmarks/bench_bath.py --full     # row 3 at kappa = 250 in full (50,000 samples, ~2 min
                                                # on a quiet 2-core machine) instead of a subset
@@ -66,9 +67,29 @@ def row(name, value, note=""):
     print(line)
 
 
-def update_docs(header):
-    """Write the table into docs/bath.md (between its bench-bath markers) and docs/figures/bath/bench.txt."""
+def _row_name(line):
+    return line.split("|")[1].strip() if line.startswith("|") else None
+
+
+def update_docs(header, partial=False):
+    """Write the table into docs/bath.md (between its bench-bath markers) and docs/figures/bath/bench.txt.
+
+    ``partial``: replace only the rows measured in this run (matched by their quantity) and
+    say so under the header, keeping the other rows of the last full run.
+    """
     table = "\n".join([header, "", "| quantity | value | note |", "|---|---|---|", *ROWS])
+    if partial:
+        page = DOCS / "bath.md"
+        start, end = "<!-- bench-bath:start -->", "<!-- bench-bath:end -->"
+        old = page.read_text(encoding="utf-8").split(start, 1)[1].split(end, 1)[0].strip("\n").splitlines()
+        new = {_row_name(line): line for line in ROWS}
+        missing = set(new) - {_row_name(line) for line in old}
+        if missing:
+            raise SystemExit(f"--update-docs with --hard-core-only: no row named {sorted(missing)} in docs/bath.md; "
+                             "run the full benchmark")
+        note = f"Hard-core rows re-measured by {header}"
+        lines = [new.get(_row_name(line), line) for line in old if not line.startswith("Hard-core rows re-measured")]
+        table = "\n".join([lines[0], note, *lines[1:]])
     (DOCS / "figures" / "bath" / "bench.txt").write_text(table + "\n", encoding="utf-8")
     page = DOCS / "bath.md"
     text = page.read_text(encoding="utf-8")
@@ -235,6 +256,8 @@ def main(argv=None):
             f"{rate:,.0f} /s", f"per core, target >= 20,000 /s; mean error {bias:+.1e} +- {bias_error:.0e}")
     if args.hard_core_only:
         fig8_hard_core_row(quick)
+        if args.update_docs:
+            update_docs(header.replace("bench_bath.py", "bench_bath.py --hard-core-only", 1), partial=True)
         return 0
     for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4):
         row(f"delay sample, kappa {kappa:g}, nu_max 250 (CPU)", f"{1e3 * delay_sample_cpu(kappa, 250):.2f} ms",

@@ -1,6 +1,13 @@
 """Where the time of one finite-kappa thermal sample goes (issue 11): one command, one table.
 
     python benchmarks/profile_bath_sample.py [--kappa 250] [--modes 250] [--samples 6]
+    python benchmarks/profile_bath_sample.py --hard-core [--modes 250] [--resolution 8]
+
+``--hard-core``: what NumPy's per-sample objects cost (SeedSequence children, Generators,
+the normals), then the pieces of the batched stochastic hard-core sampler (kappa = inf) per
+sample, CPU microseconds (medians of repeats over blocks of 256 samples): the seed words,
+the 1000 normals, the noise coefficients, the FFT tables with their bounds, the recursion
+kernel, and the whole ``ensemble`` call; and the grid nodes a sample takes.
 
 For gamma = 0.6173, T_B/E_tr = 1: the CPU time (median over samples) of the pieces of a
 sample (drawing the scene, the noise tables, the delay integration at rtol 1e-11 and 1e-6,
@@ -51,12 +58,99 @@ def _pieces(kappa, bath, modes, seed, scene, a0, tables):
     }
 
 
+def hard_core_pieces(modes, resolution, samples=256, repeats=15):
+    """CPU microseconds per sample of each piece of the batched hard-core sampler (medians of repeats)."""
+    import math
+
+    from wavecontact.bath.streams import SpawnedSeeds, seed_states, standard_normals
+    from wavecontact.delay.stochastic_hardcore_batch import _temperature_rows, cached_grid, max_plus_batch
+    from wavecontact.studies.ensemble import ensemble
+
+    grid = cached_grid(GAMMA, modes, resolution)
+    seeds = SpawnedSeeds(1, 0, samples)
+    states = seed_states(seeds)
+    normals = standard_normals(states, 4 * modes).reshape(samples, 2, 2, modes)
+    temperatures = _temperature_rows(1.0, samples)
+    block = slice(0, 32)  # the sampler's block of samples (BLOCK)
+    coefficients = [c.copy() for c in grid.coefficients(normals[block], temperatures[block])]
+    tables = [t.copy() for t in grid.tables(*coefficients)]
+    q1, q2v, q2s, cell2, block2, reach2, _reach, starts = tables
+    capacity = int(starts.max()) + 6 * grid.n1 + 4 * grid.j2
+    work = np.empty(capacity), np.empty(capacity)
+    w, nodes, status = np.empty(32), np.empty(32, dtype=np.int64), np.empty(32, dtype=np.int64)
+
+    def kernel():
+        max_plus_batch(grid.h, grid.n1, grid.j2, grid.f2, q1, q2v, q2s, cell2, block2, grid.r2, reach2, starts,
+                       capacity, *work, w, nodes, status)
+
+    pieces = {
+        "seed words (SpawnedSeeds -> PCG64 state)": (lambda: seed_states(seeds), samples),
+        f"{4 * modes} standard normals (PCG64 + ziggurat kernel)": (lambda: standard_normals(states, 4 * modes),
+                                                                     samples),
+        "noise coefficients": (lambda: grid.coefficients(normals[block], temperatures[block]), 32),
+        "FFT tables and their bounds": (lambda: grid.tables(*coefficients), 32),
+        "recursion kernel (max_plus_batch)": (kernel, 32),
+        "ensemble(...) per sample, all included": (
+            lambda: ensemble(GAMMA, math.inf, 1.0, samples, 1, bath_modes=modes, hard_core_resolution=resolution),
+            samples),
+    }
+    ensemble(GAMMA, math.inf, 1.0, 8, 0, bath_modes=modes, hard_core_resolution=resolution)  # kernels ready
+    kernel()
+    out = {}
+    for name, (function, count) in pieces.items():
+        out[name] = 1e6 * float(np.median([cpu(function) for _ in range(repeats)])) / count
+    return out, float(np.mean(nodes)), grid
+
+
+def numpy_object_costs(modes, samples=2000, repeats=5):
+    """CPU microseconds per sample of NumPy's per-sample objects, the path bath/streams.py replaces."""
+    seed = 1
+    children = [np.random.SeedSequence(seed, spawn_key=(j,)) for j in range(samples)]
+    generator = np.random.default_rng(0)
+    out = np.empty(4 * modes)
+    pieces = {
+        "SeedSequence(seed).spawn(n), per child": lambda: np.random.SeedSequence(seed).spawn(samples),
+        "SeedSequence(seed, spawn_key=(j,)) built directly": lambda: [
+            np.random.SeedSequence(seed, spawn_key=(j,)) for j in range(samples)],
+        "default_rng(child)": lambda: [np.random.default_rng(c) for c in children],
+        "Generator(PCG64(child))": lambda: [np.random.Generator(np.random.PCG64(c)) for c in children],
+        "child.generate_state(4, uint64) (what PCG64 seeds from)": lambda: [
+            c.generate_state(4, np.uint64) for c in children],
+        f"Generator.standard_normal(out=...) of {4 * modes}, one call": lambda: [
+            generator.standard_normal(out=out) for _ in range(samples)],
+    }
+    return {name: 1e6 * float(np.median([cpu(function) for _ in range(repeats)])) / samples
+            for name, function in pieces.items()}
+
+
+def main_hard_core(args):
+    print("NumPy's per-sample objects (the path before bath/streams.py); CPU us per sample, medians")
+    print("| piece | CPU us per sample |")
+    print("|---|---|")
+    for name, value in numpy_object_costs(args.modes).items():
+        print(f"| {name} | {value:.1f} |")
+    print()
+    pieces, nodes, grid = hard_core_pieces(args.modes, args.resolution)
+    print(f"hard-core mode: gamma {GAMMA}, T_B/E_tr 1, nu_max {args.modes}, {args.resolution} points per period "
+          f"(n_1 = {grid.n1} nodes per Gamma_1, rod 2's table {grid.n2}); CPU us per sample, medians")
+    print("| piece | CPU us per sample |")
+    print("|---|---|")
+    for name, value in pieces.items():
+        print(f"| {name} | {value:.1f} |")
+    print(f"\ngrid nodes per sample (mean over a block): {nodes:.0f}")
+    return 0
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--kappa", type=float, default=250.0)
     parser.add_argument("--modes", type=int, default=250)
     parser.add_argument("--samples", type=int, default=6)
+    parser.add_argument("--hard-core", action="store_true", help="the batched hard-core sampler's pieces instead")
+    parser.add_argument("--resolution", type=int, default=8, help="hard-core grid points per period (--hard-core)")
     args = parser.parse_args(argv)
+    if args.hard_core:
+        return main_hard_core(args)
     kappa, bath = args.kappa, ThermalBath(1.0, args.modes)
     seeds = range(args.samples)
     solve(thermal_scene(GAMMA, kappa, bath, 0), "delay", rtol=1e-6)  # kernels ready

@@ -1,5 +1,7 @@
 """The general explicit step's mass solve (fem/explicit_step.py) against scipy's sparse solver."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -109,14 +111,15 @@ def test_chained_mass_solve_equals_a_banded_solve_to_rounding(order, spread, ele
 
 @pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("mass", ["lumped", "consistent"])
-def test_many_fast_steps_equal_a_reference_step_with_a_banded_solve(order, mass):
+@pytest.mark.parametrize("elements", [150, 900])  # consistent: the twisted solve, then the chained one
+def test_many_fast_steps_equal_a_reference_step_with_a_banded_solve(order, mass, elements):
     """400 steps of ``step_rod`` near the stability limit against a step written with scipy's banded solver."""
-    rng = np.random.default_rng(7 * order + len(mass))
-    length, elements = 1.1, 900
+    rng = np.random.default_rng(7 * order + len(mass) + elements)
+    length = 1.1
     disc = discretize_rod(Rod(length, 2.0, 3.0, 0.5), _graded_nodes(rng, elements, length, 2.0), order, mass)
     kind, table = prepare_mass(disc)
     if mass == "consistent":
-        assert table[T_CHAIN_BURN_IN, 0] > 0
+        assert (table[T_CHAIN_BURN_IN, 0] > 0) == (elements == 900)
     (lower, upper), banded = _banded_mass(disc)
     bands = disc.stiffness_bands
     stiffness = disc.stiffness  # the assembled K
@@ -159,3 +162,47 @@ def test_compiled_chains_equal_their_pure_python_form_bit_for_bit():
         results.append(x)
     assert burn_in > 0
     np.testing.assert_array_equal(results[0], results[1])
+
+
+def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
+    """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process gives the compiled steps' bits, every kind.
+
+    700 elements: the consistent masses take the chained solve (no reassociation, no fused multiply-add
+    in the compiled kernels, so the vectorized passes round exactly as the plain Python loops do).
+    """
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "import sys, numpy as np\n"
+        "sys.path.insert(0, sys.argv[2])\n"
+        "from wavecontact import Rod\n"
+        "from wavecontact.fem.discretization import discretize_rod\n"
+        "from wavecontact.fem.explicit_step import prepare_mass, step_rod\n"
+        "out = {}\n"
+        "for order in (1, 2):\n"
+        "    for mass in ('lumped', 'consistent'):\n"
+        "        rng = np.random.default_rng(order)\n"
+        "        sizes = np.exp(rng.uniform(0.0, np.log(2.0), 700))\n"
+        "        nodes = np.r_[0.0, np.cumsum(sizes)] / sizes.sum()\n"
+        "        disc = discretize_rod(Rod(1.0, 2.0, 3.0, 0.5), nodes, order, mass)\n"
+        "        kind, table = prepare_mass(disc)\n"
+        "        u, v = 1e-3 * np.sin(7.0 * disc.x), rng.normal(size=disc.n_nodes)\n"
+        "        scratch = np.zeros(disc.n_nodes)\n"
+        "        for _ in range(5):\n"
+        "            step_rod(u, v, scratch, disc.stiffness_bands, kind, table, 1e-4)\n"
+        "        out[f'u{order}{mass}'], out[f'v{order}{mass}'] = u, v\n"
+        "np.savez(sys.argv[1], **out)\n"
+    )
+    outputs = []
+    for pure in ("1", "0"):
+        path = tmp_path / f"steps{pure}.npz"
+        env = dict(os.environ, WAVECONTACT_PURE_PYTHON=pure)
+        root = str(Path(__file__).resolve().parents[1])  # this checkout's package
+        subprocess.run([sys.executable, "-c", script, str(path), root], check=True, env=env, timeout=600)
+        with np.load(path) as data:
+            outputs.append({k: data[k] for k in data.files})
+    assert len(outputs[0]) == 8
+    for name in outputs[0]:
+        np.testing.assert_array_equal(outputs[0][name], outputs[1][name], err_msg=name)

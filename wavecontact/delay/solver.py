@@ -362,20 +362,25 @@ def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> dict
     slope, which the max-plus grid resolves too slowly: only the total
     ``(1 - epsilon^2) / 4`` is implied; use a finite kappa for the split.
     """
+    from .stochastic_hardcore_batch import cached_grid
+
     vibrations = scene.vibrations
     gamma = scene.metadata["two_rods"].gamma
     tau_free = float(scene.gaps[0])  # V = 1, l = 1: the gap is the free-flight time
-    coarser = [hard_core_noise(gamma, vibrations, tau_free, r)[1][-1] for r in (max(resolution // 2, 1), resolution)]
+    # epsilon from the batched grid, so that it equals an ensemble's sample of the same seed at
+    # hard_core_resolution = 2 x resolution bit for bit; the history from the per-sample grid
+    *coarser, restitution = [cached_grid(float(gamma), int(vibrations.modes), r).restitution_of(vibrations)
+                            for r in (max(resolution // 2, 2), resolution, 2 * resolution)]
     t, w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
     slopes = np.diff(w) / np.diff(t)
     return {
-        "restitution": float(w[-1] - 1.0),
+        "restitution": restitution,
         "time": t,
         "relative_velocity": w - 1.0,
         # the force is constant between grid points: force[i] is its value on (time[i-1], time[i]]
         "contact_force": params.force_unit * np.concatenate([[0.0], slopes]),
         "force_sampling": "interval",
-        "error_estimate": max(abs(float(coarser[1] - w[-1])), abs(float(coarser[0] - coarser[1]))),
+        "error_estimate": max(abs(coarser[1] - restitution), abs(coarser[0] - coarser[1])),
         "work": {"steps": int(t.size)},
         "extra": {"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
                   "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])},

@@ -9,7 +9,8 @@ organised for blocks of samples, with no Python work per grid node or per table 
 * the bath of sample ``j`` is ``standard_normal((2, 2, nu_max))`` from
   ``numpy.random.default_rng(seed_j)``, the same numbers as
   :meth:`wavecontact.bath.ThermalBath.draw`, so a sample here is the same
-  realisation that drives the other solvers;
+  realisation that drives the other solvers; :mod:`wavecontact.bath.streams`
+  draws them without a ``SeedSequence`` and ``Generator`` object per sample;
 * the noise tables of the whole block come from one 2-D inverse real FFT per
   table; the time origin is the nominal contact time (node ``k`` sits at
   ``(k - m) h``), so no phase factors are needed, and every operation on the
@@ -18,7 +19,12 @@ organised for blocks of samples, with no Python work per grid node or per table 
 * one compiled kernel runs the recursion of every sample.  ``A_i = w + C_i``
   is kept instead of ``w`` and ``C_i``: rod 1's memory is ``A_1[k - n_1]``,
   rod 2's a fixed linear interpolation between ``A_2[k - j_2 - 1]`` and
-  ``A_2[k - j_2]`` (``Gamma_2 / h = j_2 + f_2``).
+  ``A_2[k - j_2]`` (``Gamma_2 / h = j_2 + f_2``);
+* rod 2's noise (a cubic Hermite table) is read only at nodes where
+  ``t - C_1 - C_2 + q_1`` plus an upper bound of the table on the node's cell
+  can reach ``w`` (and at the node after such a node, for the parabola);
+  stretches where a bound over blocks of cells rules out any rise are stepped
+  as chunks in a vectorised loop that only stores ``A_i = w + C_i``.
 
 The run stops on a certificate, not on a waiting time.  Once ``w = W`` has
 stayed constant since node ``L``, the comb sums obey ``C_1[k + n_1] = C_1[k] + W``
@@ -42,6 +48,7 @@ twice the step and extrapolates.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -54,13 +61,54 @@ __all__ = ["DEFAULT_POINTS_PER_PERIOD", "HardCoreGrid", "cached_grid", "hard_cor
 
 DEFAULT_POINTS_PER_PERIOD = 8
 _TRANSLATIONAL_ENERGY = 0.25  # E_tr in the paper's units (mu = 1/2, V = 1)
+CELLS_PER_BLOCK = 32  # rod 2's table cells per block bound (a power of two)
+CHUNK = 64  # grid nodes stepped at once where the noise cannot lift f above w
 BLOCK = 32  # samples whose tables are made together (about 1.5 MB at nu_max = 250)
 STATUS_OK = 0
 STATUS_FULL = 1
 
 
+@kernel(inline="always")
+def _rod2(x, values, slopes, mask):
+    """Rod 2's noise at table position ``x`` (cubic Hermite on the periodic table; ``mask = size - 1``)."""
+    j = int(x)
+    f = x - j
+    j0 = j & mask
+    j1 = (j + 1) & mask
+    f2_ = f * f
+    f3 = f2_ * f
+    return ((2.0 * f3 - 3.0 * f2_ + 1.0) * values[j0] + (f3 - 2.0 * f2_ + f) * slopes[j0]
+            + (3.0 * f2_ - 2.0 * f3) * values[j1] + (f3 - f2_) * slopes[j1])
+
+
+@kernel(inline="always")
+def _quiet_chunk(a1, a2, q1, k, end, n1, j2, f2, g2, m, h, offset, running, top2, zeros):
+    """Nodes ``k .. end - 1`` at once if none can rise (``f <= w`` by rod 2's bound ``top2``): then store
+    ``A_i = w + C_i`` and return False; else store nothing and return True.
+
+    A chunk lies wholly before node ``n_1`` (rod 1's memory is empty) or wholly after it, and
+    likewise for node ``j_2 + 1``; ``zeros`` (at least ``end - k`` zeros) stands for an empty memory.
+    """
+    length = end - k
+    old1 = a1[k - n1:end - n1] if k >= n1 else zeros[:length]
+    before2 = a2[k - j2 - 1:end - j2 - 1] if k > j2 else zeros[:length]
+    after2 = a2[k - j2:end - j2] if k > j2 else zeros[:length]
+    noise = q1[k + offset:end + offset]
+    hit = False
+    for j in range(length):
+        hit |= (k + j - m) * h - old1[j] - (f2 * before2[j] + g2 * after2[j]) + noise[j] + top2 > running
+    if hit:
+        return True
+    new1 = a1[k:end]
+    new2 = a2[k:end]
+    for j in range(length):
+        new1[j] = running + old1[j]
+        new2[j] = running + (f2 * before2[j] + g2 * after2[j])
+    return False
+
+
 @kernel
-def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, m, capacity, a1, a2):
+def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, m, capacity, a1, a2):
     """One sample; returns ``(w_final, nodes, status)`` (see the module docstring for the names)."""
     n2 = q2v.shape[0]
     mask = n2 - 1
@@ -75,23 +123,84 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, m, capacity, a1, a2):
     c1_old = 0.0
     c2_old = 0.0
     i1 = (-m) % n1  # index of node 0 in rod 1's table
-    for k in range(capacity):
+    # before the first node at which the noise could lift f above 0, w = 0 and both memories
+    # vanish (A_1 = A_2 = 0): scan for that node without the memory terms
+    first = 0
+    while first < capacity and ((first - m) * h + q1[i1] + reach2 <= 0.0
+                                or (first - m) * h + q1[i1] + cell2[int((first - m) * r2 + shift) & mask] <= 0.0):
+        a1[first] = 0.0
+        a2[first] = 0.0
+        first += 1
+        i1 += 1
+        if i1 == n1:
+            i1 = 0
+    candidate = False  # whether node k - 1 was read because the noise could lift f above w there
+    # whether the bound over rod 2's whole table allowed a rise at nodes k - 1 and k - 2
+    back = i1 - 1 if i1 >= 1 else i1 - 1 + n1
+    within_old = (first - 1 - m) * h + q1[back] + reach2 > 0.0
+    back = i1 - 2 if i1 >= 2 else i1 - 2 + n1
+    within_older = (first - 2 - m) * h + q1[back] + reach2 > 0.0
+    c1_older = 0.0
+    c2_older = 0.0
+    zeros = np.zeros(CHUNK)  # an empty memory, for chunks before node n_1 or j_2 + 1
+    blocks = block2.shape[0]
+    width = n2 // blocks
+    g2 = 1.0 - f2
+    span = min(CHUNK, int(0.5 * n2 / r2))  # a chunk covers less than half of rod 2's table
+    scalar_until = 0
+    k = first
+    while k < capacity:
+        if k >= scalar_until and not candidate:
+            # a chunk of nodes at once (a loop the compiler vectorises): where no node of the chunk can
+            # rise above w, each only stores A_i = w + C_i, as the node-by-node loop below would
+            end = min(k + span, k + n1 - i1, capacity)
+            if k < n1:
+                end = min(end, n1)
+            if k <= j2:
+                end = min(end, j2 + 1)
+            if last >= 0:
+                end = min(end, last + patience if stop < 0 else stop)  # that node goes node by node
+            if end - k >= 2:
+                b0 = (int((k - m) * r2 + shift) & mask) // width
+                b1 = (int((end - 1 - m) * r2 + shift) & mask) // width
+                top2 = block2[b0]
+                while b0 != b1:
+                    b0 = b0 + 1 if b0 + 1 < blocks else 0
+                    top2 = max(top2, block2[b0])
+                hit = _quiet_chunk(a1, a2, q1, k, end, n1, j2, f2, g2, m, h, i1 - k, running, top2, zeros)
+                if not hit:
+                    i1 += end - k
+                    if i1 == n1:
+                        i1 = 0
+                    f_older = -math.inf
+                    f_old = -math.inf
+                    c1_older = a1[end - 2 - n1] if end - 2 >= n1 else 0.0
+                    c2_older = f2 * a2[end - 3 - j2] + g2 * a2[end - 2 - j2] if end - 2 > j2 else 0.0
+                    c1_old = a1[end - 1 - n1] if end - 1 >= n1 else 0.0
+                    c2_old = f2 * a2[end - 2 - j2] + g2 * a2[end - 1 - j2] if end - 1 > j2 else 0.0
+                    back = i1 - 2 if i1 >= 2 else i1 - 2 + n1
+                    within_older = (end - 2 - m) * h - c1_older - c2_older + q1[back] + reach2 > running
+                    back = i1 - 1 if i1 >= 1 else i1 - 1 + n1
+                    within_old = (end - 1 - m) * h - c1_old - c2_old + q1[back] + reach2 > running
+                    k = end
+                    continue
+                scalar_until = end
         c1 = a1[k - n1] if k >= n1 else 0.0
-        c2 = f2 * a2[k - j2 - 1] + (1.0 - f2) * a2[k - j2] if k > j2 else 0.0
-        bracket = (k - m) * h - c1 - c2
+        c2 = f2 * a2[k - j2 - 1] + g2 * a2[k - j2] if k > j2 else 0.0
+        rough = (k - m) * h - c1 - c2 + q1[i1]
+        x = (k - m) * r2 + shift
         value = -math.inf
-        rough = bracket + q1[i1]
-        if rough + reach2 > running:
-            # only here can the noise lift f above the running maximum: read rod 2's share
-            x = (k - m) * r2 + shift
-            j = int(x)
-            f = x - j
-            j0 = j & mask
-            j1 = (j + 1) & mask
-            f2_ = f * f
-            f3 = f2_ * f
-            value = rough + ((2.0 * f3 - 3.0 * f2_ + 1.0) * q2v[j0] + (f3 - 2.0 * f2_ + f) * q2s[j0]
-                             + (3.0 * f2_ - 2.0 * f3) * q2v[j1] + (f3 - f2_) * q2s[j1])
+        within = rough + reach2 > running  # the bound over the whole table allows a rise
+        read = within and rough + cell2[int(x) & mask] > running
+        if read or (candidate and within):
+            # only near such nodes can the noise lift f above the running maximum: read rod 2's share
+            # (also right after a read node, to complete the parabola around it)
+            value = rough + _rod2(x, q2v, q2s, mask)
+            if candidate and f_older == -math.inf and value <= f_old and within_older and k >= 2:
+                # the parabola around node k - 1 also needs node k - 2
+                back = i1 - 2 if i1 >= 2 else i1 - 2 + n1
+                f_older = ((k - 2 - m) * h - c1_older - c2_older + q1[back]
+                           + _rod2((k - 2 - m) * r2 + shift, q2v, q2s, mask))
             peak = parabola_peak(f_older, f_old, value)  # f peaked between nodes k-2 and k
             if peak > running:
                 running = peak
@@ -103,6 +212,9 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, m, capacity, a1, a2):
                 running = value
                 last = k
                 stop = -1
+        candidate = read
+        within_older = within_old
+        within_old = within
         a1[k] = running + c1
         a2[k] = running + c2
         i1 += 1
@@ -110,6 +222,8 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, m, capacity, a1, a2):
             i1 = 0
         f_older = f_old
         f_old = value
+        c1_older = c1_old
+        c2_older = c2_old
         c1_old = c1
         c2_old = c2
         if last >= 0:
@@ -117,7 +231,53 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, m, capacity, a1, a2):
                 stop = _certified_stop(h, n1, j2, f2, q1, reach2, m, last, running, a1, a2)
             if 0 <= stop <= k:
                 return running, k + 1, STATUS_OK
+        k += 1
     return running, capacity, STATUS_FULL
+
+
+@kernel(inline="always")
+def _top_of_rod1(q1, a1, begin, end, offset, n1, last, rise1):
+    """``max_j q_1 - u_1`` over nodes ``begin .. end - 1`` (four running maxima of the same numbers, one loop)."""
+    if end <= begin:
+        return -math.inf
+    noise = q1[begin + offset:end + offset]
+    memory = a1[begin - n1:end - n1]
+    start = begin - last
+    t0 = t1 = t2 = t3 = -math.inf
+    count = end - begin
+    i = 0
+    while i + 4 <= count:
+        t0 = max(t0, noise[i] - memory[i] + (start + i) * rise1)
+        t1 = max(t1, noise[i + 1] - memory[i + 1] + (start + i + 1) * rise1)
+        t2 = max(t2, noise[i + 2] - memory[i + 2] + (start + i + 2) * rise1)
+        t3 = max(t3, noise[i + 3] - memory[i + 3] + (start + i + 3) * rise1)
+        i += 4
+    for k in range(i, count):
+        t0 = max(t0, noise[k] - memory[k] + (start + k) * rise1)
+    return max(max(t0, t1), max(t2, t3))
+
+
+@kernel(inline="always")
+def _low_of_rod2(a2, begin, end, j2, f2, last, rise2):
+    """``min_j u_2`` over nodes ``begin .. end - 1`` (like :func:`_top_of_rod1`)."""
+    if end <= begin:
+        return math.inf
+    g2 = 1.0 - f2
+    before = a2[begin - j2 - 1:end - j2 - 1]
+    after = a2[begin - j2:end - j2]
+    start = begin - last
+    t0 = t1 = t2 = t3 = math.inf
+    count = end - begin
+    i = 0
+    while i + 4 <= count:
+        t0 = min(t0, f2 * before[i] + g2 * after[i] - (start + i) * rise2)
+        t1 = min(t1, f2 * before[i + 1] + g2 * after[i + 1] - (start + i + 1) * rise2)
+        t2 = min(t2, f2 * before[i + 2] + g2 * after[i + 2] - (start + i + 2) * rise2)
+        t3 = min(t3, f2 * before[i + 3] + g2 * after[i + 3] - (start + i + 3) * rise2)
+        i += 4
+    for k in range(i, count):
+        t0 = min(t0, f2 * before[k] + g2 * after[k] - (start + k) * rise2)
+    return min(min(t0, t1), min(t2, t3))
 
 
 @kernel
@@ -129,21 +289,21 @@ def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
     """
     if w <= 1.0:
         return 2**62  # still approaching: no certificate, step on
+    # rod 1: the maximum of q_1 - u_1 over the next period, in two runs that do not wrap rod 1's table
     top1 = -math.inf
-    i1 = (last - m) % n1
-    for j in range(last, last + n1):
-        c1 = a1[j - n1] if j >= n1 else 0.0
-        top = q1[i1] - (c1 - w * (j - last) / n1)
-        top1 = max(top1, top)
-        i1 += 1
-        if i1 == n1:
-            i1 = 0
-    low2 = math.inf
-    d2 = j2 + f2
-    for j in range(last, last + j2 + 2):
-        c2 = f2 * a2[j - j2 - 1] + (1.0 - f2) * a2[j - j2] if j > j2 else 0.0
-        u2 = c2 - w * (j - last) / d2
-        low2 = min(low2, u2)
+    rise1 = w / n1
+    i0 = (last - m) % n1
+    for part in range(2):
+        begin, end = (last, last + n1 - i0) if part == 0 else (last + n1 - i0, last + n1)
+        offset = i0 - last if part == 0 else i0 - last - n1
+        top1 = max(top1, _top_of_rod1(q1, a1, max(begin, n1), end, offset, n1, last, rise1))
+        for j in range(begin, min(end, n1)):  # before node n1 rod 1's memory is empty
+            top1 = max(top1, q1[j + offset] + (j - last) * rise1)
+    # rod 2: the least u_2 over the next period
+    rise2 = w / (j2 + f2)
+    low2 = _low_of_rod2(a2, max(last, j2 + 1), last + j2 + 2, j2, f2, last, rise2)
+    if last <= j2:
+        low2 = min(low2, -(j2 - last) * rise2)  # nodes before j2 + 1: no memory yet (u_2 <= 0 there)
     excess = (last - m) * h + top1 + reach2 - low2 - w
     if excess <= 0.0:
         return last
@@ -154,14 +314,77 @@ def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
 
 
 @kernel
-def max_plus_batch(h, n1, j2, f2, q1, q2v, q2s, r2, reach2, starts, capacity, a1, a2, w_final, nodes, status):
+def max_plus_batch(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, starts, capacity, a1, a2, w_final, nodes,
+                   status):
     """Run :func:`_max_plus_one` for every row (sample) of the tables; fills ``w_final``, ``nodes``, ``status``."""
     for s in range(q1.shape[0]):
-        w, count, flag = _max_plus_one(h, n1, j2, f2, q1[s], q2v[s], q2s[s], r2, reach2[s], starts[s], capacity,
+        w, count, flag = _max_plus_one(h, n1, j2, f2, q1[s], q2v[s], q2s[s], cell2[s], block2[s], r2, reach2[s],
+                                       starts[s], capacity,
                                        a1, a2)
         w_final[s] = w
         nodes[s] = count
         status[s] = flag
+
+
+@kernel
+def _noise_coefficients(normals, temperatures, energy, length1, length2, omega1, omega2, sign1, sign2, a1, b1, a2, b2):
+    """The noise coefficients of every sample, in the arithmetic of ``ThermalBath.draw`` and
+    ``BathRealisation.noise_coefficients(1.0)`` (so the same numbers)."""
+    for s in range(normals.shape[0]):
+        root1 = math.sqrt(temperatures[s, 0] * energy / length1)
+        root2 = math.sqrt(temperatures[s, 1] * energy / length2)
+        for nu in range(normals.shape[3]):
+            spread, factor = root1 / omega1[nu], 1.0 * math.sqrt(2.0) * sign1[nu]
+            a1[s, nu] = factor * (normals[s, 0, 0, nu] * spread)
+            b1[s, nu] = factor * (normals[s, 0, 1, nu] * spread)
+            spread, factor = root2 / omega2[nu], 1.0 * math.sqrt(2.0) * sign2[nu]
+            a2[s, nu] = factor * (normals[s, 1, 0, nu] * spread)
+            b2[s, nu] = factor * (normals[s, 1, 1, nu] * spread)
+
+
+@kernel
+def _spectra(a1, b1, a2, b2, scale1, scale2, slope_factor, spectrum1, spectrum2):
+    """Fill the half spectra of rod 1's table and of rod 2's values and slopes (bins 1..nu_max).
+
+    ``q(t) = sum a cos + b sin`` has the bins ``scale (a - i b)``; the slope per table index
+    multiplies them by ``i slope_factor``.
+    """
+    for s in range(a1.shape[0]):
+        for nu in range(a1.shape[1]):
+            spectrum1[s, nu + 1] = complex(scale1 * a1[s, nu], -(scale1 * b1[s, nu]))
+            real, imag = scale2 * a2[s, nu], -(scale2 * b2[s, nu])
+            spectrum2[0, s, nu + 1] = complex(real, imag)
+            spectrum2[1, s, nu + 1] = complex(-(imag * slope_factor[nu]), real * slope_factor[nu])
+
+
+@kernel
+def _table_bounds(q1, values, slopes, h, cell2, block2, reach2, reach, starts):
+    """Per sample: rod 2's upper bound on each table cell, its maximum ``reach2``, ``reach`` and the start node.
+
+    A cubic Hermite piece exceeds its larger end value by at most 4/27 of the sum of its
+    end slopes (per index).  Node 0 lies before the earliest possible contact:
+    ``f <= t + reach < 0`` there.
+    """
+    size = values.shape[1]
+    for s in range(values.shape[0]):
+        top2 = 0.0
+        for j in range(size):
+            k = j + 1 if j + 1 < size else 0
+            bound = max(values[s, j], values[s, k]) + (4.0 / 27.0) * (abs(slopes[s, j]) + abs(slopes[s, k]))
+            cell2[s, j] = bound
+            top2 = max(top2, bound)
+        width = size // block2.shape[1]
+        for b in range(block2.shape[1]):
+            top = -math.inf
+            for j in range(b * width, (b + 1) * width):
+                top = max(top, cell2[s, j])
+            block2[s, b] = top
+        top1 = 0.0
+        for j in range(q1.shape[1]):
+            top1 = max(top1, q1[s, j])
+        reach2[s] = top2
+        reach[s] = top1 + top2
+        starts[s] = int(math.ceil(reach[s] / h)) + 1  # noqa: RUF046 (an int in numba and in Python alike)
 
 
 class HardCoreGrid:
@@ -174,16 +397,19 @@ class HardCoreGrid:
     modes : int
         Bath modes per rod ``nu_max`` (>= 1).
     points_per_period : int
-        Grid points per period of rod 1's fastest bath mode, in [2, 4096]
+        Grid points per period of rod 1's fastest bath mode, in [2, 8192]
         (``n_1 = max(points_per_period nu_max, min_points)`` points per ``Gamma_1``).
     min_points : int
         Least grid points per ``Gamma_1``.
     max_points : int
         Refuse a sample longer than this many grid points.
+    rod2_points : int, optional
+        Nodes of rod 2's Hermite table per period of its fastest mode (rounded up to a power of two
+        per table); default half of ``points_per_period``.
     """
 
     def __init__(self, gamma: float, modes: int, points_per_period: int = DEFAULT_POINTS_PER_PERIOD,
-                 min_points: int = 256, max_points: int = 50_000_000):
+                 min_points: int = 256, max_points: int = 50_000_000, rod2_points: int | None = None):
         from ..bath.model import MAX_BATH_MODES
         from ..bath.noise import table_points
 
@@ -192,9 +418,9 @@ class HardCoreGrid:
         if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or not 1 <= modes <= MAX_BATH_MODES:
             raise InvalidParameterError(f"bath modes (nu_max) must be an integer in [1, {MAX_BATH_MODES}], got {modes!r}")
         if isinstance(points_per_period, bool) or not isinstance(points_per_period, (int, np.integer)) \
-                or not 2 <= points_per_period <= 4096:
+                or not 2 <= points_per_period <= 8192:
             raise InvalidParameterError(
-                f"hard_core_resolution (points per period) must be an integer in [2, 4096], got {points_per_period!r}")
+                f"hard_core_resolution (points per period) must be an integer in [2, 8192], got {points_per_period!r}")
         self.gamma = float(gamma)
         self.modes = int(modes)
         self.lengths = (0.5 * (1.0 + self.gamma), 0.5 * (1.0 + self.gamma) / self.gamma)
@@ -204,15 +430,17 @@ class HardCoreGrid:
         d2 = self.periods[1] / self.h
         self.j2 = int(d2)
         self.f2 = d2 - self.j2
-        # rod 2's Hermite table: as many nodes per period of its fastest mode as the grid has for rod 1's
-        # (rod 2's modes are slower by gamma); a power of two
-        self.n2 = table_points(self.modes, int(points_per_period))
+        # rod 2's Hermite table: half as many nodes per period of its fastest mode as the grid has for
+        # rod 1's (a power of two).  The noise is read there only near candidate maxima, and the
+        # interpolation error it adds is unbiased and below the grid's own (test_rod2_table_*)
+        self.n2 = table_points(self.modes, max(2, int(points_per_period) // 2) if rod2_points is None
+                               else int(rod2_points))
         self.r2 = self.h * self.n2 / self.periods[1]  # rod 2's table index per grid step
         self.max_points = int(max_points)
         nu = np.arange(1, self.modes + 1)
         self._omega = tuple(math.pi * nu / length for length in self.lengths)  # m_i = l_i, c = 1
         self._signs = ((-1.0) ** nu, -np.ones(self.modes))  # BathRealisation.contact_end_signs
-        self._derivative = 2j * math.pi * nu / self.periods[1] * (self.periods[1] / self.n2)  # d/d(index)
+        self._slope_factor = 2.0 * math.pi * nu / self.periods[1] * (self.periods[1] / self.n2)  # d/d(index) / i
 
     def coefficients(self, normals, temperatures):
         """Noise coefficients ``(a_1, b_1, a_2, b_2)`` of ``q = Q / kappa``, each ``(samples, nu_max)``.
@@ -220,34 +448,32 @@ class HardCoreGrid:
         The arithmetic of :meth:`ThermalBath.draw` followed by
         ``BathRealisation.noise_coefficients(1.0)``, elementwise.
         """
-        out = []
-        for i in range(2):
-            spread = np.sqrt(temperatures[:, i:i + 1] * _TRANSLATIONAL_ENERGY / self.lengths[i]) / self._omega[i]
-            factor = 1.0 * math.sqrt(2.0) * self._signs[i]
-            out.append(factor * (normals[:, i, 0] * spread))
-            out.append(factor * (normals[:, i, 1] * spread))
+        count = normals.shape[0]
+        out = [_work(f"coefficients {name}", (max(count, BLOCK), self.modes))[:count] for name in ("a1", "b1", "a2", "b2")]
+        _noise_coefficients(np.ascontiguousarray(normals), np.ascontiguousarray(temperatures, dtype=float),
+                            _TRANSLATIONAL_ENERGY, self.lengths[0], self.lengths[1], self._omega[0], self._omega[1],
+                            self._signs[0], self._signs[1], *out)
         return out
 
     def tables(self, a1, b1, a2, b2):
-        """Rod 1's table on the grid, rod 2's Hermite table (values, slopes per index), reaches, start nodes.
+        """Rod 1's table on the grid, rod 2's Hermite table (values, slopes per index), its cell bounds, reaches, start nodes.
 
-        ``a_i, b_i``: noise coefficients ``(samples, nu_max)`` (:meth:`coefficients`).
+        ``a_i, b_i``: noise coefficients ``(samples, nu_max)`` (:meth:`coefficients`).  The
+        arrays returned are this thread's work arrays, overwritten by its next call.
         """
         count = a1.shape[0]
-        top = self.modes + 1
-        spectrum = np.zeros((count, self.n1 // 2 + 1), dtype=complex)
-        spectrum[:, 1:top] = 0.5 * self.n1 * (a1 - 1j * b1)
-        q1 = np.fft.irfft(spectrum, self.n1, axis=-1)
-        spectrum = np.zeros((2, count, self.n2 // 2 + 1), dtype=complex)
-        spectrum[0, :, 1:top] = 0.5 * self.n2 * (a2 - 1j * b2)
-        spectrum[1, :, 1:top] = spectrum[0, :, 1:top] * self._derivative
-        q2 = np.fft.irfft(spectrum, self.n2, axis=-1)
-        # a cubic Hermite piece exceeds its end values by at most 8/27 of a step's slope: 0.3 max|slope|
-        reach2 = np.maximum(q2[0].max(axis=1) + 0.3 * np.abs(q2[1]).max(axis=1), 0.0)
-        reach = np.maximum(q1.max(axis=1), 0.0) + reach2
-        # node 0 before the earliest possible contact: f = t + q <= t + reach < 0 there
-        starts = (np.ceil(reach / self.h) + 1.0).astype(np.int64)
-        return q1, q2[0], q2[1], reach2, reach, starts
+        rows = max(count, BLOCK)
+        # half spectra: only the bins 1..nu_max are ever written, the others stay zero
+        spectrum1 = _work(f"spectrum1 {self.modes}", (rows, self.n1 // 2 + 1), complex)[:count]
+        spectrum2 = _work(f"spectrum2 {self.modes}", (2, rows, self.n2 // 2 + 1), complex)[:, :count]
+        _spectra(a1, b1, a2, b2, 0.5 * self.n1, 0.5 * self.n2, self._slope_factor, spectrum1, spectrum2)
+        q1 = _irfft(spectrum1, self.n1, _work("q1", (rows, self.n1))[:count])
+        q2 = _irfft(spectrum2, self.n2, _work("q2", (2, rows, self.n2))[:, :count])
+        cell2 = _work("cell2", (rows, self.n2))[:count]
+        block2 = _work("block2", (rows, self.n2 // min(self.n2, CELLS_PER_BLOCK)))[:count]
+        reach2, reach, starts = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64)
+        _table_bounds(q1, q2[0], q2[1], self.h, cell2, block2, reach2, reach, starts)
+        return q1, q2[0], q2[1], cell2, block2, reach2, reach, starts
 
     def restitutions(self, normals, temperatures) -> np.ndarray:
         """epsilon of each sample from its normals ``(samples, 2, 2, nu_max)`` and ``T_i / E_tr`` ``(samples, 2)``.
@@ -276,16 +502,16 @@ class HardCoreGrid:
         return float(self._block([a1[None], b1[None], a2[None], b2[None]], np.empty(1, dtype=np.int64))[0])
 
     def _block(self, coefficients, nodes):
-        q1, q2v, q2s, reach2, _reach, starts = self.tables(*coefficients)
+        q1, q2v, q2s, cell2, block2, reach2, _reach, starts = self.tables(*coefficients)
         count = q1.shape[0]
         w = np.empty(count)
         status = np.empty(count, dtype=np.int64)
         capacity = int(min(self.max_points, int(starts.max()) + 6 * self.n1 + 4 * self.j2))
-        # work arrays of this call: a grid is shared (cached_grid) by every thread that samples it,
-        # and the kernel runs without the GIL, so arrays kept on the grid would be overwritten
-        a1, a2 = np.empty(capacity), np.empty(capacity)
-        max_plus_batch(self.h, self.n1, self.j2, self.f2, q1, q2v, q2s, self.r2, reach2, starts, a1.size, a1, a2,
-                       w, nodes, status)
+        # this thread's work arrays (a grid is shared by every thread that samples it, and the kernel
+        # runs without the GIL); the capacity only decides which samples are rerun alone below
+        a1, a2 = _work("a1", (capacity,), grow=True), _work("a2", (capacity,), grow=True)
+        max_plus_batch(self.h, self.n1, self.j2, self.f2, q1, q2v, q2s, cell2, block2, self.r2, reach2, starts,
+                       a1.size, a1, a2, w, nodes, status)
         for s in np.flatnonzero(status != STATUS_OK):
             # a long sample: run it alone with larger work arrays (same arithmetic, same result)
             size = a1.size
@@ -295,9 +521,35 @@ class HardCoreGrid:
                 size = min(self.max_points, 4 * size)
                 big = (np.empty(size), np.empty(size))
                 one = slice(s, s + 1)
-                max_plus_batch(self.h, self.n1, self.j2, self.f2, q1[one], q2v[one], q2s[one], self.r2, reach2[one],
-                               starts[one], size, big[0], big[1], w[one], nodes[one], status[one])
+                max_plus_batch(self.h, self.n1, self.j2, self.f2, q1[one], q2v[one], q2s[one], cell2[one], block2[one], self.r2,
+                               reach2[one], starts[one], size, big[0], big[1], w[one], nodes[one], status[one])
         return w - 1.0
+
+
+_LOCAL = threading.local()  # per thread: work arrays reused between calls (fresh large arrays cost page faults)
+
+
+def _work(name: str, shape: tuple, dtype=float, grow: bool = False) -> np.ndarray:
+    """This thread's work array ``name`` of ``shape`` (zeros when first made); ``grow``: at least that size."""
+    arrays = getattr(_LOCAL, "arrays", None)
+    if arrays is None:
+        arrays = _LOCAL.arrays = {}
+    key = (name, np.dtype(dtype).str) if grow else (name, np.dtype(dtype).str, shape)
+    array = arrays.get(key)
+    if array is None or (grow and array.shape[0] < shape[0]):
+        if len(arrays) > 64:
+            arrays.clear()
+        array = arrays[key] = np.zeros(shape, dtype)
+    return array
+
+
+def _irfft(spectrum, size, out):
+    """``numpy.fft.irfft`` along the last axis into ``out`` (where NumPy takes ``out``: 2.0 and later)."""
+    try:
+        return np.fft.irfft(spectrum, size, axis=-1, out=out)
+    except TypeError:  # NumPy < 2.0
+        out[...] = np.fft.irfft(spectrum, size, axis=-1)
+        return out
 
 
 def _temperature_rows(temperature, count):
@@ -326,9 +578,11 @@ def hard_core_restitutions(gamma, temperature, seeds, *, modes: int = 250,
         Length ratio in (0, 1].
     temperature : float, pair, or array (samples,) or (samples, 2)
         ``T_i / E_tr`` of each rod (dimensionless), >= 0; per sample if an array.
-    seeds : sequence of int or numpy.random.SeedSequence
+    seeds : sequence of int or numpy.random.SeedSequence, or SpawnedSeeds
         Sample ``j``'s bath is ``default_rng(seeds[j]).standard_normal((2, 2, modes))``,
-        the realisation :meth:`wavecontact.bath.ThermalBath.draw` gives for that seed.
+        the realisation :meth:`wavecontact.bath.ThermalBath.draw` gives for that seed
+        (drawn by :mod:`wavecontact.bath.streams`, the same numbers; a
+        :class:`~wavecontact.bath.streams.SpawnedSeeds` range is hashed at once).
     modes : int
         Bath modes per rod ``nu_max``.
     points_per_period : int
@@ -343,14 +597,17 @@ def hard_core_restitutions(gamma, temperature, seeds, *, modes: int = 250,
         The coefficients of restitution (dimensionless); row ``j`` is the same number
         whatever the other seeds in the call.
     """
+    from ..bath.streams import SpawnedSeeds, seed_states, standard_normals
+
     grid = grid or HardCoreGrid(gamma, modes, points_per_period)
-    seeds = list(seeds)
-    if not seeds:
+    if not isinstance(seeds, SpawnedSeeds):
+        seeds = list(seeds)
+    if not len(seeds):
         return np.empty(0)
-    normals = np.empty((len(seeds), 2, 2, grid.modes))
-    for j, seed in enumerate(seeds):
-        np.random.default_rng(seed).standard_normal(out=normals[j])
-    return grid.restitutions(normals, _temperature_rows(temperature, len(seeds)))
+    temperatures = _temperature_rows(temperature, len(seeds))
+    # numpy's own streams, without a SeedSequence and a Generator per sample (bath/streams.py)
+    normals = standard_normals(seed_states(seeds), 4 * grid.modes).reshape(len(seeds), 2, 2, grid.modes)
+    return grid.restitutions(normals, temperatures)
 
 
 def hard_core_restitution(gamma: float, temperatures, modes: int, rng: np.random.Generator,

@@ -13,11 +13,18 @@ node:
   node; the twisted solve eliminates the upper half downwards and the lower
   half upwards at the same time, and unrolls each twice (``y_i = r_i + a_i
   r_(i-1) + (a_i a_(i-1)) y_(i-2)``), so four independent chains are in
-  flight in every phase;
+  flight in every phase.  Every solve takes its right-hand side already
+  divided by its pivots (row ``T_SCALE``), so that no sweep multiplies by an
+  inverse pivot: the stencil pass of the step does that multiplication;
 * consistent P2 mass: the midpoint nodes couple only to their element's two
-  vertices, so they are eliminated first (static condensation, one pass) and
-  the vertices solve a tridiagonal system as above; the midpoints' back
-  substitution is fused with the update.
+  vertices, so they are eliminated (static condensation) and the vertices
+  solve a tridiagonal system as above.  The step forms the condensed
+  right-hand sides straight from the displacements, element by element (two
+  differences per element and per-element coefficient rows, the pivots'
+  scaling folded in; no dependence between elements, so the compiler
+  vectorizes the pass), solves, then computes the midpoints' accelerations
+  and updates every node in a second element-wise pass
+  (:func:`_condensed_step`);
 * large tridiagonal systems (at least ``CHAINS * CHAIN_MIN_LENGTH`` burn-in
   lengths, about 560 unknowns for P1 and 420 vertices for P2) are solved by
   :func:`_chained_solve` instead: a plain ``L D L^T`` factorization whose two
@@ -43,21 +50,38 @@ MASS_TRIDIAGONAL = 1  # P1 consistent
 MASS_CONDENSED = 2  # P2 consistent: midpoints condensed, vertices tridiagonal
 
 # rows of the table of a tridiagonal solve over m unknowns: a twisted factorization about the middle
-# unknown k = m // 2 (rows above k eliminated downwards, rows below upwards; both sweeps run at once)
-T_FORWARD = 0  # above k: a_i of y_i = r_i + a_i y_(i-1) (a_0 = 0); a_k also at the twist
-T_INVERSE_PIVOT = 1  # 1 / pivot: D_i above k, the twist's gamma_k at k, E_i below k
-T_BACKWARD = 2  # outward sweeps: x_i = y_i / D_i + b_i x_(i+1) above k, x_i = z_i / E_i + b_i x_(i-1) below
+# unknown k = m // 2 (rows above k eliminated downwards, rows below upwards; both sweeps run at once).
+# Every solve takes its right-hand side scaled by its pivots' inverses (row T_SCALE), r_i / p_i, so that
+# no sweep multiplies by a pivot: the step kernels fold the scaling into the pass that forms r.
+T_FORWARD = 0  # above k: a_i of y_i = r_i / p_i + a_i y_(i-1) (a_0 = 0), a_i = -off_(i-1) / p_i; a_k at the twist
+T_INVERSE_PIVOT = 1  # 1 / p_i: pivots D_i above k, the twist's gamma_k at k, E_i below k
+T_BACKWARD = 2  # outward sweeps: x_i = y_i + b_i x_(i+1) above k, x_i = z_i + b_i x_(i-1) below
 T_MID_INVERSE = 3  # condensed P2, per element e (its midpoint j = 2e + 1): 1 / M[j, j]
 T_MID_LEFT = 4  # M[j, j - 1]
 T_MID_RIGHT = 5  # M[j, j + 1]
 T_WORK = 6  # rows 6, 7: scratch (the vertex system of P2; no allocation per step)
-T_UPWARD = 8  # k and below: c_i of z_i = r_i + c_i z_(i+1) (c_(m-1) = 0); c_k also at the twist
+T_UPWARD = 8  # k and below: c_i of z_i = r_i / p_i + c_i z_(i+1) (c_(m-1) = 0), c_i = -off_i / p_i
 # the same system as CHAINS independent recurrences (see _chained_solve): a plain L D L^T factorization
-T_CHAIN_FORWARD = 9  # y_i = r_i + f_i y_(i-1), f_0 = 0
-T_CHAIN_BACKWARD = 10  # x_i = y_i / D_i + g_i x_(i+1), g_(m-1) = 0
+T_CHAIN_FORWARD = 9  # y_i = r_i / D_i + f_i y_(i-1), f_i = -off_(i-1) / D_i, f_0 = 0
+T_CHAIN_BACKWARD = 10  # x_i = y_i + g_i x_(i+1), g_i = -off_i / D_i, g_(m-1) = 0
 T_CHAIN_INVERSE = 11  # 1 / D_i
 T_CHAIN_BURN_IN = 12  # [0]: burn-in length w of each chain (0: the system is solved by the twisted sweeps)
-T_ROWS = 13
+# condensed P2 step from the displacements, per element e (vertices 2e, 2e + 2, midpoint 2e + 1; see
+# _condensed_step): with da = u_2e - u_(2e+1) and dc = u_(2e+2) - u_(2e+1), the midpoint's share
+# s_e = -(T_P_MID_LEFT da + T_P_MID_RIGHT dc) and the element's parts of the condensed right-hand sides of
+# its two vertices, T_P_LEFT_A da + T_P_LEFT_C dc and T_P_RIGHT_A da + T_P_RIGHT_C dc
+T_P_MID_LEFT = 13  # K[j, j - 1] / M[j, j] (j = 2e + 1)
+T_P_MID_RIGHT = 14  # K[j, j + 1] / M[j, j]
+T_P_LEFT_A = 15
+T_P_LEFT_C = 16
+T_P_RIGHT_A = 17
+T_P_RIGHT_C = 18
+T_P_BACK_LEFT = 19  # M[j, j - 1] / M[j, j]: the midpoint's acceleration is s_e - this x_e - T_P_BACK_RIGHT x_(e+1)
+T_P_BACK_RIGHT = 20  # M[j, j + 1] / M[j, j]
+T_P_SHARE = 21  # scratch: s_e
+T_P_CARRY = 22  # scratch: element e's part of vertex e + 1
+T_SCALE = 23  # the scaling of the right-hand side of the solve in use: T_CHAIN_INVERSE or T_INVERSE_PIVOT
+T_ROWS = 24
 TWISTED_MIN = 8  # smaller systems take the plain sweeps (same table)
 CHAINS = 8  # independent recurrences of the chained solve
 CHAIN_TOLERANCE = 2.0**-64  # what a chain may inherit from the value it was started with, relative
@@ -69,7 +93,9 @@ def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> No
 
     Pivots ``D_i`` from the top (``L D L^T``) for ``i < k``, ``E_i`` from the
     bottom (``U E U^T``) for ``i > k``, and at the twist ``gamma_k = d_k -
-    off_(k-1)^2 / D_(k-1) - off_k^2 / E_(k+1)``.
+    off_(k-1)^2 / D_(k-1) - off_k^2 / E_(k+1)``; the sweeps' factors are those
+    of the right-hand side scaled by the inverse pivots (rows ``T_FORWARD``,
+    ``T_UPWARD``).
     """
     m = diagonal.size
     k = m // 2
@@ -84,19 +110,20 @@ def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> No
     forward = np.zeros(m)
     upward = np.zeros(m)
     backward = np.zeros(m)
-    inverse = np.empty(m)
+    pivot = np.empty(m)  # p_i: D_i above k, gamma_k, E_i below
     twist = diagonal[k]
     if k > 0:
-        forward[1 : k + 1] = -off[:k] / top[:k]
         twist -= off[k - 1] * off[k - 1] / top[k - 1]
         backward[:k] = -off[:k] / top[:k]
-        inverse[:k] = 1.0 / top[:k]
+        pivot[:k] = top[:k]
     if k < m - 1:
-        upward[k : m - 1] = -off[k:] / bottom[k + 1 :]
         twist -= off[k] * off[k] / bottom[k + 1]
         backward[k + 1 :] = -off[k:] / bottom[k + 1 :]
-        inverse[k + 1 :] = 1.0 / bottom[k + 1 :]
-    inverse[k] = 1.0 / twist
+        pivot[k + 1 :] = bottom[k + 1 :]
+    pivot[k] = twist
+    forward[1 : k + 1] = -off[:k] / pivot[1 : k + 1]
+    upward[k : m - 1] = -off[k:] / pivot[k : m - 1]
+    inverse = 1.0 / pivot
     table[T_FORWARD, :m] = forward
     table[T_UPWARD, :m] = upward
     table[T_BACKWARD, :m] = backward
@@ -107,7 +134,9 @@ def _tridiagonal(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> No
 def _chain_factors(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> None:
     """Plain ``L D L^T`` factors of the tridiagonal ``(diagonal, off)`` and the chains' burn-in length.
 
-    A chain started ``w`` unknowns early with a zero value carries the error
+    The forward sweep takes the right-hand side scaled by ``1 / D_i`` (its
+    factors ``f_i = -off_(i-1) / D_i``), the backward one none.  A chain
+    started ``w`` unknowns early with a zero value carries the error
     ``prod f_j`` (forward) or ``prod g_j`` (backward) over those ``w`` steps
     times an entry of the sweep's result; ``w`` is chosen so that the product
     of any ``w`` consecutive factors is at most ``CHAIN_TOLERANCE``, so the
@@ -123,15 +152,17 @@ def _chain_factors(diagonal: np.ndarray, off: np.ndarray, table: np.ndarray) -> 
         pivot[i] = diagonal[i] - off[i - 1] * off[i - 1] / pivot[i - 1]
     forward = np.zeros(m)
     backward = np.zeros(m)
-    forward[1:] = -off / pivot[:-1]
+    forward[1:] = -off / pivot[1:]
     backward[:-1] = -off / pivot[:-1]
     table[T_CHAIN_FORWARD, :m] = forward
     table[T_CHAIN_BACKWARD, :m] = backward
     table[T_CHAIN_INVERSE, :m] = 1.0 / pivot
     table[T_CHAIN_BURN_IN, 0] = 0.0
+    table[T_SCALE, :m] = table[T_INVERSE_PIVOT, :m]
     burn_in = _burn_in(forward[1:], backward[:-1], m // CHAINS // CHAIN_MIN_LENGTH)
     if burn_in:
         table[T_CHAIN_BURN_IN, 0] = burn_in
+        table[T_SCALE, :m] = table[T_CHAIN_INVERSE, :m]
 
 
 def _burn_in(forward: np.ndarray, backward: np.ndarray, longest: int) -> int:
@@ -182,7 +213,40 @@ def prepare_mass(disc) -> tuple:
     table[T_MID_INVERSE, : mids.size] = inverse
     table[T_MID_LEFT, : mids.size] = left
     table[T_MID_RIGHT, : mids.size] = right
+    _condensed_step_rows(disc.stiffness_bands, inverse, left, right, table[T_SCALE, : mids.size + 1], table)
     return MASS_CONDENSED, table
+
+
+def _condensed_step_rows(bands: np.ndarray, inverse: np.ndarray, left: np.ndarray, right: np.ndarray,
+                         scale: np.ndarray, table: np.ndarray) -> None:
+    """Per-element rows ``T_P_*`` of :func:`_condensed_step` from the stiffness bands and the midpoint masses.
+
+    With ``k_l = K[2e, 2e+1]``, ``k_r = K[2e+1, 2e+2]`` and ``k_f = K[2e, 2e+2]``, element ``e``'s part
+    of the force ``-K u`` is ``(k_l + k_f) da - k_f dc`` on its left vertex, ``-k_f da + (k_r + k_f) dc``
+    on its right vertex and ``-(k_l da + k_r dc)`` on its midpoint; condensing the midpoint subtracts
+    ``M[2e+1, 2e] s_e`` and ``M[2e+1, 2e+2] s_e`` from the two vertices (``s_e``: the midpoint force
+    over ``M[2e+1, 2e+1]``).  ``inverse``, ``left``, ``right``: ``1 / M[j, j]``, ``M[j, j-1]``,
+    ``M[j, j+1]`` per midpoint ``j = 2e + 1``; each vertex's parts are scaled by ``scale``, the
+    vertex solve's ``T_SCALE`` row.
+    """
+    elements = inverse.size
+    near_left = bands[1, 0 : 2 * elements : 2]
+    near_right = bands[1, 1 : 2 * elements : 2]
+    far = bands[2, 0 : 2 * elements : 2]
+    mid_left = near_left * inverse
+    mid_right = near_right * inverse
+    rows = {
+        T_P_MID_LEFT: mid_left,
+        T_P_MID_RIGHT: mid_right,
+        T_P_LEFT_A: (near_left + far + left * mid_left) * scale[:-1],
+        T_P_LEFT_C: (-far + left * mid_right) * scale[:-1],
+        T_P_RIGHT_A: (-far + right * mid_left) * scale[1:],
+        T_P_RIGHT_C: (near_right + far + right * mid_right) * scale[1:],
+        T_P_BACK_LEFT: left * inverse,
+        T_P_BACK_RIGHT: right * inverse,
+    }
+    for row, values in rows.items():
+        table[row, :elements] = values
 
 
 @kernel(fastmath=False)
@@ -288,7 +352,16 @@ def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
 
 @kernel(fastmath=False)
 def _tridiagonal_solve(table, x, m):
-    """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place).
+    """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place)."""
+    scale = table[T_SCALE]
+    for i in range(m):
+        x[i] *= scale[i]
+    _scaled_solve(table, x, m)
+
+
+@kernel(fastmath=False)
+def _scaled_solve(table, x, m):
+    """``x <- T^-1 r`` from ``x = r / p`` (the right-hand side times the row ``T_SCALE``; in place).
 
     Twisted: the upper half is eliminated downwards while the lower half is
     eliminated upwards, then both halves are back-substituted outwards from
@@ -305,7 +378,6 @@ def _tridiagonal_solve(table, x, m):
     a = table[T_FORWARD]
     c = table[T_UPWARD]
     b = table[T_BACKWARD]
-    inverse = table[T_INVERSE_PIVOT]
     k = m // 2
     # inward: top i = 2 .. k - 1 (k - 2 steps), bottom j = m - 3 .. k + 1 (m - k - 3 steps)
     top_old = x[1]  # r_(i-1)
@@ -343,14 +415,14 @@ def _tridiagonal_solve(table, x, m):
         value = current + a[i] * top_old + (a[i] * a_prev) * top_older
         x[i] = value
         top_last = value
-    middle = (x[k] + a[k] * top_last + c[k] * bottom_last) * inverse[k]
+    middle = x[k] + a[k] * top_last + c[k] * bottom_last
     x[k] = middle
     # outward: top i = k - 1 .. 0, bottom i = k + 1 .. m - 1; x_i = e_i + b_i e_(i+-1) + (b_i b_(i+-1)) x_(i+-2)
-    top_old = x[k - 1] * inverse[k - 1]  # e_(i+1)
+    top_old = x[k - 1]  # e_(i+1)
     top_older = middle  # x_(i+2)
     top_last = top_old + b[k - 1] * middle
     x[k - 1] = top_last
-    bottom_old = x[k + 1] * inverse[k + 1]
+    bottom_old = x[k + 1]
     bottom_older = middle
     bottom_last = bottom_old + b[k + 1] * middle
     x[k + 1] = bottom_last
@@ -358,7 +430,7 @@ def _tridiagonal_solve(table, x, m):
     b_bottom = b[k + 1]
     for t in range(m - k - 2):
         i = k - 2 - t
-        current = x[i] * inverse[i]
+        current = x[i]
         b_now = b[i]
         value = current + b_now * top_old + (b_now * b_top) * top_older
         x[i] = value
@@ -367,7 +439,7 @@ def _tridiagonal_solve(table, x, m):
         top_last = value
         b_top = b_now
         j = k + 2 + t
-        current = x[j] * inverse[j]
+        current = x[j]
         b_now = b[j]
         value = current + b_now * bottom_old + (b_now * b_bottom) * bottom_older
         x[j] = value
@@ -376,7 +448,7 @@ def _tridiagonal_solve(table, x, m):
         bottom_last = value
         b_bottom = b_now
     if k - 1 > m - k - 2:  # even m: the top half has one more step (i = 0)
-        current = x[0] * inverse[0]
+        current = x[0]
         x[0] = current + b[0] * top_old + (b[0] * b_top) * top_older
 
 
@@ -391,14 +463,11 @@ def _chained_solve(table, x, m):
     started ``w`` unknowns early from zero (burn-in, nothing stored): the value
     it inherits is damped by ``prod |f_j| <= CHAIN_TOLERANCE`` over those steps
     (see :func:`_chain_factors`), far below rounding.  The back substitution
-    ``x_i = y_i / D_i + g_i x_(i+1)`` runs the same way towards lower indices
+    ``x_i = y_i + g_i x_(i+1)`` runs the same way towards lower indices
     (on reversed views, so that every index is a counter plus a constant).
     """
     burn_in = int(table[T_CHAIN_BURN_IN, 0])
     _chains(x, x, table[T_CHAIN_FORWARD], m, burn_in)
-    inverse = table[T_CHAIN_INVERSE]
-    for i in range(m):
-        x[i] *= inverse[i]
     reverse = x[m - 1 :: -1]  # the table's rows are longer than m for the vertices of P2
     _chains(reverse, reverse, table[T_CHAIN_BACKWARD, m - 1 :: -1], m, burn_in)
 
@@ -465,7 +534,6 @@ def _tridiagonal_solve_plain(table, x, m):
     a = table[T_FORWARD]
     c = table[T_UPWARD]
     b = table[T_BACKWARD]
-    inverse = table[T_INVERSE_PIVOT]
     k = m // 2
     for i in range(1, k):
         x[i] += a[i] * x[i - 1]
@@ -476,11 +544,11 @@ def _tridiagonal_solve_plain(table, x, m):
         middle += a[k] * x[k - 1]
     if k < m - 1:
         middle += c[k] * x[k + 1]
-    x[k] = middle * inverse[k]
+    x[k] = middle
     for i in range(k - 1, -1, -1):
-        x[i] = x[i] * inverse[i] + b[i] * x[i + 1]
+        x[i] += b[i] * x[i + 1]
     for i in range(k + 1, m):
-        x[i] = x[i] * inverse[i] + b[i] * x[i - 1]
+        x[i] += b[i] * x[i - 1]
 
 
 @kernel(fastmath=False)
@@ -533,6 +601,70 @@ def _condensed_vertex_solve(table, r):
 
 
 @kernel(fastmath=False)
+def _scaled_tridiagonal_forces(u, near, scale, out):
+    """``out = scale * (-K u)`` for a tridiagonal ``K`` with upper band ``near`` (the right-hand side of
+    :func:`_scaled_solve`)."""
+    n = u.size
+    if n == 1:
+        out[0] = 0.0
+        return
+    out[0] = scale[0] * (-near[0] * (u[1] - u[0]))
+    for j in range(n - 2):  # node i = j + 1
+        current = u[j + 1]
+        out[j + 1] = scale[j + 1] * (-near[j] * (u[j] - current) - near[j + 1] * (u[j + 2] - current))
+    out[n - 1] = scale[n - 1] * (-near[n - 2] * (u[n - 2] - u[n - 1]))
+
+
+@kernel(fastmath=False)
+def _condensed_step(u, v, table, dt):
+    """Consistent P2 step ``v += dt M^-1 (-K u)``, ``u += dt v`` with the midpoints condensed (``T_P_*`` rows).
+
+    Three passes, the first and the last element-wise with no dependence
+    between elements, so that the compiler vectorizes them: (1) each
+    element's two differences ``da, dc`` give its midpoint share ``s_e`` and
+    its parts of its two vertices' condensed right-hand sides (already
+    scaled for the solve), summed per vertex in a short second loop; (2) the
+    tridiagonal vertex solve; (3) each midpoint's acceleration ``s_e - b_l
+    x_e - b_r x_(e+1)`` and the update of every node.
+    """
+    elements = (u.size - 1) // 2
+    share = table[T_P_SHARE]
+    carry = table[T_P_CARRY]
+    vertex = table[T_WORK + 1]
+    mid_left = table[T_P_MID_LEFT]
+    mid_right = table[T_P_MID_RIGHT]
+    left_a = table[T_P_LEFT_A]
+    left_c = table[T_P_LEFT_C]
+    right_a = table[T_P_RIGHT_A]
+    right_c = table[T_P_RIGHT_C]
+    for e in range(elements):
+        middle = u[2 * e + 1]
+        da = u[2 * e] - middle
+        dc = u[2 * e + 2] - middle
+        share[e] = -(mid_left[e] * da + mid_right[e] * dc)
+        vertex[e] = left_a[e] * da + left_c[e] * dc
+        carry[e] = right_a[e] * da + right_c[e] * dc
+    vertex[elements] = carry[elements - 1]
+    for e in range(1, elements):
+        vertex[e] += carry[e - 1]
+    _scaled_solve(table, vertex, elements + 1)
+    back_left = table[T_P_BACK_LEFT]
+    back_right = table[T_P_BACK_RIGHT]
+    for e in range(elements):
+        left = vertex[e]
+        middle = share[e] - back_left[e] * left - back_right[e] * vertex[e + 1]
+        velocity = v[2 * e] + dt * left
+        v[2 * e] = velocity
+        u[2 * e] += dt * velocity
+        velocity = v[2 * e + 1] + dt * middle
+        v[2 * e + 1] = velocity
+        u[2 * e + 1] += dt * velocity
+    velocity = v[2 * elements] + dt * vertex[elements]
+    v[2 * elements] = velocity
+    u[2 * elements] += dt * velocity
+
+
+@kernel(fastmath=False)
 def elastic_acceleration(u, bands, kind, table, out):
     """``out = M^-1 (-K u)`` (length/time^2)."""
     _stiffness_forces(u, bands, out)
@@ -545,36 +677,21 @@ def step_rod(u, v, a, bands, kind, table, dt):
     if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
         _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
         return
-    _stiffness_forces(u, bands, a)
-    if kind == MASS_LUMPED:  # the mass and the update in one pass
-        inverse = table[0]
+    if kind == MASS_CONDENSED:
+        _condensed_step(u, v, table, dt)
+        return
+    if kind == MASS_TRIDIAGONAL:  # the solve's scaling in the stencil pass
+        _scaled_tridiagonal_forces(u, bands[1], table[T_SCALE], a)
+        _scaled_solve(table, a, u.size)
         for i in range(u.size):
-            velocity = v[i] + dt * (a[i] * inverse[i])
+            velocity = v[i] + dt * a[i]
             v[i] = velocity
             u[i] += dt * velocity
         return
-    if kind == MASS_CONDENSED:  # the midpoints' accelerations and the update in one pass
-        vertex = _condensed_vertex_solve(table, a)
-        mid_inverse = table[T_MID_INVERSE]
-        mid_left = table[T_MID_LEFT]
-        mid_right = table[T_MID_RIGHT]
-        for e in range((u.size - 1) // 2):
-            j = 2 * e + 1
-            left = vertex[e]
-            middle = (a[j] - mid_left[e] * left - mid_right[e] * vertex[e + 1]) * mid_inverse[e]
-            velocity = v[j - 1] + dt * left
-            v[j - 1] = velocity
-            u[j - 1] += dt * velocity
-            velocity = v[j] + dt * middle
-            v[j] = velocity
-            u[j] += dt * velocity
-        last = u.size - 1
-        velocity = v[last] + dt * vertex[last // 2]
-        v[last] = velocity
-        u[last] += dt * velocity
-        return
-    mass_acceleration(kind, table, a)
+    # lumped P1, or lumped P2 on fewer than 5 nodes: the mass and the update in one pass
+    _stiffness_forces(u, bands, a)
+    inverse = table[0]
     for i in range(u.size):
-        velocity = v[i] + dt * a[i]
+        velocity = v[i] + dt * (a[i] * inverse[i])
         v[i] = velocity
         u[i] += dt * velocity

@@ -154,10 +154,11 @@ def _hard_core(spec: EnsembleSpec) -> bool:
 
 def _hard_core_batch(spec: EnsembleSpec, start: int, stop: int) -> np.ndarray:
     """epsilon of samples ``start .. stop - 1`` in the stochastic hard-core mode (one batched call)."""
+    from ..bath.streams import SpawnedSeeds
     from ..solvers import get_solver
 
     resolution = spec.options.get("hard_core_resolution", 8)
-    seeds = [sample_seed(spec.seed, j) for j in range(start, stop)]
+    seeds = SpawnedSeeds(spec.seed, start, stop)  # sample_seed(spec.seed, j) for j in start..stop-1
     return get_solver("delay").hard_core_thermal_batch(spec.gamma, spec.temperature, seeds, spec.bath_modes,
                                                        resolution)
 
