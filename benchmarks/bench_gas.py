@@ -8,8 +8,9 @@ time of this process (``time.process_time``).  On a machine shared with
 other jobs the wall time grows with their load while the CPU time stays
 close to what the work costs on an idle core, so both are shown:
 
-1. the vibration rule (the shipped hard-core collision law, a table lookup in the kernel) and the fixed rule (r = 1)
-   against N: median
+1. the vibration rule (the shipped hard-core collision law, a table lookup in the kernel; and the same with a
+   contact stiffness ``--stiffness ALPHA``, where each collision's kappa = alpha V l also looks up the soft law)
+   and the fixed rule (r = 1) against N: median
    over ``--repeats`` runs of ``--collisions`` collisions each, continuing
    one gas (so the gas has left its initial state), as collisions per second
    and nanoseconds per collision;
@@ -41,6 +42,7 @@ from wavecontact.gas import (
     UniformLengths,
     VibrationLaw,
     default_law,
+    default_soft_law,
     random_gas,
 )
 from wavecontact.gas.reference import heapq_ring_gas
@@ -62,10 +64,11 @@ def _medians(samples):
     return tuple(float(np.median([s[i] for s in samples])) for i in (0, 1))
 
 
-def kernel_rate(rods, rule, collisions, repeats):
+def kernel_rate(rods, rule, collisions, repeats, stiffness=None):
     """Median (wall, CPU) seconds per collision of ``repeats`` runs continuing one gas."""
     gas = random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
-    sim = GasSimulation(gas, rule, seed=2, record_every=collisions, max_frames=0, energy_floor=0.0)
+    sim = GasSimulation(gas, rule, seed=2, record_every=collisions, max_frames=0, energy_floor=0.0,
+                        contact_stiffness=stiffness)
     sim.run(min(collisions, 20 * rods))  # warm-up: compile/load the kernels, leave the initial transient
     samples = [_timed(lambda: sim.run(collisions)) for _ in range(repeats)]
     return tuple(s / collisions for s in _medians(samples))
@@ -118,17 +121,21 @@ def tables(args):
          f"worktree with `PYTHONPATH=.` to measure its code rather than the installed one's).")
     emit()
     emit(f"`python benchmarks/bench_gas.py --repeats {args.repeats} --collisions {args.collisions} "
-         f"--heapq-collisions {args.heapq_collisions} --rods {' '.join(map(str, args.rods))}`, run at {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
+         f"--heapq-collisions {args.heapq_collisions} --stiffness {args.stiffness:g} "
+         f"--rods {' '.join(map(str, args.rods))}`, run at {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
          f"on a machine shared with other jobs (load average {load:.1f} on {os.cpu_count()} cores at the start). "
          f"Medians of {args.repeats} repeats; wall-clock and CPU time of this process.")
     emit()
     emit(_row("N", "rule", "collisions/s (wall)", "ns per collision (wall)", "collisions/s (CPU)",
               "ns per collision (CPU)"))
     emit("|---|---|---|---|---|---|")
-    table = VibrationLaw(default_law())  # covers every pair state: the gas never stops for the rule
+    table = VibrationLaw(default_law(), default_soft_law())  # covers every pair state: never stops for the rule
+    rows = (("vibration (hard-core law)", table, None),
+            (f"vibration, contact stiffness alpha = {args.stiffness:g}", table, args.stiffness),
+            ("fixed r = 1 (elastic)", FixedRestitution(1.0), None))
     for rods in args.rods:
-        for name, rule in (("vibration (hard-core law)", table), ("fixed r = 1 (elastic)", FixedRestitution(1.0))):
-            wall, cpu = kernel_rate(rods, rule, args.collisions, args.repeats)
+        for name, rule, stiffness in rows:
+            wall, cpu = kernel_rate(rods, rule, args.collisions, args.repeats, stiffness)
             emit(_row(f"{rods:,}", name, f"{1 / wall:,.0f}", f"{1e9 * wall:.0f}", f"{1 / cpu:,.0f}", f"{1e9 * cpu:.0f}"))
     emit()
     rods, c = 10_000, args.heapq_collisions
@@ -164,6 +171,8 @@ def main(argv=None):
     parser.add_argument("--collisions", type=int, default=2_000_000)
     parser.add_argument("--heapq-collisions", type=int, default=200_000)
     parser.add_argument("--rods", type=int, nargs="+", default=[100, 1_000, 10_000, 100_000, 1_000_000])
+    parser.add_argument("--stiffness", type=float, default=100.0,
+                        help="contact stiffness alpha of the soft-law rows (default 100)")
     parser.add_argument("--update-docs", action="store_true", help=f"write the tables into {_DOCS}")
     args = parser.parse_args(argv)
     lines = tables(args)

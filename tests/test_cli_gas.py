@@ -37,6 +37,23 @@ def test_the_default_vibration_rule_is_the_hard_core_law_and_never_leaves_it(cap
     assert summary["beyond_law"] >= 0
 
 
+def test_contact_stiffness_is_reported_with_the_bath_limited_fraction(tmp_path, capsys):
+    out = tmp_path / "soft"
+    base = ["gas", "--rods", "100", "--rule", "vibration", "--seed", "3", "--json", "--no-progress",
+            "--contact-stiffness", "40"]
+    summary = _json(capsys, [*base, "--collisions", "4000"])  # records every 10: the last one at the end
+    assert summary["contact_stiffness"] == 40.0 and summary["rule"]["soft_law"]["kappa"][0] >= 3
+    assert 0.0 <= summary["bath_limited_fraction"] <= 1.0 and summary["status"] == "completed"
+    assert 0 <= summary["softer_than_law"] <= summary["collisions"]
+    hard = _json(capsys, ["gas", "--rods", "100", "--rule", "vibration", "--seed", "3", "--json", "--no-progress",
+                          "--collisions", "4000"])
+    assert hard["contact_stiffness"] is None and hard["softer_than_law"] == 0
+    assert hard["final_energy"] != summary["final_energy"]  # soft contacts change the run
+    _json(capsys, [*base, "--collisions", "1000", "--out", str(out)])
+    resumed = _json(capsys, [*base, "--collisions", "3000", "--out", str(out), "--resume"])
+    assert resumed["final_energy"] == summary["final_energy"] and resumed["softer_than_law"] == summary["softer_than_law"]
+
+
 def test_resume_continues_the_same_run(tmp_path, capsys):
     out = tmp_path / "run"
     base = ["gas", "--rods", "100", "--rule", "fixed", "--restitution", "0.97", "--seed", "5", "--json", "--no-progress"]
@@ -65,10 +82,12 @@ def test_collapse_stops_with_a_message(capsys):
         (["--rule", "vibration", "--lengths", "0.1", "1"], "table covers gamma"),
         (["--rule", "vibration", "--table", "a.npz", "--law", "b.npz"], "either --table or --law"),
         (["--rule", "vibration", "--law", "missing.npz"], "not a readable collision law"),
+        (["--rule", "fixed", "--restitution", "0.5", "--contact-stiffness", "10"], "vibration only"),
+        (["--rule", "vibration", "--contact-stiffness", "0"], "contact-stiffness must be a finite number > 0"),
     ],
 )
 def test_bad_options_end_with_one_line(argv, message, capsys):
-    with pytest.raises(SystemExit) if "must lie" in message else _nothing():
+    with pytest.raises(SystemExit) if "must lie" in message or "must be a finite" in message else _nothing():
         status = main(["gas", "--rods", "10", "--collisions", "10", *argv])
         assert status == 2
     err = capsys.readouterr().err.strip()

@@ -82,7 +82,8 @@ def test_kernel_draw_matches_the_table_quantile_function():
         ig = min(np.searchsorted(table.gamma, g, side="right") - 1, table.gamma.size - 2)
         wg = (g - table.gamma[ig]) / (table.gamma[ig + 1] - table.gamma[ig])
         ir, wr = kernels._lookup(ratio, r)
-        eps2, s = kernels._table_draw(u, ig, wg, ir, wr, probability, True, quantiles, share[:, :, None], False)
+        eps2, s = kernels._table_draw(u, ig, wg, ir, wr, 0, 0.0, probability, True, quantiles[:, :, None, :],
+                                      share[:, :, None, None], False)
         assert eps2 == pytest.approx(float(table.quantile(g, r, u)), rel=1e-12, abs=1e-14)
         assert s == pytest.approx(table.share(g, r), rel=1e-12)
     assert kernels._lookup(ratio, 2 * ratio[-1])[0] == -1  # beyond the grid: refused, never clipped

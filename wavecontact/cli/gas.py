@@ -63,6 +63,12 @@ def add_parser(subparsers):
     p.add_argument("--law", metavar="FILE",
                    help="collision law (.npz, wavecontact.gas.collision_law) of the vibration rule (default: "
                    "the hard-core law shipped in wavecontact/data)")
+    p.add_argument("--contact-stiffness", type=_positive("contact-stiffness"), metavar="ALPHA",
+                   help="alpha of the exponential contact V(r) = B exp(-alpha r), an inverse length in the units of "
+                   "the rod lengths (vibration rule only): each collision then has its own softness kappa = alpha V l "
+                   "(V the approach speed, l = 2 l_i l_j/(l_i + l_j), wave speed 1): the hard-core draw plus the soft "
+                   "(finite-kappa) law's correction at that kappa; softer than kappa 10 the kappa-10 correction "
+                   "(counted as softer_than_law) (default: none, every collision in the hard-core limit)")
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="root seed (default 0)")
@@ -82,21 +88,26 @@ def add_parser(subparsers):
 
 def _rule(args):
     from ..errors import InvalidParameterError
-    from ..gas import FixedRestitution, VibrationLaw, VibrationTable, default_law, load_law
+    from ..gas import FixedRestitution, VibrationLaw, VibrationTable, default_law, default_soft_law, load_law
 
     if args.rule == "fixed":
         if args.restitution is None:
             raise InvalidParameterError("--rule fixed needs --restitution E with E in [0, 1]")
+        if args.contact_stiffness is not None:
+            raise InvalidParameterError("--contact-stiffness applies to --rule vibration only")
         return FixedRestitution(args.restitution)
     if args.restitution is not None:
         raise InvalidParameterError("--restitution applies to --rule fixed only (the vibration rule draws eps)")
     if args.table and args.law:
         raise InvalidParameterError("pass either --table or --law, not both")
     if args.table:
+        if args.contact_stiffness is not None:
+            raise InvalidParameterError("--contact-stiffness needs the collision law, not --table")
         from ..restitution_table import load
 
         return VibrationTable(load(args.table))
-    return VibrationLaw(load_law(args.law) if args.law else default_law())
+    soft = default_soft_law() if args.contact_stiffness is not None else None
+    return VibrationLaw(load_law(args.law) if args.law else default_law(), soft)
 
 
 def run(args) -> int:
@@ -114,6 +125,9 @@ def run(args) -> int:
         if sim.rule.describe() != rule.describe():
             raise InvalidParameterError(f"--resume: the checkpoint was written with {sim.rule.describe()}, "
                                         f"not {rule.describe()}")
+        if sim.contact_stiffness != args.contact_stiffness:
+            raise InvalidParameterError(f"--resume: the checkpoint was written with --contact-stiffness "
+                                        f"{sim.contact_stiffness}, not {args.contact_stiffness}")
     else:
         shortest, longest = args.lengths
         if longest < shortest:
@@ -123,7 +137,7 @@ def run(args) -> int:
         initial, dynamics = np.random.SeedSequence(args.seed).spawn(2)
         gas = random_gas(args.rods, seed=initial, lengths=UniformLengths(shortest, longest),
                          packing_fraction=args.packing, boundary="walls" if args.walls else "ring")
-        sim = GasSimulation(gas, rule, damping=args.damping, seed=dynamics,
+        sim = GasSimulation(gas, rule, damping=args.damping, contact_stiffness=args.contact_stiffness, seed=dynamics,
                             record_every=max(1, args.collisions // 400), frame_every=1, max_frames=400)
     from .._jit import prepared_kernel_count
 
@@ -152,4 +166,9 @@ def run(args) -> int:
         print(f"  collisions per second {result.collisions_per_second:.4g} (wall time {result.wall_time_s:.3g} s{note})")
         print(f"  final kinetic energy  {result.final_energy:.6g}")
         print(f"  collapsed             {result.collapsed}")
+        if args.rule == "vibration":
+            print(f"  bath-limited draws    {result.bath_limited} ({summary['bath_limited_fraction']:.3g} of all)")
+            if args.contact_stiffness is not None:
+                print(f"  contact stiffness     alpha = {args.contact_stiffness:g}; draws softer than the soft law: "
+                      f"{result.softer_than_law}")
     return 0

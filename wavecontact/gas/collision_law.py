@@ -1,32 +1,37 @@
-"""The hard-core collision law of the vibration rule, tabulated over every state a pair can reach.
+"""The collision law of the vibration rule, tabulated over every state a pair can reach.
 
 A pair of rods (length ratio ``gamma``) meets with translational energy
-``E_tr`` while both baths are at ``T_B``.  The state variable is
+``E_tr`` while the short rod's bath is at ``T_s`` and the long rod's at
+``T_l`` (energy per mode).  The state variables are
 
-    x = E_tr / (E_tr + T_B)  in (0, 1],
+    x = E_tr / (E_tr + T_pair) in (0, 1],   T_pair = (T_s + T_l) / 2,
+    s = T_s / (T_s + T_l)      in [0, 1]    (0.5 when both baths are cold),
 
-``x = 1`` cold baths, ``x -> 0`` a slow pair in warm baths.  Per
-``(gamma, x)`` the :class:`CollisionLaw` holds
+``x = 1`` cold baths, ``x -> 0`` a slow pair in warm baths; ``s`` says how
+the thermal noise is split between the rods.  Each rod's term of the noise
+(Eq. 17-19) is an independent Gaussian process whose variance is
+proportional to that rod's own temperature, so the pair's noise is fixed by
+its total strength (``x``) and its split (``s``); both axes are bounded, and
+``s = 1/2`` is the one-temperature law of earlier versions.
+
+Per ``(kappa, gamma, x, s)`` the :class:`CollisionLaw` holds
 
 * the quantile function of ``epsilon^2 = E'_tr / E_tr``;
 * per probability level ``u``, the conditional mean of the short rod's
   vibration gain given that ``epsilon^2`` lies at level ``u``, in units of
-  ``E_tr + T_B`` (the long rod takes the rest of ``(1 - epsilon^2) E_tr``,
-  so energy is conserved in every draw).  A per-sample quantity: no ratio of
-  means, finite and well conditioned at ``gamma = 1``.
+  ``E_tr + T_pair`` (the long rod takes the rest of ``(1 - epsilon^2) E_tr``,
+  so energy is conserved in every draw).
 
-Grid in ``log10 x`` from ``LOG_X_MIN`` to 0.  What the solver shows as
-``x -> 0`` (docs/gas.md; ``python docs/gas_study.py vibration``, section 4b):
-``E'_tr / (E_tr + T_B) -> 0``; ``epsilon^2`` itself levels off for some
-``gamma`` (0.6) and keeps growing for others (0.85) down to ``x = 1e-5``,
-so no single limit law in these variables exists.  Below the last row (``x < 10^LOG_X_MIN``) the rule therefore uses the
-last row's law (``epsilon^2`` and the gain in units of ``E_tr + T_B``), and the
-gas counts these draws (``GasResult.beyond_law``): a stated approximation,
-never silent.
+Two laws ship with the package: the hard-core law (``kappa = inf``, fine grid,
+samples from :func:`wavecontact.gas.hardcore_collision.hard_core_collision`)
+and the soft law (a few finite ``kappa``, coarse grid, samples from the
+finite-kappa delay solve with its per-rod energy split).  The gas adds the soft
+law's change against the hard core, interpolated in kappa, to the hard-core
+draw at the collision's own ``kappa = alpha V l`` (:func:`blend_draw`).
 
-Samples come from :func:`wavecontact.gas.hardcore_collision.hard_core_collision`
-(``kappa = inf``: the paper finds the statistics independent of ``kappa``
-above about 50).  Files: ``.npz`` with a JSON ``schema`` (no pickle).
+Grid in ``log10 x`` from ``log_x[0]`` to 0.  Below the last row the rule uses
+the last row's law (counted, ``GasResult.beyond_law``).  Files: ``.npz`` with a
+JSON ``schema`` (no pickle).
 """
 
 from __future__ import annotations
@@ -42,43 +47,68 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..io.files import atomic_write
 
-__all__ = ["DEFAULT_LAW_FILE", "LOG_X_MIN", "REGENERATE", "CollisionLaw", "build_collision_law", "default_law",
-           "load_law"]
+__all__ = ["DEFAULT_LAW_FILE", "DEFAULT_SOFT_LAW_FILE", "LAW_ARRAYS", "LOG_X_MIN", "REGENERATE", "REGENERATE_SOFT",
+           "CollisionLaw", "blend_draw", "build_collision_law", "default_law", "default_soft_law", "kappa_variable",
+           "law_from_arrays", "load_law", "soft_corrections", "solve_collision"]
 
 SCHEMA_NAME = "wavecontact.collision_law"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2: kappa and short-rod-share axes
 DEFAULT_LAW_FILE = "collision_law_hardcore.npz"
+DEFAULT_SOFT_LAW_FILE = "collision_law_soft.npz"
 LOG_X_MIN = -4.0
-REGENERATE = ("python -m wavecontact.gas.collision_law --gamma 0.6 0.7 0.8 0.9 0.95 1.0 "
+REGENERATE = ("python -m wavecontact.gas.collision_law --kappa inf --gamma 0.6 0.7 0.8 0.9 0.95 1.0 "
               "--log-x 0 -0.02 -0.05 -0.1 -0.15 -0.25 -0.35 -0.5 -0.75 -1 -1.5 -2 -2.5 -3 -3.5 -4 "
-              "--samples 400 --levels 41 --seed 2026 --resolution 16 --workers 2 "
+              "--share 0 0.25 0.5 0.75 1 --samples 400 --levels 41 --seed 2026 --resolution 16 --workers 2 "
               "--out wavecontact/data/collision_law_hardcore.npz")
+REGENERATE_SOFT = ("python -m wavecontact.gas.collision_law --kappa 10 30 100 --gamma 0.6 0.8 1.0 "
+                   "--log-x 0 -0.15 -0.5 -1 -2 -3 -4 --share 0 0.5 1 --samples 64 --levels 17 --seed 2027 "
+                   "--workers 2 --out wavecontact/data/collision_law_soft.npz")
 MAX_LAW_SAMPLES = 2_000_000
-_ARRAYS = ("gamma", "log_x", "probability", "eps2_quantiles", "gain_short")
+MAX_SOFT_KAPPA_SAMPLES = 40_000  # finite-kappa solves take 10 ms to 1 s each
+LAW_ARRAYS = ("kappa", "gamma", "log_x", "short_share", "probability", "eps2_quantiles", "gain_short")
+_AXES = ("gamma", "log_x", "short_share", "probability")
+
+
+def kappa_variable(kappa):
+    """``z = ln(kappa) / kappa`` (0 for ``kappa = inf``): the variable the law is interpolated in along kappa.
+
+    Eq. 23 of the paper, ``epsilon ~ gamma + ln(kappa (Gamma_2 - Gamma_1)) / kappa``, makes the cold law
+    nearly linear in ``z`` at large ``kappa``; ``z`` decreases with ``kappa`` for ``kappa > e``.
+    """
+    kappa = float(kappa)
+    return 0.0 if math.isinf(kappa) else math.log(kappa) / kappa
 
 
 @dataclass(frozen=True)
 class CollisionLaw:
-    """Quantiles of ``epsilon^2`` and conditional short-rod gains on a ``(gamma, log10 x)`` grid.
+    """Quantiles of ``epsilon^2`` and conditional short-rod gains on a ``(kappa, gamma, log10 x, s)`` grid.
 
     Parameters
     ----------
+    kappa : array_like (K,)
+        Contact softness ``alpha V l / c`` of the rows, strictly ascending, > e; ``inf`` (the hard
+        core) only as the single row of a hard-core law.
     gamma : array_like (G,)
         Length ratios, strictly ascending in (0, 1].
     log_x : array_like (X,)
-        ``log10(E_tr / (E_tr + T_B))``, strictly ascending, last value 0.
+        ``log10(E_tr / (E_tr + T_pair))``, strictly ascending, last value 0.
+    short_share : array_like (S,)
+        ``s = T_short / (T_short + T_long)``, strictly ascending from 0 to 1 (or the single value 0.5:
+        both rods at the pair's mean temperature).
     probability : array_like (P,)
         Levels, strictly ascending from 0 to 1.
-    eps2_quantiles : array_like (G, X, P)
+    eps2_quantiles : array_like (K, G, X, S, P)
         ``epsilon^2`` at each level (dimensionless, >= 0, non-decreasing in the level).
-    gain_short : array_like (G, X, P)
-        Mean gain of the short rod's vibrations given the level, in units of ``E_tr + T_B``.
-    bath_modes, samples_per_point, seed : int
-        How the law was computed.
+    gain_short : array_like (K, G, X, S, P)
+        Mean gain of the short rod's vibrations given the level, in units of ``E_tr + T_pair``.
+    bath_modes, samples_per_point, seed, resolution : int
+        How the law was computed (``resolution``: grid points per period of the hard-core solve).
     """
 
+    kappa: np.ndarray
     gamma: np.ndarray
     log_x: np.ndarray
+    short_share: np.ndarray
     probability: np.ndarray
     eps2_quantiles: np.ndarray
     gain_short: np.ndarray
@@ -88,26 +118,31 @@ class CollisionLaw:
     resolution: int = 8
 
     def __post_init__(self):
-        for name in _ARRAYS:
+        for name in LAW_ARRAYS:
             try:
                 array = np.array(getattr(self, name), dtype=np.float64, order="C")
             except (TypeError, ValueError):
                 raise InvalidParameterError(f"collision law {name} must be an array of numbers") from None
-            if not np.all(np.isfinite(array)):
+            if np.any(np.isnan(array)) or (name != "kappa" and not np.all(np.isfinite(array))):
                 raise InvalidParameterError(f"collision law {name} must be finite")
             array.setflags(write=False)
             object.__setattr__(self, name, array)
-        for name in ("gamma", "log_x", "probability"):
+        for name in ("kappa",) + _AXES:
             values = getattr(self, name)
             if values.ndim != 1 or values.size < 1 or np.any(np.diff(values) <= 0):
                 raise InvalidParameterError(f"collision law {name} must be a strictly ascending 1-D array")
+        if self.kappa[0] <= math.e or (np.isinf(self.kappa[-1]) and self.kappa.size != 1):
+            raise InvalidParameterError("collision law kappa must be finite values > e, or the single value inf")
         if self.gamma[0] <= 0 or self.gamma[-1] > 1:
             raise InvalidParameterError("collision law gamma must lie in (0, 1]")
         if self.log_x[-1] != 0.0:
             raise InvalidParameterError("collision law log_x must end at 0 (cold baths)")
+        share = self.short_share
+        if not (share.size == 1 and share[0] == 0.5) and not (share.size >= 2 and share[0] == 0 and share[-1] == 1):
+            raise InvalidParameterError("collision law short_share must run from 0 to 1, or be the single value 0.5")
         if self.probability.size < 2 or self.probability[0] != 0 or self.probability[-1] != 1:
             raise InvalidParameterError("collision law probability must run from 0 to 1 with >= 2 levels")
-        shape = (self.gamma.size, self.log_x.size, self.probability.size)
+        shape = self.shape
         for name in ("eps2_quantiles", "gain_short"):
             if getattr(self, name).shape != shape:
                 raise InvalidParameterError(f"collision law {name} must have shape {shape}")
@@ -119,55 +154,99 @@ class CollisionLaw:
                 raise InvalidParameterError(f"collision law {name} must be an integer >= 0, got {value!r}")
             object.__setattr__(self, name, int(value))
 
-    def arrays(self):
-        """``(gamma, log_x, probability, eps2_quantiles, gain_short)`` as C-contiguous float64 (kernel form)."""
-        return tuple(np.ascontiguousarray(getattr(self, name)) for name in _ARRAYS)
+    @property
+    def shape(self):
+        return (self.kappa.size, self.gamma.size, self.log_x.size, self.short_share.size, self.probability.size)
 
-    def _row(self, gamma, x):
+    @property
+    def hard_core(self) -> bool:
+        return bool(np.isinf(self.kappa[-1]))
+
+    def arrays(self):
+        """``(kappa, gamma, log_x, short_share, probability, eps2_quantiles, gain_short)``, C-contiguous float64."""
+        return tuple(np.ascontiguousarray(getattr(self, name)) for name in LAW_ARRAYS)
+
+    def kernel_arrays(self):
+        """``(z, log_x, short_share, probability, eps2_quantiles, gain_short)`` for the gas kernel, with
+        ``z = ln(kappa)/kappa`` per row (:func:`kappa_variable`)."""
+        z = np.array([kappa_variable(k) for k in self.kappa])
+        return (z,) + tuple(np.ascontiguousarray(getattr(self, name))
+                            for name in ("log_x", "short_share", "probability", "eps2_quantiles", "gain_short"))
+
+    def _weights(self, gamma, x, short_share):
         g = float(gamma)
         if not self.gamma[0] <= g <= self.gamma[-1]:
             raise InvalidParameterError(f"gamma must lie in [{self.gamma[0]:g}, {self.gamma[-1]:g}], got {g:g}")
         if not 0.0 < x <= 1.0:
-            raise InvalidParameterError(f"x = E_tr/(E_tr + T_B) must lie in (0, 1], got {x!r}")
+            raise InvalidParameterError(f"x = E_tr/(E_tr + T_pair) must lie in (0, 1], got {x!r}")
+        if not 0.0 <= short_share <= 1.0:
+            raise InvalidParameterError(f"short_share = T_s/(T_s + T_l) must lie in [0, 1], got {short_share!r}")
         lx = max(math.log10(x), self.log_x[0])
         values = []
-        for grid, v in ((self.gamma, g), (self.log_x, lx)):
+        for grid, v in ((self.gamma, g), (self.log_x, lx), (self.short_share, float(short_share))):
             i = int(np.clip(np.searchsorted(grid, v, side="right") - 1, 0, max(grid.size - 2, 0)))
             w = 0.0 if grid.size == 1 else (v - grid[i]) / (grid[i + 1] - grid[i])
-            values += [i, w]
+            values.append((i, w))
         return values
 
-    def draw(self, gamma, x, u):
-        """``(epsilon^2, gain_short)`` at level ``u`` for a pair at ``(gamma, x)`` (as the gas kernel does)."""
-        ig, wg, ix, wx = self._row(gamma, x)
-        k = min(int(u * (self.probability.size - 1)), self.probability.size - 2)
-        wu = (u - self.probability[k]) / (self.probability[k + 1] - self.probability[k])
+    def draw(self, gamma, x, u, short_share=0.5, row=0, arrays=None):
+        """``(epsilon^2, gain_short)`` at level ``u`` for a pair at ``(gamma, x, s)``, kappa row ``row``.
+
+        Linear in the level, trilinear in ``(gamma, log10 x, s)``; a plain-Python statement of what the gas
+        kernel computes.  ``arrays``: another pair of arrays on this law's grid to evaluate instead (the
+        soft law's corrections, :func:`soft_corrections`).
+        """
+        (ig, wg), (ix, wx), (i_s, ws) = self._weights(gamma, x, short_share)
+        top = self.probability.size - 1
+        k = min(int(u * top), top - 1) if np.array_equal(self.probability, np.linspace(0, 1, top + 1)) else \
+            int(np.clip(np.searchsorted(self.probability, u, side="right") - 1, 0, top - 1))
+        wu = min(max((u - self.probability[k]) / (self.probability[k + 1] - self.probability[k]), 0.0), 1.0)
         out = []
-        for array in (self.eps2_quantiles, self.gain_short):
+        for array in (self.eps2_quantiles[row], self.gain_short[row]) if arrays is None else (arrays[0][row],
+                                                                                                arrays[1][row]):
             total = 0.0
             for dg, fg in ((0, 1 - wg), (1, wg)):
                 for dx, fx in ((0, 1 - wx), (1, wx)):
-                    a = array[min(ig + dg, self.gamma.size - 1), min(ix + dx, self.log_x.size - 1)]
-                    total += fg * fx * ((1 - wu) * a[k] + wu * a[k + 1])
+                    for ds, fs in ((0, 1 - ws), (1, ws)):
+                        a = array[min(ig + dg, self.gamma.size - 1), min(ix + dx, self.log_x.size - 1),
+                                  min(i_s + ds, self.short_share.size - 1)]
+                        total += fg * fx * fs * ((1 - wu) * a[k] + wu * a[k + 1])
             out.append(total)
         return out[0], out[1]
 
     def metadata(self) -> dict:
-        return {"name": SCHEMA_NAME, "version": SCHEMA_VERSION, "kappa": "inf", "solver": "hard-core max-plus",
+        regenerate = REGENERATE if self.hard_core else REGENERATE_SOFT
+        return {"name": SCHEMA_NAME, "version": SCHEMA_VERSION,
+                "kappa": ["inf" if math.isinf(k) else float(k) for k in self.kappa],
+                "solver": "hard-core max-plus" if self.hard_core else "delay (finite kappa, energy split)",
                 "bath_modes": self.bath_modes, "samples_per_point": self.samples_per_point, "seed": self.seed,
                 "resolution": self.resolution,
-                "units": "x = E_tr/(E_tr+T_B); eps2 = E'_tr/E_tr; gain_short in units of E_tr + T_B",
-                "regenerate": REGENERATE}
+                "units": "x = E_tr/(E_tr+T_pair), T_pair = (T_short+T_long)/2; short_share = T_short/(T_short+T_long); "
+                         "eps2 = E'_tr/E_tr; gain_short in units of E_tr + T_pair",
+                "regenerate": regenerate}
 
     def save(self, path):
-        """Write ``.npz`` (arrays plus a JSON ``schema``)."""
+        """Write ``.npz`` (arrays plus a JSON ``schema``; ``kappa`` as its finite rows, ``inf`` in the schema)."""
         path = Path(path)
         if path.suffix.lower() != ".npz":
             raise InvalidParameterError(f"collision law path must end in .npz, got {path.name!r}")
-        arrays = {name: getattr(self, name) for name in _ARRAYS}
+        arrays = {name: getattr(self, name) for name in LAW_ARRAYS if name != "kappa"}
         schema = np.array(json.dumps(self.metadata()))
         atomic_write(path, lambda handle: np.savez(handle, schema=schema, **arrays))
         return path
+
+
+def law_from_arrays(arrays: dict, meta: dict, where="collision law") -> CollisionLaw:
+    """Rebuild a :class:`CollisionLaw` from its arrays (without ``kappa``) and :meth:`CollisionLaw.metadata`."""
+    if meta.get("name") != SCHEMA_NAME or meta.get("version") != SCHEMA_VERSION:
+        raise InvalidParameterError(f"{where} is not a {SCHEMA_NAME} v{SCHEMA_VERSION} file")
+    missing = [name for name in LAW_ARRAYS if name != "kappa" and name not in arrays]
+    if missing:
+        raise InvalidParameterError(f"{where} lacks the array(s) {', '.join(missing)}")
+    kappa = [math.inf if k == "inf" else float(k) for k in meta["kappa"]]
+    return CollisionLaw(kappa, *(arrays[name] for name in LAW_ARRAYS[1:]), bath_modes=meta["bath_modes"],
+                        samples_per_point=meta["samples_per_point"], seed=meta["seed"],
+                        resolution=meta.get("resolution", 8))
 
 
 def load_law(path) -> CollisionLaw:
@@ -179,20 +258,71 @@ def load_law(path) -> CollisionLaw:
         meta = json.loads(str(document.pop("schema")))
     except (ValueError, OSError, KeyError, json.JSONDecodeError) as exc:
         raise InvalidParameterError(f"{path.name}: not a readable collision law ({exc})") from None
-    if meta.get("name") != SCHEMA_NAME or meta.get("version") != SCHEMA_VERSION:
-        raise InvalidParameterError(f"{path.name} is not a {SCHEMA_NAME} v{SCHEMA_VERSION} file")
-    missing = [name for name in _ARRAYS if name not in document]
-    if missing:
-        raise InvalidParameterError(f"{path.name} lacks the array(s) {', '.join(missing)}")
-    return CollisionLaw(**{name: document[name] for name in _ARRAYS}, bath_modes=meta["bath_modes"],
-                        samples_per_point=meta["samples_per_point"], seed=meta["seed"],
-                        resolution=meta.get("resolution", 8))
+    return law_from_arrays(document, meta, path.name)
+
+
+def _shipped(name) -> CollisionLaw:
+    with resources.as_file(resources.files("wavecontact") / "data" / name) as path:
+        return load_law(path)
 
 
 def default_law() -> CollisionLaw:
-    """The law shipped with the package (see :data:`REGENERATE`)."""
-    with resources.as_file(resources.files("wavecontact") / "data" / DEFAULT_LAW_FILE) as path:
-        return load_law(path)
+    """The hard-core law shipped with the package (see :data:`REGENERATE`)."""
+    return _shipped(DEFAULT_LAW_FILE)
+
+
+def default_soft_law() -> CollisionLaw:
+    """The finite-kappa law shipped with the package (see :data:`REGENERATE_SOFT`)."""
+    return _shipped(DEFAULT_SOFT_LAW_FILE)
+
+
+def soft_corrections(hard: CollisionLaw, soft: CollisionLaw):
+    """What softness changes: the soft law's ``(eps2, gain)`` quantile rows minus the hard-core law's at the soft
+    law's grid points and levels, arrays of the soft law's shape.
+
+    The gas adds these (interpolated on the soft law's coarse grid) to the hard-core draw on its fine grid,
+    so the strong dependence on ``(gamma, x, s)`` that both laws share comes from the fine grid and only the
+    change with ``kappa`` from the coarse one.
+    """
+    d_eps, d_gain = np.empty(soft.shape), np.empty(soft.shape)
+    for g, gamma in enumerate(soft.gamma):
+        for b, log_x in enumerate(soft.log_x):
+            for c, share in enumerate(soft.short_share):
+                for p, u in enumerate(soft.probability):
+                    e_hard, g_hard = hard.draw(gamma, 10.0**log_x, u, share)
+                    d_eps[:, g, b, c, p] = soft.eps2_quantiles[:, g, b, c, p] - e_hard
+                    d_gain[:, g, b, c, p] = soft.gain_short[:, g, b, c, p] - g_hard
+    return d_eps, d_gain
+
+
+def blend_draw(hard: CollisionLaw, soft: CollisionLaw, gamma, x, u, short_share, kappa, corrections=None):
+    """``(epsilon^2, gain_short, softer)`` at softness ``kappa``: the plain-Python form of the gas kernel's draw.
+
+    The hard-core draw plus the soft law's correction (:func:`soft_corrections`), interpolated linearly in
+    ``z = ln(kappa)/kappa`` (:func:`kappa_variable`) between the soft rows and, above the stiffest, between
+    it and zero (the hard core, ``z = 0``).  Below the softest row that row's correction is used and
+    ``softer`` is True (the gas counts these draws).  ``epsilon^2`` is floored at 0.
+    """
+    corrections = soft_corrections(hard, soft) if corrections is None else corrections
+    e_hard, g_hard = hard.draw(gamma, x, u, short_share)
+    z = kappa_variable(kappa)
+    rows = [kappa_variable(k) for k in soft.kappa]
+    softer = False
+    if kappa <= soft.kappa[0]:
+        weights = {0: 1.0}
+        softer = kappa < soft.kappa[0]
+    elif z <= rows[-1]:
+        weights = {len(rows) - 1: z / rows[-1]}
+    else:
+        r = max(i for i in range(len(rows)) if rows[i] >= z)
+        w = (rows[r] - z) / (rows[r] - rows[r + 1])
+        weights = {r: 1.0 - w, r + 1: w}
+    d_eps = d_gain = 0.0
+    for r, w in weights.items():
+        e, g = soft.draw(gamma, x, u, short_share, r, arrays=corrections)
+        d_eps += w * e
+        d_gain += w * g
+    return max(e_hard + d_eps, 0.0), g_hard + d_gain, softer
 
 
 def level_means(order_values, values, probability):
@@ -218,48 +348,82 @@ def level_means(order_values, values, probability):
     return out
 
 
-def _point(task):
-    from .hardcore_collision import hard_core_collision
-
-    gamma, log_x, seeds, modes, resolution = task
+def pair_temperatures(log_x, short_share):
+    """``(T_short, T_long) / E_tr`` of a pair at ``x = 10^log_x`` and ``s = short_share`` (mean ``(1 - x)/x``)."""
     x = 10.0**log_x
-    ratio = (1.0 - x) / x
-    samples = np.array([hard_core_collision(gamma, ratio, s, bath_modes=modes, resolution=resolution)
-                        for s in seeds])
-    return samples[:, 0], samples[:, 1] * x  # eps2; short rod's gain in units of E_tr + T_B
+    mean = (1.0 - x) / x
+    return 2.0 * short_share * mean, 2.0 * (1.0 - short_share) * mean
 
 
-def point_samples(gamma, log_x, samples, seed, *, bath_modes=250, resolution=8):
-    """``(eps2, gain_short)`` of ``samples`` hard-core collisions at one grid point (seeds spawned from ``seed``)."""
+def solve_collision(gamma, kappa, temperatures, seed, modes, resolution):
+    """``(eps2, short rod's gain in units of E_tr)`` of one collision, each rod at its own temperature.
+
+    ``kappa = inf``: the hard-core split (:func:`wavecontact.gas.hardcore_collision.hard_core_collision`,
+    ``resolution`` grid points per period); finite: :func:`wavecontact.collide` with the delay solver and its
+    per-rod energy split.  ``temperatures = (T_short, T_long) / E_tr``; ``modes`` bath modes per rod.
+    """
+    if math.isinf(kappa):
+        from .hardcore_collision import hard_core_collision
+
+        eps2, gain_1, _gain_2 = hard_core_collision(gamma, 0.0, seed, bath_modes=modes, resolution=resolution,
+                                                    temperatures=temperatures)
+        return eps2, gain_1
+    from ..api import collide
+
+    cold = temperatures[0] == 0.0 and temperatures[1] == 0.0
+    result = collide(gamma, kappa, "delay", bath_temperature=None if cold else temperatures, bath_modes=modes,
+                     seed=seed, energy_split=True)
+    gain = result.extra["vibration_energy_gain"]
+    return float(result.restitution) ** 2, 4.0 * float(gain[0])  # the delay solver's energies have E_tr = 1/4
+
+
+def _point(task):
+    gamma, kappa, log_x, share, seeds, modes, resolution = task
+    temperatures = pair_temperatures(log_x, share)
+    samples = np.array([solve_collision(gamma, kappa, temperatures, s, modes, resolution) for s in seeds])
+    return samples[:, 0], samples[:, 1] * 10.0**log_x  # eps2; short rod's gain in units of E_tr + T_pair
+
+
+def point_samples(gamma, log_x, samples, seed, *, bath_modes=250, resolution=8, short_share=0.5, kappa=math.inf):
+    """``(eps2, gain_short)`` of ``samples`` collisions at one grid point (seeds spawned from ``seed``).
+
+    ``gain_short`` in units of ``E_tr + T_pair``; ``kappa = inf`` the hard core, else the finite-kappa delay solve.
+    """
     seeds = np.random.SeedSequence(seed).spawn(int(samples)) if not isinstance(seed, np.random.SeedSequence) \
         else seed.spawn(int(samples))
-    return _point((float(gamma), float(log_x), seeds, bath_modes, resolution))
+    return _point((float(gamma), float(kappa), float(log_x), float(short_share), seeds, bath_modes, resolution))
 
 
-def build_collision_law(gammas, log_xs, samples, seed, *, levels=41, bath_modes=250, resolution=8, executor=None):
-    """Tabulate the hard-core collision law (one ensemble per ``(gamma, log10 x)`` point).
+def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), short_shares=(0.5,), levels=41,
+                        bath_modes=250, resolution=8, executor=None):
+    """Tabulate the collision law (one ensemble per ``(kappa, gamma, log10 x, s)`` point).
 
-    Point ``a`` (row-major over ``gammas`` x ``log_xs``) uses child ``a`` of
-    ``SeedSequence(seed).spawn(points)``, and its sample ``i`` child ``i`` of that.
+    Point ``a`` (row-major over ``kappas`` x ``gammas`` x ``log_xs`` x ``short_shares``) uses child ``a`` of
+    ``SeedSequence(seed).spawn(points)``, and its sample ``i`` child ``i`` of that.  Cold points (``x = 1``)
+    are deterministic; they are solved like the others.
     """
-    gammas, log_xs = np.asarray(gammas, float), np.asarray(log_xs, float)
-    if gammas.size * log_xs.size * int(samples) > MAX_LAW_SAMPLES:
+    kappas, gammas, log_xs, shares = (np.asarray(a, float) for a in (kappas, gammas, log_xs, short_shares))
+    total = kappas.size * gammas.size * log_xs.size * shares.size * int(samples)
+    if total > MAX_LAW_SAMPLES:
         raise InvalidParameterError(f"a collision law may hold at most {MAX_LAW_SAMPLES} collisions in all")
+    if np.any(np.isfinite(kappas)) and total > MAX_SOFT_KAPPA_SAMPLES:
+        raise InvalidParameterError(f"a finite-kappa law may hold at most {MAX_SOFT_KAPPA_SAMPLES} collisions "
+                                    "in all (each is a delay solve of 10 ms to 1 s)")
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 2 <= levels <= int(samples):
         raise InvalidParameterError(f"levels must be an integer in [2, samples], got {levels!r}")
     probability = np.linspace(0.0, 1.0, int(levels))
-    points = [(g, lx) for g in gammas for lx in log_xs]
+    points = [(k, g, lx, s) for k in kappas for g in gammas for lx in log_xs for s in shares]
     children = np.random.SeedSequence(int(seed)).spawn(len(points))
-    tasks = [(float(g), float(lx), child.spawn(int(samples)), int(bath_modes), int(resolution))
-             for (g, lx), child in zip(points, children)]
+    tasks = [(float(g), float(k), float(lx), float(s), child.spawn(int(samples)), int(bath_modes), int(resolution))
+             for (k, g, lx, s), child in zip(points, children)]
     results = list(executor.map(_point, tasks)) if executor is not None else [_point(t) for t in tasks]
-    shape = (gammas.size, log_xs.size, probability.size)
+    shape = (kappas.size, gammas.size, log_xs.size, shares.size, probability.size)
     quantiles, gains = np.empty(shape), np.empty(shape)
     for a, (eps2, gain) in enumerate(results):
-        g, x = divmod(a, log_xs.size)
-        quantiles[g, x] = np.quantile(eps2, probability)
-        gains[g, x] = level_means(eps2, gain, probability)
-    return CollisionLaw(gammas, log_xs, probability, quantiles, gains, bath_modes=int(bath_modes),
+        index = np.unravel_index(a, shape[:4])
+        quantiles[index] = np.quantile(eps2, probability)
+        gains[index] = level_means(eps2, gain, probability)
+    return CollisionLaw(kappas, gammas, log_xs, shares, probability, quantiles, gains, bath_modes=int(bath_modes),
                         samples_per_point=int(samples), seed=int(seed), resolution=int(resolution))
 
 
@@ -269,28 +433,37 @@ def main(argv=None):
     from concurrent.futures import ProcessPoolExecutor
 
     p = argparse.ArgumentParser(prog="python -m wavecontact.gas.collision_law",
-                                description="Tabulate the hard-core collision law of the gas's vibration rule.")
+                                description="Tabulate the collision law of the gas's vibration rule.")
+    p.add_argument("--kappa", type=float, nargs="+", default=[math.inf],
+                   help="contact softness rows: inf (hard core, default) or finite values > e")
     p.add_argument("--gamma", type=float, nargs="+", required=True)
-    p.add_argument("--log-x", type=float, nargs="+", required=True, help="log10 E_tr/(E_tr+T_B), ascending or not")
+    p.add_argument("--log-x", type=float, nargs="+", required=True,
+                   help="log10 E_tr/(E_tr+T_pair), ascending or not")
+    p.add_argument("--share", type=float, nargs="+", default=[0.5],
+                   help="short rod's share T_s/(T_s+T_l) of the bath temperature (0 ... 1, or 0.5 alone)")
     p.add_argument("--samples", type=int, required=True)
     p.add_argument("--levels", type=int, default=41)
     p.add_argument("--seed", type=int, required=True)
     p.add_argument("--bath-modes", type=int, default=250)
-    p.add_argument("--resolution", type=int, default=8)
+    p.add_argument("--resolution", type=int, default=8, help="grid points per period (hard core only)")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--out", required=True)
     args = p.parse_args(argv)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
+    options = {"kappas": sorted(args.kappa), "short_shares": sorted(args.share), "levels": args.levels,
+               "bath_modes": args.bath_modes, "resolution": args.resolution}
     log_xs = sorted(args.log_x)
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:
-            law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, levels=args.levels,
-                                      bath_modes=args.bath_modes, resolution=args.resolution, executor=pool)
+            law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, executor=pool, **options)
     else:
-        law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, levels=args.levels,
-                                  bath_modes=args.bath_modes, resolution=args.resolution)
+        law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, **options)
     law.save(args.out)
-    print(f"wrote {args.out} in {time.perf_counter() - start:.0f} s")
+    import resource
+
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    print(f"wrote {args.out} ({Path(args.out).stat().st_size / 1e3:.0f} kB) in {time.perf_counter() - start:.0f} s "
+          f"wall, {time.process_time() - cpu + children.ru_utime + children.ru_stime:.0f} s CPU")
 
 
 if __name__ == "__main__":

@@ -47,6 +47,7 @@ __all__ = [
     "STATUS_OFF_TABLE",
     "STATUS_TIME_LIMIT",
     "build_tree",
+    "empty_soft_law",
     "event_time",
     "event_times",
     "run_events",
@@ -59,8 +60,11 @@ STATUS_OFF_TABLE = 6  # a pair met at a temperature ratio outside the table: the
 
 # indices into the float64 ``scalars`` array
 T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, ENERGY_FLOOR, KINETIC_CARRY, KINETIC_REFERENCE = range(8)
-# indices into the int64 ``counters`` array (OFF_TABLE: for the law rule, the draws below its last row)
-COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED = 0, 1, 2, 3
+# indices into the int64 ``counters`` array (OFF_TABLE: for the law rule, the draws below its last row;
+# SOFTER: law rule with a contact stiffness, the draws softer than the soft law's softest row; FLOORED: the
+# draws whose soft-corrected eps^2 came out negative and was set to 0)
+COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED, SOFTER, FLOORED = 0, 1, 2, 3, 4, 5
+COUNTERS = 6
 
 
 @kernel
@@ -227,9 +231,10 @@ def _lookup(table_ratio, ratio):
 
 
 @kernel
-def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share, per_level):
+def _table_draw(u, ig, wg, ir, wr, i_s, ws, probability, uniform_levels, quantiles, share, per_level):
     """eps^2 at level ``u`` and the short rod's share (``share[..., 0]``) or, ``per_level``, its gain at level
-    ``u`` (``share`` holds one value per level), bilinear between the four corner quantile functions."""
+    ``u`` (``share`` holds one value per level), trilinear between the eight corner quantile functions of the
+    ``(gamma, ratio, short-rod share)`` grid (arrays of shape ``(G, R, S, P)``; ``S = 1``: no share axis)."""
     if uniform_levels:
         top = probability.size - 1
         lo = min(int(u * top), top - 1)
@@ -238,21 +243,89 @@ def _table_draw(u, ig, wg, ir, wr, probability, uniform_levels, quantiles, share
     wu = min(max((u - probability[lo]) / (probability[lo + 1] - probability[lo]), 0.0), 1.0)
     g1 = min(ig + 1, quantiles.shape[0] - 1)
     r1 = min(ir + 1, quantiles.shape[1] - 1)
-    q00 = (1.0 - wu) * quantiles[ig, ir, lo] + wu * quantiles[ig, ir, lo + 1]
-    q01 = (1.0 - wu) * quantiles[ig, r1, lo] + wu * quantiles[ig, r1, lo + 1]
-    q10 = (1.0 - wu) * quantiles[g1, ir, lo] + wu * quantiles[g1, ir, lo + 1]
-    q11 = (1.0 - wu) * quantiles[g1, r1, lo] + wu * quantiles[g1, r1, lo + 1]
-    eps2 = (1.0 - wg) * ((1.0 - wr) * q00 + wr * q01) + wg * ((1.0 - wr) * q10 + wr * q11)
-    if not per_level:
-        s = (1.0 - wg) * ((1.0 - wr) * share[ig, ir, 0] + wr * share[ig, r1, 0]) + wg * (
-            (1.0 - wr) * share[g1, ir, 0] + wr * share[g1, r1, 0]
-        )
-        return eps2, s
-    s00 = (1.0 - wu) * share[ig, ir, lo] + wu * share[ig, ir, lo + 1]
-    s01 = (1.0 - wu) * share[ig, r1, lo] + wu * share[ig, r1, lo + 1]
-    s10 = (1.0 - wu) * share[g1, ir, lo] + wu * share[g1, ir, lo + 1]
-    s11 = (1.0 - wu) * share[g1, r1, lo] + wu * share[g1, r1, lo + 1]
-    return eps2, (1.0 - wg) * ((1.0 - wr) * s00 + wr * s01) + wg * ((1.0 - wr) * s10 + wr * s11)
+    s1 = min(i_s + 1, quantiles.shape[2] - 1)
+    eps2 = (1.0 - ws) * _bilinear(quantiles, ig, g1, wg, ir, r1, wr, i_s, lo, wu) + ws * _bilinear(
+        quantiles, ig, g1, wg, ir, r1, wr, s1, lo, wu)
+    if per_level:
+        gain = (1.0 - ws) * _bilinear(share, ig, g1, wg, ir, r1, wr, i_s, lo, wu) + ws * _bilinear(
+            share, ig, g1, wg, ir, r1, wr, s1, lo, wu)
+    else:  # one share per grid point (a restitution table: no share axis, S = 1)
+        gain = (1.0 - wg) * ((1.0 - wr) * share[ig, ir, 0, 0] + wr * share[ig, r1, 0, 0]) + wg * (
+            (1.0 - wr) * share[g1, ir, 0, 0] + wr * share[g1, r1, 0, 0])
+    return eps2, gain
+
+
+@kernel
+def _bilinear(array, ig, g1, wg, ir, r1, wr, c, lo, wu):
+    """``array[:, :, c]`` linear in the level (``lo``, ``wu``) and bilinear in the first two axes."""
+    q00 = (1.0 - wu) * array[ig, ir, c, lo] + wu * array[ig, ir, c, lo + 1]
+    q01 = (1.0 - wu) * array[ig, r1, c, lo] + wu * array[ig, r1, c, lo + 1]
+    q10 = (1.0 - wu) * array[g1, ir, c, lo] + wu * array[g1, ir, c, lo + 1]
+    q11 = (1.0 - wu) * array[g1, r1, c, lo] + wu * array[g1, r1, c, lo + 1]
+    return (1.0 - wg) * ((1.0 - wr) * q00 + wr * q01) + wg * ((1.0 - wr) * q10 + wr * q11)
+
+
+@kernel
+def _law_point(log_x, short_share, log_x_grid, share_grid):
+    """``(below, ix, wx, i_s, ws)``: grid cell of a pair in a collision law; below its last row (``below``)
+    that row's law is used."""
+    below = log_x < log_x_grid[0]
+    ix, wx = 0, 0.0
+    if not below:
+        ix, wx = _lookup(log_x_grid, log_x)
+    i_s, ws = 0, 0.0
+    if share_grid.size > 1:
+        i_s, ws = _lookup(share_grid, short_share)
+    return below, ix, wx, i_s, ws
+
+
+@kernel
+def _soft_draw(u, gamma, kappa, log_x, short_share, eps2_hard, gain_hard, soft_kappa, soft_gamma, soft_log_x,
+               soft_share, soft_probability, soft_d_eps2, soft_d_gain):
+    """The hard-core draw plus the soft law's correction at this collision's ``kappa`` (same level ``u``).
+
+    ``soft_d_eps2``, ``soft_d_gain``: per kappa row, the soft law minus the hard-core law on the soft law's
+    grid (:func:`wavecontact.gas.collision_law.soft_corrections`), interpolated linearly in
+    ``z = ln(kappa)/kappa`` between the rows and, above the stiffest, between it and zero (the hard core);
+    below the softest row that row's correction.  Returns ``(eps2, gain, softer, below, floored)``:
+    ``softer`` when ``kappa`` lies below the softest row, ``below`` when the pair lies below the soft law's
+    last ``x`` row, ``floored`` when the corrected ``eps2`` came out negative and was set to 0.
+    """
+    rows = soft_kappa.size
+    ig, wg = _lookup(soft_gamma, gamma)
+    below, ix, wx, i_s, ws = _law_point(log_x, short_share, soft_log_x, soft_share)
+    uniform = False  # the level by a branch-free search (soft draws are a minority; no exactness test)
+    softer = False
+    if kappa <= soft_kappa[0]:
+        r = 0
+        weight_hi = 0.0
+        weight_lo = 1.0
+        softer = kappa < soft_kappa[0]
+    else:
+        z = math.log(kappa) / kappa
+        z_last = math.log(soft_kappa[rows - 1]) / soft_kappa[rows - 1]
+        if z <= z_last:
+            r = rows - 1
+            weight_lo = z / z_last
+            weight_hi = 0.0
+        else:
+            r = _bracket(soft_kappa, kappa)
+            z_lo = math.log(soft_kappa[r]) / soft_kappa[r]
+            z_hi = math.log(soft_kappa[r + 1]) / soft_kappa[r + 1]
+            weight_hi = (z_lo - z) / (z_lo - z_hi)
+            weight_lo = 1.0 - weight_hi
+    d_eps, d_gain = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_d_eps2[r],
+                                soft_d_gain[r], True)
+    d_eps *= weight_lo
+    d_gain *= weight_lo
+    if weight_hi > 0.0:
+        e1, g1 = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_d_eps2[r + 1],
+                             soft_d_gain[r + 1], True)
+        d_eps += weight_hi * e1
+        d_gain += weight_hi * g1
+    eps2 = eps2_hard + d_eps
+    floored = eps2 < 0.0
+    return max(eps2, 0.0), gain_hard + d_gain, softer, below, floored
 
 
 @kernel
@@ -278,9 +351,10 @@ def _recount_kinetic(v, mass, ring, scalars):
 
 @kernel
 def run_events(
-    x, v, local_time, temperature, mass, reach, pair_gamma_index, pair_gamma_weight, left_is_short,
+    x, v, local_time, temperature, mass, reach, pair_gamma, pair_gamma_index, pair_gamma_weight, left_is_short,
     tree_time, tree_event, ring, box,
-    rule, restitution_squared, table_ratio, probability, uniform_levels, quantiles, share, bath_modes, decay_rate,
+    rule, restitution_squared, table_ratio, share_grid, probability, uniform_levels, quantiles, share, bath_modes,
+    decay_rate, stiffness, soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains,
     uniforms, pending, max_collisions, time_limit,
     window, collapse_factor, scalars, counters,
 ):
@@ -293,9 +367,9 @@ def run_events(
         temperatures (energy per bath mode) and masses; updated in place.
     reach : ndarray
         Centre distance at contact of each event.
-    pair_gamma_index, pair_gamma_weight : ndarray
-        Per event, the lower gamma-grid index and weight of the pair's
-        length ratio (table rule).
+    pair_gamma, pair_gamma_index, pair_gamma_weight : ndarray
+        Per event, the pair's length ratio, and its lower gamma-grid index and weight
+        (table and law rules).
     left_is_short : ndarray of bool
         Per event, whether the left rod of the pair is the shorter one.
     tree_time, tree_event : ndarray
@@ -308,10 +382,11 @@ def run_events(
         :data:`RULE_FIXED`, :data:`RULE_TABLE`, :data:`RULE_EXTERNAL` or :data:`RULE_LAW`.
     restitution_squared : float
         eps^2 of the fixed rule.
-    table_ratio, probability, quantiles, share : ndarray
-        The restitution table's arrays (:meth:`RestitutionTable.arrays`, ``share`` with a trailing axis of
-        length 1), or for :data:`RULE_LAW` the collision law's (:meth:`CollisionLaw.arrays`: ``log10 x``
-        grid, levels, eps^2 quantiles, short-rod gains per level).
+    table_ratio, share_grid, probability, quantiles, share : ndarray
+        The restitution table's arrays (:meth:`RestitutionTable.arrays`, ``quantiles`` as ``(G, R, 1, P)``,
+        ``share`` as ``(G, R, 1, 1)``), or for :data:`RULE_LAW` the hard-core collision law's
+        (:meth:`CollisionLaw.kernel_arrays`: ``log10 x`` grid, short-rod-share grid, levels, eps^2 quantiles
+        and short-rod gains per level, ``(G, X, S, P)``).
     uniform_levels : bool
         Whether ``probability`` is ``linspace(0, 1, P)`` exactly (then the
         level is found by one multiplication instead of a search).
@@ -319,6 +394,13 @@ def run_events(
         Modes per rod: a bath at temperature T holds ``bath_modes * T``.
     decay_rate : float
         ``1 / tau_diss`` (0: no bath dissipation).
+    stiffness : float
+        :data:`RULE_LAW`: the contact's ``alpha`` (inverse length); each collision has
+        ``kappa = alpha V l`` with ``V`` the approach speed and ``l = 2 l_i l_j / (l_i + l_j)``
+        (``= 2 mu``: masses equal lengths).  0: hard core (the soft arrays are not used).
+    soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains : ndarray
+        The soft (finite-kappa) collision law: its kappa rows, grids, levels, and its corrections to the
+        hard-core law, arrays ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`).
     uniforms : ndarray
         Levels in [0, 1), one per collision of the table rule.
     pending : ndarray, shape (3,)
@@ -411,20 +493,31 @@ def run_events(
             if ir < 0:
                 counters[OFF_TABLE] += 1
                 return STATUS_OFF_TABLE, k, done
-            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr,
+            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, 0, 0.0,
                                   probability, uniform_levels, quantiles, share, False)
         elif rule == RULE_LAW:
-            # the hard-core law in x = E_tr / (E_tr + T_pair): every pair lies in (0, 1]; below the last row
-            # the last row's law is used (counted); s is the short rod's gain in units of E_tr + T_pair
-            scale = e_tr + 0.5 * (temperature[i] + temperature[j])
+            # the law in x = E_tr / (E_tr + T_pair) and s = T_short / (T_short + T_long): every pair lies in
+            # (0, 1] x [0, 1]; below the last x row that row's law is used (counted); the gain comes in units of
+            # E_tr + T_pair
+            t_sum = temperature[short] + temperature[long]
+            scale = e_tr + 0.5 * t_sum
             log_x = math.log10(e_tr / scale)
-            if log_x < table_ratio[0]:
-                counters[OFF_TABLE] += 1
-                ir, wr = 0, 0.0
-            else:
-                ir, wr = _lookup(table_ratio, log_x)
-            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr,
+            short_share = temperature[short] / t_sum if t_sum > 0.0 else 0.5
+            below, ir, wr, i_s, ws = _law_point(log_x, short_share, table_ratio, share_grid)
+            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, i_s, ws,
                                   probability, uniform_levels, quantiles, share, True)
+            if stiffness > 0.0:
+                kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
+                eps2, s, softer, below_soft, floored = _soft_draw(
+                    uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft_kappa, soft_gamma,
+                    soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains)
+                below = below or below_soft
+                if softer:
+                    counters[SOFTER] += 1
+                if floored:
+                    counters[FLOORED] += 1
+            if below:
+                counters[OFF_TABLE] += 1
             s *= scale
         else:
             eps2 = pending[1]
@@ -436,18 +529,21 @@ def run_events(
             # deficit goes to the other bath, and if that one cannot give it either, eps^2 is reduced
             gain_short = s
             gain_long = lost - s
+            capped = False
             if bath_modes * temperature[short] + gain_short < 0.0:
                 gain_short = -bath_modes * temperature[short]
                 gain_long = lost - gain_short
-                counters[BATH_LIMITED] += 1
+                capped = True
             if bath_modes * temperature[long] + gain_long < 0.0:
                 gain_long = -bath_modes * temperature[long]
                 gain_short = lost - gain_long
-                counters[BATH_LIMITED] += 1
+                capped = True
                 if bath_modes * temperature[short] + gain_short < 0.0:
                     gain_short = -bath_modes * temperature[short]
                     lost = gain_short + gain_long
                     eps2 = 1.0 - lost / e_tr
+            if capped:
+                counters[BATH_LIMITED] += 1  # once per draw, so that bath_limited / collisions is a fraction
             temperature[short] = max(temperature[short] + gain_short / bath_modes, 0.0)
             temperature[long] = max(temperature[long] + gain_long / bath_modes, 0.0)
         elif rule != RULE_FIXED and lost < 0.0:
@@ -542,5 +638,11 @@ def run_events(
 
 
 def empty_table():
-    """Placeholder table arrays for rules that use none (one grid point, two levels)."""
-    return (np.zeros(1), np.array([0.0, 1.0]), np.ones((1, 1, 2)), np.zeros((1, 1, 1)))
+    """Placeholder ``(ratio, share grid, levels, quantiles, share)`` for rules that use none (one point, two levels)."""
+    return (np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]), np.ones((1, 1, 1, 2)), np.zeros((1, 1, 1, 1)))
+
+
+def empty_soft_law():
+    """Placeholder soft-law arrays ``(kappa, gamma, log_x, share, levels, quantiles, gains)`` (stiffness 0)."""
+    return (np.array([10.0]), np.array([1.0]), np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]),
+            np.ones((1, 1, 1, 1, 2)), np.zeros((1, 1, 1, 1, 2)))

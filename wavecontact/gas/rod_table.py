@@ -102,3 +102,25 @@ def hard_core_draw(*, bath_modes=250, resolution=16):
         return eps2, (gain_1 / lost if lost != 0.0 else 0.5)
 
     return draw
+
+
+def contact_draw(*, bath_modes=250, resolution=16):
+    """A per-collision ``draw(gamma, temperatures, seed, kappa=inf) -> (eps2, rod1_share)``, each rod at its own
+    temperature, at the collision's own softness.
+
+    The exact counterpart of :class:`~wavecontact.gas.rules.VibrationLaw` with a soft law: use it as
+    ``VibrationSolve(contact_draw(), per_rod=True)`` in a :class:`~wavecontact.gas.GasSimulation` with a
+    ``contact_stiffness``, which passes ``kappa = alpha V l``.  ``kappa = inf`` is one hard-core solve
+    (``resolution`` grid points per period), finite ``kappa`` one delay solve with its per-rod energy split
+    (10 ms to 1 s each).  ``rod1_share = gain_1 / (1 - eps2)`` (0.5 when ``eps2 == 1`` exactly).
+    """
+    from .collision_law import solve_collision
+
+    def draw(gamma, temperatures, seed, kappa=math.inf):
+        if not isinstance(temperatures, tuple):
+            temperatures = (float(temperatures), float(temperatures))
+        eps2, gain_1 = solve_collision(gamma, float(kappa), temperatures, seed, bath_modes, resolution)
+        lost = 1.0 - eps2
+        return eps2, (gain_1 / lost if lost != 0.0 else 0.5)
+
+    return draw

@@ -11,32 +11,37 @@ A rule says how much of a colliding pair's translational energy
     at the pair's length ratio and temperature ratio; the lost energy
     (negative when the baths give energy back) is split between the two
     rods' baths by the table's ``rod1_share``.  Runs inside the kernel.
+:class:`VibrationLaw`
+    the default vibration rule: ``epsilon^2`` and the short rod's gain drawn from the
+    :class:`~wavecontact.gas.collision_law.CollisionLaw` at the pair's length ratio, its
+    ``x = E_tr / (E_tr + T_pair)`` and the short rod's share ``s = T_short / (T_short + T_long)`` of the
+    bath temperature; with a contact stiffness (``GasSimulation(contact_stiffness=alpha)``) blended with
+    the soft (finite-kappa) law at each collision's ``kappa = alpha V l``.  Runs inside the kernel.
 :class:`VibrationSolve`
     the same, but each collision asks a Python callable for
     ``(epsilon^2, share)``: the hook for solving a stochastic collision per
-    event (slow; the table is its tabulated form).
+    event (slow; the law is its tabulated form).
 
-Approximations of the vibration rules (see ``docs/gas.md``): the table is
-computed at one hardness ``kappa`` although the true ``kappa = alpha V l / c``
-grows with the impact speed (harmless where the law no longer depends on
-kappa, above about 50); the table assumes both rods at one bath temperature,
-so a pair uses the mean of its two temperatures; a pair meeting at a
-temperature ratio outside the table's grid stops the run (status
-``off_table``: the table is never extrapolated or clipped); a draw that
-would take more energy from a bath than it holds is capped (counted).
+Approximations of the vibration rules (see ``docs/gas.md``, "Approximations of the vibration rule"): the
+law is tabulated (quantiles, conditional mean gains per level, linear interpolation between grid points);
+without a contact stiffness every collision is in the hard-core limit; below the law's last ``x`` row, and
+below its softest ``kappa`` row, the last row's law is used (counted); a draw that would take more energy
+from a bath than it holds is capped (counted).  :class:`VibrationTable` (the older restitution-table rule)
+assumes both rods at the pair's mean temperature and stops the run (status ``off_table``) outside its grid.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..errors import InvalidParameterError, require_finite
 from ..restitution_table import RestitutionTable
 from . import kernels
-from .collision_law import CollisionLaw
+from .collision_law import CollisionLaw, soft_corrections
 
 __all__ = ["FixedRestitution", "VibrationLaw", "VibrationSolve", "VibrationTable", "rule_from_description"]
 
@@ -87,7 +92,8 @@ class VibrationTable:
 
     def kernel_arrays(self):
         _, ratio, probability, quantiles, share = self.table.arrays()
-        return ratio, probability, quantiles, np.ascontiguousarray(share[:, :, None])
+        return (ratio, np.array([0.5]), probability, np.ascontiguousarray(quantiles[:, :, None, :]),
+                np.ascontiguousarray(share[:, :, None, None]))
 
     def gamma_grid(self):
         return self.table.gamma
@@ -101,20 +107,36 @@ class VibrationTable:
 
 @dataclass(frozen=True)
 class VibrationLaw:
-    """``epsilon^2`` and the short rod's gain drawn from the hard-core :class:`CollisionLaw` (inside the kernel).
+    """``epsilon^2`` and the short rod's gain drawn from the :class:`CollisionLaw` (inside the kernel).
 
-    Covers every pair state: the law's grid is in ``x = E_tr / (E_tr + T_pair)`` in (0, 1]; below its
-    last row the last row's law is used and the draw is counted (``GasResult.beyond_law``).  The gains
-    are conditional means per level of ``epsilon^2`` (the exchange between the baths beyond that mean
-    is averaged out); a bath asked for more than it holds gives what it has, the other bath the rest
-    (counted as ``bath_limited``).
+    Covers every pair state: the law's grid is in ``x = E_tr / (E_tr + T_pair)`` in (0, 1] and the short
+    rod's share ``s = T_short / (T_short + T_long)`` in [0, 1] of the bath temperature; below its last ``x``
+    row the last row's law is used and the draw is counted (``GasResult.beyond_law``).  The gains are
+    conditional means per level of ``epsilon^2`` (the exchange between the baths beyond that mean is averaged
+    out); a bath asked for more than it holds gives what it has, the other bath the rest (counted as
+    ``bath_limited``).
+
+    Parameters
+    ----------
+    law : CollisionLaw
+        The hard-core law (``kappa = inf``), :func:`wavecontact.gas.default_law`.
+    soft_law : CollisionLaw, optional
+        A finite-kappa law (:func:`wavecontact.gas.default_soft_law`), used only when the simulation is given
+        a ``contact_stiffness``: each collision then blends the two at its own ``kappa = alpha V l``.
     """
 
     law: CollisionLaw
+    soft_law: CollisionLaw | None = None
 
     def __post_init__(self):
-        if not isinstance(self.law, CollisionLaw):
-            raise InvalidParameterError("VibrationLaw needs a CollisionLaw (wavecontact.gas.default_law())")
+        if not isinstance(self.law, CollisionLaw) or not self.law.hard_core:
+            raise InvalidParameterError("VibrationLaw needs a hard-core CollisionLaw (wavecontact.gas.default_law())")
+        if self.soft_law is not None:
+            if not isinstance(self.soft_law, CollisionLaw) or self.soft_law.hard_core:
+                raise InvalidParameterError("VibrationLaw soft_law must be a finite-kappa CollisionLaw "
+                                            "(wavecontact.gas.default_soft_law())")
+            if self.soft_law.bath_modes != self.law.bath_modes:
+                raise InvalidParameterError("VibrationLaw soft_law must have the hard-core law's bath_modes")
 
     code = kernels.RULE_LAW
 
@@ -123,15 +145,31 @@ class VibrationLaw:
         return self.law.bath_modes
 
     def kernel_arrays(self):
-        _, log_x, probability, quantiles, gains = self.law.arrays()
-        return log_x, probability, quantiles, gains
+        _z, log_x, share, probability, quantiles, gains = self.law.kernel_arrays()
+        return log_x, share, probability, quantiles[0], gains[0]
+
+    @cached_property
+    def _soft_arrays(self):
+        d_eps, d_gain = soft_corrections(self.law, self.soft_law)
+        kappa, gamma, log_x, share, probability = self.soft_law.arrays()[:5]
+        return kappa, gamma, log_x, share, probability, d_eps, d_gain
+
+    def soft_arrays(self):
+        """The soft law's ``(kappa, gamma, log_x, short_share, probability)`` and its corrections to the hard-core
+        law ``(d_eps2, d_gain)`` (:func:`~wavecontact.gas.collision_law.soft_corrections`), for the kernel."""
+        return self._soft_arrays if self.soft_law is not None else kernels.empty_soft_law()
 
     def gamma_grid(self):
         return self.law.gamma
 
     def describe(self) -> dict:
-        return {"rule": "vibration_law", "kappa": "inf", "bath_modes": self.law.bath_modes,
-                "samples_per_point": self.law.samples_per_point, "law_seed": self.law.seed}
+        out = {"rule": "vibration_law", "kappa": "inf", "bath_modes": self.law.bath_modes,
+               "samples_per_point": self.law.samples_per_point, "law_seed": self.law.seed,
+               "short_share_axis": self.law.short_share.size > 1}
+        if self.soft_law is not None:
+            out["soft_law"] = {"kappa": [float(k) for k in self.soft_law.kappa],
+                               "samples_per_point": self.soft_law.samples_per_point, "seed": self.soft_law.seed}
+        return out
 
 
 @dataclass(frozen=True)
@@ -155,6 +193,9 @@ class VibrationSolve:
         Recorded in results and checkpoints; a resumed run must pass a rule with the same name.
     per_rod : bool
         Pass ``temperature_ratio`` as the pair ``(T_short, T_long) / E_tr`` instead of their mean.
+
+    With a ``contact_stiffness`` the simulation calls ``draw(gamma, temperature_ratio, seed, kappa=kappa)``
+    with this collision's ``kappa = alpha V l`` (see :func:`wavecontact.gas.contact_draw`).
     """
 
     draw: Callable
@@ -180,13 +221,13 @@ class VibrationSolve:
         return {"rule": "solve", "name": self.name, "bath_modes": int(self.bath_modes), "per_rod": bool(self.per_rod)}
 
 
-def rule_from_description(description: dict, table: RestitutionTable | None = None):
-    """Rebuild a fixed or table rule from :meth:`describe` (and the table, for the vibration rule)."""
+def rule_from_description(description: dict, table: RestitutionTable | None = None, soft_law=None):
+    """Rebuild a fixed or table rule from :meth:`describe` (and the table or laws, for the vibration rules)."""
     kind = description.get("rule")
     if kind == "fixed":
         return FixedRestitution(description["restitution"])
     if kind == "vibration" and isinstance(table, RestitutionTable):
         return VibrationTable(table)
     if kind == "vibration_law" and isinstance(table, CollisionLaw):
-        return VibrationLaw(table)
+        return VibrationLaw(table, soft_law)
     raise InvalidParameterError(f"cannot rebuild the collision rule {kind!r} from a description; pass it explicitly")

@@ -21,7 +21,7 @@ from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..progress import Progress
 from ..restitution_table import RestitutionTable
 from . import kernels
-from .collision_law import CollisionLaw
+from .collision_law import LAW_ARRAYS, law_from_arrays
 from .model import RodGas
 from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable, rule_from_description
 
@@ -30,7 +30,7 @@ __all__ = ["MAX_COLLISIONS", "GasResult", "GasSimulation"]
 MAX_COLLISIONS = 10**11
 MAX_RECORDS = 10**7  # history rows one run may add (6 floats each)
 CHECKPOINT_SCHEMA = "wavecontact.gas"
-CHECKPOINT_VERSION = 2  # 2: the event times (leaves of a tournament tree) instead of a heap
+CHECKPOINT_VERSION = 3  # 2: the event times (leaves of a tournament tree) instead of a heap; 3: law v2, stiffness
 _HISTORY = ("time", "collisions", "kinetic_energy", "bath_energy", "lost_energy", "dissipated_energy")
 _STATUS = {
     kernels.STATUS_DONE: "completed",
@@ -77,6 +77,14 @@ class GasResult:
     beyond_law : int
         Law rule: draws for pairs below the law's last row (``E_tr / (E_tr + T_pair) < 10^log_x[0]``),
         which took that row's law.
+    softer_than_law : int
+        Law rule with a contact stiffness: draws at a ``kappa`` below the soft law's softest row, which took
+        that row's law.
+    soft_floored : int
+        Law rule with a contact stiffness: draws whose soft-corrected ``eps^2`` came out negative (hard-core
+        draw plus an interpolated correction) and was set to 0.
+    contact_stiffness : float or None
+        ``alpha`` of the run (None: hard core).
     energy_drift : float
         Relative change of kinetic + bath + lost + dissipated energy since the start.
     """
@@ -97,6 +105,9 @@ class GasResult:
     energy_drift: float
     rule: dict = field(default_factory=dict)
     beyond_law: int = 0
+    softer_than_law: int = 0
+    soft_floored: int = 0
+    contact_stiffness: float | None = None
 
     @property
     def collapsed(self) -> bool:
@@ -130,7 +141,11 @@ class GasResult:
             "final_bath_energy": float(self.history["bath_energy"][-1]) if self.history["bath_energy"].size else 0.0,
             "energy_drift": self.energy_drift,
             "bath_limited": self.bath_limited,
+            "bath_limited_fraction": self.bath_limited / self.collisions if self.collisions else 0.0,
             "beyond_law": self.beyond_law,
+            "softer_than_law": self.softer_than_law,
+            "soft_floored": self.soft_floored,
+            "contact_stiffness": self.contact_stiffness,
             "rule": self.rule,
         }
 
@@ -169,6 +184,13 @@ class GasSimulation:
         Relaxation time ``tau_diss`` of every bath (time unit of the gas; the
         baths cool as ``exp(-t / tau_diss)`` between collisions).  None: no
         dissipation.
+    contact_stiffness : float, optional
+        ``alpha`` of the exponential contact ``V(r) = B exp(-alpha r)`` (an inverse length, in the gas's
+        length unit).  Each collision then has its own softness ``kappa = alpha V l / c`` (MODEL.md section 2)
+        with ``V`` the approach speed, ``c = 1`` and ``l = 2 l_i l_j / (l_i + l_j)``, the pair's effective
+        length (twice the reduced mass, rods of unit density and section).  The vibration law blends its
+        soft (finite-kappa) law with the hard-core law at that kappa; a :class:`VibrationSolve` draw is
+        called with ``kappa=``.  None (default): every collision in the hard-core limit.
     seed : int or numpy.random.SeedSequence
         Root of the collision draws: ``SeedSequence(seed).spawn(2)`` gives the stream of the
         table's probability levels and the parent of the per-collision seeds of :class:`VibrationSolve`.
@@ -194,8 +216,8 @@ class GasSimulation:
         differ by less than their rounding (0: never).
     """
 
-    def __init__(self, gas: RodGas, rule, *, damping=None, seed=0, record_every=1000, frame_every=1,
-                 max_frames=400, frame_rods=2000, collapse_window=16, collapse_factor=1e-3,
+    def __init__(self, gas: RodGas, rule, *, damping=None, contact_stiffness=None, seed=0, record_every=1000,
+                 frame_every=1, max_frames=400, frame_rods=2000, collapse_window=16, collapse_factor=1e-3,
                  energy_floor=1e-20):
         if not isinstance(gas, RodGas):
             raise InvalidParameterError("gas must be a RodGas (see wavecontact.gas.random_gas)")
@@ -204,6 +226,17 @@ class GasSimulation:
         self.gas = gas
         self.rule = rule
         self.damping = None if damping is None else require_positive("damping time tau_diss", damping, allow_inf=True)
+        self.contact_stiffness = None
+        if contact_stiffness is not None:
+            alpha = require_positive("contact_stiffness alpha", contact_stiffness)
+            if not 1e-6 <= alpha <= 1e12:
+                raise InvalidParameterError(f"contact_stiffness alpha must lie in [1e-6, 1e12], got {alpha!r}")
+            if rule.code not in (kernels.RULE_LAW, kernels.RULE_EXTERNAL):
+                raise InvalidParameterError("contact_stiffness applies to the vibration law and the solve rule only")
+            if rule.code == kernels.RULE_LAW and rule.soft_law is None:
+                raise InvalidParameterError("contact_stiffness needs VibrationLaw(default_law(), default_soft_law()): "
+                                            "the rule has no soft (finite-kappa) law")
+            self.contact_stiffness = alpha
         self.record_every = _count("record_every", record_every, 1, MAX_COLLISIONS)
         self.frame_every = _count("frame_every", frame_every, 1, MAX_COLLISIONS)
         self.max_frames = _count("max_frames", max_frames, 0, 100_000)
@@ -242,12 +275,16 @@ class GasSimulation:
         self.left_is_short = l_left <= l_right
         self.pair_gamma = np.minimum(l_left, l_right) / np.maximum(l_left, l_right)
         grid = rule.gamma_grid()
+        grids = [grid]
+        if self.contact_stiffness is not None and rule.code == kernels.RULE_LAW:
+            grids.append(rule.soft_law.gamma)
         if rule.code in (kernels.RULE_TABLE, kernels.RULE_LAW):
             low, high = self.pair_gamma[inner].min(), self.pair_gamma[inner].max()
-            if low < grid[0] or high > grid[-1]:
-                raise InvalidParameterError(
-                    f"the gas has length ratios {low:.4g}..{high:.4g} but the table covers gamma in "
-                    f"[{grid[0]:g}, {grid[-1]:g}]: choose lengths inside it or a wider table")
+            for covered in grids:
+                if low < covered[0] or high > covered[-1]:
+                    raise InvalidParameterError(
+                        f"the gas has length ratios {low:.4g}..{high:.4g} but the table covers gamma in "
+                        f"[{covered[0]:g}, {covered[-1]:g}]: choose lengths inside it or a wider table")
         if grid.size == 1:
             self.gamma_index, self.gamma_weight = np.zeros(left.size, np.int64), np.zeros(left.size)
         else:
@@ -267,7 +304,7 @@ class GasSimulation:
         self.scalars[kernels.KINETIC_REFERENCE] = gas.kinetic_energy()
         self.scalars[kernels.MOMENTUM_ENERGY] = momentum**2 / (2 * total_mass) if ring else 0.0
         self.total_mass = total_mass
-        self.counters = np.zeros(4, np.int64)
+        self.counters = np.zeros(kernels.COUNTERS, np.int64)
         self.pending = np.zeros(3)
         self.initial_energy = self._energies()[4]
         self.scalars[kernels.ENERGY_FLOOR] = self.energy_floor * self._energies()[0]
@@ -349,13 +386,25 @@ class GasSimulation:
             ratio = (temperatures[short] / e_tr, temperatures[long] / e_tr) if e_tr > 0 else (math.inf, math.inf)
         return float(self.pair_gamma[event]), ratio
 
+    def collision_kappa(self, event):
+        """``kappa = alpha V l`` of the pair of ``event`` now (``inf`` without a contact stiffness)."""
+        if self.contact_stiffness is None:
+            return math.inf
+        n = self.gas.rods
+        i, j = (event, (event + 1) % n) if self.ring else (event - 1, event)
+        reduced = self.mass[i] * self.mass[j] / (self.mass[i] + self.mass[j])
+        return self.contact_stiffness * float(self.v[i] - self.v[j]) * 2.0 * reduced
+
     def _draw_external(self, event):
         gamma, ratio = self._pair_state(event)
         # the drawn-th child of _solve_seeds, as _solve_seeds.spawn() would give it (but stateless)
         parent = self._solve_seeds
         seed = np.random.SeedSequence(parent.entropy, spawn_key=parent.spawn_key + (self.drawn,))
         self.drawn += 1
-        eps2, share = self.rule.draw(gamma, ratio, seed)
+        if self.contact_stiffness is None:
+            eps2, share = self.rule.draw(gamma, ratio, seed)
+        else:
+            eps2, share = self.rule.draw(gamma, ratio, seed, kappa=self.collision_kappa(event))
         eps2, share = float(eps2), float(share)
         if not (math.isfinite(eps2) and eps2 >= 0 and math.isfinite(share)):
             raise InvalidParameterError(f"the rule's draw must return a finite eps2 >= 0 and a finite share, "
@@ -388,7 +437,10 @@ class GasSimulation:
             self._record()
         target = self.collisions + collisions
         rule = self.rule
-        ratio, probability, quantiles, share = rule.kernel_arrays()
+        ratio, share_grid, probability, quantiles, share = rule.kernel_arrays()
+        soft_law = self.contact_stiffness is not None and rule.code == kernels.RULE_LAW
+        soft = rule.soft_arrays() if soft_law else kernels.empty_soft_law()
+        stiffness = self.contact_stiffness if soft_law else 0.0
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
         no_uniforms = np.zeros(0)
@@ -406,10 +458,11 @@ class GasSimulation:
             before = self.collisions
             while True:
                 status, event, _done = kernels.run_events(
-                    self.x, self.v, self.local_time, self.temperature, self.mass, self.reach,
+                    self.x, self.v, self.local_time, self.temperature, self.mass, self.reach, self.pair_gamma,
                     self.gamma_index, self.gamma_weight, self.left_is_short, self.tree_time, self.tree_event,
-                    self.ring, self.gas.system_length, rule.code, restitution2, ratio, probability, uniform, quantiles,
-                    share, float(rule.bath_modes), self._decay_rate(), uniforms[self.collisions - before:],
+                    self.ring, self.gas.system_length, rule.code, restitution2, ratio, share_grid, probability,
+                    uniform, quantiles, share, float(rule.bath_modes), self._decay_rate(), stiffness, *soft,
+                    uniforms[self.collisions - before:],
                     self.pending, chunk - (self.collisions - before), float(max_time), self.window,
                     self.collapse_factor, self.scalars, self.counters)
                 if status == kernels.STATUS_OFF_TABLE:
@@ -471,6 +524,8 @@ class GasSimulation:
             energy_drift=(total - self.initial_energy) / self.initial_energy if self.initial_energy > 0 else 0.0,
             rule=self.rule.describe(),
             beyond_law=int(self.counters[kernels.OFF_TABLE]) if self.rule.code == kernels.RULE_LAW else 0,
+            softer_than_law=int(self.counters[kernels.SOFTER]), soft_floored=int(self.counters[kernels.FLOORED]),
+            contact_stiffness=self.contact_stiffness,
         )
 
     # ------------------------------------------------------------ checkpoint
@@ -481,6 +536,7 @@ class GasSimulation:
         return {
             "rule": self.rule.describe(),
             "damping": self.damping,
+            "contact_stiffness": self.contact_stiffness,
             "record_every": self.record_every,
             "frame_every": self.frame_every,
             "max_frames": self.max_frames,
@@ -505,9 +561,10 @@ class GasSimulation:
         arrays["progress"] = np.array([self.records, self.drawn], np.int64)
         arrays["status"] = np.asarray(self.status)
         if isinstance(self.rule, VibrationLaw):
-            arrays.update({f"law_{n}": a for n, a in zip(
-                ("gamma", "log_x", "probability", "eps2_quantiles", "gain_short"), self.rule.law.arrays())})
-            arrays["law_metadata"] = np.asarray(json.dumps(self.rule.law.metadata()))
+            for prefix, law in (("law", self.rule.law), ("soft_law", self.rule.soft_law)):
+                if law is not None:
+                    arrays.update({f"{prefix}_{n}": a for n, a in zip(LAW_ARRAYS, law.arrays()) if n != "kappa"})
+                    arrays[f"{prefix}_metadata"] = np.asarray(json.dumps(law.metadata()))
         if isinstance(self.rule, VibrationTable):
             arrays.update({f"table_{n}": a for n, a in zip(
                 ("gamma", "temperature_ratio", "probability", "eps2_quantiles", "rod1_share"), self.rule.table.arrays())})
@@ -521,12 +578,12 @@ class GasSimulation:
         params = meta["parameters"]
         if rule is None:
             table = None
+            soft_law = None
             if "law_gamma" in arrays:
-                info = json.loads(str(arrays["law_metadata"]))
-                table = CollisionLaw(*(arrays[f"law_{n}"] for n in (
-                    "gamma", "log_x", "probability", "eps2_quantiles", "gain_short")),
-                    bath_modes=info["bath_modes"], samples_per_point=info["samples_per_point"], seed=info["seed"],
-                    resolution=info.get("resolution", 8))
+                table, soft_law = (
+                    law_from_arrays({n: arrays[f"{prefix}_{n}"] for n in LAW_ARRAYS if n != "kappa"},
+                                    json.loads(str(arrays[f"{prefix}_metadata"])), f"checkpoint {path}")
+                    if f"{prefix}_gamma" in arrays else None for prefix in ("law", "soft_law"))
             if "table_gamma" in arrays:
                 info = json.loads(str(arrays["table_metadata"]))
                 table = RestitutionTable(
@@ -534,13 +591,13 @@ class GasSimulation:
                     arrays["table_eps2_quantiles"], arrays["table_rod1_share"],
                     kappa=math.inf if info["kappa"] == "inf" else info["kappa"], bath_modes=info["bath_modes"],
                     samples_per_point=info["samples_per_point"], solver=info["solver"], seed=info["seed"])
-            rule = rule_from_description(params["rule"], table)
+            rule = rule_from_description(params["rule"], table, soft_law)
         elif json.loads(json.dumps(rule.describe())) != params["rule"]:
             raise InvalidParameterError(f"checkpoint {path} was written with the rule {params['rule']}, "
                                         f"not {rule.describe()}")
         gas = RodGas(arrays["gas_lengths"], arrays["gas_positions"], arrays["gas_velocities"],
                      arrays["gas_bath_temperatures"], params["system_length"], params["boundary"])
-        sim = cls(gas, rule, damping=params["damping"], seed=np.random.SeedSequence(int(params["seed_entropy"])),
+        sim = cls(gas, rule, damping=params["damping"], contact_stiffness=params["contact_stiffness"], seed=np.random.SeedSequence(int(params["seed_entropy"])),
                   record_every=params["record_every"], frame_every=params["frame_every"],
                   max_frames=params["max_frames"], frame_rods=params["frame_rods"],
                   collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"], energy_floor=params["energy_floor"])
