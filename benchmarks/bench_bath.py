@@ -5,15 +5,19 @@
     python benchmarks/bench_bath.py --hard-core-only   # rows 1 and the Fig. 8 hard-core row (about a minute);
                                                        # with --update-docs it replaces only those rows
 
-    python benchmarks/bench_bath.py --full     # row 3 at kappa = 250 in full (50,000 samples, ~2 min
-                                               # on a quiet 2-core machine) instead of a subset
+    python benchmarks/bench_bath.py --full     # row 3 at kappa = 250 in full (50,000 samples, under
+                                               # 30 s on a quiet 2-core machine) instead of a subset
+    python benchmarks/bench_bath.py --kappa-250-only [--full]   # only the kappa = 250 rows of 2 and 3
 
 Rows:
 1. the stochastic hard-core mode (kappa = inf): samples per CPU second on one core at 8 (the default) and
    4 grid points per period of the fastest mode, with the mean error against 32 points on the same samples;
-2. one finite-kappa sample as an ensemble computes it (rtol 1e-6, no energy split), CPU ms
-   (median over samples) against kappa (nu_max 250) and nu_max (kappa 250); and one
-   ``collide()`` with its defaults (rtol 1e-11, energy split) for comparison;
+2. one finite-kappa sample as an ensemble computes it (its defaults ENSEMBLE_DELAY_OPTIONS: rtol
+   1e-3, Lobatto-Kronrod rule, 16 noise table nodes a period; no energy split; batches of 64 samples), CPU ms per sample (median
+   of 3 batches) against kappa (nu_max 250) and nu_max (kappa 250); at kappa 250 also at rtol 1e-6
+   with the Gauss-Kronrod rule (the setting before), and one ``collide()`` with its defaults
+   (rtol 1e-11, energy split) for comparison (benchmarks/ensemble_accuracy.py measures what the
+   tolerance costs in accuracy);
 3. the Fig. 8 set (2 gamma x 10 T_B/E_tr x 2500 = 50,000 collisions, nu_max = 250) through
    the parallel path (2 local worker processes): hard-core mode in full; kappa = 250 on
    100 samples a point (2,000), extrapolated, or in full with --full;
@@ -37,6 +41,7 @@ import resource
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -51,10 +56,11 @@ from wavecontact.api import solve
 from wavecontact.bath import ThermalBath
 from wavecontact.bath.collide import thermal_scene
 from wavecontact.bath.scene import scene_noise
-from wavecontact.studies.bath_figures import FIG8_TEMPERATURES
-from wavecontact.studies.ensemble import EnsembleSpec, ensemble, sample_collision
+from wavecontact.studies.bath_figures import FIG8_TEMPERATURES, spread_against_temperature
+from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS, EnsembleSpec, ensemble, run_batch
 
 GAMMA = 0.6173
+PREVIOUS = {"rtol": 1e-6, "quadrature": "gauss-kronrod", "noise_resolution": 32}  # the ensemble setting before
 
 
 ROWS: list = []  # the table as printed, for --update-docs
@@ -116,15 +122,17 @@ def hard_core_rate(samples, resolution):
     return samples / sorted(seconds)[1], float(difference.mean()), float(difference.std() / math.sqrt(subset))
 
 
-def delay_sample_cpu(kappa, modes, count=8, temperature=1.0):
-    """Median CPU seconds of one ensemble sample (``sample_collision``: rtol 1e-6, no energy split)."""
-    spec = EnsembleSpec(GAMMA, kappa, temperature, count, 3, bath_modes=modes, options={"rtol": 1e-6})
-    sample_collision(spec, 0)  # kernels ready
+def delay_sample_cpu(kappa, modes, count=64, temperature=1.0, options=None):
+    """CPU seconds per ensemble sample (``run_batch`` of ``count`` samples, median of 3 batches;
+    the ensemble's default options unless ``options``, no energy split)."""
+    spec = EnsembleSpec(GAMMA, kappa, temperature, 3 * count, 3, bath_modes=modes, options=options or {})
+    fields = asdict(spec)
+    run_batch(fields, 0, 2)  # kernels ready
     times = []
-    for j in range(count):
+    for start in range(0, 3 * count, count):
         started = time.process_time()
-        sample_collision(spec, j)
-        times.append(time.process_time() - started)
+        run_batch(fields, start, start + count)
+        times.append((time.process_time() - started) / count)
     return float(np.median(times))
 
 
@@ -145,16 +153,15 @@ def _children_cpu():
 
 
 def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEMPERATURES):
-    """Wall seconds, sample count and worker CPU seconds (start-up excluded) of the Fig. 8 set on 2 processes.
+    """Wall seconds, sample count and worker CPU seconds (start-up excluded) of the Fig. 8 set on 2 processes,
+    run as ``wavecontact bath-figure 8 --workers 2`` runs it (``spread_against_temperature``, batches of 256).
 
     The workers' CPU time is read once they have exited (``RUSAGE_CHILDREN``);
     the CPU of a pool that only starts up and warms its kernels is measured
     first and subtracted.
     """
-    options = {} if math.isinf(kappa) else {"rtol": 1e-6}
-
     def warm(pool):
-        ensemble(GAMMA, kappa, 1.0, 4, 0, executor=pool, batch_size=1, **options)  # workers import and load kernels
+        ensemble(GAMMA, kappa, 1.0, 4, 0, executor=pool, batch_size=1)  # workers import and load kernels
 
     before = _children_cpu()
     with ProcessPoolExecutor(2) as pool:
@@ -164,10 +171,7 @@ def fig8_parallel(kappa, samples, gammas=(0.6173, 0.2173), temperatures=FIG8_TEM
     with ProcessPoolExecutor(2) as pool:
         warm(pool)
         started = time.perf_counter()
-        for a, gamma in enumerate(gammas):
-            for b, temperature in enumerate(temperatures):
-                ensemble(gamma, kappa, temperature, samples, 8 + 1000 * a + b, executor=pool,
-                         batch_size=max(1, min(256, samples // 4)), **options)
+        spread_against_temperature(gammas, temperatures, kappa, samples, 8, executor=pool)  # bath-figure 8's path
         wall = time.perf_counter() - started
     cpu = _children_cpu() - before - start_up
     return wall, len(gammas) * len(temperatures) * samples, cpu
@@ -190,8 +194,8 @@ def peers(modes=50, kappa=100.0, seed=3):
     """One realisation: wavecontact's delay solver, JiTCDDE with input, solve_ivp DOP853 on the modal system."""
     scene = thermal_scene(GAMMA, kappa, ThermalBath(1.0, modes), seed)
     reference = solve(scene, "delay", rtol=1e-11).restitution
-    ours = solve(scene, "delay", rtol=1e-6, energy_split=False)
-    ours_time = median_time(lambda: solve(scene, "delay", rtol=1e-6, energy_split=False), 5)
+    ours = solve(scene, "delay", energy_split=False, **ENSEMBLE_DELAY_OPTIONS)  # as an ensemble sample
+    ours_time = median_time(lambda: solve(scene, "delay", energy_split=False, **ENSEMBLE_DELAY_OPTIONS), 5)
     # the delay solver's own accuracy at this tolerance: its error estimate, checked against the reference
     out = {"reference": reference, "ours": (ours.restitution, ours_time)}
     a0 = kappa * scene.gaps[0]
@@ -240,16 +244,22 @@ def main(argv=None):
     parser.add_argument("--hard-core-only", action="store_true",
                         help="only the hard-core rows (1 and the Fig. 8 hard-core row), about a minute")
     parser.add_argument("--full", action="store_true", help="the Fig. 8 set at kappa = 250 in full (50,000 samples)")
+    parser.add_argument("--kappa-250-only", action="store_true",
+                        help="only the finite-kappa rows at kappa 250 (one sample's cost, the Fig. 8 set)")
     parser.add_argument("--update-docs", action="store_true",
                         help="write the table into docs/bath.md section 9 and docs/figures/bath/bench.txt")
     args = parser.parse_args(argv)
     quick = args.quick
     logging.getLogger("distributed").setLevel(logging.ERROR)
-    header = (f"`python benchmarks/bench_bath.py{' --quick' if quick else ''}{' --full' if args.full else ''}`: "
+    flags = "".join(f" --{name}" for name, on in (("quick", quick), ("full", args.full), ("kappa-250-only", args.kappa_250_only)) if on)
+    header = (f"`python benchmarks/bench_bath.py{flags}`: "
               f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the start; wavecontact "
               f"{wavecontact.__version__}")
     print(header)
     print("| quantity | value | note |")
+    if args.kappa_250_only:
+        delay_rows(quick, args.full)
+        return 0
     for resolution in (8, 4):
         rate, bias, bias_error = hard_core_rate(500 if quick else 5000, resolution)
         row(f"hard-core mode (gamma 0.6173, T_B/E_tr 1, nu_max 250), {resolution} points/period, CPU",
@@ -259,22 +269,46 @@ def main(argv=None):
         if args.update_docs:
             update_docs(header.replace("bench_bath.py", "bench_bath.py --hard-core-only", 1), partial=True)
         return 0
-    for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4):
-        row(f"delay sample, kappa {kappa:g}, nu_max 250 (CPU)", f"{1e3 * delay_sample_cpu(kappa, 250):.2f} ms",
-            "rtol 1e-6, no energy split; target 1.2 ms at kappa 250")
-    for modes in (50, 250, 1000):
-        row(f"delay sample, kappa 250, nu_max {modes} (CPU)", f"{1e3 * delay_sample_cpu(250.0, modes):.2f} ms",
-            "rtol 1e-6, no energy split")
-    row("collide(0.6173, 250, T_B/E_tr 1, nu_max 250), its defaults (CPU)", f"{1e3 * collide_default_cpu():.2f} ms",
-        "rtol 1e-11, energy split")
+    delay_rows(quick, args.full, sweep=True)
     fig8_hard_core_row(quick)
-    per_point = 2500 if args.full else (10 if quick else 100)
+    peer_rows()
+    scaling = dask_scaling(400 if quick else 4000)
+    row("Dask LocalCluster, hard-core samples/s, 1 worker", f"{scaling[1]:,.0f} /s")
+    row("Dask LocalCluster, hard-core samples/s, 2 workers", f"{scaling[2]:,.0f} /s",
+        f"speed-up {scaling[2] / scaling[1]:.2f}")
+    row("Dask overhead per task (2 workers, trivial task)", f"{1e3 * scaling['overhead']:.2f} ms")
+    if args.update_docs:
+        update_docs(header)
+    return 0
+
+
+def delay_rows(quick, full, sweep=False):
+    """The finite-kappa rows: one sample's CPU cost (against kappa and nu_max with ``sweep``) and the
+    Fig. 8 set at kappa 250 through 2 worker processes (a subset, extrapolated, unless ``full``)."""
+    default = "ensemble defaults (rtol 1e-3, Lobatto-Kronrod, 16 noise nodes), no energy split"
+    for kappa in (5.0, 20.0, 50.0, 100.0, 250.0, 1000.0, 1e4) if sweep else (250.0,):
+        row(f"delay sample, kappa {kappa:g}, nu_max 250 (CPU)", f"{1e3 * delay_sample_cpu(kappa, 250):.2f} ms",
+            f"{default}; target 1.2 ms at kappa 250")
+    for modes in (50, 250, 1000) if sweep else ():
+        row(f"delay sample, kappa 250, nu_max {modes} (CPU)", f"{1e3 * delay_sample_cpu(250.0, modes):.2f} ms",
+            default)
+    row("delay sample, kappa 250, nu_max 250, rtol 1e-6 Gauss-Kronrod (CPU)",
+        f"{1e3 * delay_sample_cpu(250.0, 250, options=PREVIOUS):.2f} ms",
+        "the previous ensemble setting, for comparison")
+    if sweep:
+        row("collide(0.6173, 250, T_B/E_tr 1, nu_max 250), its defaults (CPU)",
+            f"{1e3 * collide_default_cpu():.2f} ms", "rtol 1e-11, energy split")
+    per_point = 2500 if full else (10 if quick else 100)
     seconds, count, cpu = fig8_parallel(250.0, per_point)
-    note = "" if args.full else (f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, "
-                                 f"{cpu / count * 50000 / 2:.0f} s at 2 full cores")
+    note = (f"; {cpu / 2:.0f} s at 2 full cores" if full else
+            f"; extrapolated to 50,000: {seconds / count * 50000:.0f} s wall, {cpu / count * 50000 / 2:.0f} s at 2 "
+            "full cores")
     row(f"Fig. 8 set at kappa 250: {count} samples, 2 workers", f"{seconds:.1f} s",
         f"{count / seconds / 2:,.0f} samples/s/core wall, {1e3 * cpu / count:.2f} ms CPU per sample{note}; "
         "target <= 30 s")
+
+
+def peer_rows():
     result = peers()
     reference = result.pop("reference")
     ours_time = result["ours"][1]
@@ -288,14 +322,6 @@ def main(argv=None):
         if len(value) == 3:
             note += f", compile {value[2]:.1f} s"
         row(f"peer, one sample (kappa 100, nu_max 50): {name}", f"{value[1]:.4f} s", note)
-    scaling = dask_scaling(400 if quick else 4000)
-    row("Dask LocalCluster, hard-core samples/s, 1 worker", f"{scaling[1]:,.0f} /s")
-    row("Dask LocalCluster, hard-core samples/s, 2 workers", f"{scaling[2]:,.0f} /s",
-        f"speed-up {scaling[2] / scaling[1]:.2f}")
-    row("Dask overhead per task (2 workers, trivial task)", f"{1e3 * scaling['overhead']:.2f} ms")
-    if args.update_docs:
-        update_docs(header)
-    return 0
 
 
 if __name__ == "__main__":

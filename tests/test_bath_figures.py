@@ -66,3 +66,14 @@ def test_figure_commands_write_their_images(tmp_path, figure, extra):
     assert main(["bath-figure", figure, "--out", str(out), "--json", str(tmp_path / "data.json"), *extra]) == 0
     assert out.stat().st_size > 5000
     assert (tmp_path / "data.json").stat().st_size > 10
+
+
+def test_fig8_points_run_at_once_on_an_executor_give_the_serial_numbers():
+    from concurrent.futures import ThreadPoolExecutor
+
+    args = dict(gammas=(0.6173, 0.2173), temperatures=(0.1, 1.0), kappa=math.inf, samples=12, seed=5, modes=30)  # noqa: C408
+    serial = bath_figures.spread_against_temperature(**args)
+    with ThreadPoolExecutor(2) as pool:
+        parallel = bath_figures.spread_against_temperature(**args, executor=pool)
+    for key in ("mean", "mean_error", "std", "std_error"):
+        assert np.array_equal(serial[key], parallel[key])

@@ -83,3 +83,17 @@ def test_bad_seed_and_mismatched_rods_are_refused():
     v = ThermalBath(1.0, modes=3).draw((1.0, 2.0), 0)
     with pytest.raises(InvalidParameterError, match="length"):
         two_rods(0.6, 10.0, vibrations=v)
+
+
+def test_batched_draws_are_the_single_draws_bit_for_bit():
+    from wavecontact.bath.scene import end_reach, end_reaches
+
+    bath = ThermalBath((0.3, 1.7), modes=33)
+    seeds = [np.random.SeedSequence(4, spawn_key=(j,)) for j in range(5)]
+    q, r = bath.draw_amplitudes(LENGTHS, seeds, masses=(0.7, 1.1), wave_speeds=(1.0, 1.3))
+    reaches = end_reaches(q, r)
+    for k, seed in enumerate(seeds):
+        one = bath.draw(LENGTHS, seed, masses=(0.7, 1.1), wave_speeds=(1.0, 1.3))
+        for i in range(2):
+            assert np.array_equal(q[k, i], one.displacement[i]) and np.array_equal(r[k, i], one.velocity_amplitude[i])
+        assert reaches[k] == end_reach(one)

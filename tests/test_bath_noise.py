@@ -106,3 +106,46 @@ def test_block_maxima_bound_the_interpolated_noise_on_any_interval():
         slack.append(bound - dense)
     # a bound, not a guess: the worst excess over the dense maximum stays a fraction of the noise's spread
     assert np.median(slack) < 0.5 * np.std(tables.values.sum(axis=0))
+
+
+def test_curvature_blocks_bound_the_noise_curvature_on_any_interval():
+    # the step limit's local bound of |Q''|: never below the curvature of the tables' Fourier sums
+    from wavecontact.delay.kernels import noise_curvature_bound
+
+    v = ThermalBath(1.0, modes=60).draw(LENGTHS, 12)
+    coefficients = v.noise_coefficients(250.0)
+    tables = noise_tables(coefficients, PERIODS, contact_time=2.3)
+
+    def curvature(s):
+        total = np.zeros_like(s)
+        for omega, a, b in coefficients:
+            phase = np.outer(s - 2.3, omega)
+            total += -(np.cos(phase) * omega**2) @ a - (np.sin(phase) * omega**2) @ b
+        return total
+
+    rng = np.random.default_rng(5)
+    local = []
+    for start, length in zip(rng.uniform(0.0, 9.0, 60), np.geomspace(1e-4, 3.0, 60)):
+        bound = noise_curvature_bound(start, start + length, tables.periods, tables.values, tables.curvature_blocks)
+        dense = np.max(np.abs(curvature(np.linspace(start, start + length, 400))))
+        assert dense <= bound <= tables.curvature_bound
+        local.append(bound)
+    # local: short intervals are bounded well below the period's maximum on average
+    assert np.mean(local[:20]) < 0.8 * tables.curvature_bound
+
+
+def test_batched_tables_are_the_single_tables_bit_for_bit():
+    from wavecontact.bath.noise import noise_table_batch
+
+    bath = ThermalBath((0.4, 1.0), modes=50)
+    realisations = [bath.draw(LENGTHS, s) for s in range(3)]
+    coefficients = [v.noise_coefficients(80.0) for v in realisations]
+    a = np.array([[c[i][1] for i in range(2)] for c in coefficients])
+    b = np.array([[c[i][2] for i in range(2)] for c in coefficients])
+    contact_times = np.array([1.3, 2.9, 0.4])
+    batch = noise_table_batch(a, b, PERIODS, contact_times, 0.0, 16)
+    for k, c in enumerate(coefficients):
+        one = noise_tables(c, PERIODS, contact_times[k], 0.0, 16)
+        for name in ("values", "slopes", "block_max", "curvature_blocks"):
+            assert np.array_equal(getattr(batch[k], name), getattr(one, name))
+        assert (batch[k].slope_bound, batch[k].curvature_bound) == (one.slope_bound, one.curvature_bound)

@@ -13,7 +13,7 @@ import pytest
 from wavecontact.bath.noise import NoiseTables
 from wavecontact.delay import kernels
 from wavecontact.delay.energy_split import NODES, WEIGHTS, vibration_energy_gain
-from wavecontact.delay.solver import solve_delay_equation
+from wavecontact.delay.solver import _integrate, solve_delay_equation
 
 
 @pytest.mark.parametrize("compiled", [True, False])
@@ -79,3 +79,28 @@ def test_sturdy_curvature_replaces_only_what_round_off_hides(compiled):
     assert sturdy(slope, g, slope + 1e-4, 1e5, w, drift) == exact
     # no g'' (tabulated noise: NaN): the exact formula
     assert sturdy(slope, g, slope + 1e-4, np.nan, w, drift) == exact
+
+
+@pytest.mark.parametrize("rule, degree, embedded_degree", [("gauss-kronrod", 11, 5), ("lobatto-kronrod", 9, 5)])
+def test_quadrature_rules_integrate_polynomials_to_their_degree(rule, degree, embedded_degree):
+    # the coefficient identities of each pair on [0, 1]: exact up to its degree, not one beyond
+    nodes, kronrod, embedded = kernels.QUADRATURE_RULES[rule]
+    for weights, top in ((kronrod, degree), (embedded, embedded_degree)):
+        errors = [abs(np.sum(weights * nodes**k) - 1.0 / (k + 1)) for k in range(top + 2)]
+        assert max(errors[: top + 1]) < 1e-15
+        assert errors[top + 1] > 1e-12  # far above round-off: the degree is exactly top
+    if rule == "lobatto-kronrod":
+        assert nodes.min() == 0.0 and nodes.max() == 1.0  # the end nodes the kernel takes from the step's ends
+
+
+@pytest.mark.parametrize("gamma, kappa", [(0.6, 10.0), (0.3, 1000.0)])
+def test_lobatto_rule_converges_to_the_gauss_kronrod_reference(gamma, kappa):
+    # cold collisions: both rules' errors stay below their estimates, and the Lobatto rule spends
+    # fewer evaluations of the exponent a step (5 + 1 against 7 + 1)
+    reference = solve_delay_equation(gamma, kappa, rtol=1e-12)
+    for rtol in (1e-5, 1e-8):
+        _t, w, _d1, _d2, error, work, _a0 = _integrate(gamma, kappa, rtol, None, None, None, 2_000_000, 1.0, None,
+                                                      "lobatto-kronrod")
+        assert abs(w[-1] - reference[1][-1]) / kappa <= error
+        evaluations_per_step = work["evaluations"] / (work["steps"] + work["rejected_steps"])
+        assert evaluations_per_step < 6.1

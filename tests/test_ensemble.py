@@ -135,7 +135,19 @@ def test_cli_json_and_refusals(tmp_path, capsys):
     assert (tmp_path / "law.png").stat().st_size > 0
     with np.load(tmp_path / "e" / "samples.npz", allow_pickle=False) as data:
         assert np.array_equal(data["restitution"], direct.restitution)
+        assert np.all(np.isnan(data["error_estimate"]))  # the hard-core grid states no per-sample estimate
     # a separate process: the refusal is one line on stderr with exit status 2
     bad = subprocess.run([sys.executable, "-m", "wavecontact", *args[:-5], "--scheduler", "tcp://127.0.0.1:9"],
                          capture_output=True, text=True, check=False)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "scheduler" in bad.stderr
+
+
+def test_finite_kappa_ensemble_keeps_each_samples_error_estimate(tmp_path):
+    from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS
+
+    run = ensemble(0.6173, 100.0, 0.5, 6, 3, bath_modes=20, batch_size=4, out=tmp_path / "r")
+    assert run.spec.options == ENSEMBLE_DELAY_OPTIONS  # the defaults are recorded with the run
+    assert np.all(np.isfinite(run.error_estimate)) and np.all(run.error_estimate > 0.0)
+    assert run.summary()["largest_error_estimate"] == np.max(run.error_estimate)
+    resumed = ensemble(0.6173, 100.0, 0.5, 6, 3, bath_modes=20, batch_size=4, out=tmp_path / "r")
+    assert np.array_equal(resumed.error_estimate, run.error_estimate)

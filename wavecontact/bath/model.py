@@ -124,6 +124,37 @@ class ThermalBath:
         return BathRealisation(lengths, masses, tuple(float(c) for c in wave_speeds), tuple(q), tuple(r))
 
 
+    def draw_amplitudes(self, lengths, seeds, *, translational_energy: float = 0.25, masses=None,
+                        wave_speeds=(1.0, 1.0)):
+        """The modal amplitudes of many realisations as arrays: :meth:`draw` for every seed, bit for bit.
+
+        Parameters
+        ----------
+        lengths, translational_energy, masses, wave_speeds
+            As for :meth:`draw`.
+        seeds : sequence of int or numpy.random.SeedSequence
+            One realisation per seed.
+
+        Returns
+        -------
+        q, r : ndarray (S, 2, modes)
+            ``q`` and ``r = p / (m omega)`` of both rods (length units), realisation ``k`` in row ``k``.
+        """
+        lengths = tuple(float(x) for x in lengths)
+        masses = lengths if masses is None else tuple(float(m) for m in masses)
+        draws = np.stack([np.random.default_rng(seed_sequence(seed)).standard_normal((2, 2, self.modes))
+                          for seed in seeds]) if len(seeds) else np.zeros((0, 2, 2, self.modes))
+        nu = np.arange(1, self.modes + 1)
+        q = np.empty((len(seeds), 2, self.modes))
+        r = np.empty_like(q)
+        for i in range(2):  # the arithmetic of draw(), on every realisation at once
+            omega = wave_speeds[i] * math.pi * nu / lengths[i]
+            spread = np.sqrt(self.temperature[i] * translational_energy / masses[i]) / omega
+            q[:, i] = draws[:, i, 0] * spread
+            r[:, i] = draws[:, i, 1] * spread
+        return q, r
+
+
 @dataclass(frozen=True)
 class BathRealisation:
     """Both rods' modal amplitudes at the nominal contact time (see module docstring).

@@ -16,15 +16,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .noise_kernels import table_bounds
 
-__all__ = ["POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19", "covariance_series", "noise_tables", "table_points"]
+__all__ = ["POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19", "covariance_series", "noise_table_batch", "noise_tables", "table_points"]
 
 NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
 POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
 BOUND_BLOCK = 64  # table cells per entry of the block maxima (NoiseTables.block_max)
-# |H10|, |H11| <= 4/27 on [0, 1]: the cubic Hermite interpolant of a cell exceeds the larger
-# end value by at most 4/27 h (|m0| + |m1|)
-_HERMITE_SLOPE_BOUND = 4.0 / 27.0
+CURVATURE_BLOCK = 16  # table cells per entry of the curvature bounds (NoiseTables.curvature_blocks)
+CURVATURE_MARGIN = 1.1  # one curvature sample per cell (4 cells per period of the fastest mode at least): 10 %
+# for what falls between the samples
 
 
 def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
@@ -42,7 +43,9 @@ class NoiseTables:
     ``block_max[i, k]`` bounds rod ``i``'s interpolated table from above on the
     cells ``k B .. (k + 1) B - 1`` (``B = n / block_max.shape[1]``), so that a
     solver can bound ``Q`` on any interval with a few operations
-    (:func:`wavecontact.delay.kernels.noise_upper_bound`).
+    (:func:`wavecontact.delay.kernels.noise_upper_bound`).  ``curvature_blocks[i, k]``
+    bounds ``|Q_i''|`` on the cells ``k C .. (k + 1) C - 1`` (``C = CURVATURE_BLOCK``, with
+    ``CURVATURE_MARGIN``), and ``curvature_bound`` is the sum of the rows' largest bounds.
     """
 
     periods: np.ndarray
@@ -51,10 +54,13 @@ class NoiseTables:
     slope_bound: float
     curvature_bound: float = 0.0
     block_max: np.ndarray = None
+    curvature_blocks: np.ndarray = None
 
     def __post_init__(self):
-        if self.block_max is None:
-            object.__setattr__(self, "block_max", block_maxima(self.periods, self.values, self.slopes))
+        if self.block_max is None or self.curvature_blocks is None:
+            block_max, curvature = _bounds(self.periods, self.values, self.slopes)
+            object.__setattr__(self, "block_max", block_max)
+            object.__setattr__(self, "curvature_blocks", curvature)
 
     @classmethod
     def empty(cls) -> NoiseTables:
@@ -62,7 +68,8 @@ class NoiseTables:
 
     @property
     def step_limit(self) -> float:
-        """Step over which ``Q`` departs from its secant by at most 1 (``max|Q''| h^2 / 8 <= 1``); 0 if no noise."""
+        """Step over which ``Q`` departs from its secant by at most ``NOISE_EXCURSION`` anywhere
+        (``max|Q''| h^2 / 8``); 0 if no noise.  Solvers use the local bounds ``curvature_blocks``."""
         return math.sqrt(8.0 * NOISE_EXCURSION / self.curvature_bound) if self.curvature_bound > 0.0 else 0.0
 
 
@@ -82,18 +89,24 @@ def block_maxima(periods, values, slopes, block: int = BOUND_BLOCK) -> np.ndarra
     -------
     ndarray (R, n / block)
     """
-    values = np.asarray(values, dtype=float)
+    return _bounds(periods, values, slopes, block)[0]
+
+
+def _bounds(periods, values, slopes, block=BOUND_BLOCK):
+    """``(block_max, curvature_blocks)``: :func:`wavecontact.bath.noise_kernels.table_bounds`, the
+    curvature samples times ``CURVATURE_MARGIN`` (empty rows allowed)."""
+    values = np.ascontiguousarray(values, dtype=float)
     rows, n = values.shape
     if rows == 0:
-        return np.zeros((0, 1))
+        return np.zeros((0, 1)), np.zeros((0, 1))
     block = min(block, n)
-    if n % block:
-        raise InvalidParameterError(f"noise table length {n} is not a multiple of the bound block {block}")
-    step = (np.asarray(periods, dtype=float) / n)[:, None]
-    magnitude = np.abs(slopes)
-    cells = (np.maximum(values, np.roll(values, -1, axis=1))
-             + _HERMITE_SLOPE_BOUND * step * (magnitude + np.roll(magnitude, -1, axis=1)))
-    return cells.reshape(rows, n // block, block).max(axis=2)
+    curvature_block = min(CURVATURE_BLOCK, n)
+    if n % block or n % curvature_block:
+        raise InvalidParameterError(f"noise table length {n} is not a multiple of the bound blocks "
+                                    f"{block} and {curvature_block}")
+    block_max, curvature = table_bounds(np.ascontiguousarray(periods, dtype=float), values,
+                                        np.ascontiguousarray(slopes, dtype=float), block, curvature_block)
+    return block_max, CURVATURE_MARGIN * curvature
 
 
 def _harmonic_series(a, b, period, shift, n, slopes=True):
@@ -107,14 +120,6 @@ def _harmonic_series(a, b, period, shift, n, slopes=True):
         return values, None
     spectrum[1:a.size + 1] *= 2j * math.pi * nu / period
     return values, np.fft.irfft(spectrum, n)
-
-
-def _curvature_peak(a, b, period, n):
-    """Largest ``|q''|`` over ``n`` nodes of a period (the nodes are dense: ``n >= 16 x`` modes)."""
-    nu = np.arange(1, a.size + 1)
-    spectrum = np.zeros(n // 2 + 1, dtype=complex)
-    spectrum[1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
-    return float(np.max(np.abs(np.fft.irfft(spectrum, n)))) if a.size else 0.0
 
 
 def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0,
@@ -138,8 +143,8 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
     modes = max(a.size for _omega, a, _b in coefficients)
     n = table_points(modes, points_per_period)
     shift = origin - contact_time
-    # one inverse FFT for all rows: per rod the values, the slopes and the (unshifted) curvature
-    spectra = np.zeros((3 * len(coefficients), n // 2 + 1), dtype=complex)
+    # one inverse FFT for all rows: per rod the values and the slopes
+    spectra = np.zeros((2 * len(coefficients), n // 2 + 1), dtype=complex)
     bound = 0.0
     for i, ((omega, a, b), period) in enumerate(zip(coefficients, periods)):
         a, b, period = np.asarray(a, float), np.asarray(b, float), float(period)
@@ -147,19 +152,63 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
         harmonics = 2 * math.pi * nu / period
         if a.size and not np.all(np.abs(omega - harmonics) <= 1e-8 + 1e-12 * np.abs(harmonics)):
             raise InvalidParameterError("noise frequencies must be the harmonics of the given period")
-        # as _harmonic_series and _curvature_peak compute them
+        # as _harmonic_series computes them
         values = 0.5 * n * ((a - 1j * b) * np.exp(2j * math.pi * nu * shift / period))
-        spectra[3 * i, 1:a.size + 1] = values
-        spectra[3 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
-        spectra[3 * i + 2, 1:a.size + 1] = 0.5 * n * (a - 1j * b) * -(2 * math.pi * nu / period) ** 2
+        spectra[2 * i, 1:a.size + 1] = values
+        spectra[2 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
         bound += float(np.sum(omega * np.hypot(a, b)))
+    return _tables(spectra, n, np.asarray(periods, dtype=float), bound)
+
+
+def noise_table_batch(a, b, periods, contact_times, origin: float = 0.0,
+                      points_per_period: int = POINTS_PER_PERIOD) -> list:
+    """:func:`noise_tables` of many realisations, bit for bit, with the spectra formed for all at once.
+
+    Parameters
+    ----------
+    a, b : ndarray (S, R, M)
+        Cosine and sine coefficients of each realisation's rods (``Q_i = sum a cos(omega (t - t_c))
+        + b sin(...)``, ``omega_nu = 2 pi nu / periods[i]``, ``nu = 1..M``).
+    periods : sequence of float (R,)
+        Each rod's period.
+    contact_times : ndarray (S,)
+        Each realisation's nominal contact time ``t_c``.
+    origin, points_per_period
+        As for :func:`noise_tables`.
+
+    Returns
+    -------
+    list of NoiseTables
+    """
+    count, rods, modes = a.shape
+    n = table_points(modes, points_per_period)
+    shift = origin - np.asarray(contact_times, dtype=float)
+    nu = np.arange(1, modes + 1)
+    spectra = np.zeros((count, 2 * rods, n // 2 + 1), dtype=complex)
+    weighted = np.empty((count, rods, modes))
+    for i, period in enumerate(periods):  # noise_tables' arithmetic, row by row
+        period = float(period)
+        omega = 2 * math.pi * nu / period
+        values = 0.5 * n * ((a[:, i] - 1j * b[:, i]) * np.exp(2j * math.pi * nu * shift[:, None] / period))
+        spectra[:, 2 * i, 1:modes + 1] = values
+        spectra[:, 2 * i + 1, 1:modes + 1] = values * (2j * math.pi * nu / period)
+        weighted[:, i] = omega * np.hypot(a[:, i], b[:, i])
+    periods = np.asarray(periods, dtype=float)
+    out = []
+    for k in range(count):
+        bound = 0.0
+        for i in range(rods):
+            bound += float(np.sum(weighted[k, i]))
+        out.append(_tables(spectra[k], n, periods, bound))
+    return out
+
+
+def _tables(spectra, n, periods, bound) -> NoiseTables:
+    """The tables of one realisation from its spectra (rows: each rod's values and slopes)."""
     rows = np.fft.irfft(spectra, n, axis=1)
-    # the largest curvature on the table's nodes (4 per period of the fastest mode at least,
-    # denser by default), with 10 % for what falls between them
-    curvature = 0.0
-    for i, (_omega, a, _b) in enumerate(coefficients):
-        curvature += 1.1 * float(np.max(np.abs(rows[3 * i + 2]))) if a.size else 0.0
-    return NoiseTables(np.asarray(periods, dtype=float), rows[0::3].copy(), rows[1::3].copy(), bound, curvature)
+    values, slopes = rows[0::2].copy(), rows[1::2].copy()
+    block_max, curvature = _bounds(periods, values, slopes)
+    return NoiseTables(periods, values, slopes, bound, float(np.sum(np.max(curvature, axis=1))), block_max, curvature)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:

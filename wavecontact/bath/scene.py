@@ -11,7 +11,7 @@ from ..errors import InvalidParameterError
 from .model import BathRealisation
 from .noise import POINTS_PER_PERIOD, NoiseTables, noise_tables
 
-__all__ = ["EXPONENTIAL_MARGIN", "HARD_MARGIN", "end_reach", "scene_noise", "start_gap", "vibration_fields"]
+__all__ = ["EXPONENTIAL_MARGIN", "HARD_MARGIN", "end_reach", "end_reaches", "scene_noise", "start_gap", "vibration_fields"]
 
 EXPONENTIAL_MARGIN = 40.0  # alpha * (gap - reach): exp(-40) ~ 4e-18, the force at the start is below round-off
 HARD_MARGIN = 0.01  # gap beyond the reach (length units) for contacts without range
@@ -21,6 +21,13 @@ def end_reach(vibrations: BathRealisation) -> float:
     """An upper bound of how far both facing ends together can move towards each other (length)."""
     return float(sum(math.sqrt(2.0) * np.sum(np.hypot(q, r))
                      for q, r in zip(vibrations.displacement, vibrations.velocity_amplitude)))
+
+
+def end_reaches(q, r) -> np.ndarray:
+    """:func:`end_reach` of many realisations, bit for bit, from the amplitude arrays ``(S, 2, modes)``
+    of :meth:`ThermalBath.draw_amplitudes`."""
+    spans = np.hypot(q, r)
+    return np.array([float(sum(math.sqrt(2.0) * np.sum(spans[k, i]) for i in range(2))) for k in range(q.shape[0])])
 
 
 def start_gap(vibrations: BathRealisation, contact) -> float:

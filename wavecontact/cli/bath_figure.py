@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 
@@ -37,7 +36,7 @@ def add_parser(subparsers):
 
 
 def _options(kappa):
-    return {"rtol": 1e-6} if math.isfinite(kappa) else {}
+    return {}  # the ensemble's defaults (the delay solver's rtol: studies.ensemble.ENSEMBLE_RTOL)
 
 
 def run(args) -> int:

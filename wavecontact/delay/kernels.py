@@ -65,6 +65,19 @@ KRONROD_WEIGHTS = 0.5 * np.array(
     ]
 )
 GAUSS_WEIGHTS = 0.5 * np.array([0.0, 5.0 / 9.0, 0.0, 8.0 / 9.0, 0.0, 5.0 / 9.0, 0.0])
+# Gauss-Lobatto 4 points with its Kronrod extension to 7 (Gander and Gautschi 2000), on [0, 1]; the end
+# nodes are the step's ends, where g is known, so a step costs 5 evaluations of g plus its end point
+# instead of 7 plus its end point (degree 9 instead of 11; the embedded rule has degree 5 in both)
+_LOBATTO_X = np.array([1.0, math.sqrt(2.0 / 3.0), 1.0 / math.sqrt(5.0), 0.0, -1.0 / math.sqrt(5.0),
+                       -math.sqrt(2.0 / 3.0), -1.0])
+LOBATTO_NODES = 0.5 * (1.0 + _LOBATTO_X)
+LOBATTO_KRONROD_WEIGHTS = 0.5 * np.array([11.0 / 210.0, 72.0 / 245.0, 125.0 / 294.0, 16.0 / 35.0, 125.0 / 294.0,
+                                          72.0 / 245.0, 11.0 / 210.0])
+LOBATTO_WEIGHTS = 0.5 * np.array([1.0 / 6.0, 0.0, 5.0 / 6.0, 0.0, 5.0 / 6.0, 0.0, 1.0 / 6.0])
+QUADRATURE_RULES = {
+    "gauss-kronrod": (KRONROD_NODES, KRONROD_WEIGHTS, GAUSS_WEIGHTS),
+    "lobatto-kronrod": (LOBATTO_NODES, LOBATTO_KRONROD_WEIGHTS, LOBATTO_WEIGHTS),
+}
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
@@ -76,6 +89,8 @@ STATUS_TIME_LIMIT = 4
 _QUARTIC_GAP = 0.01728
 # below this |a h| the exponential change of variable is the identity to round-off
 _LINEAR_THRESHOLD = 1e-9
+# no_later_contact certifies only separations faster than this share of the approach speed
+SLOW_SEPARATION = 1e-3
 
 
 @kernel
@@ -223,6 +238,88 @@ def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
                 k += 1
         total += best
     return total
+
+
+@kernel
+def noise_curvature_bound(t0, t1, periods, tables, curvature_blocks):
+    """An upper bound of ``|Q''|`` of the tabulated noise (the sum of the rows) on ``[t0, t1]``.
+
+    Each row's bound is the largest of its per-block curvature bounds
+    (:class:`wavecontact.bath.noise.NoiseTables`) over the blocks that the
+    interval touches, one cell more on each side against round-off.
+    """
+    total = 0.0
+    blocks = curvature_blocks.shape[1]
+    n = tables.shape[1]
+    size = n // blocks
+    for i in range(periods.shape[0]):
+        h = periods[i] / n
+        first = int(t0 / h) - 1  # t0 >= 0
+        stop = int(t1 / h) + 2
+        best = 0.0
+        if stop - first >= n:
+            for k in range(blocks):
+                best = max(best, curvature_blocks[i, k])
+        else:
+            c = first
+            while c < stop:
+                j = c % n
+                if j < 0:
+                    j += n
+                best = max(best, curvature_blocks[i, j // size])
+                c += size - j % size  # the first cell of the next block
+        total += best
+    return total
+
+
+@kernel
+def no_later_contact(t0, w_final, kappa, a0, t, w, d1, d2, last, delays, weights, periods, tables, block_max,
+                     negligible):
+    """True if, with ``W`` held at ``w_final`` from ``t0`` on, ``W'`` stays below ``e^negligible`` for good.
+
+    A certificate for stopping with tabulated noise, where a contact may come back long after the
+    last one.  With ``W`` constant, ``S_i(s + Gamma_i) = S_i(s) + W``, so ``u_i = S_i - W s / Gamma_i``
+    is ``Gamma_i``-periodic after ``t0``, like rod ``i``'s noise row, and
+    ``g - W = drift s - a0 - W + sum_i (Q_i - beta_i u_i)`` with ``drift = kappa - W sum_i beta_i / Gamma_i``.
+    Each row's ``Q_i - beta_i u_i`` is bounded over one period block by block (``block_max`` for
+    ``Q_i``; ``S_i`` never decreases), which bounds ``g - W`` for every later time once
+    ``drift < 0``.  Rows whose period is not their rod's round trip get no certificate, nor do
+    rods that separate at less than ``SLOW_SEPARATION`` of the approach speed (``-drift / kappa``
+    is epsilon for one material): True, the caller's own rule decides.
+    """
+    if periods.shape[0] != delays.shape[0]:
+        return True
+    drift = kappa
+    for i in range(delays.shape[0]):
+        if abs(periods[i] - delays[i]) > 1e-12 * delays[i]:
+            return True
+        drift -= w_final * weights[i] / delays[i]
+    if drift >= 0.0:
+        return False  # the ends still approach on average: the force must come back
+    if drift > -SLOW_SEPARATION * kappa:
+        return True  # too slow a separation to certify within the time limit: one memory period decides
+    bound = drift * t0 - a0 - w_final
+    n = tables.shape[1]
+    size = n // block_max.shape[1]
+    for i in range(delays.shape[0]):
+        gamma_i = delays[i]
+        beta = weights[i]
+        h = periods[i] / n
+        best = -math.inf
+        c = int(t0 / h)  # t0 >= 0: the cell that holds t0
+        while c * h <= t0 + gamma_i + h:
+            j = c % n
+            stop = c + size - j % size  # first cell of the next block
+            start = max(c * h, t0)
+            memory = 0.0  # S_i at the block's start (it only grows within the block)
+            m = 1
+            while start - m * gamma_i > t[0]:
+                memory += hermite5(t, w, d1, d2, last, start - m * gamma_i)[0]
+                m += 1
+            best = max(best, block_max[i, j // size] - beta * memory + beta * w_final * (stop * h) / gamma_i)
+            c = stop
+        bound += best
+    return bound < negligible
 
 
 @kernel
@@ -383,7 +480,8 @@ def integrate_delay_equation(
     table_slopes,
     block_max,
     noise_rate,
-    noise_step,
+    noise_excursion,
+    curvature_blocks,
     t_end_min,
     t_limit,
     settle_time,
@@ -418,11 +516,13 @@ def integrate_delay_equation(
     noise_rate : float
         An upper bound of ``|Q'|`` from the tables (0 without tables; unused
         with tables, whose local bounds are sharper).
-    noise_step : float
-        Longest step wherever the force may become appreciable (0: no
-        limit): short enough that ``Q`` departs from its secant by less than
-        one unit of the exponent, so that no narrow rise of the noise slips
-        between the quadrature nodes of a step that looked force-free.
+    noise_excursion, curvature_blocks : float, ndarray
+        Wherever the force may become appreciable, a step is short enough that
+        the tabulated ``Q`` departs from its secant by at most ``noise_excursion``
+        units of the exponent (``max|Q''| h^2 / 8``, ``|Q''|`` bounded on the step
+        by the per-block bounds ``curvature_blocks``, shape ``(R, n / C)``;
+        :func:`noise_curvature_bound`), so that no narrow rise of the noise slips
+        between the quadrature nodes of a step that looked force-free (0: no limit).
     t_end_min : float
         Never stop before this time.
     t_limit : float
@@ -432,7 +532,8 @@ def integrate_delay_equation(
     max_steps : int
         Give up (status 1) after this many accepted steps.
     nodes, weights_k, weights_g : ndarray
-        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and Gauss weights).
+        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and embedded weights; one of
+        :data:`QUADRATURE_RULES`).  Nodes at 0 and 1 take ``g`` from the step's ends.
     direct_copies : int
         0: every delayed copy of ``W`` is interpolated on its own.  ``K > 0``:
         copies older than ``K`` round trips come from running comb sums, one
@@ -501,11 +602,13 @@ def integrate_delay_equation(
         if tabulated:
             # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
             # step is free or it is not (a free step is the proposed one in either branch below)
-            q0 = 0.0
-            for i in range(periods.shape[0]):
-                q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
-            free = span_is_free(t0, h, negligible - (g_now - w[last]), series_rate, periods, tables,
-                                table_slopes, block_max, q0)
+            distance = negligible - (g_now - w[last])
+            free = False
+            if distance > 0.0 and series_rate * h < distance:  # else span_is_free is False at once
+                q0 = 0.0
+                for i in range(periods.shape[0]):
+                    q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
+                free = span_is_free(t0, h, distance, series_rate, periods, tables, table_slopes, block_max, q0)
             h_free = h if free else 0.0
         else:
             h_free = (negligible - (g_now - w[last])) / exponent_rate
@@ -529,8 +632,10 @@ def integrate_delay_equation(
             free = h_free > h
         if free:
             h = min(h_wanted, h_free)
-        elif noise_step > 0.0:
-            h = min(h, noise_step)
+        elif tabulated and noise_excursion > 0.0:
+            curvature = noise_curvature_bound(t0, t0 + h, periods, tables, curvature_blocks)
+            if curvature > 0.0:
+                h = min(h, math.sqrt(8.0 * noise_excursion / curvature))
         h = min(h, h_max)
         if h < 1e-14 * max(1.0, abs(t0)):
             status = STATUS_STEP_UNDERFLOW
@@ -546,24 +651,37 @@ def integrate_delay_equation(
         # nodes of the transformed rule: e^{a s} ds becomes uniform
         z = a * h
         if z > _LINEAR_THRESHOLD:
-            log_base = g1 + math.log(-math.expm1(-z) / a)
+            em = math.expm1(-z)
+            log_base = g1 + math.log(-em / a)
         elif z < -_LINEAR_THRESHOLD:
-            log_base = g_now + math.log(-math.expm1(z) / (-a))
+            em = math.expm1(z)
+            log_base = g_now + math.log(-em / (-a))
         else:
+            em = 0.0
             log_base = g_now + math.log(h)
         r_max = -math.inf
-        for j in range(nodes.shape[0]):
+        # a free step of tabulated noise: the bounds show W' below e^negligible all along it, so its whole
+        # increment (at most h e^negligible) is taken as its error and g only at the ends (the secant)
+        for j in range(0 if free and tabulated else nodes.shape[0]):
             x = nodes[j]
-            if z > _LINEAR_THRESHOLD:
-                s = h + math.log1p((1.0 - x) * math.expm1(-z)) / a
-            elif z < -_LINEAR_THRESHOLD:
-                s = math.log1p(x * math.expm1(z)) / a
+            if x == 0.0:  # a node at a step end (Lobatto rules): g is known there
+                s = 0.0
+                gs = g_now
+            elif x == 1.0:
+                s = h
+                gs = g1
             else:
-                s = h * x
-            gs, _unused, _unused2 = _exponent(
-                t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
-                periods, tables, table_slopes, False, comb, direct_copies,
-            )
+                if z > _LINEAR_THRESHOLD:
+                    s = h + math.log1p((1.0 - x) * em) / a
+                elif z < -_LINEAR_THRESHOLD:
+                    s = math.log1p(x * em) / a
+                else:
+                    s = h * x
+                gs, _unused, _unused2 = _exponent(
+                    t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
+                    periods, tables, table_slopes, False, comb, direct_copies,
+                )
+                evaluations += 1
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)
             elif z < -_LINEAR_THRESHOLD:
@@ -571,20 +689,27 @@ def integrate_delay_equation(
             else:
                 gx[j] = gs - g_now
             r_max = max(r_max, gx[j])
-        evaluations += 1 + nodes.shape[0]
-        sum_k = 0.0
-        sum_g = 0.0
-        for j in range(nodes.shape[0]):
-            e = math.exp(gx[j] - r_max)
-            sum_k += weights_k[j] * e
-            sum_g += weights_g[j] * e
-        log_integral = log_base + r_max + math.log(sum_k)
+        evaluations += 1
+        secant_only = free and tabulated
+        sum_k = 1.0
+        sum_g = 1.0
+        log_integral = log_base
+        if not secant_only:
+            sum_k = 0.0
+            sum_g = 0.0
+            for j in range(nodes.shape[0]):
+                e = math.exp(gx[j] - r_max)
+                sum_k += weights_k[j] * e
+                sum_g += weights_g[j] * e
+            log_integral = log_base + r_max + math.log(sum_k)
         w1 = _logaddexp(w[last], log_integral)
         if not math.isfinite(w1) or not math.isfinite(g1):
             status = STATUS_NONFINITE
             break
-        increment_share = math.exp(log_integral - w1)
-        error_quadrature = increment_share * abs(1.0 - sum_g / sum_k)
+        if secant_only:
+            error_quadrature = h * math.exp(negligible)
+        else:
+            error_quadrature = math.exp(log_integral - w1) * abs(1.0 - sum_g / sum_k)
         slope1 = math.exp(g1 - w1)
         curvature1 = _sturdy_curvature(slope1, g1, gp1, gpp1, w1, kappa * t1)
         top = 12.0 * (w[last] - w1) + 6.0 * h * (d1[last] + slope1) + h * h * (d2[last] - curvature1)
@@ -629,7 +754,10 @@ def integrate_delay_equation(
             t_active = t1
         factor = 4.0 if error == 0.0 else min(4.0, 0.8 * (tol / error) ** 0.2)
         h *= max(0.2, factor)
-        if t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time:
+        # with tabulated noise a contact may come back later than one memory period: stop on a certificate
+        settled = t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time
+        if settled and (not tabulated or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
+                                                          periods, tables, block_max, negligible)):
             break
 
     tail = d1[last] * settle_time

@@ -23,13 +23,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..bath.noise import NoiseTables
-from ..bath.scene import scene_noise
+from ..bath.model import ThermalBath, seed_sequence
+from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_table_batch, table_points
+from ..bath.scene import EXPONENTIAL_MARGIN, end_reaches, scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
-from ..scene import Scene
+from ..scene import Scene, two_rods
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
 from .energy_split import NODES, WEIGHTS, vibration_energy_gain
@@ -86,6 +87,10 @@ class DelayOptions(SolverOptions):
         None, "initial vibrations as the noise Q(tau) (Eq. 17), frequencies in units of 1/tau; None: a cold bath "
         "or the scene's thermal vibrations", kind="object", allow_none=True, check=_noise)
     max_steps: int = option(2_000_000, "safety limit on accepted steps", kind="int", low=10, high=10**9)
+    quadrature: str = option(
+        "gauss-kronrod", "rule of each step: Gauss-Kronrod (3, 7), or Lobatto-Kronrod (4, 7), whose end nodes are "
+        "the step's ends (6 evaluations of the exponent a step instead of 8; ensembles)", kind="choice",
+        choices=tuple(kernels.QUADRATURE_RULES))
     noise_resolution: int = option(
         32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
         kind="int", low=4, high=1024)
@@ -142,7 +147,7 @@ def solve_delay_equation(gamma, kappa, *, rtol=1e-11, initial_gap=None, end_time
     return t, w, d1, error, work, a0
 
 
-def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_ratio, tables):
+def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_ratio, tables, quadrature="gauss-kronrod"):
     """The kernel call behind :func:`solve_delay_equation`, for options already validated (DelayOptions)."""
     noise = COLD if noise is None else noise
     tables = _NO_TABLES if tables is None else tables
@@ -157,9 +162,10 @@ def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_rat
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
     t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
         float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
-        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound), float(tables.step_limit),
+        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound),
+        NOISE_EXCURSION, tables.curvature_blocks,
         float(t_end_min), float(t_limit), settle, max_steps,
-        kernels.KRONROD_NODES, kernels.KRONROD_WEIGHTS, kernels.GAUSS_WEIGHTS,
+        *kernels.QUADRATURE_RULES[quadrature],
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
     )
     if status != kernels.STATUS_OK:
@@ -253,8 +259,64 @@ class DelaySolver(SolverBase):
             raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
         initial_gap, tables = _start(scene, params, options)
         w = _integrate(params.time_ratio, params.kappa, options.rtol, initial_gap, options.end_time, None,
-                       options.max_steps, params.impedance_ratio, tables)[1]
+                       options.max_steps, params.impedance_ratio, tables, options.quadrature)[1]
         return float(w[-1] / params.kappa - 1.0)
+
+    def thermal_restitutions(self, gamma: float, kappa: float, bath, seeds, options=None) -> tuple:
+        """epsilon and its error estimate for many finite-kappa thermal collisions of the paper's rods.
+
+        Sample ``j`` is what :meth:`thermal_restitution` gives, bit for bit, for
+        ``thermal_scene(gamma, kappa, bath, seeds[j])``: the same draw, start gap,
+        noise tables and integration, with the scene object, the option checks and the
+        cost checks done once for all seeds (an ensemble's batch).
+
+        Parameters
+        ----------
+        gamma, kappa : float
+            Length ratio in ``[GAMMA_MIN, 1]`` and a finite softness.
+        bath : wavecontact.bath.ThermalBath
+            Temperature(s) ``T_B / E_tr`` and ``nu_max``.
+        seeds : sequence of int or numpy.random.SeedSequence
+            One realisation per seed (:meth:`ThermalBath.draw`).
+        options : mapping or DelayOptions, optional
+            Validated as :class:`DelayOptions`; ``noise`` must stay None.
+
+        Returns
+        -------
+        restitution, error_estimate : ndarray
+            Per seed: epsilon (dimensionless) and the solver's estimate of its error
+            (the sum of the local error estimates, :func:`solve_delay_equation`).
+        """
+        options = self.options(options)
+        if not isinstance(bath, ThermalBath):
+            raise InvalidParameterError("bath must be a wavecontact.bath.ThermalBath")
+        prototype = two_rods(gamma, kappa)  # the rods, contact and parameters of every sample (cold)
+        params = _check_scene(prototype)
+        self.estimate_cost(prototype, options)
+        if math.isinf(params.kappa) or isinstance(prototype.contact, Hard):
+            raise UnsupportedSceneError("thermal_restitutions needs a finite kappa (kappa = inf: "
+                                        "hard_core_thermal_batch)")
+        if options.noise is not None:
+            raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
+        contact, kappa = prototype.contact, params.kappa
+        lengths = tuple(rod.length for rod in prototype.rods)
+        gamma = prototype.metadata["two_rods"].gamma
+        periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
+        # _start's shift of the scaled gap: ln(B alpha^2 mu / Z_s^2)
+        shift = math.log(contact.strength * contact.alpha**2 * params.reduced_mass / params.series_impedance**2)
+        # chunks of seeds whose noise spectra take at most about 32 MB (2^21 complex numbers)
+        chunk = max(1, min(32, (1 << 21) // (2 * table_points(bath.modes, options.noise_resolution))))
+        out = np.empty((2, len(seeds)))
+        for start in range(0, len(seeds), chunk):
+            part = seeds[start:start + chunk]
+            for j, (gap, tables) in enumerate(_thermal_starts(bath, part, lengths, contact, shift, kappa, periods,
+                                                              options), start):
+                _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, gap,
+                                                                options.end_time, None, options.max_steps,
+                                                                params.impedance_ratio, tables, options.quadrature)
+                out[0, j] = w[-1] / kappa - 1.0
+                out[1, j] = error
+        return out[0], out[1]
 
     def expected_order(self, options) -> float:
         """1: the error is proportional to (and below) the tolerance ``rtol``."""
@@ -300,7 +362,7 @@ class DelaySolver(SolverBase):
         initial_gap, tables = _start(scene, params, options)
         t, w, d1, d2, error, work, a0 = _integrate(params.time_ratio, kappa, options.rtol, initial_gap,
                                                    options.end_time, options.noise, options.max_steps,
-                                                   params.impedance_ratio, tables)
+                                                   params.impedance_ratio, tables, options.quadrature)
         unit = params.time_unit
         extra = {"scaled_initial_gap": a0, "free_flight_time": a0 / kappa * unit, "velocity_increase_slope": d1,
                  "delay_parameters": _as_dict(params)}
@@ -326,6 +388,26 @@ class DelaySolver(SolverBase):
 
 
 _PARAMETER_NAMES = tuple(f.name for f in dataclasses.fields(DelayParameters))
+
+
+def _thermal_starts(bath, seeds, lengths, contact, shift, kappa, periods, options) -> list:
+    """``(initial_gap, tables)`` of each seed's realisation: what :func:`_start` gives for its thermal scene.
+
+    The draws, start gaps and noise spectra of all seeds are formed at once, with the arithmetic of
+    the per-scene path (``ThermalBath.draw``, ``start_gap``, ``noise_coefficients``, ``noise_tables``).
+    """
+    q, r = bath.draw_amplitudes(lengths, [seed_sequence(seed) for seed in seeds])
+    if options.initial_gap is None:
+        margin = EXPONENTIAL_MARGIN / contact.alpha  # start_gap's margin for exponential contact
+        gaps = [contact.alpha * float(float(reach) + margin) - shift for reach in end_reaches(q, r)]
+    else:
+        gaps = [options.initial_gap] * len(seeds)
+    signs = ((-1.0) ** np.arange(1, bath.modes + 1), -np.ones(bath.modes))  # BathRealisation.contact_end_signs
+    factors = [kappa * math.sqrt(2.0) * sign for sign in signs]  # alpha = kappa (noise_coefficients)
+    a = np.stack([factors[i] * q[:, i] for i in range(2)], axis=1)
+    b = np.stack([factors[i] * r[:, i] for i in range(2)], axis=1)
+    contact_times = np.array([float(gap) / kappa for gap in gaps])
+    return list(zip(gaps, noise_table_batch(a, b, periods, contact_times, 0.0, options.noise_resolution)))
 
 
 def _start(scene: Scene, params: DelayParameters, options: DelayOptions) -> tuple:

@@ -27,13 +27,22 @@ from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..progress import Progress
 from ..scene import validate_gamma_kappa
 
-__all__ = ["MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "ensemble", "run_batch", "sample_collision",
+__all__ = ["ENSEMBLE_DELAY_OPTIONS", "ENSEMBLE_RTOL", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec", "ensemble", "run_batch", "sample_collision",
            "sample_restitution", "sample_seed"]
 
 MAX_SAMPLES = 10_000_000
+# The delay solver's default rtol in an ensemble at finite kappa.  The step control is pessimistic
+# (its rtol bounds a sum of local error estimates): at rtol 1e-3 the samples of the Fig. 8 set differ
+# from rtol 1e-10 by at most a few 1e-5 and their mean by about 1e-6, far below the ~6e-3 standard
+# error of a 2500-sample mean (docs/bath.md, "The thermal delay solve"; benchmarks/ensemble_accuracy.py).
+ENSEMBLE_RTOL = 1e-3
+# The delay solver's defaults in an ensemble at finite kappa: the end nodes of the Lobatto rule are the
+# step's ends (6 evaluations of the exponent a step instead of 8, at the same measured accuracy), and noise
+# tables with 16 nodes per period of the fastest mode move the samples by about 1e-6 (32: 6e-8).
+ENSEMBLE_DELAY_OPTIONS = {"rtol": ENSEMBLE_RTOL, "quadrature": "lobatto-kronrod", "noise_resolution": 16}
 _BATCH_SCHEMA = "wavecontact.ensemble_batch"
 _SCHEMA = "wavecontact.ensemble"
-_VERSION = 1
+_VERSION = 2  # 2: batches keep each sample's error estimate
 _SOLVERS = ("delay", "modal", "fem")
 
 
@@ -61,7 +70,9 @@ class EnsembleSpec:
     solver : {'delay', 'modal', 'fem'}
         Solver of each collision.
     options : dict
-        Solver options (JSON values only).
+        Solver options (JSON values only).  The delay solver at finite kappa gets
+        ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = ENSEMBLE_RTOL``, the Lobatto-Kronrod rule, 16 noise
+        table nodes per period of the fastest mode) where they are not given.
     batch_size : int
         Samples per task, in [1, 100000].
     energy_split : bool
@@ -104,6 +115,8 @@ class EnsembleSpec:
             raise InvalidParameterError(
                 "the hard-core mode (kappa = inf) takes only the option hard_core_resolution, not "
                 f"{', '.join(sorted(set(self.options) - {'hard_core_resolution'}))}")
+        if self.solver == "delay" and math.isfinite(kappa):
+            object.__setattr__(self, "options", {**ENSEMBLE_DELAY_OPTIONS, **self.options})
         try:
             json.dumps(self.options)
         except TypeError:
@@ -125,27 +138,30 @@ class EnsembleSpec:
 
 
 def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
-    """``(epsilon, (Delta E_1, Delta E_2))`` of sample ``index`` (the gains are zero unless ``spec.energy_split``)."""
+    """``(epsilon, (Delta E_1, Delta E_2), error_estimate)`` of sample ``index``.
+
+    The gains are zero unless ``spec.energy_split``; the error estimate is the
+    solver's (NaN where it gives none: the hard-core mode, a solver without one).
+    """
+    _start, values, gains, errors = run_batch(asdict(spec), index, index + 1)
+    return float(values[0]), (float(gains[0, 0]), float(gains[0, 1])), float(errors[0])
+
+
+def _solved_collision(spec: EnsembleSpec, index: int) -> tuple:
+    """:func:`sample_collision` through ``solve`` (the energy split, the modal and FE solvers)."""
     from ..api import solve
     from ..bath.collide import thermal_scene, vibration_energy_gain
-    from ..solvers import get_solver
 
-    seed = sample_seed(spec.seed, index)
-    if _hard_core(spec):
-        # the hard-core mode without the scene and result objects around it (same draw)
-        return float(_hard_core_batch(spec, index, index + 1)[0]), (0.0, 0.0)
-    scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, seed)
+    scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, sample_seed(spec.seed, index))
     options = dict(spec.options)
-    if spec.solver == "delay" and not spec.energy_split:
-        # what solve() returns, without the result object around it
-        return get_solver("delay").thermal_restitution(scene, options), (0.0, 0.0)
     if spec.solver == "delay":
         options.setdefault("energy_split", spec.energy_split)
     result = solve(scene, spec.solver, **options)
     gain = (0.0, 0.0)
     if spec.energy_split:
         gain = tuple(float(x) for x in vibration_energy_gain(result, scene))
-    return float(result.restitution), gain
+    error = result.error_estimate
+    return float(result.restitution), gain, math.nan if error is None else float(error)
 
 
 def _hard_core(spec: EnsembleSpec) -> bool:
@@ -171,13 +187,23 @@ def sample_restitution(spec: EnsembleSpec, index: int) -> float:
 def run_batch(spec_fields: dict, start: int, stop: int) -> tuple:
     """Samples ``start .. stop - 1`` (a task: plain arguments, plain results).
 
-    Returns ``(start, epsilon (n,), gains (n, 2))``.
+    Returns ``(start, epsilon (n,), gains (n, 2), error estimates (n,))``.
     """
+    from ..solvers import get_solver
+
     spec = EnsembleSpec(**spec_fields)
+    n = stop - start
     if _hard_core(spec):
-        return start, _hard_core_batch(spec, start, stop), np.zeros((stop - start, 2))
-    pairs = [sample_collision(spec, j) for j in range(start, stop)]
-    return start, np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs], dtype=float).reshape(-1, 2)
+        return start, _hard_core_batch(spec, start, stop), np.zeros((n, 2)), np.full(n, math.nan)
+    if spec.solver == "delay" and not spec.energy_split:
+        # what solve() returns, without the scene and result objects around each sample
+        seeds = [sample_seed(spec.seed, j) for j in range(start, stop)]
+        values, errors = get_solver("delay").thermal_restitutions(spec.gamma, spec.kappa, spec.bath, seeds,
+                                                                  spec.options)
+        return start, values, np.zeros((n, 2)), errors
+    rows = [_solved_collision(spec, j) for j in range(start, stop)]
+    return (start, np.array([r[0] for r in rows]), np.array([r[1] for r in rows], dtype=float).reshape(-1, 2),
+            np.array([r[2] for r in rows]))
 
 
 @dataclass
@@ -192,11 +218,22 @@ class EnsembleResult:
     vibration_energy_gain : ndarray (n, 2)
         Each rod's vibrational gain per sample (units with ``E_tr = 1/4``;
         zeros unless ``spec.energy_split``).
+    error_estimate : ndarray (n,)
+        The solver's estimate of each sample's error in epsilon (NaN where it
+        gives none, as in the hard-core mode).
     """
 
     spec: EnsembleSpec
     restitution: np.ndarray
     vibration_energy_gain: np.ndarray | None = None
+    error_estimate: np.ndarray | None = None
+
+    @property
+    def largest_error_estimate(self) -> float | None:
+        """The largest per-sample error estimate (None if the solver gives none)."""
+        if self.error_estimate is None or not np.any(np.isfinite(self.error_estimate)):
+            return None
+        return float(np.nanmax(self.error_estimate))
 
     @property
     def rod1_share(self) -> float:
@@ -271,7 +308,7 @@ class EnsembleResult:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         _atomic_savez(out / "samples.npz", restitution=self.restitution,
-                      vibration_energy_gain=self.vibration_energy_gain)
+                      vibration_energy_gain=self.vibration_energy_gain, error_estimate=self.error_estimate)
         tmp = out / "summary.json.part"
         tmp.write_text(json.dumps(self.summary(), indent=1))
         os.replace(tmp, out / "summary.json")
@@ -292,6 +329,8 @@ class EnsembleResult:
             "bath_modes": spec.bath_modes,
             "seed": spec.seed,
             "solver": spec.solver,
+            "options": dict(spec.options),
+            "largest_error_estimate": self.largest_error_estimate,
         }
 
 
@@ -341,11 +380,12 @@ def _prepare_output(out, spec: EnsembleSpec) -> dict:
             try:
                 values = np.asarray(arrays["restitution"], dtype=float)
                 gains = np.asarray(arrays["vibration_energy_gain"], dtype=float)
+                errors = np.asarray(arrays["error_estimate"], dtype=float)
             except KeyError:
                 raise InvalidParameterError(f"{batch} is not a finished batch; delete it to recompute that batch") from None
-            if values.shape != (stop - start,) or gains.shape != (stop - start, 2):
+            if values.shape != (stop - start,) or gains.shape != (stop - start, 2) or errors.shape != values.shape:
                 raise InvalidParameterError(f"{batch} has the wrong size; delete it to recompute that batch")
-            done[start] = (values, gains)
+            done[start] = (values, gains, errors)
     return done
 
 
@@ -421,12 +461,12 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
     bar = Progress(spec.samples, "ensemble", unit="sample", enabled=bool(progress),
                    initial=spec.samples - sum(b - a for a, b in todo))
 
-    def finish(start, values, gains):
-        done[start] = (values, gains)
+    def finish(start, values, gains, errors):
+        done[start] = (values, gains, errors)
         if out is not None:
             write_checkpoint(_batch_path(Path(out), start), _BATCH_SCHEMA, _VERSION,
                              _batch_parameters(spec, start, start + values.size),
-                             {"restitution": values, "vibration_energy_gain": gains})
+                             {"restitution": values, "vibration_energy_gain": gains, "error_estimate": errors})
         bar.advance(values.size)
 
     pool = _executor_for(executor)
@@ -438,6 +478,5 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         raise InvalidParameterError(f"ensemble could not reach its workers: {exc}") from None
     finally:
         bar.close()
-    values = np.concatenate([done[a][0] for a, _b in spec.batches()])
-    gains = np.concatenate([done[a][1] for a, _b in spec.batches()])
-    return EnsembleResult(spec, values, gains)
+    values, gains, errors = (np.concatenate([done[a][k] for a, _b in spec.batches()]) for k in range(3))
+    return EnsembleResult(spec, values, gains, errors)
