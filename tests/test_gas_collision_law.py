@@ -26,10 +26,12 @@ from wavecontact.gas import (
 from wavecontact.gas.collision_law import (
     CollisionLaw,
     blend_draw,
+    build_collision_law,
     kappa_variable,
     level_means,
     load_law,
     point_samples,
+    row_resolutions,
     soft_corrections,
 )
 
@@ -302,3 +304,55 @@ def test_law_rule_checkpoint_resumes_bit_for_bit(tmp_path, stiffness):
     resumed.run(1500)
     for name in ("x", "v", "temperature", "local_time", "counters"):
         assert np.array_equal(getattr(straight, name), getattr(resumed, name))
+
+
+def _law_mean(law, gamma_index, row, share_index):
+    """Mean of a tabulated quantile function (trapezoid over the levels) and its sampling error."""
+    q = law.eps2_quantiles[0, gamma_index, row, share_index]
+    w = np.zeros(law.probability.size)
+    w[1:] += 0.5 * np.diff(law.probability)
+    w[:-1] += 0.5 * np.diff(law.probability)
+    mean = float(np.sum(q * w))
+    return mean, math.sqrt(float(np.sum((q - mean) ** 2 * w)) / law.samples_per_point)
+
+
+@pytest.mark.parametrize("log_x", [-2.0, -3.0, -4.0])
+def test_gamma_one_rows_of_the_law_fall_below_one_by_grid_error_only(log_x):
+    """Equal rods in the hard-core limit leave with eps = 1 in every realisation (the paper; independent of the
+    grid), so the shipped law's gamma = 1 deficit 1 - eps^2 must be the max-plus grid's error at the law's
+    resolution: fresh solves at that resolution show the same deficit (within the two samples' errors),
+    and on the same realisations it shrinks to under a third at 8x the resolution (docs/gas.md, "Grid error
+    of the law")."""
+    n, fine = 24, 8 * LAW.resolution
+    coarse_eps2, _ = point_samples(1.0, log_x, n, 12, bath_modes=LAW.bath_modes, resolution=LAW.resolution)
+    fine_eps2, _ = point_samples(1.0, log_x, n, 12, bath_modes=LAW.bath_modes, resolution=fine)
+    law_mean, law_sem = _law_mean(LAW, LAW.gamma.size - 1, list(LAW.log_x).index(log_x),
+                                  list(LAW.short_share).index(0.5))
+    deficit, sem = _mean_and_sem(1.0 - coarse_eps2)
+    assert deficit > 3.0 * sem  # the grid error is real at the law's resolution ...
+    assert abs((1.0 - law_mean) - deficit) < 3.0 * math.hypot(sem, law_sem)  # ... and is all of the law's deficit
+    fine_deficit, _ = _mean_and_sem(1.0 - fine_eps2)
+    gained, gained_sem = _mean_and_sem(fine_eps2 - coarse_eps2)
+    assert gained > 3.0 * gained_sem and fine_deficit < deficit / 3.0
+
+
+def test_resolution_rule_grows_like_sqrt_of_one_over_x_and_is_stored(tmp_path):
+    """The builder's rule min(cap, ceil(r sqrt(1/x))) per row, stored in the file and read back; on the same
+    realisations a gamma = 1 row built with it is nearer the exact eps^2 = 1 than at the fixed resolution."""
+    assert row_resolutions([-4.0, -2.0, -0.5, 0.0], 16, 256) == (256, 160, 29, 16)
+    assert row_resolutions([-4.0, 0.0], 16) == (16, 16)
+    with pytest.raises(InvalidParameterError, match="resolution cap"):
+        row_resolutions([0.0], 16, 8)
+    options = {"levels": 5, "bath_modes": 250, "resolution": 16}
+    fixed = build_collision_law([1.0], [-3.0, 0.0], 8, 5, **options)
+    grown = build_collision_law([1.0], [-3.0, 0.0], 8, 5, resolution_cap=128, **options)
+    assert fixed.row_resolution == () and grown.row_resolution == (128, 16)
+    again = load_law(grown.save(tmp_path / "grown.npz"))
+    assert again.row_resolution == (128, 16) and np.array_equal(again.eps2_quantiles, grown.eps2_quantiles)
+    assert np.allclose(grown.eps2_quantiles[0, 0, 1], 1.0) and np.allclose(fixed.eps2_quantiles[0, 0, 1], 1.0)
+    fixed_deficit = 1.0 - _law_mean(fixed, 0, 0, 0)[0]
+    grown_deficit = 1.0 - _law_mean(grown, 0, 0, 0)[0]
+    assert 0.0 <= grown_deficit < fixed_deficit / 3.0
+    with pytest.raises(InvalidParameterError, match="row_resolution"):
+        CollisionLaw(grown.kappa, grown.gamma, grown.log_x, grown.short_share, grown.probability,
+                     grown.eps2_quantiles, grown.gain_short, row_resolution=(16,))

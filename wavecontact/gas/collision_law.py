@@ -49,7 +49,7 @@ from ..io.files import atomic_write
 
 __all__ = ["DEFAULT_LAW_FILE", "DEFAULT_SOFT_LAW_FILE", "LAW_ARRAYS", "LOG_X_MIN", "REGENERATE", "REGENERATE_SOFT",
            "CollisionLaw", "blend_draw", "build_collision_law", "default_law", "default_soft_law", "kappa_variable",
-           "law_from_arrays", "load_law", "soft_corrections", "solve_collision"]
+           "law_from_arrays", "load_law", "row_resolutions", "soft_corrections", "solve_collision"]
 
 SCHEMA_NAME = "wavecontact.collision_law"
 SCHEMA_VERSION = 2  # 2: kappa and short-rod-share axes
@@ -103,6 +103,9 @@ class CollisionLaw:
         Mean gain of the short rod's vibrations given the level, in units of ``E_tr + T_pair``.
     bath_modes, samples_per_point, seed, resolution : int
         How the law was computed (``resolution``: grid points per period of the hard-core solve).
+    row_resolution : tuple of int, optional
+        Grid points per period of each ``log_x`` row when they differ (:func:`row_resolutions`); empty
+        when every row used ``resolution``.
     """
 
     kappa: np.ndarray
@@ -116,6 +119,7 @@ class CollisionLaw:
     samples_per_point: int = 0
     seed: int = 0
     resolution: int = 8
+    row_resolution: tuple = ()
 
     def __post_init__(self):
         for name in LAW_ARRAYS:
@@ -153,6 +157,11 @@ class CollisionLaw:
             if isinstance(value, bool) or int(value) != value or value < 0:
                 raise InvalidParameterError(f"collision law {name} must be an integer >= 0, got {value!r}")
             object.__setattr__(self, name, int(value))
+        rows = tuple(self.row_resolution)
+        if rows and (len(rows) != self.log_x.size or any(isinstance(r, bool) or int(r) != r or r < 1 for r in rows)):
+            raise InvalidParameterError(f"collision law row_resolution must hold {self.log_x.size} integers >= 1 "
+                                        "(one per log_x row), or be empty")
+        object.__setattr__(self, "row_resolution", tuple(int(r) for r in rows))
 
     @property
     def shape(self):
@@ -220,7 +229,7 @@ class CollisionLaw:
                 "kappa": ["inf" if math.isinf(k) else float(k) for k in self.kappa],
                 "solver": "hard-core max-plus" if self.hard_core else "delay (finite kappa, energy split)",
                 "bath_modes": self.bath_modes, "samples_per_point": self.samples_per_point, "seed": self.seed,
-                "resolution": self.resolution,
+                "resolution": self.resolution, "row_resolution": list(self.row_resolution),
                 "units": "x = E_tr/(E_tr+T_pair), T_pair = (T_short+T_long)/2; short_share = T_short/(T_short+T_long); "
                          "eps2 = E'_tr/E_tr; gain_short in units of E_tr + T_pair",
                 "regenerate": regenerate}
@@ -246,7 +255,7 @@ def law_from_arrays(arrays: dict, meta: dict, where="collision law") -> Collisio
     kappa = [math.inf if k == "inf" else float(k) for k in meta["kappa"]]
     return CollisionLaw(kappa, *(arrays[name] for name in LAW_ARRAYS[1:]), bath_modes=meta["bath_modes"],
                         samples_per_point=meta["samples_per_point"], seed=meta["seed"],
-                        resolution=meta.get("resolution", 8))
+                        resolution=meta.get("resolution", 8), row_resolution=tuple(meta.get("row_resolution", ())))
 
 
 def load_law(path) -> CollisionLaw:
@@ -394,15 +403,34 @@ def point_samples(gamma, log_x, samples, seed, *, bath_modes=250, resolution=8, 
     return _point((float(gamma), float(kappa), float(log_x), float(short_share), seeds, bath_modes, resolution))
 
 
+def row_resolutions(log_xs, resolution, cap=None):
+    """Grid points per period of the hard-core solve for each ``log10 x`` row.
+
+    ``cap=None``: ``resolution`` for every row.  Otherwise ``min(cap, ceil(resolution * sqrt(1/x)))``:
+    the max-plus grid's error is first order in the step and grows with the noise amplitude, about
+    ``sqrt(T_B/E_tr)``, and ``1 + T_B/E_tr = 1/x``, so the rule keeps the step times the noise amplitude
+    roughly fixed until the cap (docs/gas.md, "Grid error of the law").
+    """
+    log_xs = np.asarray(log_xs, float)
+    if cap is None:
+        return tuple(int(resolution) for _ in log_xs)
+    if isinstance(cap, bool) or int(cap) != cap or cap < resolution:
+        raise InvalidParameterError(f"resolution cap must be an integer >= resolution ({resolution}), got {cap!r}")
+    return tuple(int(min(int(cap), math.ceil(resolution * 10.0 ** (-lx / 2) - 1e-9))) for lx in log_xs)
+
+
 def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), short_shares=(0.5,), levels=41,
-                        bath_modes=250, resolution=8, executor=None):
+                        bath_modes=250, resolution=8, resolution_cap=None, executor=None):
     """Tabulate the collision law (one ensemble per ``(kappa, gamma, log10 x, s)`` point).
 
     Point ``a`` (row-major over ``kappas`` x ``gammas`` x ``log_xs`` x ``short_shares``) uses child ``a`` of
     ``SeedSequence(seed).spawn(points)``, and its sample ``i`` child ``i`` of that.  Cold points (``x = 1``)
-    are deterministic; they are solved like the others.
+    are deterministic; they are solved like the others.  ``resolution_cap``: grid points per period grow
+    with ``sqrt(1/x)`` up to the cap (:func:`row_resolutions`, stored per row); ``None`` keeps
+    ``resolution`` everywhere.
     """
     kappas, gammas, log_xs, shares = (np.asarray(a, float) for a in (kappas, gammas, log_xs, short_shares))
+    per_row = dict(zip(log_xs.tolist(), row_resolutions(log_xs, resolution, resolution_cap)))
     total = kappas.size * gammas.size * log_xs.size * shares.size * int(samples)
     if total > MAX_LAW_SAMPLES:
         raise InvalidParameterError(f"a collision law may hold at most {MAX_LAW_SAMPLES} collisions in all")
@@ -414,7 +442,7 @@ def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), sh
     probability = np.linspace(0.0, 1.0, int(levels))
     points = [(k, g, lx, s) for k in kappas for g in gammas for lx in log_xs for s in shares]
     children = np.random.SeedSequence(int(seed)).spawn(len(points))
-    tasks = [(float(g), float(k), float(lx), float(s), child.spawn(int(samples)), int(bath_modes), int(resolution))
+    tasks = [(float(g), float(k), float(lx), float(s), child.spawn(int(samples)), int(bath_modes), per_row[lx])
              for (k, g, lx, s), child in zip(points, children)]
     results = list(executor.map(_point, tasks)) if executor is not None else [_point(t) for t in tasks]
     shape = (kappas.size, gammas.size, log_xs.size, shares.size, probability.size)
@@ -424,7 +452,8 @@ def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), sh
         quantiles[index] = np.quantile(eps2, probability)
         gains[index] = level_means(eps2, gain, probability)
     return CollisionLaw(kappas, gammas, log_xs, shares, probability, quantiles, gains, bath_modes=int(bath_modes),
-                        samples_per_point=int(samples), seed=int(seed), resolution=int(resolution))
+                        samples_per_point=int(samples), seed=int(seed), resolution=int(resolution),
+                        row_resolution=() if resolution_cap is None else tuple(per_row[lx] for lx in log_xs))
 
 
 def main(argv=None):
@@ -446,12 +475,14 @@ def main(argv=None):
     p.add_argument("--seed", type=int, required=True)
     p.add_argument("--bath-modes", type=int, default=250)
     p.add_argument("--resolution", type=int, default=8, help="grid points per period (hard core only)")
+    p.add_argument("--resolution-cap", type=int, default=None,
+                   help="grow the resolution like sqrt(1/x) per log_x row up to this cap (default: fixed)")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--out", required=True)
     args = p.parse_args(argv)
     start, cpu = time.perf_counter(), time.process_time()
     options = {"kappas": sorted(args.kappa), "short_shares": sorted(args.share), "levels": args.levels,
-               "bath_modes": args.bath_modes, "resolution": args.resolution}
+               "bath_modes": args.bath_modes, "resolution": args.resolution, "resolution_cap": args.resolution_cap}
     log_xs = sorted(args.log_x)
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:
