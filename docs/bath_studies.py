@@ -2,8 +2,11 @@
 
     python docs/bath_studies.py                 # every study (about 20 minutes on 2 shared cores)
     python docs/bath_studies.py grid modes      # only some: grid, modes, kappa, boltzmann, uptake
+    python docs/bath_studies.py boltzmann uptake --update-docs   # also write their tables into the pages
 
-The tables are printed as markdown (kept in docs/figures/bath/studies.txt):
+The tables are printed as markdown (kept in docs/figures/bath/studies.txt); with ``--update-docs``
+each study writes its table into its marked block (``BLOCKS``: docs/bath.md sections 5-7,
+docs/markov.md's Eq. 32 section), headed by the command and the load average of the run:
 
 grid       convergence of the hard-core grid against its resolution (docs/bath.md section 5);
 modes      nu_max dependence of the statistics in the hard-core mode, at two grid resolutions
@@ -18,6 +21,7 @@ uptake     the energy that the cold modes above nu_max take up in the same trans
 from __future__ import annotations
 
 import math
+import re
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -25,6 +29,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(1, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+
+from docs_block import captured_stdout, run_header, write_block
 
 from wavecontact.bath import ThermalBath
 from wavecontact.bath.scene import start_gap
@@ -62,6 +69,7 @@ def modes_dependence(pool, cases=CASES, seed=60):
     print("| gamma | T_B/E_tr | nu_max | samples | mean eps (SE) | std eps (SE) | grid: mean(eps_8 - eps_4) (SE) "
           "| mean extrapolated to h = 0 |")
     print("|---|---|---|---|---|---|---|---|")
+    found = {}
     for gamma, temperature, samples, modes in cases:
         for m in modes:
             fine = ensemble(gamma, math.inf, temperature, samples, seed, bath_modes=m, executor=pool,
@@ -74,6 +82,29 @@ def modes_dependence(pool, cases=CASES, seed=60):
             print(f"| {gamma} | {temperature:g} | {m} | {samples} | {fine.mean:.4f} ({fine.standard_error:.4f}) | "
                   f"{fine.std:.4f} ({fine.std_standard_error:.4f}) | {grid.mean():+.5f} "
                   f"({grid.std(ddof=1) / math.sqrt(subset):.5f}) | {extrapolated:.4f} |", flush=True)
+            found[gamma, temperature, m] = (fine.mean, fine.standard_error, fine.std, grid.mean())
+    _modes_summary(found)
+
+
+def _modes_summary(found):
+    """The changes of the mean between mode counts, in standard errors, and the grid's share against them."""
+    print()
+    for gamma, temperature in sorted({(g, t) for g, t, _ in found}, reverse=True):
+        rows = {m: v for (g, t, m), v in found.items() if (g, t) == (gamma, temperature)}
+        for low, high in ((50, 250), (250, 1000)):
+            if low in rows and high in rows:
+                change = rows[high][0] - rows[low][0]
+                error = math.hypot(rows[high][1], rows[low][1])
+                print(f"* gamma {gamma}, T_B/E_tr {temperature:g}: mean from {low} to {high} modes "
+                      f"{change:+.4f} +- {error:.4f} ({change / error:+.1f} standard errors).")
+        means = [rows[m][0] for m in rows if m >= 250]
+        stds = [rows[m][2] for m in rows]
+        print(f"* gamma {gamma}, T_B/E_tr {temperature:g}: means from 250 modes on within {max(means) - min(means):.4f} "
+              f"of each other; standard deviations within {max(stds) - min(stds):.4f} over all mode counts.")
+    grids = [abs(v[3]) for v in found.values()]
+    ratio = min(v[1] / abs(v[3]) for v in found.values() if v[3])
+    print(f"* Grid corrections |mean(eps_8 - eps_4)| from {min(grids):.0e} to {max(grids):.0e}; the standard error "
+          f"of each mean is at least {ratio:.0f} times its grid correction.")
 
 
 def _grid_errors(args):
@@ -125,6 +156,7 @@ def boltzmann_defect(pool, gamma=0.6, runs=DEFECT_RUNS, seed=77, block=5000):
     print("| nu_max | transitions | mean E' - E (SE) | grid: mean of (E'_8 - E'_4) (SE) | extrapolated to h = 0 | "
           "from E < 0.1 | 0.1 <= E < 1 | 1 <= E < 3 | E >= 3 |")
     print("|---|---|---|---|---|---|---|---|---|")
+    rows = {}
     for m, transitions in runs:
         found = {}
         for resolution in (8, 4):
@@ -141,6 +173,25 @@ def boltzmann_defect(pool, gamma=0.6, runs=DEFECT_RUNS, seed=77, block=5000):
         print(f"| {m} | {transitions} | {gain.mean():+.4f} ({se:.4f}) | {grid.mean():+.5f} ({grid.std(ddof=1) / math.sqrt(transitions):.5f})"
               f" | {gain.mean() + grid.mean():+.4f} | {share[0]:+.4f} | {share[1]:+.4f} | {share[2]:+.4f} | {share[3]:+.4f} |",
               flush=True)
+        rows[m] = (gain.mean(), se, grid.mean(), np.abs(grid).max())
+    _defect_trend(rows)
+
+
+def _defect_trend(rows):
+    """The extrapolated defect against nu_max: its decay per doubling up to 128 modes, continued beyond."""
+    fitted = sorted(m for m in rows if m <= 128)
+    if len(fitted) < 2:
+        return
+    defect = {m: rows[m][0] + rows[m][2] for m in rows}  # the mean, its grid part removed
+    slope = np.polyfit(np.log(fitted), np.log([-defect[m] for m in fitted]), 1)[0]
+    print(f"\nThe extrapolated defect falls by a factor {2.0**slope:.2f} per doubling of nu_max from {fitted[0]} to "
+          f"{fitted[-1]} modes (nu_max^{slope:.2f}); the grid moves E' by {abs(rows[fitted[0]][2]):.4f} on average at "
+          f"{fitted[0]} modes and by {abs(rows[fitted[-1]][2]):.4f} at {fitted[-1]}.")
+    for m in sorted(m for m in rows if m > fitted[-1]):
+        trend = defect[fitted[-1]] * (m / fitted[-1]) ** slope
+        mean, se = defect[m], rows[m][1]
+        print(f"At {m} modes the trend gives {trend:+.4f}; measured (extrapolated to h = 0) {mean:+.4f} +- {se:.4f}, "
+              f"{(mean - trend) / se:+.1f} standard errors from the trend and {mean / se:+.1f} from zero.")
 
 
 def _cold_mode_uptake(args):
@@ -199,14 +250,27 @@ STUDIES = {"grid": grid_convergence, "modes": modes_dependence, "kappa": kappa_i
            "boltzmann": boltzmann_defect, "uptake": cold_mode_uptake}
 
 
+# the page and marked block each study's table goes to with --update-docs
+BLOCKS = {"grid": ("bath.md", "bath-studies-grid"), "modes": ("bath.md", "bath-studies-modes"),
+          "kappa": ("bath.md", "bath-studies-kappa"), "boltzmann": ("markov.md", "bath-studies-boltzmann"),
+          "uptake": ("markov.md", "bath-studies-uptake")}
+
+
 def main(argv=None):
-    names = (argv if argv is not None else sys.argv[1:]) or list(STUDIES)
+    argv = list(argv if argv is not None else sys.argv[1:])
+    update = "--update-docs" in argv
+    names = [a for a in argv if a != "--update-docs"] or list(STUDIES)
     unknown = [n for n in names if n not in STUDIES]
     if unknown:
         raise SystemExit(f"unknown study {unknown[0]!r}; choose from {', '.join(STUDIES)}")
     with ProcessPoolExecutor(2) as pool:
         for name in names:
-            STUDIES[name](pool)
+            header = run_header(["docs/bath_studies.py", name])
+            with captured_stdout() as tee:
+                STUDIES[name](pool)
+            if update:
+                table = re.sub(r"^### (.*)$", r"\1:", tee.copy.getvalue(), flags=re.MULTILINE)  # no headings
+                write_block(*BLOCKS[name], header + "\n" + table)
 
 
 if __name__ == "__main__":

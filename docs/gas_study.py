@@ -233,8 +233,8 @@ def soft_law():
         "interpolated linearly in z = ln(kappa)/kappa between these rows and, above the stiffest, between it and "
         "zero (the hard core, z = 0).")
     say()
-    say("Cold collisions at gamma = 0.6: the rule's eps against the independent reference values of MODEL.md "
-        "section 5 (rows marked * are the law's own rows).")
+    say("Cold collisions at gamma = 0.6: the rule's eps against the independent reference values of "
+        "tests/test_delay_solver.py (rows marked * are the law's own rows).")
     say()
     say("| kappa | rule's eps | reference | difference |")
     say("|---|---|---|---|")

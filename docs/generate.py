@@ -58,7 +58,7 @@ def mask(block: Block, text: str) -> str:
     text = mask_times(text)
     for pattern in block.volatile:
         text = re.sub(pattern, _hash_groups, text, flags=re.MULTILINE)
-    return text
+    return re.sub(r"[ \t]+", " ", text)  # a time of another width shifts the padding of its column
 
 
 def _hash_groups(match) -> str:
@@ -150,7 +150,7 @@ BLOCKS = [
     Block("usage-help", "docs/usage.md",
           tuple(("--help",) if c is None else (c, "--help")
                 for c in (None, "collide", "converge", "compare", "ring", "equipartition", "map", "gas", "ensemble",
-                          "bath-figure", "restitution-table", "markov")),
+                          "bath-figure", "restitution-table", "markov", "paper-figures")),
           cheap=True),
     Block("usage-compare", "docs/usage.md",
           (("compare", "--gamma", "0.6", "--kappa", "100", "--repeats", "3", "--no-progress"),)),

@@ -3,8 +3,9 @@
 Writes docs/figures/markov_fig10.png, docs/figures/markov_cooling.png and
 docs/markov_study.json, and prints the tables that docs/markov.md shows.
 ``--update-docs`` also writes those tables into docs/markov.md (blocks
-markov-fig10, markov-balance, markov-samples); ``--tables-only`` renders them
-from the stored docs/markov_study.json without running the study.
+markov-fig10, markov-balance, markov-samples, markov-cooling, markov-defect);
+``--tables-only``
+renders them from the stored docs/markov_study.json without running the study.
 """
 
 from __future__ import annotations
@@ -60,7 +61,10 @@ def tables(out):
         (f"| KS p-value (thinned, every {pooled['ks_stride']}th state) | {pooled['ks_pvalue']:.2f} "
         f"({pooled['ks_samples']} states) | {first['ks_pvalue']:.2f} ({first['ks_samples']} states) | |"),
         "",
-        f"Means of the single chains: {means}.",
+        (f"Means of the single chains: {means}. Burn-in: {pooled['burn_in']} steps per chain. States "
+        f"{pooled['ks_stride']} collisions apart are nearly independent (autocorrelation below 0.1), so error "
+        f"bars that count every state as independent are too small by about sqrt({pooled['ks_stride']}) = "
+        f"{math.sqrt(pooled['ks_stride']):.1f}."),
     ])
     solve, glauber = out["detailed_balance_solve"], out["detailed_balance_glauber"]
     balance = "\n".join([
@@ -69,6 +73,8 @@ def tables(out):
         (f"| solve (`nu_max = 250`) | {solve['transitions']:,} | {solve['statistic']:.1f} | {solve['pvalue']:.2g} | "
         f"{solve['stationarity_pvalue']:.2g} |"),
         f"| Glauber | {glauber['transitions']:,} | {glauber['statistic']:.1f} | {glauber['pvalue']:.2g} | |",
+        "",
+        _asymmetry_line(solve),
     ])
     needed = {float(key.split("_")[2]): value for key, value in out["samples_needed"].items()}
     samples = "\n".join([
@@ -77,7 +83,57 @@ def tables(out):
         "| transitions needed (0.1 % level, on average) | "
         + " | ".join(f"{float(f'{n:.3g}'):,.0f}" for n in needed.values()) + " |",
     ])
-    return {"markov-fig10": fig10, "markov-balance": balance, "markov-samples": samples}
+    cold = out["cooling"]
+    first = cold["vibration_mean_energy"][1], cold["glauber_mean_energy"][1]
+    cooling = "\n".join([
+        (f"{cold['chains']} chains, conserving bath (`N_mod = {cold['modes_per_rod']}`), "
+         f"`E_tr(0) = {cold['initial_energy']:g} T_B^0`, cold bath:"),
+        "",
+        "| | vibration rule (solve) | Glauber, Eq. 35 |",
+        "|---|---|---|",
+        (f"| mean `E_tr(1) / T_B^0` | {first[0]:.4f} (`gamma^2 E_tr(0)` = {GAMMA**2 * cold['initial_energy']:.4f}) | "
+         f"{first[1]:.4f} |"),
+        (f"| first collision whose chain mean lies within 3 standard errors of `T_B^0` | "
+         f"{cold['vibration_relaxed_at']} | {cold['glauber_relaxed_at']} |"),
+        f"| mean `E_tr / T_B^0` over collisions 20-40 | {cold['vibration_late_mean']:.3f} | {cold['glauber_late_mean']:.3f} |",
+    ])
+    sets = out["boltzmann_defect_250"]
+    few = out["boltzmann_defect"][0]
+    defect = (f"Mean of `E' - E` for `E` from Eq. 30 (`nu_max = 250`, three independent sets of "
+              f"{solve['transitions']:,} transitions): {sets['mean_of_independent_sets']:+.4f} +- "
+              f"{sets['standard_error']:.4f}; at `nu_max = {few['bath_modes']}`: {few['mean_change']:+.4f} +- "
+              f"{few['standard_error']:.4f}.")
+    return {"markov-fig10": fig10, "markov-balance": balance, "markov-samples": samples, "markov-cooling": cooling,
+            "markov-defect": defect}
+
+
+def _glauber_asymmetry(scale, bins=6, alpha=1e-3):
+    """lambda (per transition) of Glauber's rule at a bath temperature off by ``scale``."""
+    from scipy import stats
+
+    dof = bins * (bins - 1) // 2
+    return (float(stats.chi2.isf(alpha, dof)) - dof) / _glauber_contrast(scale, bins)
+
+
+def _temperature_error_with(asymmetry):
+    """The temperature error ``s - 1`` whose Glauber rule has this ``lambda`` (bisection on s in (1, 2))."""
+    low, high = 1.0 + 1e-9, 2.0
+    if asymmetry <= _glauber_asymmetry(low):
+        return 0.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if _glauber_asymmetry(middle) < asymmetry else (low, middle)
+    return 0.5 * (low + high) - 1.0
+
+
+def _asymmetry_line(solve):
+    """The solved transitions' asymmetry, and the temperature error of a Glauber rule as asymmetric."""
+    value, error = solve["asymmetry"], solve["asymmetry_standard_error"]
+    upper = value + error
+    return (f"Asymmetry of the solved transitions: `lambda = ({1e4 * value:.1f} +- {1e4 * error:.1f}) x 10^-4` per "
+            f"transition. A Glauber rule at a bath temperature off by {100 * _temperature_error_with(value):.1f} % "
+            f"has the central value, one off by {100 * _temperature_error_with(upper):.1f} % the central value plus "
+            "one standard error.")
 
 
 def main():

@@ -43,6 +43,8 @@ def test_help_explains_every_option_and_its_default(name):
     text = parser.format_help()
     assert "%%" not in text and "%(" not in text
     for action in parser._actions:
+        if not action.option_strings and not isinstance(action, argparse._SubParsersAction):
+            assert action.help, f"{name}: the positional argument {action.dest} has no help text"
         if not action.option_strings or isinstance(action, argparse._HelpAction):
             continue
         flag = action.option_strings[-1]

@@ -86,11 +86,24 @@ def test_text_reports_the_solve_and_the_kernel_preparation_apart():
     assert solve_ms < 50
 
 
-def test_penalty_says_that_kappa_is_not_used(capsys):
-    assert main(["collide", "--gamma", "0.6", "--kappa", "100", "--solver", "fem", "--contact", "penalty",
-                 "--elements", "50"]) == 0
-    out = capsys.readouterr().out
-    assert "contact = penalty" in out and "kappa = 100 unused" in out
+def _epsilon(out: str) -> float:
+    return float(out.split()[2])
+
+
+def test_penalty_says_how_kappa_sets_the_spring(capsys):
+    """kappa is the penalty spring's stiffness k = kappa Z_eff c / l (docs/fem.md): it is used, and printed
+    as such; a stiff spring approaches the hard limit epsilon = gamma, a soft one is nearly elastic."""
+    printed = {}
+    for kappa in ("1", "1e6", "inf"):
+        assert main(["collide", "--gamma", "0.6", "--kappa", kappa, "--solver", "fem", "--contact", "penalty",
+                     "--elements", "200"]) == 0
+        printed[kappa] = capsys.readouterr().out
+        assert "contact = penalty" in printed[kappa] and "unused" not in printed[kappa]
+    assert "kappa = 1 (penalty stiffness kappa Z_eff c / l)" in printed["1"]
+    assert "kappa = inf (penalty stiffness E A / h" in printed["inf"]
+    assert _epsilon(printed["1"]) > 0.99  # a soft spring: nearly elastic (docs/fem.md: 0.996)
+    assert abs(_epsilon(printed["1e6"]) - 0.6) < 1e-5  # within 1e-5 of the hard limit epsilon = gamma
+    assert abs(_epsilon(printed["inf"]) - 0.6) < 0.01  # the mesh-tied spring tends to hard contact
 
 
 def test_hard_contact_is_printed_as_kappa_inf(capsys):

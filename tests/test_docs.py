@@ -69,7 +69,9 @@ def test_every_script_written_block_has_a_writer_and_names_its_command():
         assert body, f"{page}: block {name} is empty"
         assert re.search(rf"(?:[\"']|<!-- ){re.escape(name)}[\"':]", scripts), f"{page}: no script names block {name}"
     for name in ("bench-fem", "profile-explicit-step", "bench-modal", "bench-two-materials", "bench_markov",
-                 "markov-fig10", "markov-balance", "markov-samples", "bench-bath"):
+                 "markov-fig10", "markov-balance", "markov-samples", "markov-cooling", "markov-defect", "bench-bath",
+                 "fem-cost-model", "bath-studies-boltzmann", "bath-studies-uptake", "bath-studies-grid",
+                 "bath-studies-modes", "bath-studies-kappa"):
         page, body = bodies[name]
         assert body.startswith("`python "), f"{page}: block {name} does not start with its command"
 
@@ -88,6 +90,14 @@ def test_masking_hides_wall_times_only():
     assert "0.753013243099  1.827e-09    2.03" in masked and "3320" in masked
     assert "28.235" not in masked and "3.11" not in masked and "560" not in masked and "23.4" not in masked
     assert "0.64669776105   6.7e-07" in masked and "13.243" not in masked and "1.2e+05 element_steps" in masked
+
+
+def test_masking_ignores_the_padding_of_a_time_of_another_width():
+    block = BLOCKS["convergence-kappa-20"]
+    fast = "      100   0.753013094070  1.472e-07    2.79           3.377       830"
+    slow = "      100   0.753013094070  1.472e-07    2.79          29.974       830"
+    assert generate.mask(block, fast) == generate.mask(block, slow)
+    assert generate.mask(block, fast) != generate.mask(block, fast.replace("1.472e-07", "1.473e-07"))
 
 
 def _converge_rows(text: str) -> dict:
@@ -356,3 +366,108 @@ def test_dispersive_table_shows_two_thirds_and_its_first_cell():
     assert len(rows) == 3 and all(abs(float(r[-1]) - 2 / 3) < 0.1 for r in rows)  # d ~ (c t h^2)^(1/3)
     (p2,) = [r for r in rows if r[0] == "P2 lumped"]
     assert p2[1] == f"{abs(wavecontact.collide(0.6, math.inf, solver='fem', elements=200, order=2).restitution - 0.6):.1e}"
+
+
+def _script_block(page: str, name: str) -> str:
+    """The body of a block that a script writes (``<!-- name:start -->``) on docs/``page``."""
+    text = (ROOT / "docs" / page).read_text()
+    match = re.search(rf"<!-- {re.escape(name)}:start -->\n(.*?)<!-- {re.escape(name)}:end -->", text, re.DOTALL)
+    assert match and match.group(1).strip(), f"docs/{page}: block {name} missing or empty"
+    return match.group(1)
+
+
+def _markdown_rows(text: str) -> list:
+    return [[c.strip() for c in line.strip("|").split("|")] for line in text.splitlines()
+            if line.startswith("|") and not line.startswith("|---")][1:]
+
+
+def test_fem_cost_model_block_counts_what_the_solver_runs():
+    """docs/fem.md section 4: the steps and nodes of each row are those of the FE solver's own run, and the
+    columns obey the model (loop = steps c_step + the checks' share)."""
+    rows = _markdown_rows(_script_block("fem.md", "fem-cost-model"))
+    assert len(rows) == 4
+    for contact, elements, nodes, steps, checks, loop, c_step, c_node, share, _set_up in rows:
+        kappa = math.inf if contact == "hard" else float(contact.split("=")[1])
+        result = wavecontact.collide(0.6, kappa, solver="fem", elements=int(elements))
+        assert int(steps) == result.work["steps"] - 1  # the timed runs stop one step before the stopping check
+        assert int(nodes) == sum(result.work["elements"]) + 2  # two P1 rods: elements + 1 nodes each
+        share = float(share.rstrip(" %")) / 100
+        assert float(steps) * float(c_step) * 1e-3 == pytest.approx((1 - share) * float(loop), rel=0.05, abs=0.01)
+        checks_ms = float(checks) * float(c_node) * float(nodes) * 1e-6
+        assert checks_ms == pytest.approx(share * float(loop), rel=0.1, abs=0.02)
+
+
+def test_markov_cooling_block_holds_the_deterministic_limits():
+    """docs/markov.md: after one collision from a cold bath the vibration rule leaves gamma^2 E_tr(0)
+    (epsilon = gamma exactly), Glauber's rule 0 (Eq. 36); both end near the Boltzmann mean."""
+    text = _script_block("markov.md", "markov-cooling")
+    start = float(re.search(r"`E_tr\(0\) = (\S+) T_B\^0`", text).group(1))
+    rows = _markdown_rows(text)
+    first = rows[0]
+    assert float(first[1].split()[0]) == pytest.approx(0.6**2 * start, abs=1e-4)
+    assert float(first[2]) == 0.0
+    vibration, glauber = (int(x) for x in rows[1][1:])
+    assert glauber == 1 and vibration > glauber  # Glauber's new energy does not depend on the old one
+    assert all(abs(float(x) - 1.0) < 0.15 for x in rows[2][1:])
+
+
+def test_markov_page_claims_about_the_boltzmann_defect_hold():
+    """docs/markov.md: at 250 modes the defect is below 0.01 per collision and below the Fig. 10 chains'
+    standard error; it falls as nu_max grows."""
+    rows = {int(r[0]): float(r[4]) for r in _markdown_rows(_script_block("markov.md", "bath-studies-boltzmann"))}
+    assert -0.01 < rows[250] < 0 and rows[8] < rows[32] < rows[128] < 0
+    pooled_error = float(re.search(r"standard error (\S+) from", _script_block("markov.md", "markov-fig10")).group(1))
+    assert abs(rows[250]) < pooled_error
+
+
+def test_no_page_or_docstring_cites_the_specification_outside_the_repository():
+    """The pages and the package must not send a reader to MODEL.md, which is not in the repository."""
+    files = [*PAGES, *sorted((ROOT / "wavecontact").rglob("*.py"))]
+    citing = [str(f.relative_to(ROOT)) for f in files if "MODEL.md" in f.read_text(encoding="utf-8")]
+    assert not citing, f"these cite MODEL.md, which is not in the repository: {citing}"
+
+
+def test_bath_figure_outputs_on_the_page_are_the_stored_runs():
+    """docs/bath.md section 8 shows what `wavecontact bath-figure N` printed (docs/figures/bath/figN.txt),
+    and Fig. 8's table holds the numbers of the same run's JSON."""
+    import json
+
+    text = (ROOT / "docs" / "bath.md").read_text()
+    folder = ROOT / "docs" / "figures" / "bath"
+    for n in (4, 7, 8, 9):
+        shown = re.search(rf"!\[Fig. {n}\]\(figures/bath/fig{n}.png\)\n\n```\n(.*?)```", text, re.DOTALL)
+        assert shown, f"docs/bath.md shows no output under Fig. {n}"
+        assert shown.group(1).strip() == (folder / f"fig{n}.txt").read_text().strip(), f"Fig. {n} output differs"
+    record = json.loads((folder / "fig8.json").read_text())
+    rows = [line.split() for line in (folder / "fig8.txt").read_text().splitlines()[1:]]
+    for i, gamma in enumerate(record["gamma"]):
+        for j, temperature in enumerate(record["temperature"]):
+            (row,) = [r for r in rows if float(r[0]) == gamma and float(r[1]) == temperature]
+            assert row[2] == f"{record['mean'][i][j]:.4f}" and row[4] == f"{record['std'][i][j]:.4f}"
+            assert record["mean_error"][i][j] == pytest.approx(record["std"][i][j] / math.sqrt(record["samples"]),
+                                                               rel=0.01)
+
+
+def test_bath_page_claims_about_modes_and_kappa_hold():
+    """docs/bath.md sections 6-7: the mean changes from 250 to 1000 modes by a small fraction of the 0.025
+    once claimed, within about two standard errors; from kappa = 50 on the paired difference to the hard
+    core is within about two standard errors and below a 2500-sample point's standard error."""
+    modes = _script_block("bath.md", "bath-studies-modes")
+    changes = re.findall(r"T_B/E_tr 1: mean from 250 to 1000 modes ([-+][\d.]+) \+- ([\d.]+)", modes)
+    assert len(changes) == 2
+    for change, error in changes:
+        assert abs(float(change)) < 0.025 / 4 and abs(float(change)) < 2.5 * float(error)
+    for row in _markdown_rows(_script_block("bath.md", "bath-studies-kappa")):
+        if row[0] in ("50", "100", "250"):
+            std = float(row[2])
+            difference, error = (float(x) for x in row[3].replace("(", " ").replace(")", " ").split())
+            assert abs(difference) < 2.2 * error and abs(difference) < std / 50, row[0]
+
+
+def test_usage_page_shows_the_help_of_every_subcommand():
+    import argparse
+
+    (sub,) = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
+    text = block_text("usage-help")
+    for name in sub.choices:
+        assert f"$ wavecontact {name} --help\n" in text, f"docs/usage.md does not show `wavecontact {name} --help`"

@@ -19,7 +19,7 @@ def add_parser(subparsers):
         "kappa = 5 and 100.  Fig. 8: mean and spread of epsilon against T_B/E_tr (gamma = 0.6173, 0.2173).  "
         "Fig. 9: p(eps^2) and D(eps^2) for (gamma, E_tr/T_B) = (0.6173, 10), (0.6173, 1), (0.2173, 1).",
     )
-    p.add_argument("figure", type=int, choices=(4, 7, 8, 9))
+    p.add_argument("figure", type=int, choices=(4, 7, 8, 9), help="which figure of the paper: 4, 7, 8 or 9")
     p.add_argument("--out", metavar="FILE", required=True, help="image file (PNG/PDF/SVG)")
     p.add_argument("--samples", type=positive_int,
                    help="realisations (Fig. 4) or samples per point (Fig. 8, 9) (default: the paper's: Fig. 4: 400, Fig. 8: 2500, Fig. 9: 8000)")

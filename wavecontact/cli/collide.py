@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import json
-import math
 
 from .common import (
+    CONTACT_HELP,
     contact_law,
     gamma_value,
+    kappa_text,
     kappa_value,
     option_choices,
     option_text,
@@ -34,9 +35,7 @@ def add_parser(subparsers):
     p.add_argument("--kappa", type=kappa_value, required=True,
                    help="softness alpha V l / c in (0, inf]; 'inf' is the hard-core limit")
     p.add_argument("--solver", choices=("delay", "fem", "modal"), default="delay", help="which solver")
-    p.add_argument("--contact", choices=("exponential", "penalty", "hard"),
-                   help="contact law (default: exponential for finite --kappa, hard for --kappa inf); "
-                   "hard needs --kappa inf, penalty (fem only) ignores kappa")
+    p.add_argument("--contact", choices=("exponential", "penalty", "hard"), help=CONTACT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="FILE",
                    help="draw W(tau) or v_rel(tau) with the asymptotic curve (.png, .pdf or .svg)")
@@ -62,7 +61,8 @@ def add_parser(subparsers):
     modal.add_argument("--modes", type=positive_int, metavar="N", help=option_text("modal", "modes"))
     modal.add_argument(
         "--no-static-correction", dest="static_correction", action="store_false", default=None,
-        help="switch off: " + option_text("modal", "static_correction"),
+        help="plain truncation: no correction for the omitted modes (the modal solver's static_correction=False; "
+        "not for hard contact). Default: corrected",
     )
     p.set_defaults(run=run)
     return p
@@ -158,10 +158,7 @@ def run(args) -> int:
         record["files_written"] = files
         print(json.dumps(record))
         return 0
-    kappa = "inf" if math.isinf(args.kappa) else f"{args.kappa:g}"
-    if contact == "penalty":
-        kappa += " unused: penalty stiffness E A / h"
-    line = (f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa}, "
+    line = (f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa_text(args.kappa, contact)}, "
             f"contact = {contact}, solver = {result.solver}")
     if result.error_estimate is not None:
         line += f", error estimate {result.error_estimate:.1e}"

@@ -150,13 +150,28 @@ def contact_law(kappa: float, contact: str | None) -> str:
     """The contact law to use; refuse combinations whose printed kappa would not be the one computed."""
     if contact is None:
         return "hard" if math.isinf(kappa) else "exponential"
-    if math.isinf(kappa) and contact != "hard":
-        raise ValueError(f"--contact {contact} needs a finite --kappa; --kappa inf is the hard-core limit "
+    if math.isinf(kappa) and contact == "exponential":
+        raise ValueError("--contact exponential needs a finite --kappa; --kappa inf is the hard-core limit "
                          "(use --contact hard or leave --contact out)")
     if contact == "hard" and math.isfinite(kappa):
         raise ValueError(f"--contact hard is the limit kappa -> inf; --kappa {kappa:g} would not be used "
                          "(pass --kappa inf)")
     return contact
+
+
+#: ``--contact`` help shared by the commands that take it: what kappa means for each law
+CONTACT_HELP = ("contact law (default: exponential for finite --kappa, hard for --kappa inf); hard needs --kappa inf; "
+                "penalty (fem only) is a spring of stiffness kappa Z_eff c / l, or at --kappa inf one of E A / h "
+                "(the stiffer facing element), which tends to hard contact as the mesh is refined")
+
+
+def kappa_text(kappa: float, contact: str) -> str:
+    """How the printed kappa was used: the exponential law's softness, or the penalty spring it sets."""
+    text = "inf" if math.isinf(kappa) else f"{kappa:g}"
+    if contact == "penalty":
+        text += (" (penalty stiffness E A / h of the stiffer facing element)" if math.isinf(kappa)
+                 else " (penalty stiffness kappa Z_eff c / l)")
+    return text
 
 
 #: ``--rtol``, ``--initial-energy`` ...: a finite number > 0.

@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from .common import contact_law, gamma_value, kappa_value, option_choices, positive_int, print_outcome
+from .common import (
+    CONTACT_HELP,
+    contact_law,
+    gamma_value,
+    kappa_value,
+    option_choices,
+    positive_int,
+    print_outcome,
+)
 
 
 def add_parser(subparsers):
@@ -43,8 +51,7 @@ def add_parser(subparsers):
     p.add_argument(
         "--contact",
         choices=("exponential", "penalty", "hard"),
-        help="contact law (default: exponential for finite --kappa, hard for --kappa inf); hard needs "
-        "--kappa inf; penalty ties its stiffness to the mesh and ignores kappa",
+        help=CONTACT_HELP,
     )
     p.add_argument(
         "--reference",

@@ -44,7 +44,7 @@ def add_parser(subparsers):
                    help="T1/T2 values: LOW:HIGH:N (log-spaced) or a,b,c; default 0.1:10:99")
     p.add_argument("--kappa", type=kappa_value, nargs="+", default=[float("inf")],
                    help="one or more kappa = alpha V mu / Z_s in (0, inf]; 'inf' = hard core (default)")
-    p.add_argument("--rtol", type=float, default=1e-8, help="delay-solver accuracy at finite kappa (1e-8)")
+    p.add_argument("--rtol", type=float, default=1e-8, help="delay-solver accuracy at finite kappa")
     p.add_argument("--workers", type=positive_int, default=None, help="threads at finite kappa (default: cores)")
     p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
     p.add_argument("--no-progress", dest="progress", action="store_false", default=None,

@@ -1,6 +1,6 @@
 """Which rod's vibrations took the energy: the per-rod split of the delay solution.
 
-In the units of MODEL.md section 2 (``Z = 1``, ``alpha = kappa``) a contact
+In the paper's units (docs/theory.md; ``Z = 1``, ``alpha = kappa``) a contact
 force ``F`` moves rod ``i``'s facing end, away from the contact, by
 
     kappa y_i(tau) = W(tau) / 2 + S_i(tau) - Q_i(tau),

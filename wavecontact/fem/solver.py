@@ -84,7 +84,7 @@ TRUSTED_FROM = 32
 # within one step (gamma near 1): epsilon is low by about 0.7 / kappa on every mesh until alpha V dt falls
 # below it (docs/fem.md section 7), a plateau the coarser runs cannot see
 PLATEAU_ABOVE = 10.0
-# Stable step in units of the element travel time h/c (MODEL.md 7), for the cost estimate
+# Stable step in units of the element travel time h/c (docs/fem.md section 2), for the cost estimate
 _STABLE_COURANT = {(1, "lumped"): 1.0, (1, "consistent"): 0.577, (2, "lumped"): 0.408, (2, "consistent"): 0.258}
 # Doubles held per node (state, masses, matrices, kernel buffers) and per step (histories)
 _BYTES_PER_NODE = 8 * 48

@@ -186,7 +186,7 @@ class GasSimulation:
         dissipation.
     contact_stiffness : float, optional
         ``alpha`` of the exponential contact ``V(r) = B exp(-alpha r)`` (an inverse length, in the gas's
-        length unit).  Each collision then has its own softness ``kappa = alpha V l / c`` (MODEL.md section 2)
+        length unit).  Each collision then has its own softness ``kappa = alpha V l / c`` (docs/theory.md)
         with ``V`` the approach speed, ``c = 1`` and ``l = 2 l_i l_j / (l_i + l_j)``, the pair's effective
         length (twice the reduced mass, rods of unit density and section).  The vibration law blends its
         soft (finite-kappa) law with the hard-core law at that kappa; a :class:`VibrationSolve` draw is

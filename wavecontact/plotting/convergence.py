@@ -116,7 +116,7 @@ def _guides(ax, xs, ys, slopes, symbol):
     if x1 <= x0:
         return
     anchor = ys.max() * 1.6  # from the upper left corner of the data, above every line
-    for slope in slopes:
+    for index, slope in enumerate(slopes):
         x = np.array([x0, x1])
         y = anchor * (x / x0) ** (-slope)
         exponent = f"{slope:g}" if slope != 0.5 else "1/2"
@@ -124,10 +124,12 @@ def _guides(ax, xs, ys, slopes, symbol):
         ax.annotate(
             f"${symbol}^{{-{exponent}}}$",
             xy=(x[1], y[1]),
-            xytext=(-2, 4),
+            # the shallower guide's label above its end, the steeper one's below: on a short range
+            # of x both ends are close and labels on the same side overlap
+            xytext=(-2, 4 if index == 0 else -4),
             textcoords="offset points",
             fontsize=8,
             color="0.35",
             ha="right",
-            va="bottom",
+            va="bottom" if index == 0 else "top",
         )

@@ -234,7 +234,7 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
         from ..bath.model import ThermalBath
         from ..solvers import get_solver
 
-        lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (MODEL.md section 2)
+        lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (docs/theory.md)
         vibrations = ThermalBath(float(temperature_ratio), bath_modes).draw(lengths, seed)
         unknown = set(options) - {"hard_core_resolution"}
         if unknown:

@@ -76,7 +76,7 @@ class FigureReport:
 
 
 # --------------------------------------------------------------------------------------------------
-# verdicts: pure functions of measured numbers (tested against MODEL.md values and analytic limits)
+# verdicts: pure functions of measured numbers (tested against independent reference values and analytic limits)
 # --------------------------------------------------------------------------------------------------
 
 def verdict_within_errors(measured: float, standard_error: float, expected: float, k: float = 3.0) -> tuple:
@@ -121,7 +121,7 @@ def verdict_settling_independent_of_modes(modes, medians, claimed: float = 5.0, 
         return REPRODUCED, f"all medians within x{factor:g} of {claimed:g}, slope N^{exponent:.2f}"
     held = ", ".join(f"N = {n:g}" for n, ok in zip(modes, near) if ok) or "no N"
     return NOT_REPRODUCED, (f"settling grows like N^{exponent:.2f}; about {claimed:g} holds only for {held} "
-                            "(as MODEL.md found with an independent integrator)")
+                            "(as an independent integrator written outside this package also found)")
 
 
 def verdict_small_correlation(ratio_lag1: float, limit: float = 0.2) -> tuple:
