@@ -46,7 +46,7 @@ from wavecontact.gas import (
     hard_core_draw,
     random_gas,
 )
-from wavecontact.gas.collision_law import CollisionLaw, blend_draw, point_samples
+from wavecontact.gas.collision_law import blend_draw, point_samples
 from wavecontact.gas.hardcore_collision import hard_core_collision
 from wavecontact.plotting.gas import plot_gas
 from wavecontact.plotting.ring import _pyplot, _save
@@ -59,15 +59,6 @@ SOFT = default_soft_law()
 STIFFNESS = 100.0  # alpha of the section 6 run with soft contacts
 lines = []
 GRID_NOTE = ('At resolution 16 the gamma = 1 rows lie below the exact eps^2 = 1 by the grid\'s error only; `python docs/law_grid_study.py` measures it (docs/gas.md, "Grid error of the law").')
-
-
-def one_temperature(law):
-    """The law restricted to its s = 1/2 slice: both rods at the pair's mean temperature (the earlier law)."""
-    middle = list(law.short_share).index(0.5)
-    return CollisionLaw(law.kappa, law.gamma, law.log_x, [0.5], law.probability,
-                        law.eps2_quantiles[:, :, :, middle:middle + 1], law.gain_short[:, :, :, middle:middle + 1],
-                        bath_modes=law.bath_modes, samples_per_point=law.samples_per_point, seed=law.seed,
-                        resolution=law.resolution)
 
 
 def trapezoid(probability):
@@ -327,7 +318,7 @@ def solve_vs_law():
     say("| contact | rule | log(E_end/E_start) | bath-limited draws (all gases) | wall time (s) |")
     say("|---|---|---|---|---|")
     rules = {"law (kernel)": VibrationLaw(LAW),
-             "law, one temperature": VibrationLaw(one_temperature(LAW)),
+             "law, one temperature": VibrationLaw(LAW.equal_temperature_slice()),
              "solve, own temperatures": VibrationSolve(hard_core_draw(resolution=LAW.resolution), per_rod=True),
              "solve, mean temperature": VibrationSolve(hard_core_draw(resolution=LAW.resolution))}
     for name, rule in rules.items():
@@ -357,7 +348,7 @@ def vibration_vs_fixed():
         "draws below the law's last row | bath-limited (two temperatures) | bath-limited (one temperature) | "
         f"alpha = {STIFFNESS:g} |")
     say("|---|---|---|---|---|---|---|---|---|")
-    single = VibrationLaw(one_temperature(LAW))
+    single = VibrationLaw(LAW.equal_temperature_slice())
     for seed in range(seeds):
         gas = random_gas(rods, seed=seed, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2)
         vibrating = GasSimulation(gas, VibrationLaw(LAW), seed=seed, record_every=rods, max_frames=0)
@@ -455,7 +446,7 @@ def picture():
     say()
     order = np.argsort(gas.lengths)
     thirds = np.array_split(order, 3)
-    single = GasSimulation(gas, VibrationLaw(one_temperature(LAW)), seed=4, record_every=500, max_frames=0).run(200_000)
+    single = GasSimulation(gas, VibrationLaw(LAW.equal_temperature_slice()), seed=4, record_every=500, max_frames=0).run(200_000)
     for name, run in (("law (two temperatures)", result), ("one-temperature law (s = 1/2 slice), same start", single)):
         temperature = run.bath_temperatures
         say(f"{name}: bath temperature at the end (per mode, mean over the rods) of the shortest, middle and "

@@ -223,15 +223,6 @@ def test_soft_law_rule_and_finite_kappa_solve_rule_agree_on_a_small_gas_statisti
     assert abs(m1 - m2) < 3.0 * math.hypot(s1, s2)
 
 
-def _one_temperature(law):
-    """The same law restricted to its s = 1/2 slice: both rods at the pair's mean temperature."""
-    middle = list(law.short_share).index(0.5)
-    return CollisionLaw(law.kappa, law.gamma, law.log_x, [0.5], law.probability,
-                        law.eps2_quantiles[:, :, :, middle:middle + 1], law.gain_short[:, :, :, middle:middle + 1],
-                        bath_modes=law.bath_modes, samples_per_point=law.samples_per_point, seed=law.seed,
-                        resolution=law.resolution)
-
-
 def test_two_temperatures_cut_the_bath_limited_draws():
     """In a cooling gas the short rods' baths run dry; a law that knows each rod's temperature asks them for
     less than they hold far more often than the one-temperature law (three realisations each, difference beyond
@@ -239,7 +230,7 @@ def test_two_temperatures_cut_the_bath_limited_draws():
     fractions = {"two": [], "one": []}
     for seed in range(3):
         gas = random_gas(300, seed=seed, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2)
-        for name, law in (("two", LAW), ("one", _one_temperature(LAW))):
+        for name, law in (("two", LAW), ("one", LAW.equal_temperature_slice())):
             result = GasSimulation(gas, VibrationLaw(law), seed=seed, record_every=30_000, max_frames=0).run(30_000)
             assert result.status == "completed"
             fractions[name].append(result.bath_limited / result.collisions)
@@ -356,3 +347,19 @@ def test_resolution_rule_grows_like_sqrt_of_one_over_x_and_is_stored(tmp_path):
     with pytest.raises(InvalidParameterError, match="row_resolution"):
         CollisionLaw(grown.kappa, grown.gamma, grown.log_x, grown.short_share, grown.probability,
                      grown.eps2_quantiles, grown.gain_short, row_resolution=(16,))
+
+
+def test_equal_temperature_slice_is_the_middle_share_of_the_law():
+    """The one-temperature comparison law is the s = 1/2 slice of the shipped arrays, nothing else changed."""
+    single = LAW.equal_temperature_slice()
+    middle = list(LAW.short_share).index(0.5)
+    assert list(single.short_share) == [0.5]
+    np.testing.assert_array_equal(single.eps2_quantiles[..., 0, :], LAW.eps2_quantiles[..., middle, :])
+    np.testing.assert_array_equal(single.gain_short[..., 0, :], LAW.gain_short[..., middle, :])
+    assert (single.kappa.tolist(), single.gamma.tolist(), single.log_x.tolist()) == (
+        LAW.kappa.tolist(), LAW.gamma.tolist(), LAW.log_x.tolist())
+    assert (single.resolution, single.row_resolution, single.seed) == (LAW.resolution, LAW.row_resolution, LAW.seed)
+    ends_only = single.__class__(single.kappa, single.gamma, single.log_x, [0.0, 1.0], single.probability,
+                                 np.repeat(single.eps2_quantiles, 2, axis=3), np.repeat(single.gain_short, 2, axis=3))
+    with pytest.raises(InvalidParameterError, match="no short_share = 0.5"):
+        ends_only.equal_temperature_slice()

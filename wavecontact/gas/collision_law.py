@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
@@ -162,6 +162,15 @@ class CollisionLaw:
             raise InvalidParameterError(f"collision law row_resolution must hold {self.log_x.size} integers >= 1 "
                                         "(one per log_x row), or be empty")
         object.__setattr__(self, "row_resolution", tuple(int(r) for r in rows))
+
+    def equal_temperature_slice(self) -> CollisionLaw:
+        """The law restricted to its ``short_share = 1/2`` slice: both rods at the pair's mean
+        temperature (the one-temperature law of earlier versions), for comparisons."""
+        if 0.5 not in self.short_share:
+            raise InvalidParameterError("this collision law has no short_share = 0.5 slice")
+        middle = list(self.short_share).index(0.5)
+        return replace(self, short_share=[0.5], eps2_quantiles=self.eps2_quantiles[:, :, :, middle:middle + 1],
+                       gain_short=self.gain_short[:, :, :, middle:middle + 1])
 
     @property
     def shape(self):
