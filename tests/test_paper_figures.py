@@ -66,6 +66,55 @@ def test_statistical_verdicts_follow_their_errors():
     assert pf.verdict_broadening(0.01, 0.05, 0.6173, 0.6173)[0] == pf.NOT_REPRODUCED
 
 
+def test_step_verdict_needs_the_cold_law_to_close_in_on_the_step():
+    rng = np.random.default_rng(np.random.SeedSequence(9).spawn(1)[0])
+    step = 0.44
+    # a law whose width shrinks like sqrt(T_B) (noise amplitude), centred on the cold value
+    cold, hot = step + 0.1 * rng.standard_normal(8000), step + 0.1 * math.sqrt(10) * rng.standard_normal(8000)
+    assert pf.verdict_approaches_step(cold, hot, step)[0] == pf.REPRODUCED
+    # no convergence: the same width at both temperatures, or the cold law centred away from the step
+    assert pf.verdict_approaches_step(hot[::-1], hot, step)[0] == pf.NOT_REPRODUCED
+    assert pf.verdict_approaches_step(cold + 1.0, hot, step)[0] == pf.NOT_REPRODUCED
+    # 20 samples cannot resolve a 10 % shrink
+    assert pf.verdict_approaches_step(0.9 * hot[:20], hot[20:40], step)[0] == pf.NOT_REPRODUCED
+
+
+def test_fig8_and_fig9_use_the_papers_kappa_and_sizes_through_the_bath_figure_ensembles(monkeypatch, tmp_path):
+    from wavecontact.plotting import bath as plots
+    from wavecontact.studies import bath_figures
+
+    calls = {}
+
+    def spread(**kw):
+        calls[8] = kw
+        shape = (2, len(kw["temperatures"]))
+        std = np.tile(np.linspace(0.1, 0.3, shape[1]), (2, 1)) * np.array([[1.0], [1.3]])
+        return {"gamma": np.array([0.6173, 0.2173]), "temperature": np.array(kw["temperatures"]),
+                "mean": np.ones(shape), "std": std, "std_error": np.full(shape, 1e-3)}
+
+    class Law:
+        def __init__(self, width):
+            self.restitution = 0.66 + width * np.linspace(-1.0, 1.0, 101)
+
+    def law(**kw):
+        calls[9] = kw
+        return [Law(0.05), Law(0.3), Law(0.4)]
+
+    monkeypatch.setattr(bath_figures, "spread_against_temperature", spread)
+    monkeypatch.setattr(bath_figures, "restitution_law", law)
+    monkeypatch.setattr(plots, "save", lambda fig, path: path)
+    monkeypatch.setattr(plots, "spread_figure", lambda data: None)
+    monkeypatch.setattr(plots, "law_figure", lambda results: None)
+    ctx = pf.Context(tmp_path, False, None)
+    r8, r9 = pf.figure_8(ctx), pf.figure_9(ctx)
+    # the paper: Fig. 8 at kappa = 250 with 2500 samples a point over 10 temperatures, Fig. 9 at kappa = 100, 8000
+    assert calls[8]["kappa"] == 250.0 and calls[8]["samples"] == 2500 and len(calls[8]["temperatures"]) == 10
+    assert calls[9]["kappa"] == 100.0 and calls[9]["samples"] == 8000
+    assert "kappa = 250 as in the paper" in r8.sizes and "kappa = 100 as in the paper" in r9.sizes
+    assert "instead of" not in r8.sizes + r9.sizes
+    assert [c.verdict for c in r8.claims + r9.claims] == [pf.REPRODUCED] * 3
+
+
 def test_quick_run_of_two_cheap_figures_writes_images_page_and_verdicts(tmp_path, capsys):
     out = tmp_path / "figs"
     assert main(["paper-figures", "--out", str(out), "--quick", "--only", "6", "4", "--no-progress"]) == 0

@@ -34,6 +34,7 @@ __all__ = [
     "Claim",
     "FigureReport",
     "run_figures",
+    "verdict_approaches_step",
     "verdict_asymptotic_restitution",
     "verdict_broadening",
     "verdict_covariance",
@@ -49,6 +50,8 @@ __all__ = [
 ]
 
 REPRODUCED = "reproduced"
+FIG8_KAPPA = 250.0  # the paper's kappa for Fig. 8
+FIG9_KAPPA = 100.0  # and for Fig. 9
 CAVEAT = "reproduced with caveat"
 NOT_REPRODUCED = "not reproduced"
 
@@ -186,6 +189,20 @@ def verdict_broadening(std_cold: float, std_hot: float, step_eps2: float, gamma:
     if std_hot > std_cold and step_ok:
         return REPRODUCED, f"spread of eps^2 {std_cold:.3f} -> {std_hot:.3f}; cold step at eps^2 = {step_eps2:.6f}"
     return NOT_REPRODUCED, f"spread {std_cold:.3f} -> {std_hot:.3f}, cold eps^2 = {step_eps2:.6f} vs gamma^2 = {gamma**2:.6f}"
+
+
+def verdict_approaches_step(eps2_cold, eps2_hot, step_eps2: float, k: float = 3.0) -> tuple:
+    """Fig. 9: ``D(eps^2)`` approaches the step at the cold value ``step_eps2`` as ``T_B -> 0``.
+
+    The distance is the Wasserstein-1 distance of the sample's law from the step, ``mean |eps^2 -
+    step_eps2|``; it must shrink from the hot to the cold sample by more than ``k`` combined standard
+    errors."""
+    cold, hot = (np.abs(np.asarray(e, float) - step_eps2) for e in (eps2_cold, eps2_hot))
+    d_cold, d_hot = float(cold.mean()), float(hot.mean())
+    se = math.hypot(cold.std(ddof=1) / math.sqrt(cold.size), hot.std(ddof=1) / math.sqrt(hot.size))
+    if d_hot - d_cold > k * se:
+        return REPRODUCED, f"distance to the step {d_hot:.4f} -> {d_cold:.4f} (+- {se:.4f})"
+    return NOT_REPRODUCED, f"distance to the step {d_hot:.4f} -> {d_cold:.4f} (+- {se:.4f}) does not shrink by {k:g} SE"
 
 
 def _claim(text: str, measured: str, verdict: tuple) -> Claim:
@@ -385,22 +402,19 @@ def figure_8(ctx: Context) -> FigureReport:
     from .bath_figures import FIG8_TEMPERATURES, spread_against_temperature
 
     temperatures, samples = ((0.1, 1.0), 200) if ctx.quick else (FIG8_TEMPERATURES, 2500)
-    data = spread_against_temperature(temperatures=temperatures, kappa=math.inf, samples=samples, seed=8,
+    data = spread_against_temperature(temperatures=temperatures, kappa=FIG8_KAPPA, samples=samples, seed=8,
                                       executor=ctx.executor)
     image = plots.save(plots.spread_figure(data), ctx.out / "fig8_restitution_spread.png")
     std, err = data["std"], data["std_error"]
-    verdict = verdict_spread_trends(std, err)
-    if verdict[0] == REPRODUCED:
-        verdict = (CAVEAT, verdict[1] + "; hard-core mode instead of kappa = 250 (docs/bath.md sec. 7: same within "
-                   "a few 1e-3)")
     measured = "; ".join(f"gamma = {g}: std {std[a, 0]:.3f} -> {std[a, -1]:.3f}, mean {data['mean'][a, 0]:.3f} -> "
                          f"{data['mean'][a, -1]:.3f}" for a, g in enumerate(data["gamma"]))
     claims = [_claim("the spread of epsilon grows with T_B/E_tr and is larger for more unequal rods",
-                     f"T_B/E_tr {temperatures[0]:g} -> {temperatures[-1]:g}: {measured}", verdict)]
+                     f"T_B/E_tr {temperatures[0]:g} -> {temperatures[-1]:g}: {measured}",
+                     verdict_spread_trends(std, err))]
     return FigureReport(8, "Mean and spread of epsilon against T_B/E_tr", claims, [image],
                         f"gamma = 0.6173, 0.2173; {len(temperatures)} temperatures; {samples} samples a point "
-                        "(the paper: 2500); kappa = inf (stochastic hard-core mode) instead of 250, reduced because "
-                        "at 250 the adaptive solver needs about half an hour on two cores")
+                        f"(the paper: 2500); kappa = {FIG8_KAPPA:g} as in the paper; nu_max = 250; delay solver "
+                        "(the ensemble of `wavecontact bath-figure 8`)")
 
 
 def figure_9(ctx: Context) -> FigureReport:
@@ -409,21 +423,25 @@ def figure_9(ctx: Context) -> FigureReport:
     from .bath_figures import restitution_law
 
     samples = 300 if ctx.quick else 8000
-    results = restitution_law(kappa=math.inf, samples=samples, seed=9, executor=ctx.executor)
+    results = restitution_law(kappa=FIG9_KAPPA, samples=samples, seed=9, executor=ctx.executor)
     image = plots.save(plots.law_figure(results), ctx.out / "fig9_restitution_law.png")
-    spread = [float(np.std(r.restitution**2, ddof=1)) for r in results]
-    cold = collide(0.6173, math.inf, "delay").restitution ** 2
-    verdict = verdict_broadening(spread[0], spread[1], cold, 0.6173)
-    if verdict[0] == REPRODUCED:
-        verdict = (CAVEAT, verdict[1] + "; hard-core mode instead of kappa = 100")
+    eps2 = [r.restitution**2 for r in results]
+    spread = [float(np.std(e, ddof=1)) for e in eps2]
+    hard_step = collide(0.6173, math.inf, "delay").restitution ** 2
+    cold_step = collide(0.6173, FIG9_KAPPA, "delay").restitution ** 2  # the T_B -> 0 limit at this kappa
+    distance = [float(np.mean(np.abs(e - cold_step))) for e in eps2[:2]]
     claims = [_claim("p(eps^2) broadens as T_B grows; cold hard-core limit D = Theta(eps^2 - gamma^2)",
                      f"std of eps^2: {spread[0]:.3f} (a: E_tr/T_B = 10), {spread[1]:.3f} (b: 1), {spread[2]:.3f} "
-                     f"(c: gamma = 0.2173); mean eps^2 {', '.join(f'{np.mean(r.restitution**2):.3f}' for r in results)}; "
-                     f"cold hard core eps^2 = {cold:.6f}", verdict)]
+                     f"(c: gamma = 0.2173); mean eps^2 {', '.join(f'{np.mean(e):.3f}' for e in eps2)}; "
+                     f"cold hard core eps^2 = {hard_step:.6f}",
+                     verdict_broadening(spread[0], spread[1], hard_step, 0.6173)),
+              _claim("D(eps^2) converges to the deterministic step as T_B -> 0",
+                     f"mean |eps^2 - eps0^2| (eps0^2 = {cold_step:.4f}, cold collision at kappa = {FIG9_KAPPA:g}): "
+                     f"{distance[1]:.4f} (E_tr/T_B = 1) -> {distance[0]:.4f} (E_tr/T_B = 10)",
+                     verdict_approaches_step(eps2[0], eps2[1], cold_step))]
     return FigureReport(9, "Law of eps^2: density and distribution function", claims, [image],
-                        f"{samples} samples per case (the paper: 8000); kappa = inf (stochastic hard-core mode) instead "
-                        "of 100, which Sec. VI says stands for every kappa > 50; reduced because finite kappa costs "
-                        "many times more per sample (about ten minutes for the three cases on two cores)")
+                        f"{samples} samples per case (the paper: 8000); kappa = {FIG9_KAPPA:g} as in the paper; "
+                        "nu_max = 250; delay solver (the ensembles of `wavecontact bath-figure 9`)")
 
 
 def figure_10(ctx: Context) -> FigureReport:
