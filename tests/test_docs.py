@@ -516,3 +516,23 @@ def test_gas_page_quotes_the_generated_gas_tables():
     beyond = [int(r[gas[0].index("draws below the law's last row")]) for r in gas[1:]]
     beyond.append(int(re.search(r"draws below the law's last row: (\d+)", results).group(1)))
     assert f"{min(beyond)} to {max(beyond)} draws per run" in prose
+
+
+def test_bath_page_quotes_its_ensemble_and_bench_blocks():
+    """docs/bath.md's prose around the ensemble-accuracy and bench-bath blocks quotes ranges
+    derived from them: the standard error of a 2500-sample mean and the cost of the new
+    ensemble defaults against the previous setting."""
+    prose = " ".join((ROOT / "docs" / "bath.md").read_text().split())
+    accuracy = _markdown_rows(_script_block("bath.md", "ensemble-accuracy").split("\n\n")[1])
+    se = [float(row[6]) * math.sqrt(200 / 2500) for row in accuracy if row[2] == "ensemble default"]
+    assert len(se) == 6
+    assert f"error of {min(se):.1g} to {max(se):.1g} at the six points" in prose
+    defaults = [row for row in accuracy if row[2] == "ensemble default"]
+    shifts = [abs(float(row[3].split()[0])) / float(row[3].split()[1].strip("()")) for row in defaults]
+    assert max(shifts) <= 2.5, "bath.md says the defaults move the mean by at most 2.5 paired standard errors"
+    bench = _markdown_rows(_script_block("bath.md", "bench-bath"))
+    same = [float(row[1].split()[0]) for row in bench if row[0] == "delay sample, kappa 250, nu_max 250 (CPU)"]
+    before = next(float(row[1].split()[0]) for row in bench
+                  if row[0] == "delay sample, kappa 250, nu_max 250, rtol 1e-6 Gauss-Kronrod (CPU)")
+    assert len(same) == 2
+    assert f"cost {min(same) / before:.2f} to {max(same) / before:.2f} of it" in prose
