@@ -15,6 +15,7 @@ import shlex
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import wavecontact
@@ -471,3 +472,67 @@ def test_usage_page_shows_the_help_of_every_subcommand():
     text = block_text("usage-help")
     for name in sub.choices:
         assert f"$ wavecontact {name} --help\n" in text, f"docs/usage.md does not show `wavecontact {name} --help`"
+
+
+def _results_table(text: str, header_start: str) -> list:
+    """The rows (header first) of the markdown table whose header line starts with ``header_start``."""
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith(header_start))
+    rows = []
+    for line in lines[start:]:
+        if not line.startswith("|"):
+            break
+        if not line.startswith("|---"):
+            rows.append([c.strip() for c in line.strip("|").split("|")])
+    return rows
+
+
+def test_gas_page_quotes_the_generated_gas_tables():
+    """docs/gas.md's prose quotes numbers of the generated docs/gas_vibration_results.md
+    (written by ``python docs/gas_study.py vibration``): they must be that page's current values, and
+    the interpolated gamma = 0.85 last row it quotes must be what the shipped law gives."""
+    from wavecontact.gas.collision_law import default_law
+
+    prose = " ".join((ROOT / "docs" / "gas.md").read_text().split())
+    results = (ROOT / "docs" / "gas_vibration_results.md").read_text()
+    below = _results_table(results, "| gamma | direct, x = 1e-5 |")[1:]
+    assert len(below) == 3
+    for _gamma, direct, last, _gain in below:
+        assert re.search(rf"{re.escape(direct)} (?:direct )?against {re.escape(last)}\b", prose), (direct, last)
+    law_rows = _results_table(results, "| gamma | x = 1e-4 |")
+    column = law_rows[0].index("x = 1e-4")
+    warm = [float(row[column].split()[0]) for row in law_rows[1:] if float(row[0]) < 1]
+    assert f"`eps^2` of {min(warm):.3g} to {max(warm):.3g} at `x = 1e-4`" in prose
+    # the gamma = 0.85 last row, interpolated by the law itself (mid-point rule in the uniform u)
+    law = default_law()
+    u = (np.arange(2000) + 0.5) / 2000
+    mean = float(np.mean([np.atleast_1d(law.draw(0.85, 1e-4, v, 0.5))[0] for v in u]))
+    assert f"gives about {round(mean)} where the direct solves give" in prose
+    direct = _results_table(results, "| gamma | x = 1e-1 |")
+    row = next(r for r in direct if r[0] == "0.85")
+    direct_mean = float(row[direct[0].index("x = 1e-5")].split()[0])
+    assert 4.5 <= direct_mean / mean <= 5.5, "gas.md says the rule underestimates by a factor of about five"
+    gas = _results_table(results, "| seed | fixed r (N_c) |")
+    beyond = [int(r[gas[0].index("draws below the law's last row")]) for r in gas[1:]]
+    beyond.append(int(re.search(r"draws below the law's last row: (\d+)", results).group(1)))
+    assert f"{min(beyond)} to {max(beyond)} draws per run" in prose
+
+
+def test_bath_page_quotes_its_ensemble_and_bench_blocks():
+    """docs/bath.md's prose around the ensemble-accuracy and bench-bath blocks quotes ranges
+    derived from them: the standard error of a 2500-sample mean and the cost of the new
+    ensemble defaults against the previous setting."""
+    prose = " ".join((ROOT / "docs" / "bath.md").read_text().split())
+    accuracy = _markdown_rows(_script_block("bath.md", "ensemble-accuracy").split("\n\n")[1])
+    se = [float(row[6]) * math.sqrt(200 / 2500) for row in accuracy if row[2] == "ensemble default"]
+    assert len(se) == 6
+    assert f"error of {min(se):.1g} to {max(se):.1g} at the six points" in prose
+    defaults = [row for row in accuracy if row[2] == "ensemble default"]
+    shifts = [abs(float(row[3].split()[0])) / float(row[3].split()[1].strip("()")) for row in defaults]
+    assert max(shifts) <= 2.5, "bath.md says the defaults move the mean by at most 2.5 paired standard errors"
+    bench = _markdown_rows(_script_block("bath.md", "bench-bath"))
+    same = [float(row[1].split()[0]) for row in bench if row[0] == "delay sample, kappa 250, nu_max 250 (CPU)"]
+    before = next(float(row[1].split()[0]) for row in bench
+                  if row[0] == "delay sample, kappa 250, nu_max 250, rtol 1e-6 Gauss-Kronrod (CPU)")
+    assert len(same) == 2
+    assert f"cost {min(same) / before:.2f} to {max(same) / before:.2f} of it" in prose
