@@ -89,3 +89,15 @@ def test_two_rods_refuses_mismatched_contact_and_bad_gamma():
         two_rods(0.6, 10.0, contact="sticky")
     with pytest.raises(InvalidParameterError, match="gamma"):
         two_rods(1.2, 10.0)
+
+
+def test_a_velocity_too_small_to_square_is_refused_not_solved():
+    """Hypothesis found v = 1.6e-223: its kinetic energy underflows to 0 and the FE watchdog divided 0 by 0.
+    Speeds are 0 or of magnitude in [1e-30, 1e30]."""
+    from wavecontact.contact import Hard
+    from wavecontact.errors import InvalidParameterError
+    from wavecontact.scene import Rod, Scene
+
+    with pytest.raises(InvalidParameterError, match=r"velocities\[0\] must lie in 0 or a magnitude"):
+        Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.6e-223, 0.0), contact=Hard())
+    assert Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(-1e-30, 0.0), contact=Hard()).velocities == (-1e-30, 0.0)

@@ -99,11 +99,12 @@ def require_magnitude(name: str, value, *, signed: bool = False) -> float:
     """Return ``value`` as a float if its magnitude lies in :data:`MAGNITUDE_RANGE`.
 
     Positive quantities must lie in ``[1e-30, 1e30]``; with ``signed`` the value may
-    also be zero or negative, ``|value| <= 1e30`` (a velocity).
+    also be zero or negative, ``0`` or ``1e-30 <= |value| <= 1e30`` (a velocity: smaller
+    speeds underflow the energies computed from them).
     """
     low, high = MAGNITUDE_RANGE
     number = require_finite(name, value) if signed else require_positive(name, value)
-    if abs(number) > high or (not signed and number < low):
-        allowed = f"[-{high:g}, {high:g}]" if signed else f"[{low:g}, {high:g}]"
+    if abs(number) > high or (number != 0.0 and abs(number) < low):
+        allowed = f"0 or a magnitude in [{low:g}, {high:g}]" if signed else f"[{low:g}, {high:g}]"
         raise InvalidParameterError(f"{name} must lie in {allowed} (any consistent units), got {number!r}")
     return number
