@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spl
+from pure_python_runs import pure_and_compiled_outputs
 from scipy.linalg import solve_banded
 
 from wavecontact import Rod
@@ -170,9 +171,6 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
     700 elements: the consistent masses take the chained solve (no reassociation, no fused multiply-add
     in the compiled kernels, so the vectorized passes round exactly as the plain Python loops do).
     """
-    import os
-    import subprocess
-    import sys
 
     script = (
         "import sys, numpy as np\n"
@@ -195,14 +193,8 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "        out[f'u{order}{mass}'], out[f'v{order}{mass}'] = u, v\n"
         "np.savez(sys.argv[1], **out)\n"
     )
-    outputs = []
-    for pure in ("1", "0"):
-        path = tmp_path / f"steps{pure}.npz"
-        env = dict(os.environ, WAVECONTACT_PURE_PYTHON=pure)
-        root = str(Path(__file__).resolve().parents[1])  # this checkout's package
-        subprocess.run([sys.executable, "-c", script, str(path), root], check=True, env=env, timeout=600)
-        with np.load(path) as data:
-            outputs.append({k: data[k] for k in data.files})
+    root = Path(__file__).resolve().parents[1]  # this checkout's package
+    outputs = pure_and_compiled_outputs(script, tmp_path, root)
     assert len(outputs[0]) == 8
     for name in outputs[0]:
         np.testing.assert_array_equal(outputs[0][name], outputs[1][name], err_msg=name)

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from analytic_kick_table import analytic_kick_table
+from pure_python_runs import pure_and_compiled_outputs
 
 from wavecontact.gas import kernels
 
@@ -92,9 +93,6 @@ def test_kernel_draw_matches_the_table_quantile_function():
 
 def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):
     """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process reproduces the compiled run exactly."""
-    import os
-    import subprocess
-    import sys
 
     script = (
         "import numpy as np, sys\n"
@@ -106,13 +104,7 @@ def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):
         "sim.run(300)\n"
         "np.savez(sys.argv[1], v=sim.v, x=sim.x, t=sim.temperature, time=sim.time)\n"
     )
-    outputs = []
-    for pure in ("1", "0"):
-        path = tmp_path / f"run{pure}.npz"
-        env = dict(os.environ, WAVECONTACT_PURE_PYTHON=pure)
-        subprocess.run([sys.executable, "-c", script, str(path), str(Path(__file__).parent)], check=True, env=env, timeout=600)
-        with np.load(path) as data:
-            outputs.append({k: data[k] for k in data.files})
+    outputs = pure_and_compiled_outputs(script, tmp_path, Path(__file__).parent)
     for name in outputs[0]:
         np.testing.assert_array_equal(outputs[0][name], outputs[1][name], err_msg=name)
 
