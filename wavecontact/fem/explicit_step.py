@@ -42,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import kernel
+from . import interleaved_step as lanes
 
 __all__ = ["MASS_CONDENSED", "MASS_LUMPED", "MASS_TRIDIAGONAL", "mass_acceleration", "prepare_mass", "step_rod"]
 
@@ -81,7 +82,8 @@ T_P_BACK_RIGHT = 20  # M[j, j + 1] / M[j, j]
 T_P_SHARE = 21  # scratch: s_e
 T_P_CARRY = 22  # scratch: element e's part of vertex e + 1
 T_SCALE = 23  # the scaling of the right-hand side of the solve in use: T_CHAIN_INVERSE or T_INVERSE_PIVOT
-T_ROWS = 24
+# rows lanes.L_SHAPE .. lanes.L_ROWS_END - 1: the interleaved layout of large consistent masses (interleaved_step.py)
+T_ROWS = lanes.L_ROWS_END
 TWISTED_MIN = 8  # smaller systems take the plain sweeps (same table)
 CHAINS = 8  # independent recurrences of the chained solve
 CHAIN_TOLERANCE = 2.0**-64  # what a chain may inherit from the value it was started with, relative
@@ -182,10 +184,14 @@ def _burn_in(forward: np.ndarray, backward: np.ndarray, longest: int) -> int:
     return needed
 
 
-def prepare_mass(disc) -> tuple:
+def prepare_mass(disc, interleaved: bool = True) -> tuple:
     """``(kind, table)`` of the mass solve of one rod (see the module docstring).
 
     ``disc`` is a :class:`~wavecontact.fem.discretization.RodDiscretization`.
+    With ``interleaved`` (the default) a consistent mass of at least
+    ``interleaved_step.LANE_MIN_UNKNOWNS`` unknowns is also prepared for the
+    interleaved layout, which :func:`step_rod` and the time loop then use;
+    False keeps the flat layout (for comparisons).
     """
     n = disc.n_nodes
     table = np.zeros((T_ROWS, n))
@@ -194,7 +200,12 @@ def prepare_mass(disc) -> tuple:
         return MASS_LUMPED, table
     matrix = disc.mass_matrix.tocsr()
     if disc.order == 1:
+        if n >= lanes.LANE_MIN_UNKNOWNS and interleaved:
+            table = np.zeros((T_ROWS, max(n, lanes.lanes_width(n))))
         _tridiagonal(matrix.diagonal(0).copy(), matrix.diagonal(1).copy(), table)
+        if n >= lanes.LANE_MIN_UNKNOWNS and interleaved:
+            lanes.lane_rows(disc.stiffness_bands[1, : n - 1], table[T_CHAIN_INVERSE, :n], table[T_CHAIN_FORWARD, :n],
+                            table[T_CHAIN_BACKWARD, :n], table)
         return MASS_TRIDIAGONAL, table
     if disc.order != 2:
         raise ValueError(f"no mass solve for order {disc.order}")
@@ -679,6 +690,14 @@ def step_rod(u, v, a, bands, kind, table, dt):
         return
     if kind == MASS_CONDENSED:
         _condensed_step(u, v, table, dt)
+        return
+    if kind == MASS_TRIDIAGONAL and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
+        rows = int(table[lanes.L_SHAPE, 0])
+        lanes.pack(u, table[lanes.L_U], rows)
+        lanes.pack(v, table[lanes.L_V], rows)
+        lanes.step_tridiagonal(table, dt)
+        lanes.unpack(table[lanes.L_U], u, rows)
+        lanes.unpack(table[lanes.L_V], v, rows)
         return
     if kind == MASS_TRIDIAGONAL:  # the solve's scaling in the stencil pass
         _scaled_tridiagonal_forces(u, bands[1], table[T_SCALE], a)
