@@ -201,7 +201,7 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
     matrix = disc.mass_matrix.tocsr()
     if disc.order == 1:
         if n >= lanes.LANE_MIN_UNKNOWNS and interleaved:
-            table = np.zeros((T_ROWS, max(n, lanes.lanes_width(n))))
+            table = np.zeros((T_ROWS, lanes.table_width(max(n, lanes.lanes_width(n)))))
         _tridiagonal(matrix.diagonal(0).copy(), matrix.diagonal(1).copy(), table)
         if n >= lanes.LANE_MIN_UNKNOWNS and interleaved:
             lanes.lane_rows(disc.stiffness_bands[1, : n - 1], table[T_CHAIN_INVERSE, :n], table[T_CHAIN_FORWARD, :n],
@@ -220,25 +220,33 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
     diagonal[:-1] -= left * left * inverse  # vertex 2e couples to midpoint 2e + 1 through M[2e + 1, 2e]
     diagonal[1:] -= right * right * inverse  # vertex 2e + 2 through M[2e + 1, 2e + 2]
     off = np.asarray(matrix[vertices[:-1], vertices[1:]]).ravel() - right * inverse * left
+    vertex_count = vertices.size
+    wide = vertex_count >= lanes.LANE_MIN_VERTICES and interleaved
+    if wide:
+        table = np.zeros((T_ROWS, lanes.table_width(max(n, 2 * lanes.lanes_width(vertex_count)))))
     _tridiagonal(diagonal, off, table)
     table[T_MID_INVERSE, : mids.size] = inverse
     table[T_MID_LEFT, : mids.size] = left
     table[T_MID_RIGHT, : mids.size] = right
-    _condensed_step_rows(disc.stiffness_bands, inverse, left, right, table[T_SCALE, : mids.size + 1], table)
+    coefficients = _condensed_coefficients(disc.stiffness_bands, inverse, left, right)
+    _condensed_step_rows(coefficients, table[T_SCALE, :vertex_count], table)
+    if wide:
+        lanes.condensed_lane_rows(coefficients, table[T_CHAIN_INVERSE, :vertex_count].copy(),
+                                  table[T_CHAIN_FORWARD, :vertex_count].copy(),
+                                  table[T_CHAIN_BACKWARD, :vertex_count].copy(), table)
     return MASS_CONDENSED, table
 
 
-def _condensed_step_rows(bands: np.ndarray, inverse: np.ndarray, left: np.ndarray, right: np.ndarray,
-                         scale: np.ndarray, table: np.ndarray) -> None:
-    """Per-element rows ``T_P_*`` of :func:`_condensed_step` from the stiffness bands and the midpoint masses.
+def _condensed_coefficients(bands: np.ndarray, inverse: np.ndarray, left: np.ndarray, right: np.ndarray) -> dict:
+    """Per-element coefficients of the condensed P2 step from the stiffness bands and the midpoint masses.
 
     With ``k_l = K[2e, 2e+1]``, ``k_r = K[2e+1, 2e+2]`` and ``k_f = K[2e, 2e+2]``, element ``e``'s part
     of the force ``-K u`` is ``(k_l + k_f) da - k_f dc`` on its left vertex, ``-k_f da + (k_r + k_f) dc``
     on its right vertex and ``-(k_l da + k_r dc)`` on its midpoint; condensing the midpoint subtracts
     ``M[2e+1, 2e] s_e`` and ``M[2e+1, 2e+2] s_e`` from the two vertices (``s_e``: the midpoint force
     over ``M[2e+1, 2e+1]``).  ``inverse``, ``left``, ``right``: ``1 / M[j, j]``, ``M[j, j-1]``,
-    ``M[j, j+1]`` per midpoint ``j = 2e + 1``; each vertex's parts are scaled by ``scale``, the
-    vertex solve's ``T_SCALE`` row.
+    ``M[j, j+1]`` per midpoint ``j = 2e + 1``.  The vertices' parts (``left_*``, ``right_*``) are not
+    yet scaled for a solve.
     """
     elements = inverse.size
     near_left = bands[1, 0 : 2 * elements : 2]
@@ -246,18 +254,33 @@ def _condensed_step_rows(bands: np.ndarray, inverse: np.ndarray, left: np.ndarra
     far = bands[2, 0 : 2 * elements : 2]
     mid_left = near_left * inverse
     mid_right = near_right * inverse
+    return {
+        "mid_left": mid_left,
+        "mid_right": mid_right,
+        "left_a": near_left + far + left * mid_left,
+        "left_c": -far + left * mid_right,
+        "right_a": -far + right * mid_left,
+        "right_c": near_right + far + right * mid_right,
+        "back_left": left * inverse,
+        "back_right": right * inverse,
+    }
+
+
+def _condensed_step_rows(coefficients: dict, scale: np.ndarray, table: np.ndarray) -> None:
+    """Rows ``T_P_*`` of :func:`_condensed_step`: ``coefficients`` of :func:`_condensed_coefficients`, each
+    vertex's parts scaled by ``scale``, the vertex solve's ``T_SCALE`` row."""
     rows = {
-        T_P_MID_LEFT: mid_left,
-        T_P_MID_RIGHT: mid_right,
-        T_P_LEFT_A: (near_left + far + left * mid_left) * scale[:-1],
-        T_P_LEFT_C: (-far + left * mid_right) * scale[:-1],
-        T_P_RIGHT_A: (-far + right * mid_left) * scale[1:],
-        T_P_RIGHT_C: (near_right + far + right * mid_right) * scale[1:],
-        T_P_BACK_LEFT: left * inverse,
-        T_P_BACK_RIGHT: right * inverse,
+        T_P_MID_LEFT: coefficients["mid_left"],
+        T_P_MID_RIGHT: coefficients["mid_right"],
+        T_P_LEFT_A: coefficients["left_a"] * scale[:-1],
+        T_P_LEFT_C: coefficients["left_c"] * scale[:-1],
+        T_P_RIGHT_A: coefficients["right_a"] * scale[1:],
+        T_P_RIGHT_C: coefficients["right_c"] * scale[1:],
+        T_P_BACK_LEFT: coefficients["back_left"],
+        T_P_BACK_RIGHT: coefficients["back_right"],
     }
     for row, values in rows.items():
-        table[row, :elements] = values
+        table[row, : values.size] = values
 
 
 @kernel(fastmath=False)
@@ -687,6 +710,14 @@ def step_rod(u, v, a, bands, kind, table, dt):
     """One leapfrog step of a free rod: ``v += dt M^-1 (-K u)``, ``u += dt v`` (``a``: scratch)."""
     if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
         _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
+        return
+    if kind == MASS_CONDENSED and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
+        rows = int(table[lanes.L_SHAPE, 0])
+        lanes.pack_nodes(u, table[lanes.L_U], rows, 2)
+        lanes.pack_nodes(v, table[lanes.L_V], rows, 2)
+        lanes.step_condensed(table, dt)
+        lanes.unpack_nodes(table[lanes.L_U], u, rows, 2)
+        lanes.unpack_nodes(table[lanes.L_V], v, rows, 2)
         return
     if kind == MASS_CONDENSED:
         _condensed_step(u, v, table, dt)

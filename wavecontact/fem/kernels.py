@@ -30,8 +30,8 @@ from .contact_flows import (
     contact_potential,
     interface_gap,
 )
-from .explicit_step import MASS_LUMPED, elastic_acceleration, step_rod
-from .interleaved_step import L_SHAPE, L_U, L_V, pack, position, step_tridiagonal, unpack
+from .explicit_step import MASS_CONDENSED, MASS_LUMPED, elastic_acceleration, step_rod
+from .interleaved_step import L_SHAPE, L_U, L_V, node_position, pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
 
 __all__ = [
     "STATUS_FAILED",
@@ -257,15 +257,17 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     # packed copies in their tables, the flat u, v are refreshed for the energy checks and at the end
     rows1 = int(table1[L_SHAPE, 0])
     rows2 = int(table2[L_SHAPE, 0])
-    U1, V1 = _layout(u1, v1, table1, rows1)
-    U2, V2 = _layout(u2, v2, table2, rows2)
-    end1 = position(last, rows1) if rows1 else last
+    order1 = bands1.shape[0] - 1
+    order2 = bands2.shape[0] - 1
+    U1, V1 = _layout(u1, v1, table1, rows1, order1)
+    U2, V2 = _layout(u2, v2, table2, rows2, order2)
+    end1 = node_position(last, rows1, order1) if rows1 else last
     where1 = np.empty(column1.size, np.int64)
     for k in range(column1.size):
-        where1[k] = position(c1_start + k, rows1) if rows1 else c1_start + k
+        where1[k] = node_position(c1_start + k, rows1, order1) if rows1 else c1_start + k
     where2 = np.empty(column2.size, np.int64)
     for k in range(column2.size):
-        where2[k] = position(k, rows2) if rows2 else k
+        where2[k] = node_position(k, rows2, order2) if rows2 else k
     fast = kind1 == MASS_LUMPED and kind2 == MASS_LUMPED and bands1.shape[0] == 2 and bands2.shape[0] == 2
     for step in range(max_steps):
         r_now = offset + U2[0] - U1[end1]
@@ -274,14 +276,8 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             _leapfrog_p1(u1, v1, bands1, table1[0], dt)
             _leapfrog_p1(u2, v2, bands2, table2[0], dt)
         else:
-            if rows1:
-                step_tridiagonal(table1, dt)
-            else:
-                step_rod(u1, v1, a1, bands1, kind1, table1, dt)
-            if rows2:
-                step_tridiagonal(table2, dt)
-            else:
-                step_rod(u2, v2, a2, bands2, kind2, table2, dt)
+            _step(u1, v1, a1, bands1, kind1, table1, rows1, dt)
+            _step(u2, v2, a2, bands2, kind2, table2, rows2, dt)
         # 2. contact, spread along M^-1 e_end
         r_free = offset + U2[0] - U1[end1]
         if scheme == SCHEME_FORCE:
@@ -322,11 +318,11 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             state[S_LAST_IN_RANGE] = time
         if not (math.isfinite(gap) and math.isfinite(vrel)):
             state[S_FAILED_ENERGY] = math.nan
-            _to_flat(u1, v1, table1, rows1, u2, v2, table2, rows2)
+            _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
             return STATUS_FAILED, step + 1, samples
 
         if (step + 1) % check_every == 0:
-            _to_flat(u1, v1, table1, rows1, u2, v2, table2, rows2)
+            _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
             _synchronize(u1, v1, a1, sync1, bands1, kind1, table1, dt)
             _synchronize(u2, v2, a2, sync2, bands2, kind2, table2, dt)
             kin1, str1, cor1 = rod_energies(u1, sync1, a1, bands1, mass_bands1, dt)
@@ -347,26 +343,37 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
                 centre_gap = offset + _mean_displacement(u2, weights2) - _mean_displacement(u1, weights1)
                 if centre_gap - spread > r_stop:
                     return STATUS_SEPARATED, step + 1, samples
-    _to_flat(u1, v1, table1, rows1, u2, v2, table2, rows2)
+    _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
     return STATUS_RUNNING, max_steps, samples
 
 
 @kernel
-def _layout(u, v, table, rows):
+def _step(u, v, a, bands, kind, table, rows, dt):
+    """One rod's elastic step in its layout (``rows`` > 0: the interleaved one, on the table's copy)."""
+    if rows == 0:
+        step_rod(u, v, a, bands, kind, table, dt)
+    elif kind == MASS_CONDENSED:
+        step_condensed(table, dt)
+    else:
+        step_tridiagonal(table, dt)
+
+
+@kernel
+def _layout(u, v, table, rows, order):
     """The arrays the time loop steps: ``u, v`` themselves, or (``rows`` > 0) their interleaved copies."""
     if rows == 0:
         return u, v
-    pack(u, table[L_U], rows)
-    pack(v, table[L_V], rows)
+    pack_nodes(u, table[L_U], rows, order)
+    pack_nodes(v, table[L_V], rows, order)
     return table[L_U], table[L_V]
 
 
 @kernel
-def _to_flat(u1, v1, table1, rows1, u2, v2, table2, rows2):
+def _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2):
     """Copy the interleaved state of the rods that run in that layout back to their flat arrays."""
     if rows1:
-        unpack(table1[L_U], u1, rows1)
-        unpack(table1[L_V], v1, rows1)
+        unpack_nodes(table1[L_U], u1, rows1, order1)
+        unpack_nodes(table1[L_V], v1, rows1, order1)
     if rows2:
-        unpack(table2[L_U], u2, rows2)
-        unpack(table2[L_V], v2, rows2)
+        unpack_nodes(table2[L_U], u2, rows2, order2)
+        unpack_nodes(table2[L_V], v2, rows2, order2)
