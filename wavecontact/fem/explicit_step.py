@@ -200,10 +200,11 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
         return MASS_LUMPED, table
     matrix = disc.mass_matrix.tocsr()
     if disc.order == 1:
-        if n >= lanes.LANE_MIN_UNKNOWNS and interleaved:
+        wide = interleaved and n >= max(lanes.LANE_MIN_UNKNOWNS, 2 * lanes.LANES)
+        if wide:
             table = np.zeros((T_ROWS, lanes.table_width(max(n, lanes.lanes_width(n)))))
         _tridiagonal(matrix.diagonal(0).copy(), matrix.diagonal(1).copy(), table)
-        if n >= lanes.LANE_MIN_UNKNOWNS and interleaved:
+        if wide:
             lanes.lane_rows(disc.stiffness_bands[1, : n - 1], table[T_CHAIN_INVERSE, :n], table[T_CHAIN_FORWARD, :n],
                             table[T_CHAIN_BACKWARD, :n], table)
         return MASS_TRIDIAGONAL, table
@@ -221,7 +222,7 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
     diagonal[1:] -= right * right * inverse  # vertex 2e + 2 through M[2e + 1, 2e + 2]
     off = np.asarray(matrix[vertices[:-1], vertices[1:]]).ravel() - right * inverse * left
     vertex_count = vertices.size
-    wide = vertex_count >= lanes.LANE_MIN_VERTICES and interleaved
+    wide = interleaved and vertex_count >= max(lanes.LANE_MIN_VERTICES, 2 * lanes.LANES)  # two rows at least
     if wide:
         table = np.zeros((T_ROWS, lanes.table_width(max(n, 2 * lanes.lanes_width(vertex_count)))))
     _tridiagonal(diagonal, off, table)

@@ -31,7 +31,16 @@ from .contact_flows import (
     interface_gap,
 )
 from .explicit_step import MASS_CONDENSED, MASS_LUMPED, elastic_acceleration, step_rod
-from .interleaved_step import L_SHAPE, L_U, L_V, node_position, pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
+from .interleaved_step import (
+    L_SHAPE,
+    L_U,
+    L_V,
+    node_position,
+    pack_nodes,
+    step_condensed,
+    step_tridiagonal,
+    unpack_nodes,
+)
 
 __all__ = [
     "STATUS_FAILED",
