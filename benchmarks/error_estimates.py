@@ -12,7 +12,10 @@ re-applies the library's FE rule (:mod:`wavecontact.fem.error_estimate`, a pure 
 those runs) to a stored sweep in seconds instead of solving.  ``--update-docs`` writes the table
 of one solver into docs/error_estimates.md (the block ``sweep:SOLVER:SEED``); the FE tables there
 come from ``--solver fem --seed S --offline benchmarks/sweeps/fem_S.jsonl --update-docs`` for
-S = 2027 ... 2030, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
+S = 2027 ... 2031, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
+``--add-finer FILE`` adds to a sweep stored before the solver ran the level at twice the elements
+(below ``FINER_BELOW`` elements) that level, in seconds, so that ``--offline`` applies the
+present rule (seeds 2027 ... 2030).
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
@@ -54,6 +57,7 @@ import numpy as np
 
 from wavecontact import collide, two_rods
 from wavecontact.errors import LimitError, SolverFailure
+from wavecontact.fem.solver import FINER_BELOW
 from wavecontact.fem.solver import SOLVER as FEM
 from wavecontact.solvers.base import excess_bound
 
@@ -122,6 +126,18 @@ def reapply(row: dict) -> dict:
             "rough": FEM.rough_estimate(scene, options)}
 
 
+def add_finer(row: dict) -> dict:
+    """``row`` with the run at twice the elements appended to its levels where the solver now runs it
+    (fewer than ``FINER_BELOW`` elements) and the stored sweep lacks it (sweeps saved before the solver did)."""
+    elements = row["options"]["elements"]
+    if row["status"] != "ok" or elements >= FINER_BELOW or any(n > elements for n, _ in row["levels"]):
+        return row
+    scene = two_rods(row["gamma"], row["kappa"])
+    options = FEM.estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
+    value = float(FEM._collide(scene, options.replace(elements=2 * elements, record_fields=False))["restitution"])
+    return {**row, "levels": [*row["levels"], [2 * elements, value]]}
+
+
 def summarize(rows: list) -> dict:
     """Coverage, sharpness and counts of a list of :func:`run_sample` rows."""
     solved = [r for r in rows if r["status"] == "ok"]
@@ -156,11 +172,19 @@ def main(argv=None) -> int:
     parser.add_argument("--offline", nargs="+", metavar="FILE",
                         help="re-apply the library's FE rule to the levels stored by --save (or --verbose) "
                              "instead of running, and print the table")
+    parser.add_argument("--add-finer", metavar="FILE",
+                        help="run the level at twice the elements for the stored FE samples under "
+                             f"{FINER_BELOW} elements that lack it, and rewrite FILE with it (seconds)")
     parser.add_argument("--misses", action="store_true",
                         help="also list the FE collisions the estimate does not bound or is not within 10x of")
     parser.add_argument("--update-docs", action="store_true",
                         help="also write the table into docs/error_estimates.md (block sweep:SOLVER:SEED, one solver)")
     args = parser.parse_args(argv)
+    if args.add_finer:
+        rows = [add_finer(row) if row["solver"] == "fem" else row for row in load_rows(args.add_finer)]
+        with open(args.add_finer, "w", encoding="utf-8") as handle:
+            handle.writelines(json.dumps(row) + "\n" for row in rows)
+        return 0
     if args.summarize or args.offline:
         rows = [row for name in args.summarize or args.offline for row in load_rows(name)]
         if args.offline:
@@ -220,7 +244,7 @@ def rough(row: dict) -> bool:
 def miss_lines(rows: list) -> list:
     """One line per solved FE sample outside the coverage or the factor 10: its options, the regime
     ``x = alpha V h / c``, error, estimate, their ratio, the errors of the estimate's runs and the rough flag."""
-    lines = ["index | discretization | N | x | error | estimate | ratio | errors of the runs N, N/2, ... | flag"]
+    lines = ["index | discretization | N | x | error | estimate | ratio | errors of the runs N, N/2, ... (then 2N) | flag"]
     for r in rows:
         if r["status"] != "ok":
             continue
