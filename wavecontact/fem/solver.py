@@ -131,6 +131,14 @@ class FemSolver(SolverBase):
         runs = "; ".join(f"elements={n} gave {v:.12g}" for n, v in levels[1:])
         return estimate, f"Richardson: {runs}; {rule}", levels
 
+    def error_estimate_runs(self, scene: Scene, options: FemOptions) -> list:
+        """The coarser runs, and below :data:`FINER_BELOW` elements the run at ``2N`` (four times the
+        requested run's work)."""
+        runs = super().error_estimate_runs(scene, options)
+        if runs and options.nodes is None and options.elements < FINER_BELOW:
+            runs.append(options.replace(elements=2 * options.elements, record_fields=False))
+        return runs
+
     @staticmethod
     def estimate_options(options: FemOptions, extra: dict) -> FemOptions:
         """The options of the coarser runs: the requested ones with ``scheme='auto'`` replaced by the
