@@ -84,6 +84,19 @@ def test_cheap_blocks_are_what_their_commands_print(name):
         f"{BLOCKS[name].page} is out of date: python docs/generate.py {name}")
 
 
+def test_error_estimate_tuning_figures_are_what_the_stored_sweeps_give():
+    """docs/error_estimates.md section 1: the ratios the FE estimate's orders rest on (seconds: it reads
+    the stored sweeps, no solve)."""
+    spec = importlib.util.spec_from_file_location("estimate_tuning_figures",
+                                                  ROOT / "benchmarks" / "estimate_tuning_figures.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    text = (ROOT / "docs" / "error_estimates.md").read_text()
+    block = text.split("<!-- tuning-figures:start -->\n", 1)[1].split("<!-- tuning-figures:end -->", 1)[0]
+    assert block == "\n".join(script.table([2027, 2028, 2029, 2030])) + "\n", (
+        "stale: python benchmarks/estimate_tuning_figures.py --update-docs")
+
+
 def test_checking_a_page_writes_no_figure_into_the_repository():
     """``generate.py --check`` renders with ``write_figures=False``: the example's figures go to a scratch
     directory, and its output still names docs/figures as the page does."""
