@@ -16,14 +16,18 @@ Each sweep first runs every chunk from zero, then adds what the chunk before
 it (forward) or after it (backward) contributes: the chunks' true end values
 follow from their local ones in a short sequential pass over the chunks, and
 their effect on a chunk, ``P_i e`` with ``P_i`` the product of the sweep's
-factors from the chunk boundary to ``i``, is added on the rows where ``|P_i|``
-exceeds ``LANE_TOLERANCE`` (``w`` rows; the mass matrices are diagonally
-dominant, so ``|f|, |g| <= 1/2`` and ``w`` is about 33 on uniform meshes).  The
-terms left out are below ``2^-64`` of an entry of the result, so the solve
-equals the direct one to rounding, not bit for bit.
+factors from the chunk boundary to ``i`` and ``e`` the neighbour's end value,
+is added by the same recurrence without right-hand side (``delta_i = f_i
+delta_(i-1)``, a cheap streaming pass) on the rows where ``|P_i|`` exceeds
+``LANE_TOLERANCE`` (``w`` rows; the mass matrices are diagonally dominant, so
+``|f|, |g| <= 1/2`` and ``w`` is about 33 on uniform meshes; all rows of
+chunks shorter than that).  The terms left out are below ``2^-64`` of an entry
+of the result, so the solve equals the direct one to rounding, not bit for
+bit.
 
-The layout lives only inside the time loop: :func:`pack` and :func:`unpack`
-convert at its start, at its energy checks and at its end.  The state and the
+The layout lives only inside the time loop (``kernels.advance``):
+:func:`pack_nodes` and :func:`unpack_nodes` convert at its start, at its energy
+checks and at its end.  The state and the
 coefficients are rows of the mass solve's table (rows ``L_*``); the kernels'
 loops are written as single loops with constant offsets (``j + LANES``) and
 counting down to zero where they run upwards through the rod, the forms the
@@ -41,11 +45,13 @@ __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "condensed_lane_ro
 
 LANES = 32
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
-LANE_MIN_UNKNOWNS = 1200  # smaller systems keep the flat layout: fewer than about 40 rows, the corrections cost more than the lanes save
+# smaller systems keep the flat layout: with fewer than about 40 rows per chunk the corrections cover most
+# rows and cost more than the lanes save (docs/fem.md section 7)
+LANE_MIN_UNKNOWNS = 1200
 LANE_MIN_VERTICES = 1200  # the same for the vertex system of P2 (condensed midpoints)
 
 # rows of the mass solve's table used by the interleaved layout (the flat solve's rows come first)
-L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward ones
+L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward ones (P2: + 1)
 L_LEFT = 25  # stencil, P1: r_i = -(left_i (u_(i-1) - u_i) + right_i (u_(i+1) - u_i)), scaled by 1 / D_i
 L_RIGHT = 26
 L_FORWARD = 27  # f_i of y_i = r_i + f_i y_(i-1) (0 at the first unknown and on the padding)
@@ -56,7 +62,7 @@ L_CARRY = 31  # scratch: true end values of the chunks
 L_CORRECTION = 32  # scratch: the corrections of a sweep
 L_WORK = 33  # scratch: the sweeps' values
 L_U = 34  # displacements in the interleaved layout (inside the time loop)
-L_V = 35  # velocities (P2: the vertices' first, then the midpoints', each lanes_width long)
+L_V = 35  # velocities (P2: the vertices' first, then the midpoints', each n LANES long)
 # P2 consistent (midpoints condensed), per vertex k: its condensed right-hand side from the displacements,
 # c1 (uv_(k-1) - uv_k) + c2 (um_(k-1) - uv_k) + c3 (um_k - uv_k) + c4 (uv_(k+1) - uv_k) (uv vertices, um the
 # midpoints, um_k that of element k, from vertex k to k + 1), scaled by 1 / D_k; per element k: the midpoint's
