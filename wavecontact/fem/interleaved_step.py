@@ -77,7 +77,14 @@ L_MID_RIGHT = 41  # m_r
 L_BACK_LEFT = 42  # b_l
 L_BACK_RIGHT = 43  # b_r
 L_SHARE = 44  # scratch: s_k
-L_ROWS_END = 45
+# uniform rows: [0], [1] the rows [lo, hi) (1 <= lo <= hi <= n - 1) whose coefficients, in every lane, are the
+# constants [2:] (P1: left, right, f, g; P2: c1 .. c4, m_l, m_r, f, g, b_l, b_r); the step holds those in registers
+L_UNIFORM = 45
+L_ROWS_END = 46
+UNIFORM_ULPS_PER_ELEMENT = 4.0  # uniform to the rounding of the node coordinates (see uniform_rows)
+P1_UNIFORM_ROWS = (L_LEFT, L_RIGHT, L_FORWARD, L_BACKWARD)
+P2_UNIFORM_ROWS = (L_C1, L_C2, L_C3, L_C4, L_MID_LEFT, L_MID_RIGHT, L_FORWARD, L_BACKWARD, L_BACK_LEFT,
+                   L_BACK_RIGHT)
 
 
 def lanes_width(unknowns: int) -> int:
@@ -102,6 +109,11 @@ def _interleave(values: np.ndarray, n: int) -> np.ndarray:
     return padded.reshape(LANES, n).T.ravel()
 
 
+def _deinterleave(row: np.ndarray, n: int, m: int) -> np.ndarray:
+    """The first ``m`` values of the interleaved ``row`` (``n`` rows) in the rod's order."""
+    return row[: n * LANES].reshape(n, LANES).T.ravel()[:m].copy()
+
+
 def _correction_rows(factors: np.ndarray, n: int, reverse: bool) -> tuple:
     """Per chunk, the products of ``factors`` from the chunk boundary (the top one, or the bottom one if
     ``reverse``): the whole chunk's product and the number of rows where it exceeds ``LANE_TOLERANCE``."""
@@ -113,6 +125,45 @@ def _correction_rows(factors: np.ndarray, n: int, reverse: bool) -> tuple:
     products = np.cumprod(chunks, axis=1)
     rows = int(np.max(np.sum(np.abs(products) > LANE_TOLERANCE, axis=1)))
     return products[:, -1].copy(), max(rows, 1)
+
+
+def uniform_rows(table: np.ndarray, rows: tuple, n: int, elements: int) -> tuple:
+    """Find and hold the rows of the interleaved layout whose coefficients are the same in every chunk.
+
+    A mesh of equal elements gives equal stiffness and mass entries, and the
+    factorization's ``f_i``, ``g_i`` converge geometrically to their limits
+    within a few dozen rows; but the node coordinates are rounded, so element
+    lengths of ``L / E`` differ by up to about an ulp of ``L``, a relative
+    ``E 2^-52``, and so do the coefficients (measured: up to 1.5 ``E`` ulps).
+    A row of the layout (all ``LANES`` chunks) counts as uniform when each of
+    ``rows`` is within ``UNIFORM_ULPS_PER_ELEMENT E 2^-52`` (relative) of its
+    value at the middle of the rod; the longest run ``[lo, hi)`` of such rows
+    inside ``[1, n - 1)`` gets that value written into the table (so the
+    table describes exactly the operator the step applies) and the values go
+    to row ``L_UNIFORM``.  Graded meshes have no such rows (``lo = hi = 1``,
+    nothing changes).  Returns ``(lo, hi)``.
+    """
+    tolerance = UNIFORM_ULPS_PER_ELEMENT * max(elements, 1) * 2.0**-52
+    centre = (n // 2) * LANES + LANES // 2
+    constants = np.array([table[row, centre] for row in rows])
+    uniform = np.ones(n, dtype=bool)
+    for row, value in zip(rows, constants):
+        entries = table[row, : n * LANES].reshape(n, LANES)
+        uniform &= np.all(np.abs(entries - value) <= tolerance * abs(value), axis=1)
+    uniform[0] = uniform[n - 1] = False  # the first and last rows read the neighbouring chunks
+    lo, hi, start = 1, 1, None
+    for i in range(1, n):
+        if uniform[i] and start is None:
+            start = i
+        if not uniform[i] and start is not None:
+            if i - start > hi - lo:
+                lo, hi = start, i
+            start = None
+    for row, value in zip(rows, constants):
+        table[row, lo * LANES : hi * LANES] = value
+    table[L_UNIFORM, :] = 0.0
+    table[L_UNIFORM, : 2 + len(rows)] = (lo, hi, *constants)
+    return lo, hi
 
 
 def lane_rows(near: np.ndarray, scale: np.ndarray, forward: np.ndarray, backward: np.ndarray,
@@ -139,6 +190,9 @@ def lane_rows(near: np.ndarray, scale: np.ndarray, forward: np.ndarray, backward
     table[L_RIGHT, : n * LANES] = _interleave(right, n)
     table[L_FORWARD, : n * LANES] = _interleave(forward, n)
     table[L_BACKWARD, : n * LANES] = _interleave(backward, n)
+    uniform_rows(table, P1_UNIFORM_ROWS, n, m - 1)
+    forward = _deinterleave(table[L_FORWARD], n, m)
+    backward = _deinterleave(table[L_BACKWARD], n, m)
     end, forward_rows = _correction_rows(forward, n, reverse=False)
     start, backward_rows = _correction_rows(backward, n, reverse=True)
     table[L_FORWARD_END, :LANES] = end
@@ -178,6 +232,9 @@ def condensed_lane_rows(coefficients: dict, scale: np.ndarray, forward: np.ndarr
     for row, name in ((L_MID_LEFT, "mid_left"), (L_MID_RIGHT, "mid_right"), (L_BACK_LEFT, "back_left"),
                       (L_BACK_RIGHT, "back_right")):
         table[row, : n * LANES] = _interleave(coefficients[name], n)
+    uniform_rows(table, P2_UNIFORM_ROWS, n, m - 1)
+    forward = _deinterleave(table[L_FORWARD], n, m)
+    backward = _deinterleave(table[L_BACKWARD], n, m)
     end, forward_rows = _correction_rows(forward, n, reverse=False)
     start, backward_rows = _correction_rows(backward, n, reverse=True)
     table[L_FORWARD_END, :LANES] = end
@@ -213,18 +270,41 @@ def position(k, n):
 
 
 @kernel(fastmath=False)
-def _forward_p1(u, y, left, right, forward, n):
+def _p1_rows(u, y, left, right, forward, count):
+    """Stencil and local forward sweep of the rows after the first of the views (``count`` entries)."""
+    for j in range(count):
+        current = u[j + LANES]
+        force = -(left[j + LANES] * (u[j] - current) + right[j + LANES] * (u[j + 2 * LANES] - current))
+        y[j + LANES] = force + forward[j + LANES] * y[j]
+
+
+@kernel(fastmath=False)
+def _p1_rows_uniform(u, y, constants, count):
+    """:func:`_p1_rows` with the coefficients the constants of ``L_UNIFORM`` (same operations, same order)."""
+    left = constants[2]
+    right = constants[3]
+    forward = constants[4]
+    for j in range(count):
+        current = u[j + LANES]
+        force = -(left * (u[j] - current) + right * (u[j + 2 * LANES] - current))
+        y[j + LANES] = force + forward * y[j]
+
+
+@kernel(fastmath=False)
+def _forward_p1(u, y, left, right, forward, constants, n):
     """Stencil and local forward sweep of every chunk, fused: ``y_i = r_i + f_i y_(i-1)`` from ``y = 0``
-    above each chunk (the first row of a chunk reads the last row of the chunk before it for the stencil)."""
+    above each chunk (the first row of a chunk reads the last row of the chunk before it for the stencil; the
+    uniform rows of ``constants`` with the constants)."""
     last = (n - 1) * LANES
     y[0] = -(right[0] * (u[LANES] - u[0]))
     for c in range(LANES - 1):
         current = u[c + 1]
         y[c + 1] = -(left[c + 1] * (u[last + c] - current) + right[c + 1] * (u[LANES + c + 1] - current))
-    for j in range(last - LANES):
-        current = u[j + LANES]
-        force = -(left[j + LANES] * (u[j] - current) + right[j + LANES] * (u[j + 2 * LANES] - current))
-        y[j + LANES] = force + forward[j + LANES] * y[j]
+    lo = (int(constants[0]) - 1) * LANES  # rows 1 .. lo - 1, lo .. hi - 1, hi .. n - 2 (j: the row before)
+    hi = (int(constants[1]) - 1) * LANES
+    _p1_rows(u, y, left, right, forward, lo)
+    _p1_rows_uniform(u[lo:], y[lo:], constants, hi - lo)
+    _p1_rows(u[hi:], y[hi:], left[hi:], right[hi:], forward[hi:], last - LANES - hi)
     for c in range(LANES - 1):
         current = u[last + c]
         force = -(left[last + c] * (u[last - LANES + c] - current) + right[last + c] * (u[c + 1] - current))
@@ -274,6 +354,18 @@ def _sweep_up_update(u, v, y, backward, count, dt):
 
 
 @kernel(fastmath=False)
+def _sweep_up_update_uniform(u, v, y, constants, count, dt):
+    """:func:`_sweep_up_update` with ``g`` the constant of ``L_UNIFORM``."""
+    backward = constants[5]
+    for j in range(count - 1, -1, -1):
+        acceleration = y[j] + backward * y[j + LANES]
+        y[j] = acceleration
+        velocity = v[j] + dt * acceleration
+        v[j] = velocity
+        u[j] += dt * velocity
+
+
+@kernel(fastmath=False)
 def _correct_up_update(u, v, y, backward, correction, count, dt):
     """Correction ``e_j = g_j e_(j + LANES)`` added over ``j = count - 1 .. 0``, with the update."""
     for j in range(count - 1, -1, -1):
@@ -287,13 +379,17 @@ def _correct_up_update(u, v, y, backward, correction, count, dt):
 
 
 @kernel(fastmath=False)
-def _backward_update(u, v, y, backward, start, carry, correction, n, rows, dt):
+def _backward_update(u, v, y, backward, start, carry, correction, constants, n, rows, dt):
     """Backward sweep, its correction from the chunks below and the leapfrog update, on the local forward
     result ``y`` (overwritten with the accelerations)."""
     last = (n - 1) * LANES
     split = (n - rows) * LANES  # rows from here on are corrected before their update
     _sweep_up(y[split:], backward[split:], last - split)
-    _sweep_up_update(u, v, y, backward, split, dt)
+    hi = min(int(constants[1]) * LANES, split)  # downwards: arrays, the uniform rows' constants, arrays
+    lo = min(int(constants[0]) * LANES, hi)
+    _sweep_up_update(u[hi:], v[hi:], y[hi:], backward[hi:], split - hi, dt)
+    _sweep_up_update_uniform(u[lo:], v[lo:], y[lo:], constants, hi - lo, dt)
+    _sweep_up_update(u, v, y, backward, lo, dt)
     following = y[LANES - 1]
     carry[LANES - 1] = following
     for c in range(LANES - 2, -1, -1):
@@ -322,10 +418,11 @@ def step_tridiagonal(table, dt):
     v = table[L_V]
     y = table[L_WORK]
     forward = table[L_FORWARD]
-    _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, n)
+    constants = table[L_UNIFORM]
+    _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n)
     _correct_forward(y, forward, table[L_FORWARD_END], table[L_CARRY], table[L_CORRECTION], n, forward_rows)
     _backward_update(u, v, y, table[L_BACKWARD], table[L_BACKWARD_START], table[L_CARRY], table[L_CORRECTION],
-                     n, backward_rows, dt)
+                     constants, n, backward_rows, dt)
 
 
 @kernel(fastmath=False)
@@ -374,14 +471,10 @@ def _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, j, befo
 
 
 @kernel(fastmath=False)
-def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, n):
-    """Midpoint shares, condensed right-hand sides and the local forward sweep of every chunk, fused."""
-    last = (n - 1) * LANES
-    y[0] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, 0, 0, LANES)
-    for c in range(LANES - 1):
-        y[c + 1] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, c + 1, last + c,
-                                    LANES + c + 1)
-    for j in range(last - LANES):
+def _condensed_rows(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, count):
+    """Shares, right-hand sides and local forward sweep of the rows after the first of the views (``count``
+    entries, rows inside a chunk)."""
+    for j in range(count):
         current = uv[j + LANES]
         middle = um[j + LANES]
         following = uv[j + 2 * LANES]
@@ -389,6 +482,43 @@ def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, fo
         force = (c1[j + LANES] * (uv[j] - current) + c2[j + LANES] * (um[j] - current)
                  + c3[j + LANES] * (middle - current) + c4[j + LANES] * (following - current))
         y[j + LANES] = force + forward[j + LANES] * y[j]
+
+
+@kernel(fastmath=False)
+def _condensed_rows_uniform(uv, um, y, share, constants, count):
+    """:func:`_condensed_rows` with the coefficients the constants of ``L_UNIFORM`` (same operations, same order)."""
+    c1 = constants[2]
+    c2 = constants[3]
+    c3 = constants[4]
+    c4 = constants[5]
+    mid_left = constants[6]
+    mid_right = constants[7]
+    forward = constants[8]
+    for j in range(count):
+        current = uv[j + LANES]
+        middle = um[j + LANES]
+        following = uv[j + 2 * LANES]
+        share[j + LANES] = -(mid_left * (current - middle) + mid_right * (following - middle))
+        force = (c1 * (uv[j] - current) + c2 * (um[j] - current) + c3 * (middle - current)
+                 + c4 * (following - current))
+        y[j + LANES] = force + forward * y[j]
+
+
+@kernel(fastmath=False)
+def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, constants, n):
+    """Midpoint shares, condensed right-hand sides and the local forward sweep of every chunk, fused (the
+    uniform rows ``[lo, hi)`` of ``constants`` with the constants)."""
+    last = (n - 1) * LANES
+    y[0] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, 0, 0, LANES)
+    for c in range(LANES - 1):
+        y[c + 1] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, c + 1, last + c,
+                                    LANES + c + 1)
+    lo = (int(constants[0]) - 1) * LANES  # rows 1 .. lo - 1, lo .. hi - 1, hi .. n - 2 (j: the row before)
+    hi = (int(constants[1]) - 1) * LANES
+    _condensed_rows(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, lo)
+    _condensed_rows_uniform(uv[lo:], um[lo:], y[lo:], share[lo:], constants, hi - lo)
+    _condensed_rows(uv[hi:], um[hi:], y[hi:], share[hi:], c1[hi:], c2[hi:], c3[hi:], c4[hi:], mid_left[hi:],
+                    mid_right[hi:], forward[hi:], last - LANES - hi)
     for c in range(LANES - 1):
         force = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, last + c, last - LANES + c,
                                  c + 1)
@@ -422,6 +552,25 @@ def _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, ba
         vv[j] = velocity
         uv[j] += dt * velocity
         middle = share[j] - back_left[j] * acceleration - back_right[j] * following
+        velocity = vm[j] + dt * middle
+        vm[j] = velocity
+        um[j] += dt * velocity
+
+
+@kernel(fastmath=False)
+def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, count, dt):
+    """:func:`_sweep_up_update_condensed` with the coefficients the constants of ``L_UNIFORM``."""
+    backward = constants[9]
+    back_left = constants[10]
+    back_right = constants[11]
+    for j in range(count - 1, -1, -1):
+        following = y[j + LANES]
+        acceleration = y[j] + backward * following
+        y[j] = acceleration
+        velocity = vv[j] + dt * acceleration
+        vv[j] = velocity
+        uv[j] += dt * velocity
+        middle = share[j] - back_left * acceleration - back_right * following
         velocity = vm[j] + dt * middle
         vm[j] = velocity
         um[j] += dt * velocity
@@ -464,13 +613,21 @@ def step_condensed(table, dt):
     back_right = table[L_BACK_RIGHT]
     carry = table[L_CARRY]
     correction = table[L_CORRECTION]
+    constants = table[L_UNIFORM]
     _forward_condensed(uv, um, y, share, table[L_C1], table[L_C2], table[L_C3], table[L_C4], table[L_MID_LEFT],
-                       table[L_MID_RIGHT], forward, n)
+                       table[L_MID_RIGHT], forward, constants, n)
     _correct_forward(y, forward, table[L_FORWARD_END], carry, correction, n, forward_rows)
     last = (n - 1) * LANES
     split = (n - backward_rows) * LANES
     _sweep_up(y[split:], backward[split:], last - split)
-    _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, back_right, split, dt)
+    # rows below the corrected ones, downwards: [hi, n - backward_rows) and [0, lo) with the arrays, the
+    # uniform rows between with the constants
+    hi = min(int(constants[1]) * LANES, split)
+    lo = min(int(constants[0]) * LANES, hi)
+    _sweep_up_update_condensed(uv[hi:], vv[hi:], um[hi:], vm[hi:], y[hi:], share[hi:], backward[hi:], back_left[hi:],
+                               back_right[hi:], split - hi, dt)
+    _sweep_up_update_condensed_uniform(uv[lo:], vv[lo:], um[lo:], vm[lo:], y[lo:], share[lo:], constants, hi - lo, dt)
+    _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, back_right, lo, dt)
     start = table[L_BACKWARD_START]
     following = y[LANES - 1]
     carry[LANES - 1] = following
