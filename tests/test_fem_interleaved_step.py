@@ -9,7 +9,7 @@ from test_fem_explicit_step import _banded_mass, _graded_nodes
 import wavecontact
 from wavecontact import Rod
 from wavecontact.fem import interleaved_step
-from wavecontact.fem.discretization import discretize_rod
+from wavecontact.fem.discretization import discretize_rod, matched_nodes
 from wavecontact.fem.explicit_step import prepare_mass, step_rod
 from wavecontact.fem.interleaved_step import (
     L_SHAPE,
@@ -96,3 +96,104 @@ def test_collision_in_the_interleaved_layout_equals_the_flat_one_to_rounding(mon
         np.testing.assert_allclose(packed_u, flat_u, rtol=0, atol=1e-11 * np.abs(flat_u).max())
     momentum = packed["run"].momentum()
     assert abs(momentum - packed["run"].momentum0) <= 1e-12 * packed["run"].momentum_scale
+
+
+def _last_chunk_rows(table, unknowns):
+    """Rows of the last chunk that hold unknowns (the rest is padding)."""
+    return unknowns - (LANES - 1) * int(table[L_SHAPE, 0])
+
+
+def _uniform_rows(table):
+    lo, hi = table[interleaved_step.L_UNIFORM, :2]
+    return int(lo), int(hi)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_uniform_rows_cover_a_uniform_mesh_between_its_ends_and_nothing_of_a_graded_one(order):
+    """Equal elements (rounded node coordinates): every row but a few dozen at the ends runs with constants;
+    a mesh graded by at most 1 % from one element to the next: none."""
+    elements = 3000
+    disc = discretize_rod(Rod(1.1, 2.0, 3.0, 0.5), np.linspace(0.0, 1.1, elements + 1), order, "consistent")
+    _, table = prepare_mass(disc)
+    rows = int(table[L_SHAPE, 0])
+    lo, hi = _uniform_rows(table)
+    # the factorization's factors converge like 0.27^i (P1) from the rod's start; the far end's rows differ,
+    # and so do the rows where the last chunk has only padding
+    assert 1 <= lo <= 16 and _last_chunk_rows(table, elements + 1) - 16 <= hi <= rows - 1
+    rng = np.random.default_rng(order)
+    graded = discretize_rod(Rod(1.1, 2.0, 3.0, 0.5), _graded_nodes(rng, elements, 1.1, 1.01), order, "consistent")
+    _, table = prepare_mass(graded)
+    lo, hi = _uniform_rows(table)
+    assert lo == hi
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_uniform_rows_run_with_constants_as_the_arrays_would(order):
+    """The step with the uniform rows' constants equals, bit for bit, the step reading the same (held)
+    values from the table's arrays (the uniform run switched off after the set-up)."""
+    disc = discretize_rod(Rod(1.1, 2.0, 3.0, 0.5), np.linspace(0.0, 1.1, 2534), order, "consistent")
+    kind, table = prepare_mass(disc)
+    assert _uniform_rows(table)[1] - _uniform_rows(table)[0] > 20
+    arrays = table.copy()
+    arrays[interleaved_step.L_UNIFORM, :2] = 1.0
+    rng = np.random.default_rng(4)
+    u, v = rng.normal(size=disc.n_nodes), rng.normal(size=disc.n_nodes)
+    results = []
+    for step_table in (table, arrays):
+        x, w, scratch = u.copy(), v.copy(), np.empty(disc.n_nodes)
+        for _ in range(5):
+            step_rod(x, w, scratch, disc.stiffness_bands, kind, step_table, 1e-4)
+        results.append((x, w))
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])
+
+
+@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("remainder", [0.0, 1.0 / 3.0, 2.0 / 3.0])
+def test_uniform_rows_with_far_end_remainders_equal_a_banded_solve(order, remainder):
+    """400 steps near the stability limit against LAPACK's banded solve, on meshes of equal elements of
+    2^-10 (node coordinates exact, so the held constants are the entries up to the factors' rounding) whose
+    far end carries the remainder of 0, 1/3 or 2/3 of an element as a lumped mass."""
+    element = 2.0**-10
+    elements = 1599  # 1600 unknowns (P1) or vertices (P2): 32 chunks of 50 rows, no padding
+    length = (elements + remainder) * element
+    nodes = matched_nodes(length, element, from_left=True)
+    assert nodes.size == elements + 1 and np.all(np.diff(nodes) == element)
+    disc = discretize_rod(Rod(length, 2.0, 3.0, 0.5), nodes, order, "consistent", remainder_at="right")
+    kind, table = prepare_mass(disc)
+    lo, hi = _uniform_rows(table)
+    assert lo <= 16 and hi >= _last_chunk_rows(table, elements + 1) - 16
+    (lower, upper), banded = _banded_mass(disc)
+    stiffness = disc.stiffness
+    highest = spl.eigsh(stiffness, k=1, M=disc.mass_matrix.tocsc(), which="LM", return_eigenvectors=False)[0]
+    dt = 1.9 / np.sqrt(highest)
+    rng = np.random.default_rng(order + int(3 * remainder))
+    u = 1e-3 * np.sin(3.0 * disc.x) + 1e-6 * rng.normal(size=disc.n_nodes)
+    v = rng.normal(size=disc.n_nodes) * 1e-3
+    u_ref, v_ref = u.copy(), v.copy()
+    scratch = np.empty(disc.n_nodes)
+    for _ in range(400):
+        step_rod(u, v, scratch, disc.stiffness_bands, kind, table, dt)
+        v_ref += dt * solve_banded((lower, upper), banded, -(stiffness @ u_ref))
+        u_ref += dt * v_ref
+    np.testing.assert_allclose(v, v_ref, rtol=0, atol=1e-11 * np.abs(v_ref).max())
+    np.testing.assert_allclose(u, u_ref, rtol=0, atol=1e-11 * np.abs(u_ref).max())
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_held_constants_change_an_acceleration_by_the_rounding_of_the_node_coordinates(order):
+    """On ``linspace`` nodes the elements differ by the rounding of their end points (a relative ``E``
+    ulps at most); the accelerations with the held constants differ from LAPACK's banded solve of the
+    assembled matrices by no more than that relative size."""
+    elements = 2533
+    disc = discretize_rod(Rod(1.1, 2.0, 3.0, 0.5), np.linspace(0.0, 1.1, elements + 1), order, "consistent")
+    kind, table = prepare_mass(disc)
+    assert _uniform_rows(table)[1] - _uniform_rows(table)[0] > 20
+    (lower, upper), banded = _banded_mass(disc)
+    rng = np.random.default_rng(order)
+    u = rng.normal(size=disc.n_nodes)
+    v = np.zeros(disc.n_nodes)
+    dt = 2.0**-20
+    step_rod(u.copy(), v, np.empty(disc.n_nodes), disc.stiffness_bands, kind, table, dt)
+    expected = solve_banded((lower, upper), banded, -(disc.stiffness @ u))
+    np.testing.assert_allclose(v / dt, expected, rtol=0, atol=8 * elements * 2.0**-52 * np.abs(expected).max())

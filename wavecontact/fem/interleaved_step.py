@@ -132,24 +132,31 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, elements: int) -> tuple
 
     A mesh of equal elements gives equal stiffness and mass entries, and the
     factorization's ``f_i``, ``g_i`` converge geometrically to their limits
-    within a few dozen rows; but the node coordinates are rounded, so element
-    lengths of ``L / E`` differ by up to about an ulp of ``L``, a relative
-    ``E 2^-52``, and so do the coefficients (measured: up to 1.5 ``E`` ulps).
-    A row of the layout (all ``LANES`` chunks) counts as uniform when each of
-    ``rows`` is within ``UNIFORM_ULPS_PER_ELEMENT E 2^-52`` (relative) of its
-    value at the middle of the rod; the longest run ``[lo, hi)`` of such rows
-    inside ``[1, n - 1)`` gets that value written into the table (so the
-    table describes exactly the operator the step applies) and the values go
-    to row ``L_UNIFORM``.  Graded meshes have no such rows (``lo = hi = 1``,
-    nothing changes).  Returns ``(lo, hi)``.
+    within a few dozen rows; but node coordinates are rounded, so element
+    lengths of ``L / E`` may differ by about an ulp of ``L``, a relative
+    ``E 2^-52``, and so do the coefficients (measured: up to 1.5 ``E`` ulps on
+    ``linspace`` nodes; none on nodes that are multiples of a power of two).
+    Each of ``rows`` gets its constant, its value at the middle of the rod, and
+    a tolerance: twice the largest distance from it over the middle half of
+    the chunks 1 .. ``LANES - 2`` (rows far from both ends), at least 4 ulps
+    and at most ``UNIFORM_ULPS_PER_ELEMENT E`` ulps.  A row of the layout (all
+    ``LANES`` chunks) is uniform when each of ``rows`` is within its
+    tolerance; the longest run ``[lo, hi)`` of uniform rows inside ``[1, n -
+    1)`` gets the constants written into the table (so the table describes
+    exactly the operator the step applies) and the constants go to row
+    ``L_UNIFORM``.  Graded meshes have no such rows (``lo = hi = 1``, nothing
+    changes).  Returns ``(lo, hi)``.
     """
-    tolerance = UNIFORM_ULPS_PER_ELEMENT * max(elements, 1) * 2.0**-52
+    ulp = 2.0**-52
     centre = (n // 2) * LANES + LANES // 2
     constants = np.array([table[row, centre] for row in rows])
     uniform = np.ones(n, dtype=bool)
     for row, value in zip(rows, constants):
         entries = table[row, : n * LANES].reshape(n, LANES)
-        uniform &= np.all(np.abs(entries - value) <= tolerance * abs(value), axis=1)
+        spread = np.max(np.abs(entries[n // 4 : max(3 * n // 4, n // 4 + 1), 1 : LANES - 1] - value))
+        tolerance = min(max(2.0 * spread, 4.0 * ulp * abs(value)), UNIFORM_ULPS_PER_ELEMENT * max(elements, 1) * ulp
+                        * abs(value))
+        uniform &= np.all(np.abs(entries - value) <= tolerance, axis=1)
     uniform[0] = uniform[n - 1] = False  # the first and last rows read the neighbouring chunks
     lo, hi, start = 1, 1, None
     for i in range(1, n):
