@@ -136,10 +136,12 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, elements: int) -> tuple
     lengths of ``L / E`` may differ by about an ulp of ``L``, a relative
     ``E 2^-52``, and so do the coefficients (measured: up to 1.5 ``E`` ulps on
     ``linspace`` nodes; none on nodes that are multiples of a power of two).
-    Each of ``rows`` gets its constant, its value at the middle of the rod, and
-    a tolerance: twice the largest distance from it over the middle half of
-    the chunks 1 .. ``LANES - 2`` (rows far from both ends), at least 4 ulps
-    and at most ``UNIFORM_ULPS_PER_ELEMENT E`` ulps.  A row of the layout (all
+    Each of ``rows`` gets its constant, its mean over the middle half of the
+    chunks 1 .. ``LANES - 2`` (rows far from both ends; the mean, not one
+    element's value, so that the held elements keep the mesh's mean length
+    and the waves their speed), and a tolerance: twice the largest distance
+    from it over those rows, at least 4 ulps and at most
+    ``UNIFORM_ULPS_PER_ELEMENT E`` ulps.  A row of the layout (all
     ``LANES`` chunks) is uniform when each of ``rows`` is within its
     tolerance; the longest run ``[lo, hi)`` of uniform rows inside ``[1, n -
     1)`` gets the constants written into the table (so the table describes
@@ -148,12 +150,12 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, elements: int) -> tuple
     changes).  Returns ``(lo, hi)``.
     """
     ulp = 2.0**-52
-    centre = (n // 2) * LANES + LANES // 2
-    constants = np.array([table[row, centre] for row in rows])
+    middle = slice(n // 4, max(3 * n // 4, n // 4 + 1))
+    constants = np.array([np.mean(table[row, : n * LANES].reshape(n, LANES)[middle, 1 : LANES - 1]) for row in rows])
     uniform = np.ones(n, dtype=bool)
     for row, value in zip(rows, constants):
         entries = table[row, : n * LANES].reshape(n, LANES)
-        spread = np.max(np.abs(entries[n // 4 : max(3 * n // 4, n // 4 + 1), 1 : LANES - 1] - value))
+        spread = np.max(np.abs(entries[middle, 1 : LANES - 1] - value))
         tolerance = min(max(2.0 * spread, 4.0 * ulp * abs(value)), UNIFORM_ULPS_PER_ELEMENT * max(elements, 1) * ulp
                         * abs(value))
         uniform &= np.all(np.abs(entries - value) <= tolerance, axis=1)
