@@ -39,6 +39,16 @@ def test_packing_places_every_node_where_node_position_says(order, elements):
     np.testing.assert_array_equal(back, x)
 
 
+@pytest.mark.parametrize("order", [1, 2])
+def test_interleaved_tables_start_every_row_on_a_cache_line(order):
+    disc = discretize_rod(Rod(1.0), np.linspace(0.0, 1.0, 1500), order, "consistent")
+    _, table = prepare_mass(disc)
+    assert table[L_SHAPE, 0] > 0
+    assert table.ctypes.data % 64 == 0 and table.strides[0] % 64 == 0 and table.flags.c_contiguous
+    with pytest.raises(ValueError, match="multiple of 8"):
+        interleaved_step.aligned_table(2, 12)
+
+
 def test_table_rows_do_not_start_a_multiple_of_4_kib_apart():
     for minimum in (10, 1000, 10752, 43008):
         width = table_width(minimum)

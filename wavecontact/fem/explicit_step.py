@@ -202,7 +202,7 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
     if disc.order == 1:
         wide = interleaved and n >= max(lanes.LANE_MIN_UNKNOWNS, 2 * lanes.LANES)
         if wide:
-            table = np.zeros((T_ROWS, lanes.table_width(max(n, lanes.lanes_width(n)))))
+            table = lanes.aligned_table(T_ROWS, lanes.table_width(max(n, lanes.lanes_width(n))))
         _tridiagonal(matrix.diagonal(0).copy(), matrix.diagonal(1).copy(), table)
         if wide:
             lanes.lane_rows(disc.stiffness_bands[1, : n - 1], table[T_CHAIN_INVERSE, :n], table[T_CHAIN_FORWARD, :n],
@@ -224,7 +224,7 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
     vertex_count = vertices.size
     wide = interleaved and vertex_count >= max(lanes.LANE_MIN_VERTICES, 2 * lanes.LANES)  # two rows at least
     if wide:
-        table = np.zeros((T_ROWS, lanes.table_width(max(n, 2 * lanes.lanes_width(vertex_count)))))
+        table = lanes.aligned_table(T_ROWS, lanes.table_width(max(n, 2 * lanes.lanes_width(vertex_count))))
     _tridiagonal(diagonal, off, table)
     table[T_MID_INVERSE, : mids.size] = inverse
     table[T_MID_LEFT, : mids.size] = left

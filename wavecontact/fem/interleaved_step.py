@@ -40,7 +40,7 @@ import numpy as np
 
 from .._jit import kernel
 
-__all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "condensed_lane_rows", "lane_rows", "lanes_width",
+__all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "aligned_table", "condensed_lane_rows", "lane_rows", "lanes_width",
            "node_position", "pack_nodes", "step_condensed", "step_tridiagonal", "table_width", "unpack_nodes"]
 
 LANES = 32
@@ -100,6 +100,21 @@ def table_width(minimum: int) -> int:
     compares the addresses' low 12 bits first), which costs about a factor two in the P2 step.
     """
     return -(-(minimum - 24) // 512) * 512 + 24 if minimum > 24 else 24
+
+
+def aligned_table(rows: int, width: int) -> np.ndarray:
+    """A zero ``(rows, width)`` table whose rows start on 64-byte boundaries (``width`` a multiple of 8).
+
+    A row of the layout is 32 doubles, four cache lines; on a table placed 16 bytes off a cache line every
+    vector load and store of the step straddles two lines, which cost the P1 step about half again and
+    the P2 step a quarter (1333-element rod: 2.07 against 1.37 and 2.9 against 2.35 ns per element;
+    numpy aligns large arrays to 16 bytes only).
+    """
+    if width % 8:
+        raise ValueError(f"width must be a multiple of 8 doubles, got {width}")
+    buffer = np.zeros(rows * width + 8)
+    start = (-buffer.ctypes.data % 64) // 8
+    return buffer[start : start + rows * width].reshape(rows, width)
 
 
 def _interleave(values: np.ndarray, n: int) -> np.ndarray:
