@@ -87,8 +87,10 @@ def profile_row(name, order, mass, elements, repeats):
     dt, per = setup.dt, 1e9 / disc.n_elements
     kind, table = run.mass_solves[1]
     flat_kind, flat_table = explicit_step.prepare_mass(disc, interleaved=False)
-    arrays_table = interleaved_step.aligned_table(*table.shape)  # the same step reading its uniform rows'
-    arrays_table[:] = table  # coefficients from the arrays (aligned as the table itself: a copy may not be)
+    interleaved = table[interleaved_step.L_SHAPE, 0] > 0
+    # the same step reading its uniform rows' coefficients from the arrays (aligned as the table itself)
+    arrays_table = interleaved_step.aligned_table(*table.shape) if interleaved else np.zeros(table.shape)
+    arrays_table[:] = table
     arrays_table[interleaved_step.L_UNIFORM, :2] = 1.0
     step = loop_step(disc, run.u[1].copy(), run.v[1].copy(), kind, table)
     arrays_step = loop_step(disc, run.u[1].copy(), run.v[1].copy(), kind, arrays_table)
