@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import shlex
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -31,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from docs_block import run_header, write_block
 
 from wavecontact.gas import default_law
-from wavecontact.gas.collision_law import REGENERATE, point_samples, row_resolutions
+from wavecontact.gas.collision_law import REGENERATE, parser, point_samples, row_resolutions
 
 GAMMAS = (0.6, 0.85, 0.9, 0.95, 1.0)
 LOG_XS = (0.0, -1.0, -2.0, -3.0, -4.0)
@@ -48,11 +49,15 @@ def affordable(gamma, log_x, resolution):
     return gamma == 1.0 or (gamma in (0.6, 0.85) and log_x > -4.0)
 
 
-def law_resolution(law, gamma, log_x):
-    """Grid points per period the law used at ``(gamma, log_x)``: its own row where it has one, else the nearest
-    ``gamma`` row's (the law's resolution is decided per ``gamma`` row)."""
-    a = int(np.argmin(np.abs(law.gamma - gamma)))
-    return law.point_resolution(a, list(law.log_x).index(log_x))
+def law_resolution(gamma, log_x):
+    """Grid points per period the shipped law's command (:data:`REGENERATE`) uses at ``(gamma, log_x)``: the
+    nearest ``gamma`` row's cap (the resolution is decided per ``gamma`` row), its rule at ``log_x``.  Taken from
+    the command so that the solves can run before the law is rebuilt; :func:`run` checks it against the file."""
+    args = parser().parse_args(shlex.split(REGENERATE)[3:])
+    caps = args.resolution_cap or [None]
+    caps = caps * len(args.gamma) if len(caps) == 1 else caps
+    a = int(np.argmin(np.abs(np.array(args.gamma) - gamma)))
+    return row_resolutions([log_x], args.resolution, caps[a])[0]
 
 
 def _task(args):
@@ -78,12 +83,18 @@ def law_row(law, gamma, log_x):
 
 
 def run(samples, workers):
-    law = default_law()
     tasks = [(g, lx, r, samples, i * len(LOG_XS) + j) for i, g in enumerate(GAMMAS) for j, lx in enumerate(LOG_XS)
-             for r in sorted(set(RESOLUTIONS) | {law_resolution(law, g, lx)}) if affordable(g, lx, r)]
+             for r in sorted(set(RESOLUTIONS) | {law_resolution(g, lx)}) if affordable(g, lx, r)]
     tasks.sort(key=lambda t: -t[2] * 10.0 ** (-t[1] / 2))  # dearest first
     with ProcessPoolExecutor(workers) as pool:
         results = {key: (eps2, gain, cpu) for key, eps2, gain, cpu in pool.map(_task, tasks)}
+    law = default_law()  # read after the solves: the file must be the one its command builds
+    for gamma in GAMMAS:
+        if gamma in law.gamma:
+            a = list(law.gamma).index(gamma)
+            for log_x in LOG_XS:
+                if law.point_resolution(a, list(law.log_x).index(log_x)) != law_resolution(gamma, log_x):
+                    raise SystemExit("the shipped law's resolution differs from its command's: rebuild it first")
     cpu_total = sum(v[2] for v in results.values())
     print(f"{samples} hard-core solves per point (the same seeds at every resolution), 250 modes per bath, "
           f"s = 1/2; mean eps^2 +- standard error, in brackets the short rod's mean gain in units of "
@@ -106,7 +117,7 @@ def run(samples, workers):
                 sem = eps2.std(ddof=1) / math.sqrt(eps2.size)
                 cells.append(f"{eps2.mean():.4g} +- {sem:.2g} ({gain.mean():+.3g})")
                 finest = r
-            own = law_resolution(law, gamma, log_x)
+            own = law_resolution(gamma, log_x)
             finest = max(finest, own)
             diff = results[(gamma, log_x, own)][0] - results[(gamma, log_x, finest)][0]
             paired = diff.std(ddof=1) / math.sqrt(diff.size)
