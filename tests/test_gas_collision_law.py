@@ -409,14 +409,19 @@ def test_a_cap_per_gamma_and_reused_points_give_the_same_law_as_a_full_build(tmp
                      full.gain_short, row_resolution=((16, 16, 16), (128, 51)))
 
 
+# (point, tolerance): 0 is bit for bit.  The soft law's rows kappa = 10, 30, 100 were built before the delay
+# kernel's stopping rule changed (the stop certificate, commit 37e0e2f), which moves its eps^2 by round-off
+# (about 1e-13); the kappa = 5 row and the hard-core law were built with the present code.
 @pytest.mark.parametrize(("command", "points"), [
-    (REGENERATE, [(0, 0, 14, 0), (0, 5, 14, 1)]),
-    (REGENERATE_SOFT, [(4, 0, 6, 1), (4, 2, 5, 1), (0, 0, 6, 1)]),
-], ids=["hard-core", "soft"])
+    (REGENERATE, [((0, 0, 14, 0), 0.0), ((0, 5, 14, 1), 0.0)]),
+    (REGENERATE_SOFT, [((3, 0, 6, 1), 0.0), ((3, 1, 5, 1), 1e-9), ((0, 0, 6, 1), 0.0)]),
+    pytest.param(REGENERATE_SOFT, [((0, 1, 5, 1), 0.0)], marks=pytest.mark.slow),  # 64 solves of 0.1 to 0.3 s
+], ids=["hard-core", "soft", "soft-kappa-5-warm"])
 def test_the_shipped_laws_are_what_their_stored_commands_build(command, points):
     """The commands in the file's metadata describe the shipped grid, seeds, caps and sample counts (a soft law
     merged from two builds: each build's kappa rows and seed), and re-solving a few of its points (the cheap
-    ones near x = 1) from the commands' seeds reproduces the file bit for bit."""
+    ones near x = 1) from the commands' seeds reproduces the file: bit for bit where the present code built it,
+    to round-off where an earlier delay kernel did."""
     law = LAW if command == REGENERATE else SOFT
     assert law.metadata()["regenerate"] == command
     builds = [parser().parse_args(shlex.split(part)[3:]) for part in command.split(" && ")]
@@ -436,7 +441,7 @@ def test_the_shipped_laws_are_what_their_stored_commands_build(command, points):
         for a, cap in enumerate(caps):
             assert [law.point_resolution(a, b) for b in range(law.log_x.size)] == list(
                 row_resolutions(law.log_x, args.resolution, cap))
-    for index in points:
+    for index, tolerance in points:
         k, g, b, c = index
         args = next(a for a in builds if law.kappa[k] in a.kappa)
         rows = sorted(args.kappa)
@@ -446,8 +451,13 @@ def test_the_shipped_laws_are_what_their_stored_commands_build(command, points):
         eps2, gain = point_samples(law.gamma[g], law.log_x[b], law.samples_per_point, seeds,
                                    bath_modes=law.bath_modes, resolution=law.point_resolution(g, b),
                                    short_share=law.short_share[c], kappa=law.kappa[k])
-        assert np.array_equal(np.quantile(eps2, law.probability), law.eps2_quantiles[index])
-        assert np.array_equal(level_means(eps2, gain, law.probability), law.gain_short[index])
+        quantiles, gains = np.quantile(eps2, law.probability), level_means(eps2, gain, law.probability)
+        if tolerance == 0.0:
+            assert np.array_equal(quantiles, law.eps2_quantiles[index])
+            assert np.array_equal(gains, law.gain_short[index])
+        else:
+            np.testing.assert_allclose(quantiles, law.eps2_quantiles[index], rtol=0, atol=tolerance)
+            np.testing.assert_allclose(gains, law.gain_short[index], rtol=0, atol=tolerance)
 
 
 def test_soft_laws_merge_along_kappa_and_refuse_other_grids(tmp_path):
