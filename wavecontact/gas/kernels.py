@@ -201,12 +201,23 @@ def build_tree(key, tree_time, tree_event):
 
 
 @kernel(inline="always")
-def _advance(i, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars):
-    """Bring rod ``i`` to time ``t``: free flight, and its bath relaxing at ``decay_rate``."""
+def _advance(i, t, x, v, local_time):
+    """Bring rod ``i`` to time ``t`` (free flight); returns the time it flew.
+
+    Branch-free, so that numba's reference counts of the arrays cancel when
+    it is inlined; the bath's relaxation is :func:`_relax_bath`, called only
+    when there is damping.
+    """
     dt = t - local_time[i]
     x[i] += v[i] * dt
     local_time[i] = t
-    if decay_rate > 0.0 and dt > 0.0:
+    return dt
+
+
+@kernel
+def _relax_bath(i, dt, temperature, decay_rate, bath_modes, scalars):
+    """Rod ``i``'s bath relaxing at ``decay_rate`` for a time ``dt`` (its energy counted as dissipated)."""
+    if dt > 0.0:
         cooled = temperature[i] * math.exp(-decay_rate * dt)
         scalars[DISSIPATED] += bath_modes * (temperature[i] - cooled)
         temperature[i] = cooled
@@ -475,7 +486,9 @@ def run_events(
             return STATUS_TIME_LIMIT, -1, done
         if not ring and (k == 0 or k == n):
             rod = 0 if k == 0 else n - 1
-            _advance(rod, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars)
+            dt = _advance(rod, t, x, v, local_time)
+            if decay_rate > 0.0:
+                _relax_bath(rod, dt, temperature, decay_rate, bath_modes, scalars)
             v[rod] = -v[rod]
             scalars[T_NOW] = t
             counters[WALL_HITS] += 1
@@ -494,8 +507,11 @@ def run_events(
             j = k
         if rule == RULE_EXTERNAL and pending[0] == 0.0:
             return STATUS_NEED_DRAW, k, done
-        _advance(i, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars)
-        _advance(j, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars)
+        dt_i = _advance(i, t, x, v, local_time)
+        dt_j = _advance(j, t, x, v, local_time)
+        if decay_rate > 0.0:
+            _relax_bath(i, dt_i, temperature, decay_rate, bath_modes, scalars)
+            _relax_bath(j, dt_j, temperature, decay_rate, bath_modes, scalars)
         mi = mass[i]
         mj = mass[j]
         total = mi + mj
