@@ -40,6 +40,7 @@ from peers.fem_scipy_loop import scipy_fem_run
 from timing import median_time
 
 import wavecontact
+from wavecontact.fem.explicit_step import prepare_mass
 from wavecontact.fem.simulation import _Run, build_setup, run_collision
 
 GAMMA = 0.6
@@ -135,34 +136,48 @@ OURS_ELEMENT_STEPS = 2e7  # per timed run: about 0.1 s of our loop
 PEER_ELEMENT_STEPS = 3e6  # per timed run of the peer (0.02 - 0.6 s)
 
 
+def _our_loop(setup, steps, both, flat_layout):
+    """(CPU, wall) seconds per element-step of our time loop over up to ``steps`` steps from the start, divided
+    by the steps it ran (a short run separates before ``steps``); ``flat_layout``: every mass solve in the
+    flat layout (``prepare_mass(..., interleaved=False)``), for comparison with the interleaved one."""
+    run = _Run(setup, 0.05)
+    if flat_layout:
+        run.mass_solves = [prepare_mass(d, interleaved=False) for d in setup.rods]
+    started, started_wall = time.thread_time(), time.perf_counter()
+    _, history, _ = run.advance(steps)
+    done = len(history[0]) * both
+    return (time.thread_time() - started) / done, (time.perf_counter() - started_wall) / done
+
+
 def table_discretizations(repeats, reference):
     print("\n#### General explicit path against the scikit-fem + scipy.sparse loop, kappa = 100 "
           "(target <= 2 ns per element-step, >= 20x)\n")
     print("Both loops take the same step (ours: 'auto', the force scheme here) on the same kind of mesh (both rods "
           "meshed whole); the peer solves a consistent mass with scipy.sparse.linalg.splu factorized once. Timed over "
           "a fixed number of steps from the start (the cost per step does not depend on the phase of the collision), "
-          "runs alternated, medians; epsilon error from full runs at 800 elements. 'CPU' is the CPU time of the "
+          "runs alternated, medians, divided by the steps the run took (it may separate earlier); 'flat layout': our "
+          "loop with every mass solve in the flat layout instead of the interleaved one of large consistent masses "
+          "(the same otherwise); epsilon error from full runs at 800 elements. 'CPU' is the CPU time of the "
           "calling thread (time.thread_time), 'wall' the elapsed time: on a shared machine the wall time also counts "
           "the time other jobs hold the core, the CPU time does not. Not the process's CPU time: OpenBLAS's worker "
           "threads, woken by the BLAS calls of a set-up on the large meshes (build_setup at 12800 elements), spin "
           "for a while afterwards and add their CPU time to whatever loop runs then (OPENBLAS_NUM_THREADS=1 "
           "removes it).\n")
-    print("| discretization | elements | dt / stable step | ours: ns/el-step CPU (wall) | "
+    print("| discretization | elements | dt / stable step | ours: ns/el-step CPU (wall) | ours, flat layout: CPU | "
           "peer: ns/el-step CPU (wall) | speed-up CPU (wall) | error at 800 (ours / peer) |")
-    print("|---|---:|---:|---:|---:|---:|---|")
+    print("|---|---:|---:|---:|---:|---:|---:|---|")
     for name, order, mass, extra in DISCRETIZATIONS:
         for elements in (800, 3200, 12800):
             setup = build_setup(wavecontact.two_rods(GAMMA, 100), elements=elements, order=order, mass=mass, **extra)
             both = sum(d.n_elements for d in setup.rods)
             ours_steps = max(100, int(OURS_ELEMENT_STEPS / both))
             peer_steps = max(20, int(PEER_ELEMENT_STEPS / both))
-            ours, ours_wall, theirs, theirs_wall = [], [], [], []
+            ours, ours_wall, flat, theirs, theirs_wall = [], [], [], [], []
             for _ in range(max(3, repeats // 2)):
-                run = _Run(setup, 0.05)
-                started, started_wall = time.thread_time(), time.perf_counter()
-                run.advance(ours_steps)
-                ours.append((time.thread_time() - started) / (ours_steps * both))
-                ours_wall.append((time.perf_counter() - started_wall) / (ours_steps * both))
+                seconds, seconds_wall = _our_loop(setup, ours_steps, both, flat_layout=False)
+                ours.append(seconds)
+                ours_wall.append(seconds_wall)
+                flat.append(_our_loop(setup, ours_steps, both, flat_layout=True)[0])
                 _, seconds, _, element_steps = scipy_fem_run(GAMMA, 100, elements, order, mass, dt=setup.dt,
                                                              max_steps=peer_steps, clock=time.thread_time)
                 theirs.append(seconds / element_steps)
@@ -170,6 +185,7 @@ def table_discretizations(repeats, reference):
                                                              max_steps=peer_steps)
                 theirs_wall.append(seconds / element_steps)
             ours_ns, theirs_ns = float(np.median(ours)) * 1e9, float(np.median(theirs)) * 1e9
+            flat_ns = float(np.median(flat)) * 1e9
             ours_wall_ns, theirs_wall_ns = float(np.median(ours_wall)) * 1e9, float(np.median(theirs_wall)) * 1e9
             errors = ""
             if elements == 800:
@@ -177,6 +193,7 @@ def table_discretizations(repeats, reference):
                 peer_eps = scipy_fem_run(GAMMA, 100, elements, order, mass, dt=setup.dt)[0]
                 errors = f"{abs(mine.restitution - reference[100]):.1e} / {abs(peer_eps - reference[100]):.1e}"
             print(f"| {name} | {elements} | {setup.dt / setup.stable_step:.2f} | {ours_ns:.2f} ({ours_wall_ns:.2f}) | "
+                  f"{flat_ns:.2f} | "
                   f"{theirs_ns:.1f} ({theirs_wall_ns:.1f}) | {theirs_ns / ours_ns:.0f}x "
                   f"({theirs_wall_ns / ours_wall_ns:.0f}x) | {errors} |")
 

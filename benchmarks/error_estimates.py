@@ -12,7 +12,10 @@ re-applies the library's FE rule (:mod:`wavecontact.fem.error_estimate`, a pure 
 those runs) to a stored sweep in seconds instead of solving.  ``--update-docs`` writes the table
 of one solver into docs/error_estimates.md (the block ``sweep:SOLVER:SEED``); the FE tables there
 come from ``--solver fem --seed S --offline benchmarks/sweeps/fem_S.jsonl --update-docs`` for
-S = 2027 ... 2030, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
+S = 2027 ... 2031, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
+``--add-finer FILE`` adds to a sweep stored before the solver ran the level at twice the elements
+(below ``FINER_BELOW`` elements) that level, in seconds, so that ``--offline`` applies the
+present rule (seeds 2027 ... 2030).
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
@@ -32,8 +35,9 @@ refused, failed
     collisions refused up front (LimitError: over the work limit ``--max-work``
     or the memory limit) or stopped by the solver (SolverFailure); not counted above.
 
-The FE rows are also split by discretization and by regime (``alpha V h / c`` at the
-requested mesh, hard contact), and a last line gives the time of the estimate's coarser
+The FE rows are also split by discretization, by regime (``alpha V h / c`` at the
+requested mesh, hard contact), by mesh size (under ``FINER_BELOW`` elements the estimate
+uses a run at 2N) and by the rough flag, and a last line gives the time of the estimate's
 runs relative to the requested run.
 
 Each sample has its own random stream (``SeedSequence(seed).spawn``); the
@@ -54,6 +58,7 @@ import numpy as np
 
 from wavecontact import collide, two_rods
 from wavecontact.errors import LimitError, SolverFailure
+from wavecontact.fem.solver import FINER_BELOW
 from wavecontact.fem.solver import SOLVER as FEM
 from wavecontact.solvers.base import excess_bound
 
@@ -122,6 +127,22 @@ def reapply(row: dict) -> dict:
             "rough": FEM.rough_estimate(scene, options)}
 
 
+def add_finer(row: dict) -> tuple:
+    """``(row, drift)``: ``row`` with the run at twice the elements appended to its levels where the solver
+    now runs it (fewer than ``FINER_BELOW`` elements) and the stored sweep lacks it (sweeps saved before the
+    solver did), and ``|eps(N)|`` rerun now minus the stored one (NaN where nothing was added): the added
+    level is only consistent with the stored ones if the code still gives the stored runs."""
+    elements = row["options"]["elements"]
+    if row["status"] != "ok" or elements >= FINER_BELOW or any(n > elements for n, _ in row["levels"]):
+        return row, math.nan
+    scene = two_rods(row["gamma"], row["kappa"])
+    options = FEM.estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
+    value = float(FEM._collide(scene, options.replace(elements=2 * elements, record_fields=False))["restitution"])
+    again = float(FEM._collide(scene, options.replace(record_fields=False))["restitution"])
+    return ({**row, "levels": [*row["levels"], [2 * elements, value]], "finer_added": True},
+            abs(again - row["restitution"]))
+
+
 def summarize(rows: list) -> dict:
     """Coverage, sharpness and counts of a list of :func:`run_sample` rows."""
     solved = [r for r in rows if r["status"] == "ok"]
@@ -156,11 +177,25 @@ def main(argv=None) -> int:
     parser.add_argument("--offline", nargs="+", metavar="FILE",
                         help="re-apply the library's FE rule to the levels stored by --save (or --verbose) "
                              "instead of running, and print the table")
+    parser.add_argument("--add-finer", metavar="FILE",
+                        help="run the level at twice the elements for the stored FE samples under "
+                             f"{FINER_BELOW} elements that lack it, and rewrite FILE with it (seconds)")
     parser.add_argument("--misses", action="store_true",
                         help="also list the FE collisions the estimate does not bound or is not within 10x of")
     parser.add_argument("--update-docs", action="store_true",
                         help="also write the table into docs/error_estimates.md (block sweep:SOLVER:SEED, one solver)")
+    parser.add_argument("--block", metavar="NAME",
+                        help="with --update-docs: write block sweep:NAME instead (e.g. fem:2027-2030 for several "
+                             "--offline files together)")
     args = parser.parse_args(argv)
+    if args.add_finer:
+        pairs = [add_finer(row) if row["solver"] == "fem" else (row, math.nan) for row in load_rows(args.add_finer)]
+        with open(args.add_finer, "w", encoding="utf-8") as handle:
+            handle.writelines(json.dumps(row) + "\n" for row, _ in pairs)
+        drifts = [drift for _, drift in pairs if not math.isnan(drift)]
+        print(f"added the run at 2N to {len(drifts)} samples; the requested runs rerun now differ from the stored "
+              f"ones by at most {max(drifts, default=0.0):.2g}")
+        return 0
     if args.summarize or args.offline:
         rows = [row for name in args.summarize or args.offline for row in load_rows(name)]
         if args.offline:
@@ -195,7 +230,7 @@ def _report(tables: dict, args) -> int:
     if args.update_docs:
         if len(tables) != 1:
             raise SystemExit("--update-docs writes one solver's table: give one --solver")
-        update_docs(lines, next(iter(tables)), args.seed)
+        update_docs(lines, args.block or f"{next(iter(tables))}:{args.seed}")
     return 0
 
 
@@ -220,7 +255,7 @@ def rough(row: dict) -> bool:
 def miss_lines(rows: list) -> list:
     """One line per solved FE sample outside the coverage or the factor 10: its options, the regime
     ``x = alpha V h / c``, error, estimate, their ratio, the errors of the estimate's runs and the rough flag."""
-    lines = ["index | discretization | N | x | error | estimate | ratio | errors of the runs N, N/2, ... | flag"]
+    lines = ["index | discretization | N | x | error | estimate | ratio | errors of the runs N, N/2, ... (then 2N) | flag"]
     for r in rows:
         if r["status"] != "ok":
             continue
@@ -250,6 +285,18 @@ def estimate_share(rows: list) -> tuple:
     return total, float(np.median(long)) if long else math.nan, len(long)
 
 
+def finer_share(rows: list) -> tuple:
+    """Time of the estimate's runs (2N included) over the requested run's, for the FE samples under
+    ``FINER_BELOW`` elements whose run at 2N was timed with the solve (not added by ``--add-finer``):
+    the median ratio, the largest estimate time in seconds and the count."""
+    small = [r for r in rows if r["status"] == "ok" and "estimate_seconds" in r and not r.get("finer_added")
+             and r["options"].get("elements", math.inf) < FINER_BELOW]
+    if not small:
+        return math.nan, math.nan, 0
+    ratios = [r["estimate_seconds"] / max(r["solve_seconds"] - r["estimate_seconds"], 1e-12) for r in small]
+    return float(np.median(ratios)), max(r["estimate_seconds"] for r in small), len(small)
+
+
 def table_lines(tables: dict) -> list:
     """The table (markdown) of every solver's rows; FE also per discretization and per regime."""
     lines = ["| sample | solved | coverage | within 10x | (n) | median | p95 | refused | failed |",
@@ -262,6 +309,8 @@ def table_lines(tables: dict) -> list:
                                               == (order, mass)]
             for name in ("alpha V h/c <= 1", "alpha V h/c in (1, 30]", "alpha V h/c > 30", "hard contact"):
                 groups[name] = [r for r in rows if regime(r) == name]
+            groups[f"under {FINER_BELOW} elements"] = [r for r in rows if r["options"]["elements"] < FINER_BELOW]
+            groups[f"{FINER_BELOW} elements or more"] = [r for r in rows if r["options"]["elements"] >= FINER_BELOW]
             flagged = [r for r in rows if r["status"] == "ok" and rough(r)]
             groups["flagged rough"] = flagged
             groups["not flagged"] = [r for r in rows if r not in flagged]
@@ -271,13 +320,18 @@ def table_lines(tables: dict) -> list:
                          f"| {s['median_ratio']:.3g} | {s['p95_ratio']:.3g} | {s['refused']} | {s['failed']} |")
         total, median, count = estimate_share(rows)
         lines.append(f"\n{solver}: the coarser runs of the estimate took {total:.2f} of the requested runs' time in "
-                     f"all, {median:.2f} (median) for the {count} requested runs of a second or more.\n")
+                     f"all, {median:.2f} (median) for the {count} requested runs of a second or more.")
+        ratio, longest, small = finer_share(rows) if solver == "fem" else (math.nan, math.nan, 0)
+        if small:
+            lines.append(f"Under {FINER_BELOW} elements (with the run at 2N): {ratio:.2f} of the requested run's time "
+                         f"(median of {small}), at most {longest:.2g} s.")
+        lines.append("")
     return lines
 
 
-def update_docs(lines: list, solver: str, seed: int, page: str = DOCS_PAGE) -> None:
-    """Replace the block ``<!-- sweep:SOLVER:SEED:start/end -->`` of ``page`` with ``lines``."""
-    start, end = f"<!-- sweep:{solver}:{seed}:start -->\n", f"<!-- sweep:{solver}:{seed}:end -->"
+def update_docs(lines: list, block: str, page: str = DOCS_PAGE) -> None:
+    """Replace the block ``<!-- sweep:BLOCK:start/end -->`` of ``page`` (BLOCK: ``SOLVER:SEED``) with ``lines``."""
+    start, end = f"<!-- sweep:{block}:start -->\n", f"<!-- sweep:{block}:end -->"
     with open(page, encoding="utf-8") as handle:
         text = handle.read()
     if start not in text or end not in text:

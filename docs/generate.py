@@ -3,7 +3,8 @@
     python docs/generate.py              # every block (a few minutes on 2 cores)
     python docs/generate.py NAME ...     # only these blocks
     python docs/generate.py --list       # the blocks, their pages and commands
-    python docs/generate.py --check      # exit 1 if a page differs from a fresh run
+    python docs/generate.py --check      # exit 1 if a page differs from a fresh run (writes nothing:
+                                         # figures of the commands go to a scratch directory)
 
 A generated block on a page is the text between
 
@@ -174,19 +175,22 @@ BLOCKS = [
     Block("modal-accuracy", "docs/modal.md", (("python", "benchmarks/bench_modal.py", "--accuracy-only"),),
           volatile=(r"^machine load average.*?: (.*)$", r"^ *\S+ +\d+ +\S+ +\(.*?\)( +[\d.]+)$")),
     Block("materials-map", "docs/materials.md",
-          (("map", "--kappa", "inf", "100", "--out", "docs/figures/material_map", "--no-progress"),), markdown=True),
+          (("map", "--kappa", "inf", "100", "--out", "{figures}/material_map", "--no-progress"),), markdown=True),
     Block("materials-striker", "docs/materials.md",
-          (("python", "examples/steel_striker_on_aluminium_bar.py", "docs/figures"),)),
+          (("python", "examples/steel_striker_on_aluminium_bar.py", "{figures}"),)),
     Block("theory-two-material-contacts", "docs/theory.md", (("python", "docs/two_material_contacts.py"),)),
     # the examples write their figures where docs/examples.md shows them
-    *(Block(f"example-{name[:-3]}", "docs/examples.md", (("python", f"examples/{name}", "docs/figures/examples"),))
+    *(Block(f"example-{name[:-3]}", "docs/examples.md", (("python", f"examples/{name}", "{figures}/examples"),))
       for name in EXAMPLES),
 ]
 
 
+FIGURES = "docs/figures"  # where "{figures}" in a command writes when pages are regenerated
+
+
 def display(argv) -> str:
-    """The command as a reader types it (temporary directories shown as ``out/``)."""
-    words = [w.replace("{tmp}/", "out/").replace("{tmp}", "out") for w in argv]
+    """The command as a reader types it (temporary directories shown as ``out/``, figures under docs/figures)."""
+    words = [w.replace("{tmp}/", "out/").replace("{tmp}", "out").replace("{figures}", FIGURES) for w in argv]
     if words[0] == "python":
         return " ".join(words)
     return "wavecontact " + " ".join(words)
@@ -214,32 +218,40 @@ def _help_text(argv) -> str:
     return out.getvalue()
 
 
-def run_command(argv, scratch: str, env: dict | None = None) -> str:
-    """Run one command from this checkout and return its standard output."""
+def run_command(argv, scratch: str, env: dict | None = None, figures: str = FIGURES) -> str:
+    """Run one command from this checkout and return its standard output.
+
+    ``{tmp}`` in a command is ``scratch``; ``{figures}`` is ``figures`` (docs/figures when pages are
+    regenerated, a scratch directory when they are only checked), shown as docs/figures in the output.
+    """
     if argv[-1] == "--help" and argv[0] != "python":
         return _help_text(argv)  # no output files, nothing to time: a subprocess per page would be slow
-    words = [w.replace("{tmp}", scratch) for w in argv]
+    words = [w.replace("{tmp}", scratch).replace("{figures}", figures) for w in argv]
     command = [sys.executable, *words[1:]] if words[0] == "python" else [sys.executable, "-m", "wavecontact", *words]
     environment = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100", "MPLBACKEND": "Agg", **(env or {})}
     done = subprocess.run(command, cwd=ROOT, env=environment, capture_output=True, text=True, timeout=3600,
                           check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{display(argv)} failed ({done.returncode}):\n{done.stderr}")
-    return done.stdout
+    return done.stdout.replace(figures, FIGURES)
 
 
-def render(block: Block) -> str:
-    """The block's text: each command and what it printed, as one code block."""
+def render(block: Block, write_figures: bool = True) -> str:
+    """The block's text: each command and what it printed, as one code block.
+
+    With ``write_figures=False`` the figures its commands write go to a scratch directory, not to
+    docs/figures (for ``--check`` and the tests: comparing a page must not change the repository).
+    """
     if block.python:
         return globals()[block.python]()
-    if block.markdown:
-        with tempfile.TemporaryDirectory() as scratch:
-            return "".join(f"`$ {display(argv)}`\n\n{run_command(argv, scratch, block.env).strip()}\n"
-                           for argv in block.commands)
-    parts = []
     with tempfile.TemporaryDirectory() as scratch:
-        for argv in block.commands:
-            parts.append(f"$ {display(argv)}\n{run_command(argv, scratch, block.env).rstrip()}\n")
+        figures = FIGURES if write_figures else os.path.join(scratch, "figures")
+        for word in (w for argv in block.commands for w in argv if w.startswith("{figures}")):
+            os.makedirs(word.replace("{figures}", figures), exist_ok=True)  # they exist in a checkout
+        outputs = [run_command(argv, scratch, block.env, figures) for argv in block.commands]
+    if block.markdown:
+        return "".join(f"`$ {display(argv)}`\n\n{out.strip()}\n" for argv, out in zip(block.commands, outputs))
+    parts = [f"$ {display(argv)}\n{out.rstrip()}\n" for argv, out in zip(block.commands, outputs)]
     return "```text\n" + "\n".join(parts) + "```\n"
 
 
@@ -275,7 +287,7 @@ def main(argv=None) -> int:
         parser.error(f"unknown block(s) {', '.join(unknown)}; see --list")
     stale = 0
     for block in [known[n] for n in args.names] or BLOCKS:
-        body = render(block)
+        body = render(block, write_figures=not args.check)
         page = ROOT / block.page
         if args.check:
             current = page_blocks(page).get(block.name)

@@ -79,9 +79,34 @@ def test_every_script_written_block_has_a_writer_and_names_its_command():
 
 @pytest.mark.parametrize("name", sorted(n for n, b in BLOCKS.items() if b.cheap))
 def test_cheap_blocks_are_what_their_commands_print(name):
-    fresh = generate.render(BLOCKS[name])
+    fresh = generate.render(BLOCKS[name], write_figures=False)
     assert generate.mask(BLOCKS[name], block_text(name)) == generate.mask(BLOCKS[name], fresh), (
         f"{BLOCKS[name].page} is out of date: python docs/generate.py {name}")
+
+
+def test_error_estimate_tuning_figures_are_what_the_stored_sweeps_give():
+    """docs/error_estimates.md section 1: the ratios the FE estimate's orders rest on (seconds: it reads
+    the stored sweeps, no solve)."""
+    spec = importlib.util.spec_from_file_location("estimate_tuning_figures",
+                                                  ROOT / "benchmarks" / "estimate_tuning_figures.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    text = (ROOT / "docs" / "error_estimates.md").read_text()
+    block = text.split("<!-- tuning-figures:start -->\n", 1)[1].split("<!-- tuning-figures:end -->", 1)[0]
+    assert block == "\n".join(script.table([2027, 2028, 2029, 2030])) + "\n", (
+        "stale: python benchmarks/estimate_tuning_figures.py --update-docs")
+
+
+def test_checking_a_page_writes_no_figure_into_the_repository():
+    """``generate.py --check`` renders with ``write_figures=False``: the example's figures go to a scratch
+    directory, and its output still names docs/figures as the page does."""
+    block = BLOCKS["example-restitution_vs_kappa"]
+    figures = ROOT / "docs" / "figures"
+    before = {p: p.stat().st_mtime_ns for p in figures.rglob("*") if p.is_file()}
+    fresh = generate.render(block, write_figures=False)
+    after = {p: p.stat().st_mtime_ns for p in figures.rglob("*") if p.is_file()}
+    assert after == before
+    assert "docs/figures/examples" in fresh and "/tmp" not in fresh and "figures/examples" in block_text(block.name)
 
 
 def test_masking_hides_wall_times_only():

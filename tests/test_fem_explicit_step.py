@@ -22,6 +22,7 @@ from wavecontact.fem.explicit_step import (
     prepare_mass,
     step_rod,
 )
+from wavecontact.fem.interleaved_step import L_SHAPE, LANE_MIN_UNKNOWNS, LANE_MIN_VERTICES, LANES
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -112,15 +113,25 @@ def test_chained_mass_solve_equals_a_banded_solve_to_rounding(order, spread, ele
 
 @pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("mass", ["lumped", "consistent"])
-@pytest.mark.parametrize("elements", [150, 900])  # consistent: the twisted solve, then the chained one
+@pytest.mark.parametrize("elements", [150, 900, 1301, 2533])
 def test_many_fast_steps_equal_a_reference_step_with_a_banded_solve(order, mass, elements):
-    """400 steps of ``step_rod`` near the stability limit against a step written with scipy's banded solver."""
+    """400 steps of ``step_rod`` near the stability limit against a step written with scipy's banded solver.
+
+    Consistent masses: the twisted solve (150), the chained one (900), and from 1200 unknowns (P1) or
+    vertices (P2) the interleaved layout, with unknowns that do not fill the last row (1301, 2533) and
+    chunks shorter (P1 at 1301 on this graded mesh, P2 at 1301) and longer than their correction rows.
+    """
     rng = np.random.default_rng(7 * order + len(mass) + elements)
     length = 1.1
     disc = discretize_rod(Rod(length, 2.0, 3.0, 0.5), _graded_nodes(rng, elements, length, 2.0), order, mass)
     kind, table = prepare_mass(disc)
     if mass == "consistent":
-        assert (table[T_CHAIN_BURN_IN, 0] > 0) == (elements == 900)
+        unknowns = elements + 1
+        interleaved = unknowns >= (LANE_MIN_UNKNOWNS if order == 1 else LANE_MIN_VERTICES)
+        assert (table[L_SHAPE, 0] > 0) == interleaved
+        assert interleaved or (table[T_CHAIN_BURN_IN, 0] > 0) == (elements == 900)
+        if interleaved:
+            assert unknowns % LANES != 0
     (lower, upper), banded = _banded_mass(disc)
     bands = disc.stiffness_bands
     stiffness = disc.stiffness  # the assembled K
@@ -168,8 +179,9 @@ def test_compiled_chains_equal_their_pure_python_form_bit_for_bit():
 def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
     """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process gives the compiled steps' bits, every kind.
 
-    700 elements: the consistent masses take the chained solve (no reassociation, no fused multiply-add
-    in the compiled kernels, so the vectorized passes round exactly as the plain Python loops do).
+    700 elements: the consistent masses take the chained solve, 1250 the interleaved layout (no
+    reassociation, no fused multiply-add in the compiled kernels, so the vectorized passes round exactly
+    as the plain Python loops do).
     """
 
     script = (
@@ -179,10 +191,11 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "from wavecontact.fem.discretization import discretize_rod\n"
         "from wavecontact.fem.explicit_step import prepare_mass, step_rod\n"
         "out = {}\n"
-        "for order in (1, 2):\n"
-        "    for mass in ('lumped', 'consistent'):\n"
+        "for order, mass, elements in ((1, 'lumped', 700), (2, 'lumped', 700), (1, 'consistent', 700),\n"
+        "                              (2, 'consistent', 700), (1, 'consistent', 1250), (2, 'consistent', 1250)):\n"
+        "    if True:\n"
         "        rng = np.random.default_rng(order)\n"
-        "        sizes = np.exp(rng.uniform(0.0, np.log(2.0), 700))\n"
+        "        sizes = np.exp(rng.uniform(0.0, np.log(2.0), elements))\n"
         "        nodes = np.r_[0.0, np.cumsum(sizes)] / sizes.sum()\n"
         "        disc = discretize_rod(Rod(1.0, 2.0, 3.0, 0.5), nodes, order, mass)\n"
         "        kind, table = prepare_mass(disc)\n"
@@ -190,11 +203,14 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "        scratch = np.zeros(disc.n_nodes)\n"
         "        for _ in range(5):\n"
         "            step_rod(u, v, scratch, disc.stiffness_bands, kind, table, 1e-4)\n"
-        "        out[f'u{order}{mass}'], out[f'v{order}{mass}'] = u, v\n"
+        "        out[f'u{order}{mass}{elements}'], out[f'v{order}{mass}{elements}'] = u, v\n"
+        "        out[f'layout{order}{mass}{elements}'] = table[24, :3]\n"
         "np.savez(sys.argv[1], **out)\n"
     )
     root = Path(__file__).resolve().parents[1]  # this checkout's package
     outputs = pure_and_compiled_outputs(script, tmp_path, root)
-    assert len(outputs[0]) == 8
+    assert len(outputs[0]) == 18
+    assert outputs[1]["layout1consistent1250"][0] > 0 and outputs[1]["layout2consistent1250"][0] > 0  # interleaved
+    assert outputs[1]["layout1consistent700"][0] == 0
     for name in outputs[0]:
         np.testing.assert_array_equal(outputs[0][name], outputs[1][name], err_msg=name)

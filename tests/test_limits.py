@@ -94,6 +94,20 @@ def test_limits_can_be_raised_explicitly():
         check_cost("fem", Cost(steps=1, work=1, memory=10.0), Limits(max_memory=5.0))
 
 
+def test_the_work_limit_counts_the_error_estimates_runs():
+    # below 32 elements the FE estimate also runs 2N elements (four times the work) and N/2, N/4:
+    # a limit between the requested run's work and the total refuses the estimate, not the bare run
+    fem = wavecontact.solvers.get_solver("fem")
+    scene, options = wavecontact.two_rods(0.6, 20), fem.Options(elements=20)
+    alone = fem.estimate_cost(scene, options).work
+    total = fem.total_cost(scene, options, estimating=True).work
+    assert total > 4 * alone  # the 2N run has twice the nodes and twice the steps
+    limit = 2 * alone
+    assert collide(0.6, 20, solver="fem", elements=20, max_work=limit, estimate_error=False).restitution > 0
+    error = refused(lambda: collide(0.6, 20, solver="fem", elements=20, max_work=limit), "max_work=", "error estimate")
+    assert isinstance(error, LimitError)
+
+
 @pytest.mark.parametrize("kappa", [1e-6, 1e-3, 0.999 * KAPPA_MIN, 1.001 * KAPPA_MAX, 1e10, 1e300])
 def test_kappa_outside_the_supported_range_is_refused_up_front(kappa):
     error = refused(lambda: collide(0.6, kappa), "kappa", "inf")

@@ -2,7 +2,9 @@
 
 After the requested run on ``N`` elements the FE solver runs the same collision on ``N/2``
 and ``N/4`` elements (same contact scheme) and turns the restitutions into an
-estimate of ``|epsilon(N) - epsilon_exact|`` with :func:`estimate_from_levels`.  The rule
+estimate of ``|epsilon(N) - epsilon_exact|`` with :func:`estimate_from_levels`.  On small
+meshes it also runs ``2N`` elements and estimates the error with :func:`estimate_with_finer`
+(the difference to that run plus the rule's estimate of the finer run's own error).  The rule
 depends only on those restitutions and on three numbers known before the run: the contact
 resolution ``x = alpha V h / c`` at ``N``, the declared order and whether the run uses the
 characteristic interface of P1 lumped.  The benchmark (``benchmarks/error_estimates.py
@@ -27,6 +29,7 @@ __all__ = [
     "ROUNDING_FLOOR",
     "UNRESOLVED_ORDER",
     "estimate_from_levels",
+    "estimate_with_finer",
 ]
 
 #: order of an unresolved impact, whose front spreads over about h^(2/3) (docs/fem.md section 3)
@@ -128,3 +131,41 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     floor = CHARACTERISTIC_FLOOR if characteristic and x < math.inf else ROUNDING_FLOOR
     return (max(estimate, floor),
             f"order {order:.3g} ({how}; alpha V h / c = {x:.3g}), safety {ESTIMATE_SAFETY:g}, floor {floor:g}")
+
+
+def estimate_with_finer(finer, levels, resolution: float, declared: float, characteristic: bool) -> tuple:
+    """``(estimate, rule)``: the error of ``levels[0]``'s restitution from a run on a finer mesh.
+
+    By the triangle inequality ``|e(N)| <= |eps(N) - eps(2N)| + |e(2N)|``: the first term is
+    measured, the second is :func:`estimate_from_levels` applied to the finer run followed by
+    ``levels`` (so its finest difference is ``eps(2N) - eps(N)``), with the regime of the requested
+    run (``resolution`` at ``N``, the coarser of the pair: the lower order at the bands' edges).
+    Where the runs converge, the measured difference is most of the error and the estimate is
+    sharp whatever the order; where ``eps(N)`` is near the limit by accident (the error changes sign
+    between ``N/2`` and ``2N``), the estimate is about ``|e(2N)|`` instead of the size of the coarser
+    runs' differences.  docs/error_estimates.md section 1 gives the evidence.
+
+    Parameters
+    ----------
+    finer : (int, float)
+        ``(elements, restitution)`` of the finer run (about twice the requested elements).
+    levels : sequence of (int, float)
+        ``(elements, restitution)`` of the requested run first, then of the coarser runs (at least
+        the requested run).
+    resolution : float
+        ``alpha V h / c`` at the requested mesh (dimensionless; inf for hard and penalty contact).
+    declared : float
+        The discretization's order where the contact is resolved.
+    characteristic : bool
+        Whether the run uses the characteristic interface with the sub-step gap quadrature.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The estimate of ``|epsilon - epsilon_exact|`` at the requested mesh (dimensionless) and a
+        one-line account of the rule.
+    """
+    difference = abs(levels[0][1] - finer[1])
+    finer_error, rule = estimate_from_levels([tuple(finer), *levels], resolution, declared, characteristic)
+    return (difference + finer_error,
+            f"|eps(N) - eps({finer[0]})| = {difference:.3g} plus the error of the run at {finer[0]}: {rule}")

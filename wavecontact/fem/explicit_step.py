@@ -42,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import kernel
+from . import interleaved_step as lanes
 
 __all__ = ["MASS_CONDENSED", "MASS_LUMPED", "MASS_TRIDIAGONAL", "mass_acceleration", "prepare_mass", "step_rod"]
 
@@ -81,7 +82,8 @@ T_P_BACK_RIGHT = 20  # M[j, j + 1] / M[j, j]
 T_P_SHARE = 21  # scratch: s_e
 T_P_CARRY = 22  # scratch: element e's part of vertex e + 1
 T_SCALE = 23  # the scaling of the right-hand side of the solve in use: T_CHAIN_INVERSE or T_INVERSE_PIVOT
-T_ROWS = 24
+# rows lanes.L_SHAPE .. lanes.L_ROWS_END - 1: the interleaved layout of large consistent masses (interleaved_step.py)
+T_ROWS = lanes.L_ROWS_END
 TWISTED_MIN = 8  # smaller systems take the plain sweeps (same table)
 CHAINS = 8  # independent recurrences of the chained solve
 CHAIN_TOLERANCE = 2.0**-64  # what a chain may inherit from the value it was started with, relative
@@ -182,10 +184,14 @@ def _burn_in(forward: np.ndarray, backward: np.ndarray, longest: int) -> int:
     return needed
 
 
-def prepare_mass(disc) -> tuple:
+def prepare_mass(disc, interleaved: bool = True) -> tuple:
     """``(kind, table)`` of the mass solve of one rod (see the module docstring).
 
     ``disc`` is a :class:`~wavecontact.fem.discretization.RodDiscretization`.
+    With ``interleaved`` (the default) a consistent mass of at least
+    ``interleaved_step.LANE_MIN_UNKNOWNS`` unknowns is also prepared for the
+    interleaved layout, which :func:`step_rod` and the time loop then use;
+    False keeps the flat layout (for comparisons).
     """
     n = disc.n_nodes
     table = np.zeros((T_ROWS, n))
@@ -194,7 +200,13 @@ def prepare_mass(disc) -> tuple:
         return MASS_LUMPED, table
     matrix = disc.mass_matrix.tocsr()
     if disc.order == 1:
+        wide = interleaved and n >= max(lanes.LANE_MIN_UNKNOWNS, 2 * lanes.LANES)
+        if wide:
+            table = np.zeros((T_ROWS, lanes.table_width(max(n, lanes.lanes_width(n)))))
         _tridiagonal(matrix.diagonal(0).copy(), matrix.diagonal(1).copy(), table)
+        if wide:
+            lanes.lane_rows(disc.stiffness_bands[1, : n - 1], table[T_CHAIN_INVERSE, :n], table[T_CHAIN_FORWARD, :n],
+                            table[T_CHAIN_BACKWARD, :n], table)
         return MASS_TRIDIAGONAL, table
     if disc.order != 2:
         raise ValueError(f"no mass solve for order {disc.order}")
@@ -209,25 +221,33 @@ def prepare_mass(disc) -> tuple:
     diagonal[:-1] -= left * left * inverse  # vertex 2e couples to midpoint 2e + 1 through M[2e + 1, 2e]
     diagonal[1:] -= right * right * inverse  # vertex 2e + 2 through M[2e + 1, 2e + 2]
     off = np.asarray(matrix[vertices[:-1], vertices[1:]]).ravel() - right * inverse * left
+    vertex_count = vertices.size
+    wide = interleaved and vertex_count >= max(lanes.LANE_MIN_VERTICES, 2 * lanes.LANES)  # two rows at least
+    if wide:
+        table = np.zeros((T_ROWS, lanes.table_width(max(n, 2 * lanes.lanes_width(vertex_count)))))
     _tridiagonal(diagonal, off, table)
     table[T_MID_INVERSE, : mids.size] = inverse
     table[T_MID_LEFT, : mids.size] = left
     table[T_MID_RIGHT, : mids.size] = right
-    _condensed_step_rows(disc.stiffness_bands, inverse, left, right, table[T_SCALE, : mids.size + 1], table)
+    coefficients = _condensed_coefficients(disc.stiffness_bands, inverse, left, right)
+    _condensed_step_rows(coefficients, table[T_SCALE, :vertex_count], table)
+    if wide:
+        lanes.condensed_lane_rows(coefficients, table[T_CHAIN_INVERSE, :vertex_count].copy(),
+                                  table[T_CHAIN_FORWARD, :vertex_count].copy(),
+                                  table[T_CHAIN_BACKWARD, :vertex_count].copy(), table)
     return MASS_CONDENSED, table
 
 
-def _condensed_step_rows(bands: np.ndarray, inverse: np.ndarray, left: np.ndarray, right: np.ndarray,
-                         scale: np.ndarray, table: np.ndarray) -> None:
-    """Per-element rows ``T_P_*`` of :func:`_condensed_step` from the stiffness bands and the midpoint masses.
+def _condensed_coefficients(bands: np.ndarray, inverse: np.ndarray, left: np.ndarray, right: np.ndarray) -> dict:
+    """Per-element coefficients of the condensed P2 step from the stiffness bands and the midpoint masses.
 
     With ``k_l = K[2e, 2e+1]``, ``k_r = K[2e+1, 2e+2]`` and ``k_f = K[2e, 2e+2]``, element ``e``'s part
     of the force ``-K u`` is ``(k_l + k_f) da - k_f dc`` on its left vertex, ``-k_f da + (k_r + k_f) dc``
     on its right vertex and ``-(k_l da + k_r dc)`` on its midpoint; condensing the midpoint subtracts
     ``M[2e+1, 2e] s_e`` and ``M[2e+1, 2e+2] s_e`` from the two vertices (``s_e``: the midpoint force
     over ``M[2e+1, 2e+1]``).  ``inverse``, ``left``, ``right``: ``1 / M[j, j]``, ``M[j, j-1]``,
-    ``M[j, j+1]`` per midpoint ``j = 2e + 1``; each vertex's parts are scaled by ``scale``, the
-    vertex solve's ``T_SCALE`` row.
+    ``M[j, j+1]`` per midpoint ``j = 2e + 1``.  The vertices' parts (``left_*``, ``right_*``) are not
+    yet scaled for a solve.
     """
     elements = inverse.size
     near_left = bands[1, 0 : 2 * elements : 2]
@@ -235,18 +255,33 @@ def _condensed_step_rows(bands: np.ndarray, inverse: np.ndarray, left: np.ndarra
     far = bands[2, 0 : 2 * elements : 2]
     mid_left = near_left * inverse
     mid_right = near_right * inverse
+    return {
+        "mid_left": mid_left,
+        "mid_right": mid_right,
+        "left_a": near_left + far + left * mid_left,
+        "left_c": -far + left * mid_right,
+        "right_a": -far + right * mid_left,
+        "right_c": near_right + far + right * mid_right,
+        "back_left": left * inverse,
+        "back_right": right * inverse,
+    }
+
+
+def _condensed_step_rows(coefficients: dict, scale: np.ndarray, table: np.ndarray) -> None:
+    """Rows ``T_P_*`` of :func:`_condensed_step`: ``coefficients`` of :func:`_condensed_coefficients`, each
+    vertex's parts scaled by ``scale``, the vertex solve's ``T_SCALE`` row."""
     rows = {
-        T_P_MID_LEFT: mid_left,
-        T_P_MID_RIGHT: mid_right,
-        T_P_LEFT_A: (near_left + far + left * mid_left) * scale[:-1],
-        T_P_LEFT_C: (-far + left * mid_right) * scale[:-1],
-        T_P_RIGHT_A: (-far + right * mid_left) * scale[1:],
-        T_P_RIGHT_C: (near_right + far + right * mid_right) * scale[1:],
-        T_P_BACK_LEFT: left * inverse,
-        T_P_BACK_RIGHT: right * inverse,
+        T_P_MID_LEFT: coefficients["mid_left"],
+        T_P_MID_RIGHT: coefficients["mid_right"],
+        T_P_LEFT_A: coefficients["left_a"] * scale[:-1],
+        T_P_LEFT_C: coefficients["left_c"] * scale[:-1],
+        T_P_RIGHT_A: coefficients["right_a"] * scale[1:],
+        T_P_RIGHT_C: coefficients["right_c"] * scale[1:],
+        T_P_BACK_LEFT: coefficients["back_left"],
+        T_P_BACK_RIGHT: coefficients["back_right"],
     }
     for row, values in rows.items():
-        table[row, :elements] = values
+        table[row, : values.size] = values
 
 
 @kernel(fastmath=False)
@@ -677,8 +712,24 @@ def step_rod(u, v, a, bands, kind, table, dt):
     if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
         _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
         return
+    if kind == MASS_CONDENSED and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
+        rows = int(table[lanes.L_SHAPE, 0])
+        lanes.pack_nodes(u, table[lanes.L_U], rows, 2)
+        lanes.pack_nodes(v, table[lanes.L_V], rows, 2)
+        lanes.step_condensed(table, dt)
+        lanes.unpack_nodes(table[lanes.L_U], u, rows, 2)
+        lanes.unpack_nodes(table[lanes.L_V], v, rows, 2)
+        return
     if kind == MASS_CONDENSED:
         _condensed_step(u, v, table, dt)
+        return
+    if kind == MASS_TRIDIAGONAL and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
+        rows = int(table[lanes.L_SHAPE, 0])
+        lanes.pack(u, table[lanes.L_U], rows)
+        lanes.pack(v, table[lanes.L_V], rows)
+        lanes.step_tridiagonal(table, dt)
+        lanes.unpack(table[lanes.L_U], u, rows)
+        lanes.unpack(table[lanes.L_V], v, rows)
         return
     if kind == MASS_TRIDIAGONAL:  # the solve's scaling in the stencil pass
         _scaled_tridiagonal_forces(u, bands[1], table[T_SCALE], a)

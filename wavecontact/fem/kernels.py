@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .._jit import kernel
 from .contact_flows import (
     contact_flow,
@@ -28,7 +30,17 @@ from .contact_flows import (
     contact_potential,
     interface_gap,
 )
-from .explicit_step import MASS_LUMPED, elastic_acceleration, step_rod
+from .explicit_step import MASS_CONDENSED, MASS_LUMPED, elastic_acceleration, step_rod
+from .interleaved_step import (
+    L_SHAPE,
+    L_U,
+    L_V,
+    node_position,
+    pack_nodes,
+    step_condensed,
+    step_tridiagonal,
+    unpack_nodes,
+)
 
 __all__ = [
     "STATUS_FAILED",
@@ -250,47 +262,62 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     for i in range(u2.size):
         mass2 += weights2[i]
     samples = 0
+    # large consistent masses run in the interleaved layout (interleaved_step.py): U, V below are then the
+    # packed copies in their tables, the flat u, v are refreshed for the energy checks and at the end
+    rows1 = int(table1[L_SHAPE, 0])
+    rows2 = int(table2[L_SHAPE, 0])
+    order1 = bands1.shape[0] - 1
+    order2 = bands2.shape[0] - 1
+    U1, V1 = _layout(u1, v1, table1, rows1, order1)
+    U2, V2 = _layout(u2, v2, table2, rows2, order2)
+    end1 = node_position(last, rows1, order1) if rows1 else last
+    where1 = np.empty(column1.size, np.int64)
+    for k in range(column1.size):
+        where1[k] = node_position(c1_start + k, rows1, order1) if rows1 else c1_start + k
+    where2 = np.empty(column2.size, np.int64)
+    for k in range(column2.size):
+        where2[k] = node_position(k, rows2, order2) if rows2 else k
     fast = kind1 == MASS_LUMPED and kind2 == MASS_LUMPED and bands1.shape[0] == 2 and bands2.shape[0] == 2
     for step in range(max_steps):
-        r_now = offset + u2[0] - u1[last]
+        r_now = offset + U2[0] - U1[end1]
         # 1. kick with the elastic forces and drift (central differences)
         if fast:
             _leapfrog_p1(u1, v1, bands1, table1[0], dt)
             _leapfrog_p1(u2, v2, bands2, table2[0], dt)
         else:
-            step_rod(u1, v1, a1, bands1, kind1, table1, dt)
-            step_rod(u2, v2, a2, bands2, kind2, table2, dt)
+            _step(u1, v1, a1, bands1, kind1, table1, rows1, dt)
+            _step(u2, v2, a2, bands2, kind2, table2, rows2, dt)
         # 2. contact, spread along M^-1 e_end
-        r_free = offset + u2[0] - u1[last]
+        r_free = offset + U2[0] - U1[end1]
         if scheme == SCHEME_FORCE:
             # plain central differences: the force at the start of the step, as a kick
             impulse = contact_force(law, r_now, alpha, strength, stiffness) * dt
             shift = impulse * dt
         elif scheme == SCHEME_SPLITTING:
-            w0 = v2[0] - v1[last]
+            w0 = V2[0] - V1[end1]
             r1, w1 = contact_flow(law, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv
             shift = (r1 - r_free) / m_inv
         else:
             # massless-end interface: the ends close at their current relative velocity
-            w0 = v2[0] - v1[last]
+            w0 = V2[0] - V1[end1]
             r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
         if impulse != 0.0 or shift != 0.0:
             for k in range(column1.size):
-                u1[c1_start + k] -= column1[k] * shift
-                v1[c1_start + k] -= column1[k] * impulse
+                U1[where1[k]] -= column1[k] * shift
+                V1[where1[k]] -= column1[k] * impulse
             for k in range(column2.size):
-                u2[k] += column2[k] * shift
-                v2[k] += column2[k] * impulse
+                U2[where2[k]] += column2[k] * shift
+                V2[where2[k]] += column2[k] * impulse
 
         state[S_MOMENTUM1] -= impulse
         state[S_MOMENTUM2] += impulse
         time = state[S_TIME] + dt
         state[S_TIME] = time
         state[S_STEPS] += 1.0
-        gap = offset + u2[0] - u1[last]
+        gap = offset + U2[0] - U1[end1]
         vrel = state[S_MOMENTUM2] / mass2 - state[S_MOMENTUM1] / mass1
         hist_time[step] = time
         hist_force[step] = impulse / dt
@@ -300,9 +327,11 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             state[S_LAST_IN_RANGE] = time
         if not (math.isfinite(gap) and math.isfinite(vrel)):
             state[S_FAILED_ENERGY] = math.nan
+            _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
             return STATUS_FAILED, step + 1, samples
 
         if (step + 1) % check_every == 0:
+            _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
             _synchronize(u1, v1, a1, sync1, bands1, kind1, table1, dt)
             _synchronize(u2, v2, a2, sync2, bands2, kind2, table2, dt)
             kin1, str1, cor1 = rod_energies(u1, sync1, a1, bands1, mass_bands1, dt)
@@ -323,4 +352,37 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
                 centre_gap = offset + _mean_displacement(u2, weights2) - _mean_displacement(u1, weights1)
                 if centre_gap - spread > r_stop:
                     return STATUS_SEPARATED, step + 1, samples
+    _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
     return STATUS_RUNNING, max_steps, samples
+
+
+@kernel
+def _step(u, v, a, bands, kind, table, rows, dt):
+    """One rod's elastic step in its layout (``rows`` > 0: the interleaved one, on the table's copy)."""
+    if rows == 0:
+        step_rod(u, v, a, bands, kind, table, dt)
+    elif kind == MASS_CONDENSED:
+        step_condensed(table, dt)
+    else:
+        step_tridiagonal(table, dt)
+
+
+@kernel
+def _layout(u, v, table, rows, order):
+    """The arrays the time loop steps: ``u, v`` themselves, or (``rows`` > 0) their interleaved copies."""
+    if rows == 0:
+        return u, v
+    pack_nodes(u, table[L_U], rows, order)
+    pack_nodes(v, table[L_V], rows, order)
+    return table[L_U], table[L_V]
+
+
+@kernel
+def _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2):
+    """Copy the interleaved state of the rods that run in that layout back to their flat arrays."""
+    if rows1:
+        unpack_nodes(table1[L_U], u1, rows1, order1)
+        unpack_nodes(table1[L_V], v1, rows1, order1)
+    if rows2:
+        unpack_nodes(table2[L_U], u2, rows2, order2)
+        unpack_nodes(table2[L_V], v2, rows2, order2)

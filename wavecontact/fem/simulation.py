@@ -20,6 +20,7 @@ from . import kernels, lattice
 from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
 from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
 from .explicit_step import elastic_acceleration, prepare_mass
+from .interleaved_step import LANE_TOLERANCE
 from .schemes import choose_scheme, gap_treatment, wants_lattice_mesh
 from .stability import banded_mass, check_time_step, stable_step
 
@@ -360,8 +361,10 @@ class _Run:
         self.mass_bands = [banded_mass(d) for d in setup.rods]
         column1 = left.inverse_mass_column(left.n_nodes - 1)
         column2 = right.inverse_mass_column(0)
-        start = int(np.flatnonzero(column1)[0])
-        stop = int(np.flatnonzero(column2)[-1]) + 1
+        # a consistent mass spreads the contact over the whole rod, decaying geometrically from the end:
+        # entries below LANE_TOLERANCE of the end's are left out (they change no velocity beyond rounding)
+        start = int(np.flatnonzero(np.abs(column1) > LANE_TOLERANCE * abs(column1[-1]))[0])
+        stop = int(np.flatnonzero(np.abs(column2) > LANE_TOLERANCE * abs(column2[0]))[-1]) + 1
         self.column1 = np.ascontiguousarray(column1[start:])
         self.column2 = np.ascontiguousarray(column2[:stop])
         self.m_inv = column1[-1] + column2[0]

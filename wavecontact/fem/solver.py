@@ -16,14 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import Exponential, Hard
-from ..errors import InvalidParameterError
+from ..contact import Exponential
+from ..errors import InvalidParameterError, SolverFailure
 from ..limits import Cost
 from ..scene import Scene
 from ..solvers.base import SolverBase, SolverOptions, option
 from . import kernels
-from .error_estimate import ESTIMATE_SAFETY, RESOLVED_BELOW
+from .error_estimate import ESTIMATE_SAFETY
 from .error_estimate import estimate_from_levels as _estimate_from_levels
+from .error_estimate import estimate_with_finer as _estimate_with_finer
 from .simulation import build_setup, run_collision
 
 __all__ = ["EXPECTED_ORDER", "SOLVER", "FemOptions", "FemSolver"]
@@ -75,11 +76,12 @@ class FemOptions(SolverOptions):
 EXPECTED_ORDER = {(1, "lumped"): 2, (1, "consistent"): 2, (2, "lumped"): 2, (2, "consistent"): 2}
 # The error estimate (docs/error_estimates.md section 1) is the pure function
 # error_estimate.estimate_from_levels of the coarser runs' restitutions.
-# Fewer elements than this with an unresolved or hard contact: the run at N/4 has fewer than 8
-# elements, the errors (up to 1e-2) are in no asymptotic regime, and the estimate bounds them in
-# only 79 to 97 % of the sweeps' collisions (docs/error_estimates.md section 2): an order of
-# magnitude, which tolerance= does not accept
-TRUSTED_FROM = 32
+# Below this many elements the runs at N/2 and N/4 have fewer than 16 and 8 elements, their errors
+# (up to 1e-2 with an unresolved or hard contact) are in no asymptotic regime, and the coarse rule
+# bounded them in only 79 to 97 % of the sweeps' collisions; there the solver also runs 2N elements
+# (four times the requested run's work, milliseconds at these sizes) and estimates the error from
+# the difference to that run (error_estimate.estimate_with_finer)
+FINER_BELOW = 32
 # P1 lumped on the characteristic lattice with alpha V dt above this (dt = h / c) and both far-end echoes
 # within one step (gamma near 1): epsilon is low by about 0.7 / kappa on every mesh until alpha V dt falls
 # below it (docs/fem.md section 7), a plateau the coarser runs cannot see
@@ -112,8 +114,30 @@ class FemSolver(SolverBase):
         """Richardson with the coarser runs held to the contact scheme of the requested run: with
         scheme='auto' a coarser mesh may no longer resolve the contact and switch from the force
         scheme (second order) to the massless-end interface (first order, errors near 1e-3), and the
-        difference of two schemes says nothing about the finer run's error."""
-        return super()._error_estimate(scene, self.estimate_options(options, fields.get("extra", {})), fields)
+        difference of two schemes says nothing about the finer run's error.  Below
+        :data:`FINER_BELOW` elements one more run at ``2N`` (same scheme) joins the levels."""
+        held = self.estimate_options(options, fields.get("extra", {}))
+        estimate, method, levels = super()._error_estimate(scene, held, fields)
+        if not levels or held.nodes is not None or held.elements >= FINER_BELOW:
+            return estimate, method, levels
+        finer = held.replace(elements=2 * held.elements, record_fields=False)
+        try:
+            value = float(self._collide(scene, finer)["restitution"])
+        except SolverFailure as failure:
+            why = f"the run at {finer.elements} elements, needed below {FINER_BELOW}, failed: {failure}"
+            return math.nan, f"none ({why})", levels
+        levels = [*levels, (finer.elements, value)]
+        estimate, rule = self.estimate_from_levels(scene, held, levels)
+        runs = "; ".join(f"elements={n} gave {v:.12g}" for n, v in levels[1:])
+        return estimate, f"Richardson: {runs}; {rule}", levels
+
+    def error_estimate_runs(self, scene: Scene, options: FemOptions) -> list:
+        """The coarser runs, and below :data:`FINER_BELOW` elements the run at ``2N`` (four times the
+        requested run's work)."""
+        runs = super().error_estimate_runs(scene, options)
+        if runs and options.nodes is None and options.elements < FINER_BELOW:
+            runs.append(options.replace(elements=2 * options.elements, record_fields=False))
+        return runs
 
     @staticmethod
     def estimate_options(options: FemOptions, extra: dict) -> FemOptions:
@@ -148,22 +172,25 @@ class FemSolver(SolverBase):
                 and isinstance(scene.contact, Exponential))
 
     def estimate_from_levels(self, scene: Scene, options: FemOptions, levels: list) -> tuple:
-        """``(estimate, rule)`` by :func:`wavecontact.fem.error_estimate.estimate_from_levels`.
+        """``(estimate, rule)`` by :func:`wavecontact.fem.error_estimate.estimate_from_levels`, or by
+        :func:`~wavecontact.fem.error_estimate.estimate_with_finer` where a level is finer than the
+        requested run.
 
-        ``levels``: ``(elements, restitution)`` at N, N/2 and (where it ran) N/4.
+        ``levels``: ``(elements, restitution)`` at N, N/2 and (where it ran) N/4, then (below
+        :data:`FINER_BELOW` elements) at 2N.
         """
-        return _estimate_from_levels(levels, self.contact_resolution(scene, options), self.expected_order(options),
-                                     self._characteristic(scene, options))
+        requested = levels[0][0]
+        finer = [level for level in levels if level[0] > requested]
+        coarse = [level for level in levels if level[0] <= requested]
+        arguments = (self.contact_resolution(scene, options), self.expected_order(options),
+                     self._characteristic(scene, options))
+        if finer:
+            return _estimate_with_finer(min(finer), coarse, *arguments)
+        return _estimate_from_levels(coarse, *arguments)
 
     def rough_estimate(self, scene: Scene, options: FemOptions) -> str:
-        """Advice where the estimate is an order of magnitude: fewer than :data:`TRUSTED_FROM`
-        elements with ``alpha V h / c > RESOLVED_BELOW`` or hard or penalty contact (except hard
-        contact on the P1 lumped lattice, exact to round-off)."""
-        exact = isinstance(scene.contact, Hard) and (options.order, options.mass) == (1, "lumped")
-        if (options.nodes is None and options.elements < TRUSTED_FROM and not exact
-                and self.contact_resolution(scene, options) > RESOLVED_BELOW):
-            return (f"with fewer than {TRUSTED_FROM} elements and an unresolved contact it is an order of magnitude, "
-                    f"not a bound; try elements={TRUSTED_FROM} or more")
+        """Advice where the estimate is an order of magnitude: P1 lumped on the characteristic lattice with
+        ``alpha V dt > PLATEAU_ABOVE`` and both far-end echoes within one step (gamma near 1)."""
         x = self.contact_resolution(scene, options)
         if self._characteristic(scene, options) and PLATEAU_ABOVE < x < math.inf:
             travel = [rod.length / rod.wave_speed for rod in scene.rods]

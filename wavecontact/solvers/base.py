@@ -351,6 +351,32 @@ class SolverBase:
         """The cost of ``solve(scene, options)`` estimated before any work (None: not estimated)."""
         return None
 
+    def error_estimate_runs(self, scene: Scene, options) -> list:
+        """Options of the extra runs the error estimate will make (the coarser levels), so that
+        their cost is checked with the solve's before any work."""
+        del scene
+        runs, coarse = [], options
+        for _ in range(self.error_levels):
+            coarse = self.coarser_options(coarse)
+            if coarse is None:
+                break
+            runs.append(coarse)
+        return runs
+
+    def total_cost(self, scene: Scene, options, estimating: bool) -> Cost | None:
+        """:meth:`estimate_cost` of the solve plus, when ``estimating``, of the error estimate's runs
+        (their work added, the largest memory kept)."""
+        cost = self.estimate_cost(scene, options)
+        if cost is None or not estimating:
+            return cost
+        extra = [c for c in (self.estimate_cost(scene, o) for o in self.error_estimate_runs(scene, options))
+                 if c is not None]
+        if not extra:
+            return cost
+        added = sum(c.work for c in extra)
+        return Cost(steps=cost.steps, work=cost.work + added, memory=max([cost.memory] + [c.memory for c in extra]),
+                    detail=f"{cost.detail}; the error estimate's {len(extra)} runs add {added:.3g} updates")
+
     def coarser_options(self, options) -> SolverOptions | None:
         """Options at half the resolution, for the Richardson error estimate (None: no estimate)."""
         del options
@@ -448,7 +474,7 @@ class SolverBase:
         limits = Limits(max_work=max_work, max_memory=max_memory)
         gamma, kappa = scene_numbers(scene)
         check_kappa(kappa)
-        check_cost(self.name, self.estimate_cost(scene, options), limits)
+        check_cost(self.name, self.total_cost(scene, options, estimate_error or tolerance is not None), limits)
         prepared = prepared_kernel_count()
         with Stopwatch() as watch:
             fields = self._collide(scene, options)
