@@ -79,7 +79,7 @@ def _pair_time(now, xi, vi, ti, xj, vj, tj, offset, reach):
     return when if closing else math.inf
 
 
-@kernel(inline="always")
+@kernel
 def event_time(k, now, x, v, local_time, reach, ring, box):
     """Predicted time of event ``k`` seen from time ``now`` (``inf``: the partners separate)."""
     n = x.size
