@@ -3,6 +3,7 @@ contacts), energy conserved per collision, the law against direct solves, and th
 per collision on small gases."""
 
 import math
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -24,12 +25,16 @@ from wavecontact.gas import (
     random_gas,
 )
 from wavecontact.gas.collision_law import (
+    REGENERATE,
+    REGENERATE_SOFT,
     CollisionLaw,
     blend_draw,
     build_collision_law,
     kappa_variable,
     level_means,
     load_law,
+    merge_kappa_rows,
+    parser,
     point_samples,
     row_resolutions,
     soft_corrections,
@@ -307,24 +312,48 @@ def _law_mean(law, gamma_index, row, share_index):
     return mean, math.sqrt(float(np.sum((q - mean) ** 2 * w)) / law.samples_per_point)
 
 
-@pytest.mark.parametrize("log_x", [-2.0, -3.0, -4.0])
-def test_gamma_one_rows_of_the_law_fall_below_one_by_grid_error_only(log_x):
+# The stated grid error of the max-plus solve at gamma = 1 (docs/gas.md, "Grid error of the law"): first order in
+# the step and proportional to the noise amplitude, 1 - eps^2 ~ C sqrt(1/x - 1) / r at r points per period, with
+# C = 0.06 ... 0.08 measured by docs/law_grid_study.py on fresh realisations at r = 16 ... 1024 (where the exact
+# answer is 1) for s = 1/2, and about the same at s = 0 ... 1.  The stated bound takes C = 0.1; it is not a value
+# of the shipped law.
+GRID_ERROR_CONSTANT = 0.1
+
+
+def test_gamma_one_rows_of_the_law_lie_within_their_stated_grid_error_of_one():
     """Equal rods in the hard-core limit leave with eps = 1 in every realisation (the paper; independent of the
-    grid), so the shipped law's gamma = 1 deficit 1 - eps^2 must be the max-plus grid's error at the law's
-    resolution: fresh solves at that resolution show the same deficit (within the two samples' errors),
-    and on the same realisations it shrinks to under a third at 8x the resolution (docs/gas.md, "Grid error
-    of the law")."""
-    n, fine = 24, 8 * LAW.resolution
-    coarse_eps2, _ = point_samples(1.0, log_x, n, 12, bath_modes=LAW.bath_modes, resolution=LAW.resolution)
-    fine_eps2, _ = point_samples(1.0, log_x, n, 12, bath_modes=LAW.bath_modes, resolution=fine)
-    law_mean, law_sem = _law_mean(LAW, LAW.gamma.size - 1, list(LAW.log_x).index(log_x),
-                                  list(LAW.short_share).index(0.5))
+    grid): every gamma = 1 row of the shipped law, at every share s, lies below 1 by no more than the stated grid
+    error at that row's resolution, and the rows are refined enough that this error is below 0.04 everywhere
+    (at the base resolution 16 it would reach 0.6 at x = 1e-4)."""
+    g = LAW.gamma.size - 1
+    assert LAW.gamma[g] == 1.0
+    for b, log_x in enumerate(LAW.log_x):
+        r = LAW.point_resolution(g, b)
+        bound = GRID_ERROR_CONSTANT * math.sqrt(10.0 ** -log_x - 1.0) / r
+        assert bound < 0.04
+        for c in range(LAW.short_share.size):
+            mean, sem = _law_mean(LAW, g, b, c)
+            assert -3.0 * sem - 1e-12 <= 1.0 - mean <= bound + 3.0 * sem, (log_x, LAW.short_share[c], mean, bound)
+
+
+@pytest.mark.parametrize("log_x", [-1.0, -2.0])
+def test_gamma_one_rows_of_the_law_fall_below_one_by_grid_error_only(log_x):
+    """The shipped law's gamma = 1 deficit 1 - eps^2 is the max-plus grid's error at the row's resolution: fresh
+    solves at that resolution show the same deficit (within the two samples' errors), and on the same realisations
+    it shrinks below a half at 4x the resolution (first order: a quarter)."""
+    n = 24
+    g, b = LAW.gamma.size - 1, list(LAW.log_x).index(log_x)
+    r = LAW.point_resolution(g, b)
+    assert r > LAW.resolution  # the rows are refined (the resolution rule), not the base grid's
+    coarse_eps2, _ = point_samples(1.0, log_x, n, 12, bath_modes=LAW.bath_modes, resolution=r)
+    fine_eps2, _ = point_samples(1.0, log_x, n, 12, bath_modes=LAW.bath_modes, resolution=4 * r)
+    law_mean, law_sem = _law_mean(LAW, g, b, list(LAW.short_share).index(0.5))
     deficit, sem = _mean_and_sem(1.0 - coarse_eps2)
     assert deficit > 3.0 * sem  # the grid error is real at the law's resolution ...
     assert abs((1.0 - law_mean) - deficit) < 3.0 * math.hypot(sem, law_sem)  # ... and is all of the law's deficit
     fine_deficit, _ = _mean_and_sem(1.0 - fine_eps2)
     gained, gained_sem = _mean_and_sem(fine_eps2 - coarse_eps2)
-    assert gained > 3.0 * gained_sem and fine_deficit < deficit / 3.0
+    assert gained > 3.0 * gained_sem and fine_deficit < deficit / 2.0
 
 
 def test_resolution_rule_grows_like_sqrt_of_one_over_x_and_is_stored(tmp_path):
@@ -347,6 +376,107 @@ def test_resolution_rule_grows_like_sqrt_of_one_over_x_and_is_stored(tmp_path):
     with pytest.raises(InvalidParameterError, match="row_resolution"):
         CollisionLaw(grown.kappa, grown.gamma, grown.log_x, grown.short_share, grown.probability,
                      grown.eps2_quantiles, grown.gain_short, row_resolution=(16,))
+
+
+def test_a_cap_per_gamma_and_reused_points_give_the_same_law_as_a_full_build(tmp_path):
+    """One cap per gamma row is stored per (gamma, row); a build that copies the points of an earlier law at the
+    same resolution (same grid and seeds) equals a full build bit for bit, and a law with another seed is not
+    copied from."""
+    grid = ([0.9, 1.0], [-3.0, -1.0, 0.0], 8, 5)
+    options = {"levels": 5, "bath_modes": 250, "resolution": 16, "short_shares": (0.0, 0.5, 1.0)}
+    fixed = build_collision_law(*grid, **options)
+    full = build_collision_law(*grid, resolution_cap=(16, 128), **options)
+    assert full.row_resolution == ((16, 16, 16), (128, 51, 16))
+    assert [full.point_resolution(1, b) for b in range(3)] == [128, 51, 16] and full.point_resolution(0, 0) == 16
+    solved = []
+    reused = build_collision_law(*grid, resolution_cap=(16, 128), reuse=fixed,
+                                 progress=lambda done, todo: solved.append(todo), **options)
+    assert solved[-1] == 2 * 3  # the gamma = 1 rows at x = 1e-3 and 1e-1, three shares each; the rest copied
+    assert np.array_equal(reused.eps2_quantiles, full.eps2_quantiles)
+    assert np.array_equal(reused.gain_short, full.gain_short)
+    assert np.array_equal(full.eps2_quantiles[0, 0], fixed.eps2_quantiles[0, 0])
+    other = build_collision_law(grid[0], grid[1], grid[2], 6, **options)
+    solved.clear()
+    build_collision_law(*grid, resolution_cap=(16, 128), reuse=other,
+                        progress=lambda done, todo: solved.append(todo), **options)
+    assert solved[-1] == 2 * 3 * 3  # another seed: nothing copied
+    again = load_law(full.save(tmp_path / "caps.npz"))
+    assert again.row_resolution == full.row_resolution
+    with pytest.raises(InvalidParameterError, match="one per gamma"):
+        build_collision_law(*grid, resolution_cap=(16, 32, 64), **options)
+    with pytest.raises(InvalidParameterError, match="row_resolution"):
+        CollisionLaw(full.kappa, full.gamma, full.log_x, full.short_share, full.probability, full.eps2_quantiles,
+                     full.gain_short, row_resolution=((16, 16, 16), (128, 51)))
+
+
+# (point, tolerance): 0 is bit for bit.  The soft law's rows kappa = 10, 30, 100 were built before the delay
+# kernel's stopping rule changed (the stop certificate, commit 37e0e2f), which moves its eps^2 by round-off
+# (about 1e-13); the kappa = 5 row and the hard-core law were built with the present code.
+@pytest.mark.parametrize(("command", "points"), [
+    (REGENERATE, [((0, 0, 14, 0), 0.0), ((0, 5, 14, 1), 0.0)]),
+    (REGENERATE_SOFT, [((3, 0, 6, 1), 0.0), ((3, 1, 5, 1), 1e-9), ((0, 0, 6, 1), 0.0)]),
+    pytest.param(REGENERATE_SOFT, [((0, 1, 5, 1), 0.0)], marks=pytest.mark.slow),  # 64 solves of 0.1 to 0.3 s
+], ids=["hard-core", "soft", "soft-kappa-5-warm"])
+def test_the_shipped_laws_are_what_their_stored_commands_build(command, points):
+    """The commands in the file's metadata describe the shipped grid, seeds, caps and sample counts (a soft law
+    merged from two builds: each build's kappa rows and seed), and re-solving a few of its points (the cheap
+    ones near x = 1) from the commands' seeds reproduces the file: bit for bit where the present code built it,
+    to round-off where an earlier delay kernel did."""
+    law = LAW if command == REGENERATE else SOFT
+    assert law.metadata()["regenerate"] == command
+    builds = [parser().parse_args(shlex.split(part)[3:]) for part in command.split(" && ")]
+    merge = [b for b in builds if b.merge]
+    builds = [b for b in builds if not b.merge]
+    assert len(merge) == (len(builds) > 1)
+    assert sorted(k for b in builds for k in b.kappa) == law.kappa.tolist()
+    seeds = {k: b.seed for b in builds for k in b.kappa}
+    assert [seeds[k] for k in law.kappa] == list(law.kappa_seeds or [law.seed] * law.kappa.size)
+    for args in builds:
+        assert np.array_equal(law.gamma, args.gamma) and np.array_equal(law.log_x, sorted(args.log_x))
+        assert np.array_equal(law.short_share, sorted(args.share))
+        assert (law.samples_per_point, law.probability.size, law.bath_modes) == (args.samples, args.levels,
+                                                                                 args.bath_modes)
+        caps = args.resolution_cap or [None]
+        caps = caps * law.gamma.size if len(caps) == 1 else caps
+        for a, cap in enumerate(caps):
+            assert [law.point_resolution(a, b) for b in range(law.log_x.size)] == list(
+                row_resolutions(law.log_x, args.resolution, cap))
+    for index, tolerance in points:
+        k, g, b, c = index
+        args = next(a for a in builds if law.kappa[k] in a.kappa)
+        rows = sorted(args.kappa)
+        shape = (len(rows),) + law.shape[1:4]
+        children = np.random.SeedSequence(args.seed).spawn(int(np.prod(shape)))
+        seeds = children[np.ravel_multi_index((rows.index(law.kappa[k]), g, b, c), shape)]
+        eps2, gain = point_samples(law.gamma[g], law.log_x[b], law.samples_per_point, seeds,
+                                   bath_modes=law.bath_modes, resolution=law.point_resolution(g, b),
+                                   short_share=law.short_share[c], kappa=law.kappa[k])
+        quantiles, gains = np.quantile(eps2, law.probability), level_means(eps2, gain, law.probability)
+        if tolerance == 0.0:
+            assert np.array_equal(quantiles, law.eps2_quantiles[index])
+            assert np.array_equal(gains, law.gain_short[index])
+        else:
+            np.testing.assert_allclose(quantiles, law.eps2_quantiles[index], rtol=0, atol=tolerance)
+            np.testing.assert_allclose(gains, law.gain_short[index], rtol=0, atol=tolerance)
+
+
+def test_soft_laws_merge_along_kappa_and_refuse_other_grids(tmp_path):
+    """Merging keeps every row's arrays and seed, sorts the rows by kappa, and refuses laws on other grids."""
+    parts = {name: CollisionLaw(kappa, SOFT.gamma, SOFT.log_x, SOFT.short_share, SOFT.probability,
+                                SOFT.eps2_quantiles[rows], SOFT.gain_short[rows], samples_per_point=64, seed=seed)
+             for name, kappa, rows, seed in (("stiff", SOFT.kappa[2:], slice(2, None), 7),
+                                             ("soft", SOFT.kappa[:2], slice(0, 2), 8))}
+    merged = merge_kappa_rows([parts["stiff"], parts["soft"]])
+    assert np.array_equal(merged.kappa, SOFT.kappa) and merged.kappa_seeds == (8, 8) + (7,) * (SOFT.kappa.size - 2)
+    assert np.array_equal(merged.eps2_quantiles, SOFT.eps2_quantiles)
+    assert np.array_equal(merged.gain_short, SOFT.gain_short)
+    assert load_law(merged.save(tmp_path / "merged.npz")).kappa_seeds == merged.kappa_seeds
+    with pytest.raises(InvalidParameterError, match="distinct kappa"):
+        merge_kappa_rows([parts["stiff"], parts["stiff"]])
+    with pytest.raises(InvalidParameterError, match="share their gamma"):
+        merge_kappa_rows([parts["soft"], SOFT.equal_temperature_slice()])
+    with pytest.raises(InvalidParameterError, match="finite-kappa"):
+        merge_kappa_rows([parts["soft"], LAW])
 
 
 def test_equal_temperature_slice_is_the_middle_share_of_the_law():

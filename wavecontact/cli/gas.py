@@ -67,8 +67,8 @@ def add_parser(subparsers):
                    help="alpha of the exponential contact V(r) = B exp(-alpha r), an inverse length in the units of "
                    "the rod lengths (vibration rule only): each collision then has its own softness kappa = alpha V l "
                    "(V the approach speed, l = 2 l_i l_j/(l_i + l_j), wave speed 1): the hard-core draw plus the soft "
-                   "(finite-kappa) law's correction at that kappa; softer than kappa 10 the kappa-10 correction "
-                   "(counted as softer_than_law) (default: none, every collision in the hard-core limit)")
+                   "(finite-kappa) law's correction at that kappa; softer than the soft law's softest row (kappa 5) "
+                   "that row's correction (counted as softer_than_law) (default: none, every collision in the hard-core limit)")
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="root seed (default 0)")

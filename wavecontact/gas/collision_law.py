@@ -30,8 +30,12 @@ law's change against the hard core, interpolated in kappa, to the hard-core
 draw at the collision's own ``kappa = alpha V l`` (:func:`blend_draw`).
 
 Grid in ``log10 x`` from ``log_x[0]`` to 0.  Below the last row the rule uses
-the last row's law (counted, ``GasResult.beyond_law``).  Files: ``.npz`` with a
-JSON ``schema`` (no pickle).
+the last row's law (counted, ``GasResult.beyond_law``); softer than the soft law's
+softest row, that row's correction (counted, ``softer_than_law``).  The hard-core
+solve's grid (points per period) may grow with ``sqrt(1/x)`` per row up to a cap,
+one cap per ``gamma`` (:func:`row_resolutions`; the shipped law refines only its
+``gamma = 1`` rows, where the exact answer ``eps^2 = 1`` makes the grid error
+visible).  Files: ``.npz`` with a JSON ``schema`` (no pickle).
 """
 
 from __future__ import annotations
@@ -49,7 +53,7 @@ from ..io.files import atomic_write
 
 __all__ = ["DEFAULT_LAW_FILE", "DEFAULT_SOFT_LAW_FILE", "LAW_ARRAYS", "LOG_X_MIN", "REGENERATE", "REGENERATE_SOFT",
            "CollisionLaw", "blend_draw", "build_collision_law", "default_law", "default_soft_law", "kappa_variable",
-           "law_from_arrays", "load_law", "row_resolutions", "soft_corrections", "solve_collision"]
+           "law_from_arrays", "load_law", "merge_kappa_rows", "parser", "row_resolutions", "soft_corrections", "solve_collision"]
 
 SCHEMA_NAME = "wavecontact.collision_law"
 SCHEMA_VERSION = 2  # 2: kappa and short-rod-share axes
@@ -58,11 +62,16 @@ DEFAULT_SOFT_LAW_FILE = "collision_law_soft.npz"
 LOG_X_MIN = -4.0
 REGENERATE = ("python -m wavecontact.gas.collision_law --kappa inf --gamma 0.6 0.7 0.8 0.9 0.95 1.0 "
               "--log-x 0 -0.02 -0.05 -0.1 -0.15 -0.25 -0.35 -0.5 -0.75 -1 -1.5 -2 -2.5 -3 -3.5 -4 "
-              "--share 0 0.25 0.5 0.75 1 --samples 400 --levels 41 --seed 2026 --resolution 16 --workers 2 "
-              "--out wavecontact/data/collision_law_hardcore.npz")
-REGENERATE_SOFT = ("python -m wavecontact.gas.collision_law --kappa 10 30 100 --gamma 0.6 0.8 1.0 "
-                   "--log-x 0 -0.15 -0.5 -1 -2 -3 -4 --share 0 0.5 1 --samples 64 --levels 17 --seed 2027 "
-                   "--workers 2 --out wavecontact/data/collision_law_soft.npz")
+              "--share 0 0.25 0.5 0.75 1 --samples 400 --levels 41 --seed 2026 --resolution 16 "
+              "--resolution-cap 16 16 16 16 16 256 --workers 2 --out wavecontact/data/collision_law_hardcore.npz")
+_SOFT_GRID = ("--gamma 0.6 0.8 1.0 --log-x 0 -0.15 -0.5 -1 -2 -3 -4 --share 0 0.5 1 --samples 64 --levels 17 "
+              "--workers 2")
+# the soft law's rows come from two builds (the kappa = 5 row was added later, with its own seed), merged along kappa
+REGENERATE_SOFT = (f"python -m wavecontact.gas.collision_law --kappa 10 30 100 {_SOFT_GRID} --seed 2027 "
+                   "--out soft_10_30_100.npz && "
+                   f"python -m wavecontact.gas.collision_law --kappa 5 {_SOFT_GRID} --seed 2028 --out soft_5.npz && "
+                   "python -m wavecontact.gas.collision_law --merge soft_5.npz soft_10_30_100.npz "
+                   "--out wavecontact/data/collision_law_soft.npz")
 MAX_LAW_SAMPLES = 2_000_000
 MAX_SOFT_KAPPA_SAMPLES = 40_000  # finite-kappa solves take 10 ms to 1 s each
 LAW_ARRAYS = ("kappa", "gamma", "log_x", "short_share", "probability", "eps2_quantiles", "gain_short")
@@ -103,9 +112,13 @@ class CollisionLaw:
         Mean gain of the short rod's vibrations given the level, in units of ``E_tr + T_pair``.
     bath_modes, samples_per_point, seed, resolution : int
         How the law was computed (``resolution``: grid points per period of the hard-core solve).
-    row_resolution : tuple of int, optional
-        Grid points per period of each ``log_x`` row when they differ (:func:`row_resolutions`); empty
-        when every row used ``resolution``.
+    kappa_seeds : tuple of int, optional
+        The seed of each kappa row when the rows come from separate builds (:func:`merge_kappa_rows`); empty
+        when one build (``seed``) made them all.
+    row_resolution : tuple, optional
+        Grid points per period of the hard-core solve where they differ from ``resolution``
+        (:func:`row_resolutions`): one integer per ``log_x`` row (the same for every ``gamma``), or one such
+        tuple per ``gamma`` row (a cap per ``gamma``); empty when every point used ``resolution``.
     """
 
     kappa: np.ndarray
@@ -120,6 +133,7 @@ class CollisionLaw:
     seed: int = 0
     resolution: int = 8
     row_resolution: tuple = ()
+    kappa_seeds: tuple = ()
 
     def __post_init__(self):
         for name in LAW_ARRAYS:
@@ -157,11 +171,20 @@ class CollisionLaw:
             if isinstance(value, bool) or int(value) != value or value < 0:
                 raise InvalidParameterError(f"collision law {name} must be an integer >= 0, got {value!r}")
             object.__setattr__(self, name, int(value))
-        rows = tuple(self.row_resolution)
-        if rows and (len(rows) != self.log_x.size or any(isinstance(r, bool) or int(r) != r or r < 1 for r in rows)):
-            raise InvalidParameterError(f"collision law row_resolution must hold {self.log_x.size} integers >= 1 "
-                                        "(one per log_x row), or be empty")
-        object.__setattr__(self, "row_resolution", tuple(int(r) for r in rows))
+        seeds = tuple(self.kappa_seeds)
+        if seeds and (len(seeds) != self.kappa.size or not all(_is_count(v) or v == 0 for v in seeds)):
+            raise InvalidParameterError(f"collision law kappa_seeds must hold {self.kappa.size} integers >= 0 "
+                                        "(one per kappa row), or be empty")
+        object.__setattr__(self, "kappa_seeds", tuple(int(v) for v in seeds))
+        object.__setattr__(self, "row_resolution", _checked_row_resolution(self.row_resolution, self.gamma.size,
+                                                                           self.log_x.size))
+
+    def point_resolution(self, gamma_index, log_x_index) -> int:
+        """Grid points per period the hard-core solve used at row ``(gamma_index, log_x_index)``."""
+        rows = self.row_resolution
+        if not rows:
+            return self.resolution
+        return rows[gamma_index][log_x_index] if isinstance(rows[0], tuple) else rows[log_x_index]
 
     def equal_temperature_slice(self) -> CollisionLaw:
         """The law restricted to its ``short_share = 1/2`` slice: both rods at the pair's mean
@@ -238,7 +261,9 @@ class CollisionLaw:
                 "kappa": ["inf" if math.isinf(k) else float(k) for k in self.kappa],
                 "solver": "hard-core max-plus" if self.hard_core else "delay (finite kappa, energy split)",
                 "bath_modes": self.bath_modes, "samples_per_point": self.samples_per_point, "seed": self.seed,
-                "resolution": self.resolution, "row_resolution": list(self.row_resolution),
+                "resolution": self.resolution,
+                "row_resolution": [list(r) if isinstance(r, tuple) else r for r in self.row_resolution],
+                "kappa_seeds": list(self.kappa_seeds),
                 "units": "x = E_tr/(E_tr+T_pair), T_pair = (T_short+T_long)/2; short_share = T_short/(T_short+T_long); "
                          "eps2 = E'_tr/E_tr; gain_short in units of E_tr + T_pair",
                 "regenerate": regenerate}
@@ -254,6 +279,25 @@ class CollisionLaw:
         return path
 
 
+def _is_count(value):
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating)) \
+        and int(value) == value and value >= 1
+
+
+def _checked_row_resolution(rows, gammas, log_xs):
+    """``row_resolution`` as a tuple of ints (per ``log_x`` row) or of tuples (per ``gamma`` row), or ``()``."""
+    rows = tuple(tuple(r) if isinstance(r, (list, tuple, np.ndarray)) else r for r in rows)
+    if not rows:
+        return ()
+    if all(_is_count(r) for r in rows) and len(rows) == log_xs:
+        return tuple(int(r) for r in rows)
+    if len(rows) == gammas and all(isinstance(r, tuple) and len(r) == log_xs and all(_is_count(v) for v in r)
+                                   for r in rows):
+        return tuple(tuple(int(v) for v in r) for r in rows)
+    raise InvalidParameterError(f"collision law row_resolution must hold {log_xs} integers >= 1 (one per log_x "
+                                f"row), or {gammas} such rows (one per gamma), or be empty")
+
+
 def law_from_arrays(arrays: dict, meta: dict, where="collision law") -> CollisionLaw:
     """Rebuild a :class:`CollisionLaw` from its arrays (without ``kappa``) and :meth:`CollisionLaw.metadata`."""
     if meta.get("name") != SCHEMA_NAME or meta.get("version") != SCHEMA_VERSION:
@@ -264,7 +308,8 @@ def law_from_arrays(arrays: dict, meta: dict, where="collision law") -> Collisio
     kappa = [math.inf if k == "inf" else float(k) for k in meta["kappa"]]
     return CollisionLaw(kappa, *(arrays[name] for name in LAW_ARRAYS[1:]), bath_modes=meta["bath_modes"],
                         samples_per_point=meta["samples_per_point"], seed=meta["seed"],
-                        resolution=meta.get("resolution", 8), row_resolution=tuple(meta.get("row_resolution", ())))
+                        resolution=meta.get("resolution", 8), row_resolution=meta.get("row_resolution", ()),
+                        kappa_seeds=tuple(meta.get("kappa_seeds", ())))
 
 
 def load_law(path) -> CollisionLaw:
@@ -428,18 +473,52 @@ def row_resolutions(log_xs, resolution, cap=None):
     return tuple(int(min(int(cap), math.ceil(resolution * 10.0 ** (-lx / 2) - 1e-9))) for lx in log_xs)
 
 
+def _caps_per_gamma(resolution_cap, gammas, resolution):
+    """``None`` (fixed resolution), one cap for every ``gamma``, or one per ``gamma`` (a tuple of them)."""
+    if resolution_cap is None:
+        return None
+    if isinstance(resolution_cap, (list, tuple, np.ndarray)):
+        caps = tuple(resolution_cap)
+        if len(caps) == 1:
+            return caps * gammas.size
+        if len(caps) != gammas.size:
+            raise InvalidParameterError(f"give one resolution cap, or one per gamma ({gammas.size}), "
+                                        f"got {len(caps)}")
+        return caps
+    return (resolution_cap,) * gammas.size
+
+
+def _reusable(old, kappas, gammas, log_xs, shares, probability, samples, seed, bath_modes):
+    """True when ``old`` was built on this grid with these seeds, so its points equal a fresh solve's."""
+    if old is None:
+        return False
+    same_grid = all(a.shape == b.shape and np.array_equal(a, b) for a, b in
+                    ((old.kappa, kappas), (old.gamma, gammas), (old.log_x, log_xs), (old.short_share, shares),
+                     (old.probability, probability)))
+    return same_grid and (old.samples_per_point, old.seed, old.bath_modes) == (int(samples), int(seed),
+                                                                                 int(bath_modes))
+
+
 def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), short_shares=(0.5,), levels=41,
-                        bath_modes=250, resolution=8, resolution_cap=None, executor=None):
+                        bath_modes=250, resolution=8, resolution_cap=None, executor=None, reuse=None,
+                        progress=None):
     """Tabulate the collision law (one ensemble per ``(kappa, gamma, log10 x, s)`` point).
 
     Point ``a`` (row-major over ``kappas`` x ``gammas`` x ``log_xs`` x ``short_shares``) uses child ``a`` of
     ``SeedSequence(seed).spawn(points)``, and its sample ``i`` child ``i`` of that.  Cold points (``x = 1``)
     are deterministic; they are solved like the others.  ``resolution_cap``: grid points per period grow
-    with ``sqrt(1/x)`` up to the cap (:func:`row_resolutions`, stored per row); ``None`` keeps
-    ``resolution`` everywhere.
+    with ``sqrt(1/x)`` up to the cap (:func:`row_resolutions`, stored per row); one cap, or a sequence with
+    one per ``gamma`` (stored per ``gamma`` and row); ``None`` keeps ``resolution`` everywhere.
+
+    ``reuse``: a law built earlier on the same grid with the same ``seed``, ``samples``, levels and
+    ``bath_modes``: its points whose resolution equals the new one's are copied instead of solved (the same
+    seeds at the same resolution give the same solves, so the result equals a full build; a law on another
+    grid or seed is not used).  ``progress``: called with ``(points done, points to solve)``.
     """
     kappas, gammas, log_xs, shares = (np.asarray(a, float) for a in (kappas, gammas, log_xs, short_shares))
-    per_row = dict(zip(log_xs.tolist(), row_resolutions(log_xs, resolution, resolution_cap)))
+    caps = _caps_per_gamma(resolution_cap, gammas, resolution)
+    per_point = {(g, lx): r for g, cap in zip(gammas.tolist(), caps or (None,) * gammas.size)
+                 for lx, r in zip(log_xs.tolist(), row_resolutions(log_xs, resolution, cap))}
     total = kappas.size * gammas.size * log_xs.size * shares.size * int(samples)
     if total > MAX_LAW_SAMPLES:
         raise InvalidParameterError(f"a collision law may hold at most {MAX_LAW_SAMPLES} collisions in all")
@@ -449,50 +528,124 @@ def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), sh
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 2 <= levels <= int(samples):
         raise InvalidParameterError(f"levels must be an integer in [2, samples], got {levels!r}")
     probability = np.linspace(0.0, 1.0, int(levels))
-    points = [(k, g, lx, s) for k in kappas for g in gammas for lx in log_xs for s in shares]
-    children = np.random.SeedSequence(int(seed)).spawn(len(points))
-    tasks = [(float(g), float(k), float(lx), float(s), child.spawn(int(samples)), int(bath_modes), per_row[lx])
-             for (k, g, lx, s), child in zip(points, children)]
-    results = list(executor.map(_point, tasks)) if executor is not None else [_point(t) for t in tasks]
     shape = (kappas.size, gammas.size, log_xs.size, shares.size, probability.size)
     quantiles, gains = np.empty(shape), np.empty(shape)
-    for a, (eps2, gain) in enumerate(results):
+    reusable = _reusable(reuse, kappas, gammas, log_xs, shares, probability, samples, seed, bath_modes)
+    points = [(k, g, lx, s) for k in kappas for g in gammas for lx in log_xs for s in shares]
+    children = np.random.SeedSequence(int(seed)).spawn(len(points))
+    tasks = {}
+    for a, ((k, g, lx, s), child) in enumerate(zip(points, children)):
+        index = np.unravel_index(a, shape[:4])
+        r = per_point[(g, lx)]
+        if reusable and reuse.point_resolution(index[1], index[2]) == r:
+            quantiles[index], gains[index] = reuse.eps2_quantiles[index], reuse.gain_short[index]
+        else:
+            tasks[a] = (float(g), float(k), float(lx), float(s), child.spawn(int(samples)), int(bath_modes), r)
+    # dearest first (finer grids and warmer rows take longer), so two workers finish together
+    order = sorted(tasks, key=lambda a: -tasks[a][6] * 10.0 ** (-tasks[a][2] / 2))
+    mapped = executor.map(_point, [tasks[a] for a in order]) if executor is not None else \
+        (_point(tasks[a]) for a in order)
+    for done, (a, (eps2, gain)) in enumerate(zip(order, mapped), start=1):
         index = np.unravel_index(a, shape[:4])
         quantiles[index] = np.quantile(eps2, probability)
         gains[index] = level_means(eps2, gain, probability)
+        if progress is not None:
+            progress(done, len(order))
+    if caps is None:
+        rows = ()
+    elif len(set(caps)) == 1:
+        rows = tuple(per_point[(gammas[0], lx)] for lx in log_xs.tolist())
+    else:
+        rows = tuple(tuple(per_point[(g, lx)] for lx in log_xs.tolist()) for g in gammas.tolist())
     return CollisionLaw(kappas, gammas, log_xs, shares, probability, quantiles, gains, bath_modes=int(bath_modes),
                         samples_per_point=int(samples), seed=int(seed), resolution=int(resolution),
-                        row_resolution=() if resolution_cap is None else tuple(per_row[lx] for lx in log_xs))
+                        row_resolution=rows)
 
 
-def main(argv=None):
+def merge_kappa_rows(laws) -> CollisionLaw:
+    """One finite-kappa law from several built on the same ``(gamma, log10 x, s)`` grid, levels, sample count and
+    bath, each with its own kappa rows and seed: the rows sorted by kappa, each row's seed kept
+    (``kappa_seeds``).  Lets a soft law gain rows without re-solving the ones it has."""
+    laws = list(laws)
+    if len(laws) < 2:
+        raise InvalidParameterError("merge needs at least two collision laws")
+    first = laws[0]
+    for law in laws:
+        if law.hard_core:
+            raise InvalidParameterError("only finite-kappa (soft) laws are merged along kappa")
+        same = all(np.array_equal(getattr(law, name), getattr(first, name))
+                   and getattr(law, name).shape == getattr(first, name).shape for name in _AXES)
+        if not same or (law.samples_per_point, law.bath_modes) != (first.samples_per_point, first.bath_modes):
+            raise InvalidParameterError("merged collision laws must share their gamma, log_x, short_share and "
+                                        "probability grids, samples per point and bath modes")
+    kappa = np.concatenate([law.kappa for law in laws])
+    if np.unique(kappa).size != kappa.size:
+        raise InvalidParameterError("merged collision laws must have distinct kappa rows")
+    seeds = np.concatenate([law.kappa_seeds if law.kappa_seeds else [law.seed] * law.kappa.size for law in laws])
+    order = np.argsort(kappa)
+    stack = {name: np.concatenate([getattr(law, name) for law in laws])[order]
+             for name in ("eps2_quantiles", "gain_short")}
+    return CollisionLaw(kappa[order], first.gamma, first.log_x, first.short_share, first.probability,
+                        stack["eps2_quantiles"], stack["gain_short"], bath_modes=first.bath_modes,
+                        samples_per_point=first.samples_per_point, seed=int(seeds[order][0]),
+                        resolution=first.resolution, kappa_seeds=tuple(int(v) for v in seeds[order]))
+
+
+def parser():
+    """The builder's command line (``python -m wavecontact.gas.collision_law``; :data:`REGENERATE`)."""
     import argparse
-    import time
-    from concurrent.futures import ProcessPoolExecutor
 
     p = argparse.ArgumentParser(prog="python -m wavecontact.gas.collision_law",
                                 description="Tabulate the collision law of the gas's vibration rule.")
     p.add_argument("--kappa", type=float, nargs="+", default=[math.inf],
                    help="contact softness rows: inf (hard core, default) or finite values > e")
-    p.add_argument("--gamma", type=float, nargs="+", required=True)
-    p.add_argument("--log-x", type=float, nargs="+", required=True,
-                   help="log10 E_tr/(E_tr+T_pair), ascending or not")
+    p.add_argument("--merge", nargs="+", default=None, metavar="LAW",
+                   help="instead of building: merge soft laws (same grid) along kappa into --out")
+    p.add_argument("--gamma", type=float, nargs="+")
+    p.add_argument("--log-x", type=float, nargs="+", help="log10 E_tr/(E_tr+T_pair), ascending or not")
     p.add_argument("--share", type=float, nargs="+", default=[0.5],
                    help="short rod's share T_s/(T_s+T_l) of the bath temperature (0 ... 1, or 0.5 alone)")
-    p.add_argument("--samples", type=int, required=True)
+    p.add_argument("--samples", type=int)
     p.add_argument("--levels", type=int, default=41)
-    p.add_argument("--seed", type=int, required=True)
+    p.add_argument("--seed", type=int)
     p.add_argument("--bath-modes", type=int, default=250)
     p.add_argument("--resolution", type=int, default=8, help="grid points per period (hard core only)")
-    p.add_argument("--resolution-cap", type=int, default=None,
-                   help="grow the resolution like sqrt(1/x) per log_x row up to this cap (default: fixed)")
+    p.add_argument("--resolution-cap", type=int, nargs="+", default=None,
+                   help="grow the resolution like sqrt(1/x) per log_x row up to this cap; one cap, or one per "
+                        "gamma (default: fixed)")
+    p.add_argument("--reuse", default=None,
+                   help="a law built before on the same grid and seed: copy its points at the same resolution")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--out", required=True)
+    return p
+
+
+def main(argv=None):
+    import sys
+    import time
+    from concurrent.futures import ProcessPoolExecutor
+
+    p = parser()
     args = p.parse_args(argv)
+    if args.merge is not None:
+        merge_kappa_rows([load_law(path) for path in args.merge]).save(args.out)
+        print(f"wrote {args.out} (kappa rows of {', '.join(args.merge)})")
+        return
+    missing = [name for name in ("gamma", "log_x", "samples", "seed") if getattr(args, name) is None]
+    if missing:
+        p.error("building a law needs " + ", ".join("--" + name.replace("_", "-") for name in missing))
     start, cpu = time.perf_counter(), time.process_time()
     options = {"kappas": sorted(args.kappa), "short_shares": sorted(args.share), "levels": args.levels,
                "bath_modes": args.bath_modes, "resolution": args.resolution, "resolution_cap": args.resolution_cap}
     log_xs = sorted(args.log_x)
+    if args.reuse is not None:
+        options["reuse"] = load_law(args.reuse)
+
+    def progress(done, todo):
+        if done == todo or done % max(1, todo // 40) == 0:
+            print(f"{done}/{todo} points solved, {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
+
+    options["progress"] = progress
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:
             law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, executor=pool, **options)
