@@ -7,6 +7,8 @@ import pytest
 from analytic_kick_table import analytic_kick_table
 
 from wavecontact.cli import main
+from wavecontact.gas import UniformLengths, random_gas
+from wavecontact.gas.reference import heapq_ring_gas
 
 
 def _json(capsys, argv):
@@ -63,6 +65,28 @@ def test_resume_continues_the_same_run(tmp_path, capsys):
     assert resumed["collisions"] == 2000
     assert resumed["simulated_time"] == straight["simulated_time"]
     assert resumed["final_energy"] == straight["final_energy"]
+
+
+def test_final_energy_is_the_energy_after_the_last_collision(tmp_path, capsys):
+    """1,001 collisions with a record every 2: the summary's final_energy and the saved records' last row are the
+    state after collision 1,001, as an independent heapq loop on the same gas finds it (not the record at 1,000)."""
+    out = tmp_path / "run"
+    summary = _json(capsys, ["gas", "--rods", "100", "--collisions", "1001", "--rule", "fixed", "--restitution",
+                             "0.99", "--seed", "4", "--lengths", "0.5", "1.0", "--packing", "0.2", "--json",
+                             "--no-progress", "--out", str(out)])
+    initial = np.random.SeedSequence(4).spawn(2)[0]  # the CLI's gas: the first child of the root seed
+    gas = random_gas(100, seed=initial, lengths=UniformLengths(0.5, 1.0), packing_fraction=0.2)
+    _, v, now, _ = heapq_ring_gas(gas.lengths, gas.positions, gas.velocities, gas.system_length, 0.99, 1001)
+    v, m = np.asarray(v), gas.lengths
+    expected = 0.5 * np.sum(m * v**2) - np.sum(m * v) ** 2 / (2 * m.sum())  # centre-of-mass frame
+    one_before = heapq_ring_gas(gas.lengths, gas.positions, gas.velocities, gas.system_length, 0.99, 1000)[1]
+    assert abs(0.5 * np.sum(m * np.asarray(one_before) ** 2) - 0.5 * np.sum(m * v**2)) > 1e-6 * expected
+    assert summary["collisions"] == 1001 and summary["simulated_time"] == pytest.approx(now, rel=1e-12)
+    assert summary["final_energy"] == pytest.approx(expected, rel=1e-10)
+    with np.load(out / "gas_history.npz", allow_pickle=False) as data:
+        assert data["history_collisions"][-1] == 1001 and np.all(np.diff(data["history_collisions"]) > 0)
+        assert data["history_kinetic_energy"][-1] == summary["final_energy"]
+        assert data["history_time"][-1] == summary["simulated_time"]
 
 
 def test_collapse_stops_with_a_message(capsys):

@@ -92,7 +92,8 @@ def test_kernel_draw_matches_the_table_quantile_function():
 
 
 def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):
-    """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process reproduces the compiled run exactly."""
+    """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process reproduces the compiled runs exactly (a ring
+    with the table rule and damping, a box with walls and the fixed rule)."""
 
     script = (
         "import numpy as np, sys\n"
@@ -102,7 +103,12 @@ def test_pure_python_path_gives_the_same_run_bit_for_bit(tmp_path):
         "sim = GasSimulation(random_gas(30, seed=1), VibrationTable(analytic_kick_table(levels=51)), seed=2,"
         " damping=5.0, record_every=100)\n"
         "sim.run(300)\n"
-        "np.savez(sys.argv[1], v=sim.v, x=sim.x, t=sim.temperature, time=sim.time)\n"
+        "from wavecontact.gas import FixedRestitution\n"
+        "walls = GasSimulation(random_gas(20, seed=3, boundary='walls'), FixedRestitution(0.9), seed=0,"
+        " record_every=50)\n"
+        "walls.run(300)\n"
+        "np.savez(sys.argv[1], v=sim.v, x=sim.x, t=sim.temperature, time=sim.time, walls_v=walls.v,"
+        " walls_x=walls.x, walls_time=walls.time, walls_hits=walls.counters)\n"
     )
     outputs = pure_and_compiled_outputs(script, tmp_path, Path(__file__).parent)
     for name in outputs[0]:

@@ -67,6 +67,18 @@ COLLISIONS, WALL_HITS, OFF_TABLE, BATH_LIMITED, SOFTER, FLOORED = 0, 1, 2, 3, 4,
 COUNTERS = 6
 
 
+@kernel(inline="always")
+def _pair_time(now, xi, vi, ti, xj, vj, tj, offset, reach):
+    """Predicted contact time of rods ``i`` (left) and ``j`` (right), each given by its centre ``x``, velocity
+    ``v`` and clock ``t`` (``offset``: the circumference when ``j`` sits across the ring's seam)."""
+    approach = vi - vj
+    gap = (xj + vj * (now - tj) + offset) - (xi + vi * (now - ti)) - reach
+    # whether the pair closes in is random from one call to the next: selects instead of a branch
+    closing = approach > 0.0
+    when = now + max(gap, 0.0) / (approach if closing else 1.0)
+    return when if closing else math.inf
+
+
 @kernel
 def event_time(k, now, x, v, local_time, reach, ring, box):
     """Predicted time of event ``k`` seen from time ``now`` (``inf``: the partners separate)."""
@@ -92,12 +104,7 @@ def event_time(k, now, x, v, local_time, reach, ring, box):
         i = k - 1
         j = k
         offset = 0.0
-    approach = v[i] - v[j]
-    gap = (x[j] + v[j] * (now - local_time[j]) + offset) - (x[i] + v[i] * (now - local_time[i])) - reach[k]
-    # whether the pair closes in is random from one call to the next: selects instead of a branch
-    closing = approach > 0.0
-    when = now + max(gap, 0.0) / (approach if closing else 1.0)
-    return when if closing else math.inf
+    return _pair_time(now, x[i], v[i], local_time[i], x[j], v[j], local_time[j], offset, reach[k])
 
 
 @kernel
@@ -115,7 +122,7 @@ def tree_size(events):
     return 2 * leaves
 
 
-@kernel
+@kernel(inline="always")
 def _pull(tree_time, tree_event, p):
     """Node ``p`` takes the earlier of its two children (the left one on a tie: it holds the lower events)."""
     left = 2 * p
@@ -129,18 +136,23 @@ def _pull(tree_time, tree_event, p):
     tree_event[p] = e
 
 
-@kernel
+@kernel(inline="always")
 def _climb(tree_time, tree_event, p):
-    """Re-evaluate the ancestors of node ``p`` (whose own entry is right), carrying the winner in registers.
+    """Re-evaluate the ancestors of node ``p`` (whose own entry is right); returns the root ``(time, event)``."""
+    return _climb_from(tree_time, tree_event, p, tree_time[p], tree_event[p])
+
+
+@kernel(inline="always")
+def _climb_from(tree_time, tree_event, p, t, e):
+    """Re-evaluate the ancestors of node ``p``, which holds ``(t, e)``, carrying the winner in registers.
 
     Each level compares the winner so far with the sibling subtree's, which
     did not change, so the loads need not wait for the stores below them.
     The choice is written as two selects (compiled to conditional moves, not
     branches that the processor would mispredict half of the time): the
     sibling wins if it is earlier, or equally early and on the left (lower events).
+    Returns the root's ``(time, event)``, so that the next collision need not read it back from memory.
     """
-    t = tree_time[p]
-    e = tree_event[p]
     while p > 1:
         sibling_time = tree_time[p ^ 1]
         sibling_event = tree_event[p ^ 1]
@@ -150,9 +162,10 @@ def _climb(tree_time, tree_event, p):
         p >>= 1
         tree_time[p] = t
         tree_event[p] = e
+    return t, e
 
 
-@kernel
+@kernel(inline="always")
 def _pull_range(tree_time, tree_event, lo, hi):
     """Recompute every ancestor of the leaves of events ``lo..hi`` (their times already set), up to the root."""
     leaves = tree_time.size >> 1
@@ -163,7 +176,7 @@ def _pull_range(tree_time, tree_event, lo, hi):
         hi >>= 1
         for p in range(lo, hi + 1):
             _pull(tree_time, tree_event, p)
-    _climb(tree_time, tree_event, lo)
+    return _climb(tree_time, tree_event, lo)
 
 
 @kernel
@@ -187,13 +200,24 @@ def build_tree(key, tree_time, tree_event):
         _pull(tree_time, tree_event, p)
 
 
-@kernel
-def _advance(i, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars):
-    """Bring rod ``i`` to time ``t``: free flight, and its bath relaxing at ``decay_rate``."""
+@kernel(inline="always")
+def _advance(i, t, x, v, local_time):
+    """Bring rod ``i`` to time ``t`` (free flight); returns the time it flew.
+
+    Branch-free, so that numba's reference counts of the arrays cancel when
+    it is inlined; the bath's relaxation is :func:`_relax_bath`, called only
+    when there is damping.
+    """
     dt = t - local_time[i]
     x[i] += v[i] * dt
     local_time[i] = t
-    if decay_rate > 0.0 and dt > 0.0:
+    return dt
+
+
+@kernel
+def _relax_bath(i, dt, temperature, decay_rate, bath_modes, scalars):
+    """Rod ``i``'s bath relaxing at ``decay_rate`` for a time ``dt`` (its energy counted as dissipated)."""
+    if dt > 0.0:
         cooled = temperature[i] * math.exp(-decay_rate * dt)
         scalars[DISSIPATED] += bath_modes * (temperature[i] - cooled)
         temperature[i] = cooled
@@ -433,9 +457,19 @@ def run_events(
     events = reach.size
     leaves = tree_time.size >> 1
     done = 0
+    k = tree_event[1]
+    t = tree_time[1]
+    # interior events, whose two neighbouring events are pairs of rods next to the collision's (no seam, no wall)
+    first_interior, last_interior = (1, n - 3) if ring else (2, n - 2)
+    # the running sums in registers (written through to the arrays at every collision, read from here)
+    kinetic = scalars[KINETIC]
+    carry = scalars[KINETIC_CARRY]
+    reference = scalars[KINETIC_REFERENCE]
+    momentum_energy = scalars[MOMENTUM_ENERGY]
+    energy_floor = scalars[ENERGY_FLOOR]
+    lost_total = scalars[LOST]
+    count = counters[COLLISIONS]
     while done < max_collisions:
-        k = tree_event[1]
-        t = tree_time[1]
         if t == math.inf:
             # on a ring this means all velocities are equal: the gas has merged into one block. If the
             # collisions before were accelerating, that is the end of a collapse lost in the rounding.
@@ -452,7 +486,9 @@ def run_events(
             return STATUS_TIME_LIMIT, -1, done
         if not ring and (k == 0 or k == n):
             rod = 0 if k == 0 else n - 1
-            _advance(rod, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars)
+            dt = _advance(rod, t, x, v, local_time)
+            if decay_rate > 0.0:
+                _relax_bath(rod, dt, temperature, decay_rate, bath_modes, scalars)
             v[rod] = -v[rod]
             scalars[T_NOW] = t
             counters[WALL_HITS] += 1
@@ -460,6 +496,8 @@ def run_events(
             tree_time[leaves + k] = math.inf
             tree_time[leaves + neighbour] = event_time(neighbour, t, x, v, local_time, reach, ring, box)
             _pull_range(tree_time, tree_event, min(k, neighbour), max(k, neighbour))
+            k = tree_event[1]
+            t = tree_time[1]
             continue
         if ring:
             i = k
@@ -469,8 +507,11 @@ def run_events(
             j = k
         if rule == RULE_EXTERNAL and pending[0] == 0.0:
             return STATUS_NEED_DRAW, k, done
-        _advance(i, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars)
-        _advance(j, t, x, v, local_time, temperature, decay_rate, bath_modes, scalars)
+        dt_i = _advance(i, t, x, v, local_time)
+        dt_j = _advance(j, t, x, v, local_time)
+        if decay_rate > 0.0:
+            _relax_bath(i, dt_i, temperature, decay_rate, bath_modes, scalars)
+            _relax_bath(j, dt_j, temperature, decay_rate, bath_modes, scalars)
         mi = mass[i]
         mj = mass[j]
         total = mi + mj
@@ -567,7 +608,8 @@ def run_events(
                 eps2 = 1.0 - lost / e_tr
                 counters[BATH_LIMITED] += 1
         if rule == RULE_FIXED:
-            scalars[LOST] += lost
+            lost_total += lost
+            scalars[LOST] = lost_total
         elif rule != RULE_LAW:
             temperature[short] += s * lost / bath_modes
             temperature[long] += (1.0 - s) * lost / bath_modes
@@ -576,50 +618,70 @@ def run_events(
             temperature[long] = max(temperature[long], 0.0)
         # compensated (Kahan) sum: the kinetic energy stays accurate relative to itself while it decays
         # by many orders of magnitude (plain sums would keep an error of 1e-16 of the initial energy)
-        change = -lost - scalars[KINETIC_CARRY]
-        kinetic = scalars[KINETIC] + change
-        scalars[KINETIC_CARRY] = (kinetic - scalars[KINETIC]) - change
+        change = -lost - carry
+        updated = kinetic + change
+        carry = (updated - kinetic) - change
+        kinetic = updated
+        scalars[KINETIC_CARRY] = carry
         scalars[KINETIC] = kinetic
         centre = (mi * v[i] + mj * v[j]) / total
         after = math.sqrt(eps2) * approach
-        v[i] = centre - mj / total * after
-        v[j] = centre + mi / total * after
+        vi = centre - mj / total * after
+        vj = centre + mi / total * after
+        v[i] = vi
+        v[j] = vj
         scalars[T_NOW] = t
-        counters[COLLISIONS] += 1
+        count += 1
+        counters[COLLISIONS] = count
         done += 1
-        tree_time[leaves + k] = math.inf
-        before = k - 1
-        after_k = k + 1
-        if ring:
-            if before < 0:
-                before = events - 1
-            if after_k == events:
-                after_k = 0
-        has_before = before >= 0 and before != k
-        has_after = after_k < events and after_k != k and after_k != before
-        if has_before:
-            tree_time[leaves + before] = event_time(before, t, x, v, local_time, reach, ring, box)
-        if has_after:
-            tree_time[leaves + after_k] = event_time(after_k, t, x, v, local_time, reach, ring, box)
-        if before == k - 1 and after_k == k + 1:
-            _pull_range(tree_time, tree_event, before, after_k)  # one shared path to the root
-        else:  # the ring's seam (or fewer than three events): separate paths
-            _pull_range(tree_time, tree_event, k, k)
+        if first_interior <= k <= last_interior:
+            # the usual case: the two new predictions from the velocities still in registers (event_time's
+            # arithmetic, without reading back what was just stored), and one shared path to the root
+            t_before = _pair_time(t, x[i - 1], v[i - 1], local_time[i - 1], x[i], vi, t, 0.0, reach[k - 1])
+            t_after = _pair_time(t, x[j], vj, t, x[j + 1], v[j + 1], local_time[j + 1], 0.0, reach[k + 1])
+            tree_time[leaves + k - 1] = t_before
+            tree_time[leaves + k] = math.inf
+            tree_time[leaves + k + 1] = t_after
+            t_next, k_next = _pull_range(tree_time, tree_event, k - 1, k + 1)
+        else:
+            tree_time[leaves + k] = math.inf
+            before = k - 1
+            after_k = k + 1
+            if ring:
+                if before < 0:
+                    before = events - 1
+                if after_k == events:
+                    after_k = 0
+            has_before = before >= 0 and before != k
+            has_after = after_k < events and after_k != k and after_k != before
             if has_before:
-                _pull_range(tree_time, tree_event, before, before)
+                tree_time[leaves + before] = event_time(before, t, x, v, local_time, reach, ring, box)
             if has_after:
-                _pull_range(tree_time, tree_event, after_k, after_k)
+                tree_time[leaves + after_k] = event_time(after_k, t, x, v, local_time, reach, ring, box)
+            if before == k - 1 and after_k == k + 1:
+                _pull_range(tree_time, tree_event, before, after_k)  # one shared path to the root
+            else:  # the ring's seam (or fewer than three events): separate paths
+                _pull_range(tree_time, tree_event, k, k)
+                if has_before:
+                    _pull_range(tree_time, tree_event, before, before)
+                if has_after:
+                    _pull_range(tree_time, tree_event, after_k, after_k)
+            t_next = tree_time[1]
+            k_next = tree_event[1]
         # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite time).
         # Compare the time taken by the last half of the window with the half before it; in floating
         # point a collapsing cluster ends after a few dozen collisions with exactly equal velocities,
         # which the half-window of 8..16 collisions still sees.
-        if scalars[KINETIC] < 1e-6 * scalars[KINETIC_REFERENCE]:
+        if kinetic < 1e-6 * reference:
             _recount_kinetic(v, mass, ring, scalars)
-        count = counters[COLLISIONS]
+            kinetic = scalars[KINETIC]
+            carry = scalars[KINETIC_CARRY]
+            momentum_energy = scalars[MOMENTUM_ENERGY]
+            reference = scalars[KINETIC_REFERENCE]
         size = window.size  # a power of two: positions by masking instead of a division
         mask = size - 1
         window[(count - 1) & mask] = t
-        cooled = scalars[ENERGY_FLOOR] > 0.0 and scalars[KINETIC] - scalars[MOMENTUM_ENERGY] < scalars[ENERGY_FLOOR]
+        cooled = energy_floor > 0.0 and kinetic - momentum_energy < energy_floor
         if count >= size or cooled:
             # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite
             # time).  Compare the time taken by the last half of the window with the half before it;
@@ -634,6 +696,8 @@ def run_events(
                     return STATUS_COLLAPSE, k, done
             if cooled:
                 return STATUS_COOLED, k, done
+        k = k_next
+        t = t_next
     return STATUS_DONE, -1, done
 
 

@@ -63,7 +63,7 @@ class GasResult:
     collisions_per_second : float
         Collisions of this call per wall-clock second.
     history : dict of ndarray
-        At every ``record_every`` collisions: ``time``, ``collisions``,
+        At every ``record_every`` collisions, and at the end of the run: ``time``, ``collisions``,
         ``kinetic_energy`` (in the centre-of-mass frame on a ring),
         ``bath_energy``, ``lost_energy`` (fixed rule), ``dissipated_energy``
         (bath damping).
@@ -362,9 +362,13 @@ class GasSimulation:
             x = np.mod(x - drift * now, self.gas.system_length)
         return x
 
-    def _record(self):
+    def _record_row(self):
+        """The values of one history record now, in the order of ``_HISTORY``."""
         kinetic, bath, lost, dissipated, _ = self._energies()
-        for name, value in zip(_HISTORY, (self.time, self.collisions, kinetic, bath, lost, dissipated)):
+        return self.time, self.collisions, kinetic, bath, lost, dissipated
+
+    def _record(self):
+        for name, value in zip(_HISTORY, self._record_row()):
             self.history[name].append(value)
         if self.records % self.frame_every == 0 and len(self.frames) < self.max_frames:
             stride = max(1, math.ceil(self.gas.rods / self.frame_rods))
@@ -510,8 +514,14 @@ class GasSimulation:
         return f"{c} collisions, t = {t:.6g}"
 
     def _result(self, wall, done) -> GasResult:
+        history = {name: list(values) for name, values in self.history.items()}
+        if not history["collisions"] or history["collisions"][-1] != self.collisions:
+            # a run that ends between records: the result's history ends with the final state (the
+            # simulation's own records keep their cadence, so that a run in pieces records what one run does)
+            for name, value in zip(_HISTORY, self._record_row()):
+                history[name].append(value)
         history = {name: np.asarray(values, dtype=np.int64 if name == "collisions" else float)
-                   for name, values in self.history.items()}
+                   for name, values in history.items()}
         total = self._energies()[4]
         frames = np.array(self.frames) if self.frames else np.zeros((0, 0), np.float32)
         return GasResult(
