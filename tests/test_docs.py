@@ -512,6 +512,18 @@ def _results_table(text: str, header_start: str) -> list:
     return rows
 
 
+def test_gas_page_quotes_the_heapq_ratio_of_its_bench_block():
+    """docs/gas.md's prose quotes the kernel-against-heapq ratio of the bench_gas block (written by
+    ``python benchmarks/bench_gas.py --update-docs``) and says whether it meets the 50x goal."""
+    text = (ROOT / "docs" / "gas.md").read_text()
+    block = text.split("<!-- bench_gas:begin -->", 1)[1].split("<!-- bench_gas:end -->", 1)[0]
+    row = next(line for line in block.splitlines() if line.startswith("| wavecontact kernel (numba) |"))
+    ratio = int(row.split("|")[-2].strip().rstrip("x"))
+    prose = " ".join(text.split("<!-- bench_gas:end -->", 1)[1].split())
+    verdict = "short of the 50x goal" if ratio < 50 else "meeting the 50x goal"
+    assert f"the ratio is {ratio}x in CPU time, {verdict}" in prose, (ratio, verdict)
+
+
 def test_gas_page_quotes_the_generated_gas_tables():
     """docs/gas.md's prose quotes numbers of the generated docs/gas_vibration_results.md
     (written by ``python docs/gas_study.py vibration``): they must be that page's current values, and
