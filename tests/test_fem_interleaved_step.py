@@ -2,9 +2,8 @@
 
 import numpy as np
 import pytest
-import scipy.sparse.linalg as spl
 from scipy.linalg import solve_banded
-from test_fem_explicit_step import _banded_mass, _graded_nodes
+from test_fem_explicit_step import _banded_mass, _graded_nodes, assert_steps_equal_a_banded_solve
 
 import wavecontact
 from wavecontact import Rod
@@ -67,20 +66,7 @@ def test_short_chunks_equal_a_reference_step_with_a_banded_solve(monkeypatch, or
     kind, table = prepare_mass(disc)
     rows, forward_rows, backward_rows = table[L_SHAPE, :3]
     assert 2 <= rows <= min(forward_rows, backward_rows)  # every row of a chunk is corrected
-    (lower, upper), banded = _banded_mass(disc)
-    stiffness = disc.stiffness
-    highest = spl.eigsh(stiffness, k=1, M=disc.mass_matrix.tocsc(), which="LM", return_eigenvectors=False)[0]
-    dt = 1.9 / np.sqrt(highest)
-    u = 1e-3 * np.sin(3.0 * disc.x) + 1e-6 * rng.normal(size=disc.n_nodes)
-    v = rng.normal(size=disc.n_nodes) * 1e-3
-    u_ref, v_ref = u.copy(), v.copy()
-    scratch = np.empty(disc.n_nodes)
-    for _ in range(400):
-        step_rod(u, v, scratch, disc.stiffness_bands, kind, table, dt)
-        v_ref += dt * solve_banded((lower, upper), banded, -(stiffness @ u_ref))
-        u_ref += dt * v_ref
-    np.testing.assert_allclose(v, v_ref, rtol=0, atol=1e-11 * np.abs(v_ref).max())
-    np.testing.assert_allclose(u, u_ref, rtol=0, atol=1e-11 * np.abs(u_ref).max())
+    assert_steps_equal_a_banded_solve(disc, kind, table, rng)
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -173,21 +159,8 @@ def test_uniform_rows_with_far_end_remainders_equal_a_banded_solve(order, remain
     kind, table = prepare_mass(disc)
     lo, hi = _uniform_rows(table)
     assert lo <= 16 and hi >= _last_chunk_rows(table, elements + 1) - 16
-    (lower, upper), banded = _banded_mass(disc)
-    stiffness = disc.stiffness
-    highest = spl.eigsh(stiffness, k=1, M=disc.mass_matrix.tocsc(), which="LM", return_eigenvectors=False)[0]
-    dt = 1.9 / np.sqrt(highest)
     rng = np.random.default_rng(order + int(3 * remainder))
-    u = 1e-3 * np.sin(3.0 * disc.x) + 1e-6 * rng.normal(size=disc.n_nodes)
-    v = rng.normal(size=disc.n_nodes) * 1e-3
-    u_ref, v_ref = u.copy(), v.copy()
-    scratch = np.empty(disc.n_nodes)
-    for _ in range(400):
-        step_rod(u, v, scratch, disc.stiffness_bands, kind, table, dt)
-        v_ref += dt * solve_banded((lower, upper), banded, -(stiffness @ u_ref))
-        u_ref += dt * v_ref
-    np.testing.assert_allclose(v, v_ref, rtol=0, atol=1e-11 * np.abs(v_ref).max())
-    np.testing.assert_allclose(u, u_ref, rtol=0, atol=1e-11 * np.abs(u_ref).max())
+    assert_steps_equal_a_banded_solve(disc, kind, table, rng)
 
 
 @pytest.mark.parametrize("order", [1, 2])
