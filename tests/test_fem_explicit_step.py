@@ -184,10 +184,12 @@ def test_compiled_chains_equal_their_pure_python_form_bit_for_bit():
 def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
     """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process gives the compiled steps' bits, every kind.
 
-    700 elements: the consistent masses take the chained solve, 1250 (graded) the interleaved layout's
-    arrays, 3001 (equal elements) also its constants of the uniform rows (no
-    reassociation, no fused multiply-add in the compiled kernels, so the vectorized passes round exactly
-    as the plain Python loops do).
+    700 elements: the consistent masses take the chained solve (flat layout asked for), 1250 (graded) the
+    interleaved layout's arrays, 3001 and 800 (equal elements) also its constants of the uniform rows (800:
+    P2's 801 vertices in chunks of 26 rows, the last chunk padding only, the padding after the first
+    padding unknown held and the backward burn-in over whole chunks) (no reassociation, no fused
+    multiply-add in the compiled kernels, so the vectorized passes round exactly as the plain Python loops
+    do).
     """
 
     script = (
@@ -199,15 +201,16 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "out = {}\n"
         "for order, mass, elements in ((1, 'lumped', 700), (2, 'lumped', 700), (1, 'consistent', 700),\n"
         "                              (2, 'consistent', 700), (1, 'consistent', 1250), (2, 'consistent', 1250),\n"
-        "                              (1, 'consistent', 3001), (2, 'consistent', 3001)):\n"
+        "                              (1, 'consistent', 3001), (2, 'consistent', 3001), (1, 'consistent', 800),\n"
+        "                              (2, 'consistent', 800)):\n"
         "    if True:\n"
         "        rng = np.random.default_rng(order)\n"
         "        sizes = np.exp(rng.uniform(0.0, np.log(2.0), elements))\n"
         "        nodes = np.r_[0.0, np.cumsum(sizes)] / sizes.sum()\n"
-        "        if elements == 3001:  # equal elements: the uniform rows run with constants\n"
+        "        if elements in (800, 3001):  # equal elements: the uniform rows run with constants\n"
         "            nodes = np.linspace(0.0, 1.0, elements + 1)\n"
         "        disc = discretize_rod(Rod(1.0, 2.0, 3.0, 0.5), nodes, order, mass)\n"
-        "        kind, table = prepare_mass(disc)\n"
+        "        kind, table = prepare_mass(disc, interleaved=elements != 700)\n"
         "        u, v = 1e-3 * np.sin(7.0 * disc.x), rng.normal(size=disc.n_nodes)\n"
         "        scratch = np.zeros(disc.n_nodes)\n"
         "        for _ in range(5):\n"
@@ -219,10 +222,13 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
     )
     root = Path(__file__).resolve().parents[1]  # this checkout's package
     outputs = pure_and_compiled_outputs(script, tmp_path, root)
-    assert len(outputs[0]) == 32
+    assert len(outputs[0]) == 40
     for order in (1, 2):
         lo, hi = outputs[1][f"uniform{order}consistent3001"]
         assert hi - lo > 50 and np.all(outputs[1][f"uniform{order}consistent1250"] == 1.0)  # constants / arrays
+        lo, hi = outputs[1][f"uniform{order}consistent800"]
+        assert hi - lo >= 5
+    assert outputs[1]["layout2consistent800"][0] == outputs[1]["layout2consistent800"][2] == 26  # burn-in: all rows
     assert outputs[1]["layout1consistent1250"][0] > 0 and outputs[1]["layout2consistent1250"][0] > 0  # interleaved
     assert outputs[1]["layout1consistent700"][0] == 0
     for name in outputs[0]:

@@ -45,22 +45,23 @@ __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "aligned_table", "
 
 LANES = 32
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
-# smaller systems keep the flat layout: with fewer than about 40 rows per chunk the corrections cover most
-# rows and cost more than the lanes save (docs/fem.md section 7)
-LANE_MIN_UNKNOWNS = 1200
-LANE_MIN_VERTICES = 1200  # the same for the vertex system of P2 (condensed midpoints)
+# smaller systems keep the flat layout: with few rows per chunk the chunks' coupling covers most rows and
+# costs more than the lanes save (measured crossings: about 350 unknowns for P1, 550 vertices for P2;
+# docs/fem.md section 7)
+LANE_MIN_UNKNOWNS = 400
+LANE_MIN_VERTICES = 600  # the same for the vertex system of P2 (condensed midpoints)
 
 # rows of the mass solve's table used by the interleaved layout (the flat solve's rows come first)
-L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward ones (P2: + 1)
+L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward burn-in rows
 L_LEFT = 25  # stencil, P1: r_i = -(left_i (u_(i-1) - u_i) + right_i (u_(i+1) - u_i)), scaled by 1 / D_i
 L_RIGHT = 26
 L_FORWARD = 27  # f_i of y_i = r_i + f_i y_(i-1) (0 at the first unknown and on the padding)
 L_BACKWARD = 28  # g_i of x_i = y_i + g_i x_(i+1) (0 at the last unknown and on the padding)
 L_FORWARD_END = 29  # per chunk: product of its forward factors (first LANES entries)
-L_BACKWARD_START = 30  # per chunk: product of its backward factors
+L_BACKWARD_START = 30  # per chunk: product of its backward factors (first LANES entries)
 L_CARRY = 31  # scratch: true end values of the chunks
-L_CORRECTION = 32  # scratch: the corrections of a sweep
-L_WORK = 33  # scratch: the sweeps' values
+L_CORRECTION = 32  # scratch: the forward sweep's corrections, then the backward burn-in
+L_WORK = 33  # scratch: the sweeps' values; its row n: the first unknown of the next chunk (backward)
 L_U = 34  # displacements in the interleaved layout (inside the time loop)
 L_V = 35  # velocities (P2: the vertices' first, then the midpoints', each n LANES long)
 # P2 consistent (midpoints condensed), per vertex k: its condensed right-hand side from the displacements,
@@ -80,16 +81,30 @@ L_SHARE = 44  # scratch: s_k
 # uniform rows: [0], [1] the rows [lo, hi) (1 <= lo <= hi <= n - 1) whose coefficients, in every lane, are the
 # constants [2:] (P1: left, right, f, g; P2: c1 .. c4, m_l, m_r, f, g, b_l, b_r); the step holds those in registers
 L_UNIFORM = 45
-L_ROWS_END = 46
+L_WEIGHT = 46  # G_i: per chunk, the product of the backward factors g above row i (1 at row 0)
+L_BURN = 47  # scratch: per chunk, sum of G_i y_i over its rows so far
+L_ROWS_END = 48
 UNIFORM_ULPS_PER_ELEMENT = 4.0  # uniform to the rounding of the node coordinates (see uniform_rows)
+HELD_ROW_COST = 0.6  # a held row's cost against one read from the arrays (P2 step, 1333 elements, measured)
 P1_UNIFORM_ROWS = (L_LEFT, L_RIGHT, L_FORWARD, L_BACKWARD)
 P2_UNIFORM_ROWS = (L_C1, L_C2, L_C3, L_C4, L_MID_LEFT, L_MID_RIGHT, L_FORWARD, L_BACKWARD, L_BACK_LEFT,
                    L_BACK_RIGHT)
 
 
+def candidate_rows(unknowns: int) -> range:
+    """The rows per chunk the set-up chooses from for ``unknowns`` unknowns (see :func:`_fill_rows`).
+
+    From the fewest, ``ceil(unknowns / LANES)``, upwards: one more row moves the rod's far end about
+    ``LANES - 1`` rows up its chunk, so these reach every position of it within a few rows of the top.
+    """
+    fewest = -(-unknowns // LANES)
+    return range(fewest, fewest + fewest // (LANES - 1) + 3)
+
+
 def lanes_width(unknowns: int) -> int:
-    """Length of a row of the interleaved layout for ``unknowns`` unknowns (one spare row)."""
-    return (-(-unknowns // LANES) + 1) * LANES
+    """Length of a row of the interleaved layout for ``unknowns`` unknowns, for any of their
+    :func:`candidate_rows` (one spare row)."""
+    return (candidate_rows(unknowns)[-1] + 1) * LANES
 
 
 def table_width(minimum: int) -> int:
@@ -129,20 +144,67 @@ def _deinterleave(row: np.ndarray, n: int, m: int) -> np.ndarray:
     return row[: n * LANES].reshape(n, LANES).T.ravel()[:m].copy()
 
 
-def _correction_rows(factors: np.ndarray, n: int, reverse: bool) -> tuple:
-    """Per chunk, the products of ``factors`` from the chunk boundary (the top one, or the bottom one if
-    ``reverse``): the whole chunk's product and the number of rows where it exceeds ``LANE_TOLERANCE``."""
-    chunks = np.zeros(n * LANES)
-    chunks[: factors.size] = factors
-    chunks = chunks.reshape(LANES, n)
-    if reverse:
-        chunks = chunks[:, ::-1]
-    products = np.cumprod(chunks, axis=1)
+def _correction_rows(factors: np.ndarray) -> tuple:
+    """Per chunk (``factors``: one row per chunk), the products of its factors from its first row down: the
+    whole chunk's product and the number of rows where it exceeds ``LANE_TOLERANCE`` (at least 1)."""
+    products = np.cumprod(factors, axis=1)
     rows = int(np.max(np.sum(np.abs(products) > LANE_TOLERANCE, axis=1)))
     return products[:, -1].copy(), max(rows, 1)
 
 
-def uniform_rows(table: np.ndarray, rows: tuple, n: int, elements: int) -> tuple:
+def _chunk_couplings(table: np.ndarray, n: int) -> None:
+    """Rows ``L_SHAPE``, ``L_FORWARD_END``, ``L_BACKWARD_START``, ``L_WEIGHT`` from the solve's factors in the
+    table (``n`` rows per chunk).
+
+    Forward: the chunk before adds ``P_i e`` to row ``i`` of a chunk (``P_i`` the product of its factors
+    ``f`` from the first row to ``i``, ``e`` that chunk's true last value), on the rows where ``|P_i|``
+    exceeds ``LANE_TOLERANCE``.  Backward: a chunk's first unknown is ``x_0 = sum_(i<n) G_i y_i + G_n
+    x_n`` (``G_i``, row ``L_WEIGHT``, the product of its factors ``g`` above row ``i``; ``x_n`` the next
+    chunk's first unknown), summed over the rows where ``|G_i|`` exceeds ``LANE_TOLERANCE`` (the burn-in
+    rows; the last term only when they are all the chunk's rows, with ``G_n`` per chunk in
+    ``L_BACKWARD_START``).
+    """
+    forward = table[L_FORWARD, : n * LANES].reshape(n, LANES).T
+    backward = table[L_BACKWARD, : n * LANES].reshape(n, LANES).T
+    end, forward_rows = _correction_rows(forward)
+    start, backward_rows = _correction_rows(backward)
+    table[L_FORWARD_END, :LANES] = end
+    table[L_BACKWARD_START, :LANES] = start
+    weights = np.ones((LANES, n))
+    weights[:, 1:] = np.cumprod(backward[:, :-1], axis=1)
+    table[L_WEIGHT, :] = 0.0
+    table[L_WEIGHT, : n * LANES] = weights.T.ravel()
+    table[L_SHAPE, :3] = (n, forward_rows, min(backward_rows + 1, n))
+
+
+def _fill_rows(table: np.ndarray, per_unknown: dict, held: tuple, m: int) -> None:
+    """Write ``per_unknown`` (table row: values of the ``m`` unknowns) in the interleaved layout with the rows
+    per chunk among :func:`candidate_rows` that costs least, hold the uniform rows, fill the couplings.
+
+    The cost of a layout counts its rows, a held row as ``HELD_ROW_COST`` of one read from the arrays: more
+    rows per chunk can move the rod's far end up into the rows where the factors have not yet converged
+    at its start, which are not held anyway, and so lengthen the run of held rows.
+    """
+    best = None
+    for n in candidate_rows(m):
+        lo, hi = _layout_rows(table, per_unknown, held, n, m)
+        cost = n - (1.0 - HELD_ROW_COST) * (hi - lo)
+        if best is None or cost < best[0]:
+            best = (cost, n)
+    n = best[1]
+    _layout_rows(table, per_unknown, held, n, m)
+    _chunk_couplings(table, n)
+
+
+def _layout_rows(table: np.ndarray, per_unknown: dict, held: tuple, n: int, m: int) -> tuple:
+    """:func:`_fill_rows` for ``n`` rows per chunk, without the couplings; returns the held rows ``(lo, hi)``."""
+    for row, values in per_unknown.items():
+        table[row, :] = 0.0
+        table[row, : n * LANES] = _interleave(values, n)
+    return uniform_rows(table, held, n, m)
+
+
+def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
     """Find and hold the rows of the interleaved layout whose coefficients are the same in every chunk.
 
     A mesh of equal elements gives equal stiffness and mass entries, and the
@@ -152,28 +214,36 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, elements: int) -> tuple
     ``E 2^-52``, and so do the coefficients (measured: up to 1.5 ``E`` ulps on
     ``linspace`` nodes; none on nodes that are multiples of a power of two).
     Each of ``rows`` gets its constant, its mean over the middle half of the
-    chunks 1 .. ``LANES - 2`` (rows far from both ends; the mean, not one
-    element's value, so that the held elements keep the mesh's mean length
-    and the waves their speed), and a tolerance: twice the largest distance
-    from it over those rows, at least 4 ulps and at most
-    ``UNIFORM_ULPS_PER_ELEMENT E`` ulps.  A row of the layout (all
-    ``LANES`` chunks) is uniform when each of ``rows`` is within its
-    tolerance; the longest run ``[lo, hi)`` of uniform rows inside ``[1, n -
-    1)`` gets the constants written into the table (so the table describes
-    exactly the operator the step applies) and the constants go to row
-    ``L_UNIFORM``.  Graded meshes have no such rows (``lo = hi = 1``, nothing
-    changes).  Returns ``(lo, hi)``.
+    rows of the chunks 1 .. ``LANES - 2`` (their unknowns, all along the rod
+    but far from its ends; the mean, not one element's value, so that the
+    held elements keep the mesh's mean length and the waves their speed),
+    and a tolerance: twice the largest distance from it over those
+    unknowns, at least 4 ulps and at most
+    ``UNIFORM_ULPS_PER_ELEMENT E`` ulps (``E = m - 1`` elements).  A row of
+    the layout (all ``LANES`` chunks) is uniform when each of ``rows`` is
+    within its tolerance at every unknown of the row; padding beyond the
+    first padding unknown counts as uniform (it stays zero whatever its
+    coefficients: the first one, after the rod's last unknown, keeps its
+    zero coefficients and decouples it).  The longest run ``[lo, hi)`` of
+    uniform rows inside ``[1, n - 1)`` gets the constants written into the
+    table (so the table describes exactly the operator the step applies) and
+    the constants go to row ``L_UNIFORM``.  Graded meshes have no such rows
+    (``lo = hi = 1``, nothing changes).  Returns ``(lo, hi)``.
     """
     ulp = 2.0**-52
-    middle = slice(n // 4, max(3 * n // 4, n // 4 + 1))
-    constants = np.array([np.mean(table[row, : n * LANES].reshape(n, LANES)[middle, 1 : LANES - 1]) for row in rows])
+    index = np.arange(n * LANES).reshape(LANES, n).T  # the unknown at (row, chunk)
+    free = index > m
+    middle = np.zeros((n, LANES), dtype=bool)
+    middle[n // 4 : max(3 * n // 4, n // 4 + 1), 1 : LANES - 1] = True
+    middle &= index < m - 2  # not the rod's end
+    elements = max(m - 1, 1)
+    constants = np.array([np.mean(table[row, : n * LANES].reshape(n, LANES)[middle]) for row in rows])
     uniform = np.ones(n, dtype=bool)
     for row, value in zip(rows, constants):
         entries = table[row, : n * LANES].reshape(n, LANES)
-        spread = np.max(np.abs(entries[middle, 1 : LANES - 1] - value))
-        tolerance = min(max(2.0 * spread, 4.0 * ulp * abs(value)), UNIFORM_ULPS_PER_ELEMENT * max(elements, 1) * ulp
-                        * abs(value))
-        uniform &= np.all(np.abs(entries - value) <= tolerance, axis=1)
+        spread = np.max(np.abs(entries[middle] - value))
+        tolerance = min(max(2.0 * spread, 4.0 * ulp * abs(value)), UNIFORM_ULPS_PER_ELEMENT * elements * ulp * abs(value))
+        uniform &= np.all((np.abs(entries - value) <= tolerance) | free, axis=1)
     uniform[0] = uniform[n - 1] = False  # the first and last rows read the neighbouring chunks
     lo, hi, start = 1, 1, None
     for i in range(1, n):
@@ -205,23 +275,11 @@ def lane_rows(near: np.ndarray, scale: np.ndarray, forward: np.ndarray, backward
         The mass solve's table, at least :func:`lanes_width` wide.
     """
     m = scale.size
-    n = -(-m // LANES)
     left = np.zeros(m)
     right = np.zeros(m)
     left[1:] = scale[1:] * near
     right[:-1] = scale[:-1] * near
-    table[L_LEFT, : n * LANES] = _interleave(left, n)
-    table[L_RIGHT, : n * LANES] = _interleave(right, n)
-    table[L_FORWARD, : n * LANES] = _interleave(forward, n)
-    table[L_BACKWARD, : n * LANES] = _interleave(backward, n)
-    uniform_rows(table, P1_UNIFORM_ROWS, n, m - 1)
-    forward = _deinterleave(table[L_FORWARD], n, m)
-    backward = _deinterleave(table[L_BACKWARD], n, m)
-    end, forward_rows = _correction_rows(forward, n, reverse=False)
-    start, backward_rows = _correction_rows(backward, n, reverse=True)
-    table[L_FORWARD_END, :LANES] = end
-    table[L_BACKWARD_START, :LANES] = start
-    table[L_SHAPE, :3] = (n, forward_rows, backward_rows)
+    _fill_rows(table, {L_LEFT: left, L_RIGHT: right, L_FORWARD: forward, L_BACKWARD: backward}, P1_UNIFORM_ROWS, m)
 
 
 def condensed_lane_rows(coefficients: dict, scale: np.ndarray, forward: np.ndarray, backward: np.ndarray,
@@ -241,7 +299,6 @@ def condensed_lane_rows(coefficients: dict, scale: np.ndarray, forward: np.ndarr
         The mass solve's table, at least twice :func:`lanes_width` of the vertices wide.
     """
     m = scale.size
-    n = -(-m // LANES)
     la, lc = coefficients["left_a"], coefficients["left_c"]
     ra, rc = coefficients["right_a"], coefficients["right_c"]
     c1, c2, c3, c4 = (np.zeros(m) for _ in range(4))
@@ -249,22 +306,12 @@ def condensed_lane_rows(coefficients: dict, scale: np.ndarray, forward: np.ndarr
     c2[1:] = -(ra + rc)
     c3[:-1] = -(la + lc)
     c4[:-1] = lc
-    per_vertex = {L_C1: c1 * scale, L_C2: c2 * scale, L_C3: c3 * scale, L_C4: c4 * scale,
-                  L_FORWARD: forward, L_BACKWARD: backward}
-    for row, values in per_vertex.items():
-        table[row, : n * LANES] = _interleave(values, n)
+    per_unknown = {L_C1: c1 * scale, L_C2: c2 * scale, L_C3: c3 * scale, L_C4: c4 * scale, L_FORWARD: forward,
+                   L_BACKWARD: backward}
     for row, name in ((L_MID_LEFT, "mid_left"), (L_MID_RIGHT, "mid_right"), (L_BACK_LEFT, "back_left"),
                       (L_BACK_RIGHT, "back_right")):
-        table[row, : n * LANES] = _interleave(coefficients[name], n)
-    uniform_rows(table, P2_UNIFORM_ROWS, n, m - 1)
-    forward = _deinterleave(table[L_FORWARD], n, m)
-    backward = _deinterleave(table[L_BACKWARD], n, m)
-    end, forward_rows = _correction_rows(forward, n, reverse=False)
-    start, backward_rows = _correction_rows(backward, n, reverse=True)
-    table[L_FORWARD_END, :LANES] = end
-    table[L_BACKWARD_START, :LANES] = start
-    # one backward row more than the solve needs: a midpoint also reads the vertex after it
-    table[L_SHAPE, :3] = (n, forward_rows, backward_rows + 1)
+        per_unknown[row] = coefficients[name]
+    _fill_rows(table, per_unknown, P2_UNIFORM_ROWS, m)
 
 
 @kernel(fastmath=False)
@@ -339,9 +386,17 @@ def _forward_p1(u, y, left, right, forward, constants, n):
 
 
 @kernel(fastmath=False)
-def _correct_forward(y, forward, end, carry, correction, n, rows):
-    """Add the chunks above to the local forward sweep: ``carry[c]`` the true last value of chunk ``c``,
-    then ``delta_i = f_i delta_(i-1)`` from ``delta_0 = f_0 carry[c - 1]`` over the first ``rows`` rows."""
+def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, rows):
+    """Couple the chunks' local forward sweeps ``y`` and prepare the backward sweep's exact starts.
+
+    Forward: ``carry[c]`` the true last value of chunk ``c`` (a short sequential pass), then ``delta_i = f_i
+    delta_(i-1)`` from ``delta_0 = f_0 carry[c - 1]`` added to the first ``rows`` rows.  In the same pass, per
+    chunk, ``burn_i = burn_(i-1) + G_i y_i`` (``weight``: ``G_i``, the product of the backward factors above
+    row ``i`` of the chunk) on the corrected ``y``: the chunk's first unknown after the backward sweep is
+    ``x_0 = burn_(rows-1) + G_n x_n`` (``x_n``: the next chunk's, ``G_n`` in ``start``; the last term only
+    when ``rows`` covers the chunk, else it is below ``LANE_TOLERANCE`` of an entry), written below the
+    chunk before (row ``n`` of ``y``, lane ``c - 1``), where that chunk's backward sweep starts from it.
+    """
     last = (n - 1) * LANES
     previous = y[last]
     carry[0] = previous
@@ -349,21 +404,29 @@ def _correct_forward(y, forward, end, carry, correction, n, rows):
         previous = y[last + c] + end[c] * previous
         carry[c] = previous
     correction[0] = 0.0
+    burn[0] = weight[0] * y[0]
     for c in range(1, LANES):
         delta = forward[c] * carry[c - 1]
         correction[c] = delta
-        y[c] += delta
+        value = y[c] + delta
+        y[c] = value
+        burn[c] = weight[c] * value
     for j in range((rows - 1) * LANES):
         delta = forward[j + LANES] * correction[j]
         correction[j + LANES] = delta
-        y[j + LANES] += delta
-
-
-@kernel(fastmath=False)
-def _sweep_up(y, backward, count):
-    """``y_j <- y_j + g_j y_(j + LANES)`` for ``j = count - 1 .. 0`` (local backward sweep, no update)."""
-    for j in range(count - 1, -1, -1):
-        y[j] = y[j] + backward[j] * y[j + LANES]
+        value = y[j + LANES] + delta
+        y[j + LANES] = value
+        burn[j + LANES] = burn[j] + weight[j + LANES] * value
+    sums = (rows - 1) * LANES
+    below = n * LANES
+    y[below + LANES - 1] = 0.0
+    following = 0.0
+    for c in range(LANES - 1, 0, -1):
+        value = burn[sums + c]
+        if rows == n:
+            value += start[c] * following
+        following = value
+        y[below + c - 1] = value
 
 
 @kernel(fastmath=False)
@@ -390,45 +453,15 @@ def _sweep_up_update_uniform(u, v, y, constants, count, dt):
 
 
 @kernel(fastmath=False)
-def _correct_up_update(u, v, y, backward, correction, count, dt):
-    """Correction ``e_j = g_j e_(j + LANES)`` added over ``j = count - 1 .. 0``, with the update."""
-    for j in range(count - 1, -1, -1):
-        delta = backward[j] * correction[j + LANES]
-        correction[j] = delta
-        acceleration = y[j] + delta
-        y[j] = acceleration
-        velocity = v[j] + dt * acceleration
-        v[j] = velocity
-        u[j] += dt * velocity
-
-
-@kernel(fastmath=False)
-def _backward_update(u, v, y, backward, start, carry, correction, constants, n, rows, dt):
-    """Backward sweep, its correction from the chunks below and the leapfrog update, on the local forward
-    result ``y`` (overwritten with the accelerations)."""
-    last = (n - 1) * LANES
-    split = (n - rows) * LANES  # rows from here on are corrected before their update
-    _sweep_up(y[split:], backward[split:], last - split)
-    hi = min(int(constants[1]) * LANES, split)  # downwards: arrays, the uniform rows' constants, arrays
-    lo = min(int(constants[0]) * LANES, hi)
-    _sweep_up_update(u[hi:], v[hi:], y[hi:], backward[hi:], split - hi, dt)
+def _backward_update(u, v, y, backward, constants, n, dt):
+    """Backward sweep of every chunk from its exact start (row ``n`` of ``y``) with the leapfrog update, on the
+    true forward result ``y`` (overwritten with the accelerations): rows ``[hi, n)`` and ``[0, lo)`` with the
+    arrays, the uniform rows ``[lo, hi)`` of ``constants`` with the constants."""
+    hi = int(constants[1]) * LANES
+    lo = int(constants[0]) * LANES
+    _sweep_up_update(u[hi:], v[hi:], y[hi:], backward[hi:], n * LANES - hi, dt)
     _sweep_up_update_uniform(u[lo:], v[lo:], y[lo:], constants, hi - lo, dt)
     _sweep_up_update(u, v, y, backward, lo, dt)
-    following = y[LANES - 1]
-    carry[LANES - 1] = following
-    for c in range(LANES - 2, -1, -1):
-        following = y[c] + start[c] * following
-        carry[c] = following
-    for c in range(LANES - 1):
-        correction[last + c] = backward[last + c] * carry[c + 1]
-    correction[last + LANES - 1] = 0.0
-    for j in range(last, last + LANES):
-        acceleration = y[j] + correction[j]
-        y[j] = acceleration
-        velocity = v[j] + dt * acceleration
-        v[j] = velocity
-        u[j] += dt * velocity
-    _correct_up_update(u[split:], v[split:], y[split:], backward[split:], correction[split:], last - split, dt)
 
 
 @kernel(fastmath=False)
@@ -436,17 +469,16 @@ def step_tridiagonal(table, dt):
     """One leapfrog step ``v += dt M^-1 (-K u)``, ``u += dt v`` of a P1 consistent rod held in the rows
     ``L_U``, ``L_V`` of its table (interleaved layout)."""
     n = int(table[L_SHAPE, 0])
-    forward_rows = min(int(table[L_SHAPE, 1]), n)
-    backward_rows = min(int(table[L_SHAPE, 2]), n)
+    coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     u = table[L_U]
     v = table[L_V]
     y = table[L_WORK]
     forward = table[L_FORWARD]
     constants = table[L_UNIFORM]
     _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n)
-    _correct_forward(y, forward, table[L_FORWARD_END], table[L_CARRY], table[L_CORRECTION], n, forward_rows)
-    _backward_update(u, v, y, table[L_BACKWARD], table[L_BACKWARD_START], table[L_CARRY], table[L_CORRECTION],
-                     constants, n, backward_rows, dt)
+    _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
+                   table[L_CORRECTION], table[L_BURN], n, coupled_rows)
+    _backward_update(u, v, y, table[L_BACKWARD], constants, n, dt)
 
 
 @kernel(fastmath=False)
@@ -552,19 +584,6 @@ def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, fo
     y[j] = force + forward[j] * y[j - LANES]
 
 
-@kernel(fastmath=False, inline="always")
-def _update_pair(uv, vv, um, vm, share, back_left, back_right, j, acceleration, following, dt):
-    """Leapfrog update of vertex ``j`` (acceleration given) and of its element's midpoint (``following``: the
-    acceleration of the vertex after it)."""
-    velocity = vv[j] + dt * acceleration
-    vv[j] = velocity
-    uv[j] += dt * velocity
-    middle = share[j] - back_left[j] * acceleration - back_right[j] * following
-    velocity = vm[j] + dt * middle
-    vm[j] = velocity
-    um[j] += dt * velocity
-
-
 @kernel(fastmath=False)
 def _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, back_right, count, dt):
     """Backward sweep over ``j = count - 1 .. 0`` with the update of the vertices and midpoints."""
@@ -601,29 +620,11 @@ def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, coun
 
 
 @kernel(fastmath=False)
-def _correct_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, back_right, correction, count, dt):
-    """Correction ``e_j = g_j e_(j + LANES)`` over ``j = count - 1 .. 0`` with the updates."""
-    for j in range(count - 1, -1, -1):
-        delta = backward[j] * correction[j + LANES]
-        correction[j] = delta
-        acceleration = y[j] + delta
-        y[j] = acceleration
-        velocity = vv[j] + dt * acceleration
-        vv[j] = velocity
-        uv[j] += dt * velocity
-        middle = share[j] - back_left[j] * acceleration - back_right[j] * y[j + LANES]
-        velocity = vm[j] + dt * middle
-        vm[j] = velocity
-        um[j] += dt * velocity
-
-
-@kernel(fastmath=False)
 def step_condensed(table, dt):
     """One leapfrog step of a P2 consistent rod held in the rows ``L_U``, ``L_V`` of its table (interleaved
     layout, :func:`pack_nodes`): midpoints condensed, the vertex system solved in chunks."""
     n = int(table[L_SHAPE, 0])
-    forward_rows = min(int(table[L_SHAPE, 1]), n)
-    backward_rows = min(int(table[L_SHAPE, 2]), n)
+    coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     width = n * LANES
     uv = table[L_U, :width]
     um = table[L_U, width : 2 * width]
@@ -635,35 +636,16 @@ def step_condensed(table, dt):
     backward = table[L_BACKWARD]
     back_left = table[L_BACK_LEFT]
     back_right = table[L_BACK_RIGHT]
-    carry = table[L_CARRY]
-    correction = table[L_CORRECTION]
     constants = table[L_UNIFORM]
     _forward_condensed(uv, um, y, share, table[L_C1], table[L_C2], table[L_C3], table[L_C4], table[L_MID_LEFT],
                        table[L_MID_RIGHT], forward, constants, n)
-    _correct_forward(y, forward, table[L_FORWARD_END], carry, correction, n, forward_rows)
-    last = (n - 1) * LANES
-    split = (n - backward_rows) * LANES
-    _sweep_up(y[split:], backward[split:], last - split)
-    # rows below the corrected ones, downwards: [hi, n - backward_rows) and [0, lo) with the arrays, the
-    # uniform rows between with the constants
-    hi = min(int(constants[1]) * LANES, split)
-    lo = min(int(constants[0]) * LANES, hi)
+    _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
+                   table[L_CORRECTION], table[L_BURN], n, coupled_rows)
+    # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the
+    # arrays, the uniform rows between with the constants
+    hi = int(constants[1]) * LANES
+    lo = int(constants[0]) * LANES
     _sweep_up_update_condensed(uv[hi:], vv[hi:], um[hi:], vm[hi:], y[hi:], share[hi:], backward[hi:], back_left[hi:],
-                               back_right[hi:], split - hi, dt)
+                               back_right[hi:], width - hi, dt)
     _sweep_up_update_condensed_uniform(uv[lo:], vv[lo:], um[lo:], vm[lo:], y[lo:], share[lo:], constants, hi - lo, dt)
     _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, back_right, lo, dt)
-    start = table[L_BACKWARD_START]
-    following = y[LANES - 1]
-    carry[LANES - 1] = following
-    for c in range(LANES - 2, -1, -1):
-        following = y[c] + start[c] * following
-        carry[c] = following
-    for c in range(LANES - 1):
-        correction[last + c] = backward[last + c] * carry[c + 1]
-        y[last + c] += correction[last + c]
-        _update_pair(uv, vv, um, vm, share, back_left, back_right, last + c, y[last + c], carry[c + 1], dt)
-    correction[last + LANES - 1] = 0.0
-    _update_pair(uv, vv, um, vm, share, back_left, back_right, last + LANES - 1, y[last + LANES - 1], 0.0, dt)
-    _correct_up_update_condensed(uv[split:], vv[split:], um[split:], vm[split:], y[split:], share[split:],
-                                 backward[split:], back_left[split:], back_right[split:], correction[split:],
-                                 last - split, dt)
