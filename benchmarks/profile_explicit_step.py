@@ -37,6 +37,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout this script lives in
 
 from docs_block import run_and_write
+from peers.fem_scipy_loop import scipy_fem_run
 
 import wavecontact
 from wavecontact._jit import kernel
@@ -126,6 +127,93 @@ def _stream(u, v, a, dt):
 
 
 @kernel
+def _p2_lumped_floor(uv, um, vv, vm, uv_new, um_new, constants, dt):
+    """The cheapest P2 lumped step we can write: interior elements of equal size only (no ends, no contact), the
+    coefficients ``constants = (near, far, dt / m_vertex, dt / m_midpoint)`` held in registers, vertices ``uv``
+    and midpoints ``um`` (midpoint ``k`` between vertices ``k`` and ``k + 1``) in separate arrays and the new
+    displacements written to ``uv_new``, ``um_new`` (two buffers swapped from step to step), so that one pass
+    with no dependence between elements does the step and the compiler vectorizes it; the same differences as
+    the real step (rigid motion exact).  Per element: 14 additions or subtractions, 7 multiplications (one
+    negation folded into the constants); 8 doubles read or written (``uv, um`` read, ``vv, vm`` read and
+    written, ``uv_new, um_new`` written)."""
+    near = constants[0]  # -K[2k, 2k+1] = -K[2k+1, 2k+2] (vertex to midpoint), sign folded in
+    far = constants[1]  # -K[2k, 2k+2] (vertex to vertex across an element)
+    kick_vertex = constants[2]
+    kick_midpoint = constants[3]
+    for k in range(1, uv.size - 1):
+        current = uv[k]
+        following = uv[k + 1]
+        middle = um[k]
+        vertex_force = near * ((um[k - 1] - current) + (middle - current)) + far * ((uv[k - 1] - current)
+                                                                                  + (following - current))
+        midpoint_force = near * ((current - middle) + (following - middle))
+        velocity = vv[k] + kick_vertex * vertex_force
+        vv[k] = velocity
+        uv_new[k] = current + dt * velocity
+        velocity = vm[k] + kick_midpoint * midpoint_force
+        vm[k] = velocity
+        um_new[k] = middle + dt * velocity
+
+
+@kernel
+def _p2_lumped_floor_steps(rod1, rod2, constants, dt, steps):
+    """``steps`` pairs of :func:`_p2_lumped_floor` over both rods' arrays, the buffers swapped every step."""
+    for step in range(steps):
+        for uv, um, vv, vm, uv2, um2 in (rod1, rod2):
+            if step % 2 == 0:
+                _p2_lumped_floor(uv, um, vv, vm, uv2, um2, constants, dt)
+            else:
+                _p2_lumped_floor(uv2, um2, vv, vm, uv, um, constants, dt)
+
+
+FLOOR_ADDITIONS, FLOOR_MULTIPLICATIONS = 14, 7  # per element of _p2_lumped_floor (counted in its source)
+FLOOR_DOUBLES = 8  # doubles read or written per element of _p2_lumped_floor
+CLOCK_GHZ = 2.6  # this CPU (AMD EPYC, Zen 4)
+ADDITIONS_PER_CYCLE = 8  # doubles: two 256-bit adders (a 512-bit instruction takes one of them two cycles)
+
+
+def floor_row(elements, repeats, per_double):
+    """One row of table 3: the cheapest P2 lumped step (:func:`_p2_lumped_floor`) on both rods of the pair, CPU
+    ns per element-step, against its additions alone at the adders' rate, its traffic at the streaming pass's
+    rate per double (``per_double``, ns), the real P2 lumped step (both rods, compiled loop of steps) and the
+    20x target (the scikit-fem + scipy.sparse peer's CPU time per element-step over 20)."""
+    setup = build_setup(wavecontact.two_rods(0.6, 100), elements=elements, order=2, mass="lumped")
+    disc = setup.rods[1]
+    k = disc.n_nodes // 2  # an interior vertex, its coefficients those of every interior one
+    inverse = 1.0 / disc.lumped_mass
+    constants = np.array([-disc.stiffness_bands[1, k], -disc.stiffness_bands[2, k], setup.dt * inverse[k],
+                          setup.dt * inverse[k + 1]])
+    rng = np.random.default_rng(0)
+    rods = tuple(tuple(1e-6 * rng.normal(size=d.n_elements + 1) for _ in range(6)) for d in setup.rods)
+    both = sum(d.n_elements for d in setup.rods)
+    steps = max(100, int(2e7 / both))
+    _p2_lumped_floor_steps(rods[0], rods[1], constants, setup.dt, 2)
+    run = _Run(setup, 0.05)
+    real = [(run.u[i], run.v[i], run.a[i], setup.rods[i].stiffness_bands) for i in range(2)]
+    kinds = np.array([kind for kind, _ in run.mass_solves])
+    tables = (run.mass_solves[0][1], run.mass_solves[1][1])
+    shape = np.zeros(2, dtype=np.int64)
+    _steps_only(real[0], real[1], kinds, tables, shape, setup.dt, 1)
+    floor, step = [], []
+    for _ in range(repeats):
+        started = time.thread_time()
+        _p2_lumped_floor_steps(rods[0], rods[1], constants, setup.dt, steps)
+        floor.append((time.thread_time() - started) / (steps * both))
+        started = time.thread_time()
+        _steps_only(real[0], real[1], kinds, tables, shape, setup.dt, steps)
+        step.append((time.thread_time() - started) / (steps * both))
+    peer = []
+    for _ in range(max(3, repeats // 2)):
+        _, seconds, _, element_steps = scipy_fem_run(0.6, 100, elements, 2, "lumped", dt=setup.dt,
+                                                     max_steps=max(20, int(3e6 / both)), clock=time.thread_time)
+        peer.append(seconds / element_steps)
+    floor_ns, step_ns, peer_ns = (float(np.median(x)) * 1e9 for x in (floor, step, peer))
+    additions = FLOOR_ADDITIONS / ADDITIONS_PER_CYCLE / CLOCK_GHZ
+    return (f"| {elements} | {floor_ns:.2f} | {additions:.2f} | {FLOOR_DOUBLES * per_double:.2f} | {step_ns:.2f} | "
+            f"{peer_ns / 20:.2f} ({peer_ns:.1f} / 20) |")
+
+
+@kernel
 def _steps_only(rod1, rod2, kinds, tables, shape, dt, steps):
     """``steps`` elastic steps of both rods (no contact, no histories, no energy checks)."""
     u1, v1, a1, bands1 = rod1
@@ -190,8 +278,17 @@ def measure(args):
     u, v, a = np.zeros(entries), np.zeros(entries), np.zeros(entries)
     _stream(u, v, a, 0.0)
     stream = cpu_per_call(lambda: _stream(u, v, a, 0.0), args.repeats)
+    per_double = stream * 1e9 / (5 * entries)
     print(f"Streaming pass (v += dt a, u += dt v over three arrays of {entries} doubles, 1 MB, the size of the L2 "
-          f"cache): {stream * 1e9 / (5 * entries):.3f} ns per double read or written.\n")
+          f"cache): {per_double:.3f} ns per double read or written.\n")
+    print("| elements (short rod) | cheapest P2 lumped step: ns/element-step | its additions alone, "
+          f"{ADDITIONS_PER_CYCLE} per cycle at {CLOCK_GHZ} GHz | its {FLOOR_DOUBLES} doubles at the streaming rate | "
+          "the P2 lumped step (both rods) | 20x target: peer / 20 |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for elements in (800, 12800):
+        print(floor_row(elements, args.repeats, per_double))
+    print(f"\n(cheapest step: {FLOOR_ADDITIONS} additions or subtractions and {FLOOR_MULTIPLICATIONS} multiplications "
+          f"per element, {FLOOR_ADDITIONS + FLOOR_MULTIPLICATIONS} floating-point operations.)\n")
     print("| discretization | elements (short rod) | time loop: ns/element-step | the two rods' steps alone | "
           "rest of the loop |")
     print("|---|---:|---:|---:|---:|")
