@@ -121,6 +121,7 @@ def test_uniform_rows_cover_a_uniform_mesh_between_its_ends_and_nothing_of_a_gra
     _, table = prepare_mass(graded)
     lo, hi = _uniform_rows(table)
     assert lo == hi
+    assert table[L_SHAPE, 0] == -(-(elements + 1) // LANES)  # nothing held: the fewest rows per chunk
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -201,3 +202,52 @@ def test_held_constants_do_not_change_a_collision_beyond_the_rounding_of_the_coo
     scale = np.abs(arrays["contact_force"]).max()
     np.testing.assert_allclose(held["contact_force"], arrays["contact_force"], rtol=0, atol=2e-11 * scale)
     np.testing.assert_allclose(held["relative_velocity"], arrays["relative_velocity"], rtol=0, atol=2e-11)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_more_rows_per_chunk_move_the_far_end_up_and_equal_a_banded_solve(order):
+    """1334 unknowns (P1) or vertices (P2) of equal elements of 2^-10: 42 rows per chunk would leave the far end
+    in row 31 of the last chunk (and its padding below unheld); 43 put it in row 0, among the start's
+    unconverged rows, and every row from there to the last but one is held.  400 steps against LAPACK."""
+    element = 2.0**-10
+    elements = 1333
+    nodes = np.arange(elements + 1) * element
+    disc = discretize_rod(Rod(elements * element, 2.0, 3.0, 0.5), nodes, order, "consistent")
+    kind, table = prepare_mass(disc)
+    rows = int(table[L_SHAPE, 0])
+    assert rows == 43 > -(-(elements + 1) // LANES)
+    assert elements == (LANES - 1) * rows  # the last unknown opens the last chunk
+    lo, hi = _uniform_rows(table)
+    assert lo <= 16 and hi == rows - 1
+    assert_steps_equal_a_banded_solve(disc, kind, table, np.random.default_rng(order))
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_held_padding_stays_zero_and_the_steps_equal_a_banded_solve(order, monkeypatch):
+    """801 unknowns (P1, threshold lowered) or vertices (P2) of equal elements of 2^-10 in chunks of 26 rows:
+    the last chunk is padding only and the one before it ends after 21 rows.  The padding after the first
+    padding unknown counts as uniform and takes the held constants; it must stay exactly zero while the rod
+    moves (400 steps against LAPACK), and the first padding unknown keeps its zero coefficients."""
+    monkeypatch.setattr(interleaved_step, "LANE_MIN_UNKNOWNS", 0)
+    element = 2.0**-10
+    elements = 800
+    disc = discretize_rod(Rod(elements * element, 2.0, 3.0, 0.5), np.arange(elements + 1) * element, order,
+                          "consistent")
+    kind, table = prepare_mass(disc)
+    rows = int(table[L_SHAPE, 0])
+    assert rows == 26 and table[L_SHAPE, 2] == rows  # the backward burn-in covers whole chunks
+    lo, hi = _uniform_rows(table)
+    unknowns = elements + 1
+    first_padding = interleaved_step.position(unknowns, rows)  # row 21 of chunk 30
+    width = rows * LANES
+    index = np.arange(width).reshape(LANES, rows).T.ravel()  # the unknown at each place of the layout
+    held = (index > unknowns) & (np.arange(width) >= lo * LANES) & (np.arange(width) < hi * LANES)
+    assert hi - lo >= 5 and held.any()  # chunk 31's rows among the held ones
+    backward = interleaved_step.L_BACKWARD
+    assert table[backward, first_padding] == 0.0
+    assert np.all(table[backward, :width][held] == table[interleaved_step.L_UNIFORM, 5 if order == 1 else 9])
+    assert_steps_equal_a_banded_solve(disc, kind, table, np.random.default_rng(order))
+    for row in (interleaved_step.L_U, interleaved_step.L_V):
+        for half in range(order):
+            packed = table[row, half * width : (half + 1) * width]
+            assert np.all(packed[index >= unknowns - half] == 0.0)  # P2 midpoints: one fewer than vertices
