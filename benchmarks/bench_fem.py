@@ -181,7 +181,7 @@ def table_discretizations(repeats, reference):
             ours_steps = max(100, int(OURS_ELEMENT_STEPS / both))
             peer_steps = max(20, int(PEER_ELEMENT_STEPS / both))
             ours, ours_wall, flat, arrays, theirs, theirs_wall = [], [], [], [], [], []
-            for _ in range(max(3, repeats // 2)):
+            for _ in range(max(3, repeats)):  # each run builds new tables: medians over placements (docs/fem.md)
                 seconds, seconds_wall = _our_loop(setup, ours_steps, both, flat_layout=False)
                 ours.append(seconds)
                 ours_wall.append(seconds_wall)
