@@ -12,18 +12,26 @@ stencil's neighbours ``i +- 1`` are the previous and next rows, and every pass
 ``LANES`` apart depend on each other: the compiler runs the chunks as SIMD
 lanes.  Only a chunk's first and last rows see a neighbouring chunk.
 
-Each sweep first runs every chunk from zero, then adds what the chunk before
-it (forward) or after it (backward) contributes: the chunks' true end values
-follow from their local ones in a short sequential pass over the chunks, and
-their effect on a chunk, ``P_i e`` with ``P_i`` the product of the sweep's
-factors from the chunk boundary to ``i`` and ``e`` the neighbour's end value,
-is added by the same recurrence without right-hand side (``delta_i = f_i
-delta_(i-1)``, a cheap streaming pass) on the rows where ``|P_i|`` exceeds
-``LANE_TOLERANCE`` (``w`` rows; the mass matrices are diagonally dominant, so
-``|f|, |g| <= 1/2`` and ``w`` is about 33 on uniform meshes; all rows of
-chunks shorter than that).  The terms left out are below ``2^-64`` of an entry
-of the result, so the solve equals the direct one to rounding, not bit for
-bit.
+The forward sweep first runs every chunk from zero, then adds what the chunk
+before it contributes: the chunks' true end values follow from their local
+ones in a short sequential pass over the chunks, and their effect on a chunk,
+``P_i e`` with ``P_i`` the product of the sweep's factors from the chunk
+boundary to ``i`` and ``e`` the neighbour's end value, is added by the same
+recurrence without right-hand side (``delta_i = f_i delta_(i-1)``, a cheap
+streaming pass) on the rows where ``|P_i|`` exceeds ``LANE_TOLERANCE`` (``w``
+rows; the mass matrices are diagonally dominant, so ``|f|, |g| <= 1/2`` and
+``w`` is about 33 on uniform meshes; all rows of chunks shorter than that).
+The same pass sums, per chunk, ``G_i y_i`` over its first rows (``G_i`` the
+product of the backward factors above row ``i``): that sum is the chunk's first
+unknown after the backward sweep, up to terms below ``LANE_TOLERANCE``, and is
+written below the chunk before it, so that every chunk's backward sweep starts
+from its exact neighbour and runs, with the update, in one pass.  The terms
+left out are below ``2^-64`` of an entry of the result, so the solve equals
+the direct one to rounding, not bit for bit.
+
+The rows per chunk are chosen at set-up among a few (:func:`candidate_rows`) so
+that as many rows as possible hold their coefficients as constants on meshes of
+equal elements (:func:`uniform_rows`).
 
 The layout lives only inside the time loop (``kernels.advance``):
 :func:`pack_nodes` and :func:`unpack_nodes` convert at its start, at its energy
