@@ -229,7 +229,10 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
     unknowns, at least 4 ulps and at most
     ``UNIFORM_ULPS_PER_ELEMENT E`` ulps (``E = m - 1`` elements).  A row of
     the layout (all ``LANES`` chunks) is uniform when each of ``rows`` is
-    within its tolerance at every unknown of the row; padding beyond the
+    within its tolerance at every unknown of the row (the run's constants
+    then become the means over its own unknowns, so that the held elements
+    keep their mean length, not the middle's; on ``linspace`` nodes that
+    halves epsilon's change at 3200 and 12800 elements, docs/fem.md); padding beyond the
     first padding unknown counts as uniform (it stays zero whatever its
     coefficients: the first one, after the rod's last unknown, keeps its
     zero coefficients and decouples it).  The longest run ``[lo, hi)`` of
@@ -261,6 +264,10 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
             if i - start > hi - lo:
                 lo, hi = start, i
             start = None
+    if hi > lo:  # the held rows keep their own mean (their elements' mean length: the waves keep their time)
+        held = np.zeros((n, LANES), dtype=bool)
+        held[lo:hi] = index[lo:hi] < m
+        constants = np.array([np.mean(table[row, : n * LANES].reshape(n, LANES)[held]) for row in rows])
     for row, value in zip(rows, constants):
         table[row, lo * LANES : hi * LANES] = value
     table[L_UNIFORM, :] = 0.0
