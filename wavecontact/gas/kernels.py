@@ -71,8 +71,13 @@ COUNTERS = 6
 def _pair_time(now, xi, vi, ti, xj, vj, tj, offset, reach):
     """Predicted contact time of rods ``i`` (left) and ``j`` (right), each given by its centre ``x``, velocity
     ``v`` and clock ``t`` (``offset``: the circumference when ``j`` sits across the ring's seam)."""
-    approach = vi - vj
     gap = (xj + vj * (now - tj) + offset) - (xi + vi * (now - ti)) - reach
+    return _closing_time(now, gap, vi - vj)
+
+
+@kernel(inline="always")
+def _closing_time(now, gap, approach):
+    """Contact time of a pair at distance ``gap`` (beyond contact) at time ``now`` closing in at ``approach``."""
     # whether the pair closes in is random from one call to the next: selects instead of a branch
     closing = approach > 0.0
     when = now + max(gap, 0.0) / (approach if closing else 1.0)
@@ -265,16 +270,17 @@ def build_tree(key, tree_time, tree_event):
 
 @kernel(inline="always")
 def _advance(i, t, x, v, local_time):
-    """Bring rod ``i`` to time ``t`` (free flight); returns the time it flew.
+    """Bring rod ``i`` to time ``t`` (free flight); returns the time it flew and its new centre.
 
     Branch-free, so that numba's reference counts of the arrays cancel when
     it is inlined; the bath's relaxation is :func:`_relax_bath`, called only
     when there is damping.
     """
     dt = t - local_time[i]
-    x[i] += v[i] * dt
+    moved = x[i] + v[i] * dt
+    x[i] = moved
     local_time[i] = t
-    return dt
+    return dt, moved
 
 
 @kernel
@@ -549,7 +555,7 @@ def run_events(
             return STATUS_TIME_LIMIT, -1, done
         if not ring and (k == 0 or k == n):
             rod = 0 if k == 0 else n - 1
-            dt = _advance(rod, t, x, v, local_time)
+            dt, _ = _advance(rod, t, x, v, local_time)
             if decay_rate > 0.0:
                 _relax_bath(rod, dt, temperature, decay_rate, bath_modes, scalars)
             v[rod] = -v[rod]
@@ -570,8 +576,8 @@ def run_events(
             j = k
         if rule == RULE_EXTERNAL and pending[0] == 0.0:
             return STATUS_NEED_DRAW, k, done
-        dt_i = _advance(i, t, x, v, local_time)
-        dt_j = _advance(j, t, x, v, local_time)
+        dt_i, x_i = _advance(i, t, x, v, local_time)
+        dt_j, x_j = _advance(j, t, x, v, local_time)
         if decay_rate > 0.0:
             _relax_bath(i, dt_i, temperature, decay_rate, bath_modes, scalars)
             _relax_bath(j, dt_j, temperature, decay_rate, bath_modes, scalars)
@@ -698,10 +704,14 @@ def run_events(
         counters[COLLISIONS] = count
         done += 1
         if first_interior <= k <= last_interior:
-            # the usual case: the two new predictions from the velocities still in registers (event_time's
-            # arithmetic, without reading back what was just stored), and one shared path to the root
-            t_before = _pair_time(t, x[i - 1], v[i - 1], local_time[i - 1], x[i], vi, t, 0.0, reach[k - 1])
-            t_after = _pair_time(t, x[j], vj, t, x[j + 1], v[j + 1], local_time[j + 1], 0.0, reach[k + 1])
+            # the usual case: the two new predictions from the centres and velocities still in registers, and
+            # one shared path to the root.  Rods i and j are at time t, so event_time's term ``x + v (t - t)``
+            # is ``x`` (up to the sign of a zero, which the subtraction of ``reach > 0`` removes): the gaps
+            # come out bit for bit as event_time's, but do not wait for the new velocities
+            gap_before = x_i - (x[i - 1] + v[i - 1] * (t - local_time[i - 1])) - reach[k - 1]
+            gap_after = (x[j + 1] + v[j + 1] * (t - local_time[j + 1])) - x_j - reach[k + 1]
+            t_before = _closing_time(t, gap_before, v[i - 1] - vi)
+            t_after = _closing_time(t, gap_after, vj - v[j + 1])
             tree_time[leaves + k - 1] = t_before
             tree_time[leaves + k] = math.inf
             tree_time[leaves + k + 1] = t_after

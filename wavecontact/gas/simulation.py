@@ -294,7 +294,7 @@ class GasSimulation:
         key = np.empty(left.size)
         kernels.event_times(0.0, self.x, self.v, self.local_time, self.reach, ring, gas.system_length, key)
         self.tree_time = np.empty(kernels.tree_size(left.size))
-        self.tree_event = np.empty(self.tree_time.size, np.int64)
+        self.tree_event = np.empty(self.tree_time.size, np.int32)
         kernels.build_tree(key, self.tree_time, self.tree_event)
         self.window = np.zeros(2 * window)
         momentum = float(np.sum(self.mass * self.v))
