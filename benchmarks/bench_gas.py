@@ -74,14 +74,25 @@ def kernel_rate(rods, rule, collisions, repeats, stiffness=None):
     return tuple(s / collisions for s in _medians(samples))
 
 
+def comparison_gas(rods):
+    """The fresh gas of the heapq comparison (ring, lengths in [0.6, 1], packing fraction 0.2)."""
+    return random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
+
+
+def kernel_task(gas, restitution, collisions):
+    """The kernel's side of the heapq comparison: a fresh simulation of ``gas`` (set-up included, the same
+    task as the heapq loop's) run for ``collisions`` collisions with the fixed rule."""
+    GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0,
+                  energy_floor=0.0).run(collisions)
+
+
 def kernel_against_heapq(rods, restitution, collisions, repeats):
     """Median (wall, CPU) seconds per collision of the kernel and of the heapq loop, alternating."""
-    gas = random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
+    gas = comparison_gas(rods)
     GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0).run(10)  # warm-up
 
-    def ours():  # set-up included: the same task as the heapq loop's
-        GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0,
-                      energy_floor=0.0).run(collisions)
+    def ours():
+        kernel_task(gas, restitution, collisions)
 
     args = (gas.lengths, gas.positions, gas.velocities, gas.system_length, restitution, collisions)
     samples = {"ours": [], "heapq": []}
