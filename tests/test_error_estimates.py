@@ -198,7 +198,7 @@ def test_solver_reports_the_rule_applied_to_its_levels(kappa, elements, scheme):
         assert [n for n, _ in levels] == [elements, elements // 2, elements // 4]
         expected, _ = error_estimate.estimate_from_levels(levels, x, 2.0, False)
     else:
-        assert [n for n, _ in levels] == [elements, elements // 2, elements // 4, 2 * elements]
+        assert [n for n, _ in levels] == [elements, elements // 2, 2 * elements]  # no N/4: the rule needs none
         finer = fem_solver.SOLVER.solve(scene, held.replace(elements=2 * elements), estimate_error=False)
         assert levels[-1][1] == finer.restitution
         expected, _ = error_estimate.estimate_with_finer(levels[-1], levels[:-1], x, 2.0, False)
@@ -230,9 +230,9 @@ def test_fem_estimate_is_within_ten_of_the_error_where_the_old_rule_was_not(gamm
     result = collide(gamma, kappa, solver="fem", elements=elements, order=order, mass=mass)
     error = abs(result.restitution - collide(gamma, kappa).restitution)
     assert error <= result.error_estimate <= 10.0 * error
-    coarse = [elements, elements // 2, elements // 4]
-    finer = [2 * elements] if elements < fem_solver.FINER_BELOW else []
-    assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == coarse + finer
+    small = elements < fem_solver.FINER_BELOW  # below 32 elements the run at 2N takes the place of N/4
+    expected = [elements, elements // 2, 2 * elements] if small else [elements, elements // 2, elements // 4]
+    assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == expected
 
 
 def test_small_meshes_estimate_from_a_finer_run_and_are_not_flagged():
@@ -241,7 +241,7 @@ def test_small_meshes_estimate_from_a_finer_run_and_are_not_flagged():
     # accepts it (the small-mesh flag of the coarse rule is gone)
     gamma, kappa = 0.6, 1e4
     result = collide(gamma, kappa, solver="fem", elements=20, order=2, mass="consistent", tolerance=1.0)
-    assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == [20, 10, 5, 40]
+    assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == [20, 10, 40]
     assert result.diagnostics["error_estimate_rough"] == ""
     error = abs(result.restitution - collide(gamma, kappa).restitution)
     assert error <= result.error_estimate <= 10.0 * error

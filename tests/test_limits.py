@@ -95,7 +95,7 @@ def test_limits_can_be_raised_explicitly():
 
 
 def test_the_work_limit_counts_the_error_estimates_runs():
-    # below 32 elements the FE estimate also runs 2N elements (four times the work) and N/2, N/4:
+    # below 32 elements the FE estimate runs 2N elements (four times the work) and N/2:
     # a limit between the requested run's work and the total refuses the estimate, not the bare run
     fem = wavecontact.solvers.get_solver("fem")
     scene, options = wavecontact.two_rods(0.6, 20), fem.Options(elements=20)

@@ -131,6 +131,14 @@ class FemSolver(SolverBase):
         runs = "; ".join(f"elements={n} gave {v:.12g}" for n, v in levels[1:])
         return estimate, f"Richardson: {runs}; {rule}", levels
 
+    def coarser_levels(self, options: FemOptions) -> int:
+        """Two coarser runs (N/2, N/4); one (N/2) below :data:`FINER_BELOW` elements, where the run at
+        ``2N`` takes the N/4 run's place (:func:`~wavecontact.fem.error_estimate.estimate_with_finer`
+        uses the two finest differences only)."""
+        if options.nodes is None and options.elements < FINER_BELOW:
+            return 1
+        return self.error_levels
+
     def error_estimate_runs(self, scene: Scene, options: FemOptions) -> list:
         """The coarser runs, and below :data:`FINER_BELOW` elements the run at ``2N`` (four times the
         requested run's work)."""
@@ -176,8 +184,8 @@ class FemSolver(SolverBase):
         :func:`~wavecontact.fem.error_estimate.estimate_with_finer` where a level is finer than the
         requested run.
 
-        ``levels``: ``(elements, restitution)`` at N, N/2 and (where it ran) N/4, then (below
-        :data:`FINER_BELOW` elements) at 2N.
+        ``levels``: ``(elements, restitution)`` at N and N/2, then at N/4 (from :data:`FINER_BELOW`
+        elements up, where it ran) or at 2N (below :data:`FINER_BELOW` elements).
         """
         requested = levels[0][0]
         finer = [level for level in levels if level[0] > requested]

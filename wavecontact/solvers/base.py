@@ -324,6 +324,12 @@ class SolverBase:
     def expected_order(self, options) -> float | None:
         return None
 
+    def coarser_levels(self, options) -> int:
+        """How many coarser runs the Richardson estimate of a run with ``options`` makes
+        (:attr:`error_levels`; a solver may use fewer where its rule does not need them)."""
+        del options
+        return self.error_levels
+
     def options(self, given: Mapping | None = None):
         """Validated options from a mapping (or the defaults).
 
@@ -356,7 +362,7 @@ class SolverBase:
         their cost is checked with the solve's before any work."""
         del scene
         runs, coarse = [], options
-        for _ in range(self.error_levels):
+        for _ in range(self.coarser_levels(options)):
             coarse = self.coarser_options(coarse)
             if coarse is None:
                 break
@@ -398,7 +404,7 @@ class SolverBase:
             return own, "the solver's own estimate", []
         levels, coarse_options = [(getattr(options, self.resolution, None), float(fields["restitution"]))], options
         failure_text = ""
-        for _ in range(self.error_levels):
+        for _ in range(self.coarser_levels(options)):
             coarse_options = self.coarser_options(coarse_options)
             if coarse_options is None:
                 break
