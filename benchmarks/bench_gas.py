@@ -1,6 +1,6 @@
 """Benchmark of the rod gas: collisions per second of the event kernel, and a plain-Python heapq loop.
 
-Run: ``python benchmarks/bench_gas.py [--repeats 5] [--collisions 2000000] [--update-docs]``
+Run: ``python benchmarks/bench_gas.py [--repeats 5] [--collisions 2000000] [--only rates|heapq] [--update-docs]``
 
 Prints two markdown tables (one core; the kernel is warmed up first, so no
 compilation is timed).  Every time is given twice: wall-clock, and the CPU
@@ -74,14 +74,25 @@ def kernel_rate(rods, rule, collisions, repeats, stiffness=None):
     return tuple(s / collisions for s in _medians(samples))
 
 
+def comparison_gas(rods):
+    """The fresh gas of the heapq comparison (ring, lengths in [0.6, 1], packing fraction 0.2)."""
+    return random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
+
+
+def kernel_task(gas, restitution, collisions):
+    """The kernel's side of the heapq comparison: a fresh simulation of ``gas`` (set-up included, the same
+    task as the heapq loop's) run for ``collisions`` collisions with the fixed rule."""
+    GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0,
+                  energy_floor=0.0).run(collisions)
+
+
 def kernel_against_heapq(rods, restitution, collisions, repeats):
     """Median (wall, CPU) seconds per collision of the kernel and of the heapq loop, alternating."""
-    gas = random_gas(rods, seed=1, packing_fraction=0.2, lengths=_LENGTHS)
+    gas = comparison_gas(rods)
     GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0).run(10)  # warm-up
 
-    def ours():  # set-up included: the same task as the heapq loop's
-        GasSimulation(gas, FixedRestitution(restitution), seed=2, record_every=10**9, max_frames=0,
-                      energy_floor=0.0).run(collisions)
+    def ours():
+        kernel_task(gas, restitution, collisions)
 
     args = (gas.lengths, gas.positions, gas.velocities, gas.system_length, restitution, collisions)
     samples = {"ours": [], "heapq": []}
@@ -122,10 +133,21 @@ def tables(args):
     emit()
     emit(f"`python benchmarks/bench_gas.py --repeats {args.repeats} --collisions {args.collisions} "
          f"--heapq-collisions {args.heapq_collisions} --stiffness {args.stiffness:g} "
-         f"--rods {' '.join(map(str, args.rods))}`, run at {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
+         f"--rods {' '.join(map(str, args.rods))}{' --only ' + args.only if args.only else ''}`, run at {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
          f"on a machine shared with other jobs (load average {load:.1f} on {os.cpu_count()} cores at the start). "
          f"Medians of {args.repeats} repeats; wall-clock and CPU time of this process.")
     emit()
+    if args.only != "heapq":
+        _rate_table(args, emit)
+    if args.only != "rates":
+        _heapq_table(args, emit)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    emit(f"(load average {load:.1f} at the end)")
+    return lines
+
+
+def _rate_table(args, emit):
+    """Table 1: the kernel's collisions per second against N, per rule."""
     emit(_row("N", "rule", "collisions/s (wall)", "ns per collision (wall)", "collisions/s (CPU)",
               "ns per collision (CPU)"))
     emit("|---|---|---|---|---|---|")
@@ -138,6 +160,10 @@ def tables(args):
             wall, cpu = kernel_rate(rods, rule, args.collisions, args.repeats, stiffness)
             emit(_row(f"{rods:,}", name, f"{1 / wall:,.0f}", f"{1e9 * wall:.0f}", f"{1 / cpu:,.0f}", f"{1e9 * cpu:.0f}"))
     emit()
+
+
+def _heapq_table(args, emit):
+    """Table 2: the kernel against the plain-Python heapq loop on the same gas."""
     rods, c = 10_000, args.heapq_collisions
     per = kernel_against_heapq(rods, 1.0, c, args.repeats)
     emit(f"Fixed rule r = 1, N = {rods:,}, {c:,} collisions from the same initial gas (a fresh simulation per "
@@ -150,9 +176,6 @@ def tables(args):
         wall, cpu = per[key]
         emit(_row(name, f"{1 / wall:,.0f}", f"{base_wall / wall:.0f}x", f"{1 / cpu:,.0f}", f"{base_cpu / cpu:.0f}x"))
     emit()
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    emit(f"(load average {load:.1f} at the end)")
-    return lines
 
 
 def update_docs(lines, path=_DOCS):
@@ -173,8 +196,12 @@ def main(argv=None):
     parser.add_argument("--rods", type=int, nargs="+", default=[100, 1_000, 10_000, 100_000, 1_000_000])
     parser.add_argument("--stiffness", type=float, default=100.0,
                         help="contact stiffness alpha of the soft-law rows (default 100)")
+    parser.add_argument("--only", choices=("rates", "heapq"),
+                        help="run only the rates against N, or only the comparison with the heapq loop")
     parser.add_argument("--update-docs", action="store_true", help=f"write the tables into {_DOCS}")
     args = parser.parse_args(argv)
+    if args.update_docs and args.only:
+        parser.error("--update-docs writes both tables: leave out --only")
     lines = tables(args)
     if args.update_docs:
         update_docs(lines)

@@ -18,12 +18,26 @@ def _tree_of(keys):
     return times, events
 
 
+def _assert_every_node_holds_its_earliest_child(times, events):
+    """Every node of the four-ary tree holds the earliest of its four children, ties to the leftmost (written
+    here as a sort by (time, position), independently of the kernel's selects)."""
+    level = times.size // 2
+    while level > 1:
+        level //= 4
+        for p in range(level, 2 * level):
+            children = range(4 * p, 4 * p + 4)
+            best = min(children, key=lambda c: (times[c], c))
+            assert times[p] == times[best] and events[p] == events[best]
+
+
 @pytest.mark.parametrize("jit", [True, False])
-@pytest.mark.parametrize("size", [1, 2, 3, 257])
+@pytest.mark.parametrize("size", [1, 2, 3, 5, 17, 257, 1100])
 def test_tree_root_is_the_earliest_event_after_any_change(jit, size):
-    """After re-timing single events, or a neighbour triple (the ring's seam included), the root is the
-    earliest event, ties going to the lower index, and every node holds the earlier of its children."""
+    """After re-timing single events, or a neighbour triple (the ring's seam included, and triples straddling
+    the tree's blocks of 4 and 16 leaves), the root is the earliest event, ties going to the lower index, and
+    every node holds the earliest of its children."""
     pull_range = kernels._pull_range if jit else kernels._pull_range.py_func
+    pull_triple = kernels._pull_triple if jit else kernels._pull_triple.py_func
     rng = np.random.default_rng(np.random.SeedSequence([4, size]))
     keys = rng.exponential(size=size)
     keys[::17] = math.inf
@@ -32,13 +46,13 @@ def test_tree_root_is_the_earliest_event_after_any_change(jit, size):
     times, events = _tree_of(keys.copy())
     leaves = times.size // 2
     reference = keys.copy()
-    for step in range(3000):
+    steps = 3000 if size < 1000 else 600
+    for step in range(steps):
         earliest = min(range(size), key=lambda k: (reference[k], k))
         assert events[1] == earliest and times[1] == reference[earliest]
         assert np.array_equal(times[leaves:leaves + size], reference)
-        for p in range(1, leaves):
-            child = 2 * p + (1 if times[2 * p + 1] < times[2 * p] else 0)
-            assert times[p] == times[child] and events[p] == events[child]
+        if step % 50 == 0 or size < 20:
+            _assert_every_node_holds_its_earliest_child(times, events)
         k = int(rng.integers(size))
         changed = [k] if step % 2 else sorted({(k - 1) % size, k, (k + 1) % size})
         for c in changed:
@@ -46,11 +60,15 @@ def test_tree_root_is_the_earliest_event_after_any_change(jit, size):
             if rng.random() < 0.1:
                 reference[c] = reference[earliest]  # ties with the current root
             times[leaves + c] = reference[c]
-        if changed == list(range(changed[0], changed[-1] + 1)):
+        if len(changed) == 3 and changed == list(range(changed[0], changed[0] + 3)):
+            root = pull_triple(times, events, leaves + changed[1])  # the kernel's interior case
+            assert root == (times[1], events[1])
+        elif changed == list(range(changed[0], changed[-1] + 1)):
             pull_range(times, events, changed[0], changed[-1])
         else:
             for c in changed:
                 pull_range(times, events, c, c)
+    _assert_every_node_holds_its_earliest_child(times, events)
 
 
 def test_collision_times_on_a_ring_and_against_walls():

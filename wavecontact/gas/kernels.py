@@ -4,10 +4,10 @@ In one dimension only neighbours meet, so the gas has one event per
 neighbour pair (N on a ring; N + 1 between walls, the walls counting as
 fixed partners).  Each collision changes the velocities of two rods and
 therefore the predicted times of at most three events, and these three are
-neighbours: they sit on neighbouring leaves of a binary tournament tree
-(each node holding the earlier of its two children, the root the next
-event), so their paths to the root join after a level or two and one path
-of ``log2 N`` comparisons is re-evaluated per collision.  (An indexed
+neighbours: they sit on neighbouring leaves of a tournament tree with four
+children per node (each node holding the earliest of its children, the
+root the next event), so their paths to the root join after a level or two
+and one path of ``log4 N`` levels is re-evaluated per collision.  (An indexed
 binary heap would re-key the three events separately, each with its own
 sift of unpredictable branches.)  Rods are advanced lazily: a rod's position,
 velocity and bath temperature refer to its own clock ``local_time`` and are
@@ -71,8 +71,13 @@ COUNTERS = 6
 def _pair_time(now, xi, vi, ti, xj, vj, tj, offset, reach):
     """Predicted contact time of rods ``i`` (left) and ``j`` (right), each given by its centre ``x``, velocity
     ``v`` and clock ``t`` (``offset``: the circumference when ``j`` sits across the ring's seam)."""
-    approach = vi - vj
     gap = (xj + vj * (now - tj) + offset) - (xi + vi * (now - ti)) - reach
+    return _closing_time(now, gap, vi - vj)
+
+
+@kernel(inline="always")
+def _closing_time(now, gap, approach):
+    """Contact time of a pair at distance ``gap`` (beyond contact) at time ``now`` closing in at ``approach``."""
     # whether the pair closes in is random from one call to the next: selects instead of a branch
     closing = approach > 0.0
     when = now + max(gap, 0.0) / (approach if closing else 1.0)
@@ -115,25 +120,35 @@ def event_times(now, x, v, local_time, reach, ring, box, out):
 
 
 def tree_size(events):
-    """Length of the tree arrays for ``events`` events: twice the power of two at or above ``events``."""
-    leaves = 1
+    """Length of the tree arrays for ``events`` events: twice the power of four at or above ``events`` (and 16)."""
+    leaves = 16  # at least two levels below the root (:func:`_pull_triple` updates two levels unconditionally)
     while leaves < events:
-        leaves *= 2
+        leaves *= 4
     return 2 * leaves
 
 
 @kernel(inline="always")
 def _pull(tree_time, tree_event, p):
-    """Node ``p`` takes the earlier of its two children (the left one on a tie: it holds the lower events)."""
-    left = 2 * p
-    t = tree_time[left]
-    e = tree_event[left]
-    right_time = tree_time[left + 1]
-    right_event = tree_event[left + 1]
-    e = right_event if right_time < t else e
-    t = min(t, right_time)
+    """Node ``p`` takes the earliest of its four children (ties: the leftmost, which holds the lowest events);
+    returns its new ``(time, event)``.  Written as two pairs and their final (selects, no branches)."""
+    c = p << 2
+    t0 = tree_time[c]
+    t1 = tree_time[c + 1]
+    t2 = tree_time[c + 2]
+    t3 = tree_time[c + 3]
+    e0 = tree_event[c]
+    e1 = tree_event[c + 1]
+    e2 = tree_event[c + 2]
+    e3 = tree_event[c + 3]
+    ea = e1 if t1 < t0 else e0
+    ta = min(t0, t1)
+    eb = e3 if t3 < t2 else e2
+    tb = min(t2, t3)
+    e = eb if tb < ta else ea
+    t = min(ta, tb)
     tree_time[p] = t
     tree_event[p] = e
+    return t, e
 
 
 @kernel(inline="always")
@@ -146,20 +161,35 @@ def _climb(tree_time, tree_event, p):
 def _climb_from(tree_time, tree_event, p, t, e):
     """Re-evaluate the ancestors of node ``p``, which holds ``(t, e)``, carrying the winner in registers.
 
-    Each level compares the winner so far with the sibling subtree's, which
-    did not change, so the loads need not wait for the stores below them.
-    The choice is written as two selects (compiled to conditional moves, not
-    branches that the processor would mispredict half of the time): the
-    sibling wins if it is earlier, or equally early and on the left (lower events).
+    Each level first finds the earliest of the other three children of
+    ``p``'s parent (sibling subtrees that did not change, so their loads and
+    comparisons need not wait for the carried winner), then compares that
+    one with the carried winner: the chain of dependent steps from the
+    leaves to the root is one comparison per level, ``log4 M`` of them.  Comparisons order by ``(time, event)``, which is the tie rule of
+    the tree (ties to the lower event); they are written as selects
+    (conditional moves), not branches that the processor would mispredict.
     Returns the root's ``(time, event)``, so that the next collision need not read it back from memory.
     """
     while p > 1:
-        sibling_time = tree_time[p ^ 1]
-        sibling_event = tree_event[p ^ 1]
-        take = (sibling_time < t) | ((sibling_time == t) & ((p & 1) == 1))
+        # the siblings of p: its partner in its pair, and the other pair of the group of four (indices
+        # computed rather than the carried child masked: a mask on p's position became a branch on it)
+        partner = p ^ 1
+        pair = (p & ~3) | ((p & 2) ^ 2)
+        partner_time = tree_time[partner]
+        partner_event = tree_event[partner]
+        pair_time = tree_time[pair]
+        pair_event = tree_event[pair]
+        pair_time_1 = tree_time[pair + 1]
+        pair_event_1 = tree_event[pair + 1]
+        pair_event = pair_event_1 if pair_time_1 < pair_time else pair_event  # ties: the lower (left) event
+        pair_time = min(pair_time, pair_time_1)
+        take = (pair_time < partner_time) | ((pair_time == partner_time) & (pair_event < partner_event))
+        sibling_event = pair_event if take else partner_event
+        sibling_time = min(partner_time, pair_time)
+        take = (sibling_time < t) | ((sibling_time == t) & (sibling_event < e))
         e = sibling_event if take else e
         t = min(t, sibling_time)
-        p >>= 1
+        p >>= 2
         tree_time[p] = t
         tree_event[p] = e
     return t, e
@@ -167,51 +197,90 @@ def _climb_from(tree_time, tree_event, p, t, e):
 
 @kernel(inline="always")
 def _pull_range(tree_time, tree_event, lo, hi):
-    """Recompute every ancestor of the leaves of events ``lo..hi`` (their times already set), up to the root."""
+    """Recompute every ancestor of the leaves of events ``lo..hi`` (their times already set), up to the root;
+    returns the root's ``(time, event)``."""
     leaves = tree_time.size >> 1
-    lo += leaves
-    hi += leaves
+    return _pull_nodes(tree_time, tree_event, lo + leaves, hi + leaves)
+
+
+@kernel(inline="always")
+def _pull_nodes(tree_time, tree_event, lo, hi):
+    """Recompute every ancestor of the nodes ``lo..hi`` of one level (themselves right), up to the root."""
     while lo != hi:
-        lo >>= 1
-        hi >>= 1
+        lo >>= 2
+        hi >>= 2
         for p in range(lo, hi + 1):
             _pull(tree_time, tree_event, p)
     return _climb(tree_time, tree_event, lo)
+
+
+@kernel(inline="always")
+def _pull_triple(tree_time, tree_event, leaf):
+    """Recompute the ancestors of the leaves ``leaf - 1 .. leaf + 1`` (their times already set), up to the
+    root; returns the root's ``(time, event)``.
+
+    Their parents are one node or two neighbours, and so are the grandparents
+    (two only when the triple straddles a boundary of 16 leaves): the two
+    lowest levels update both nodes unconditionally (the same node twice when
+    they coincide), then the winner is carried up in registers.  No branch
+    depends on where the triple lies, except the rare straddle.
+    """
+    lo = (leaf - 1) >> 2
+    hi = (leaf + 1) >> 2
+    _pull(tree_time, tree_event, lo)
+    _pull(tree_time, tree_event, hi)
+    lo >>= 2
+    hi >>= 2
+    _pull(tree_time, tree_event, lo)
+    t, e = _pull(tree_time, tree_event, hi)
+    if lo != hi:
+        return _pull_nodes(tree_time, tree_event, lo, hi)
+    return _climb_from(tree_time, tree_event, lo, t, e)
 
 
 @kernel
 def build_tree(key, tree_time, tree_event):
     """Fill a tournament tree of the event times ``key``: the root holds the earliest (ties: the lowest event).
 
-    The arrays have length ``2 M`` (:func:`tree_size`); leaf ``M + k`` holds
-    the time of event ``k`` (``inf`` for the padding beyond ``key.size``),
-    node ``p < M`` the earlier of nodes ``2 p`` and ``2 p + 1`` (time in
-    ``tree_time``, event in ``tree_event``); node 0 is unused and node 1 is the root.
-    Changing the times of a few neighbouring events re-evaluates their common
-    path to the root once (:func:`_pull_range`), ``log2 M`` comparisons.
+    Every node has four children.  The arrays have length ``2 M``
+    (:func:`tree_size`, ``M`` a power of four); leaf ``M + k`` holds the time
+    of event ``k`` (``inf`` for the padding beyond ``key.size``), node ``p``
+    the earliest of nodes ``4 p`` to ``4 p + 3`` (time in ``tree_time``,
+    event in ``tree_event``).  Node 1 is the root; the levels are the index
+    ranges ``[4^l, 2 4^l)``, and the indices between them (and 0) are unused
+    (``inf``, event -1).  The siblings of a node are the aligned group of four
+    entries around it (one 32-byte block).  Changing the times of a few
+    neighbouring events re-evaluates their common path to the root once
+    (:func:`_pull_range`), ``log4 M`` levels: half the depth of a binary tree,
+    for a few more comparisons per level that do not wait for each other.
     """
     leaves = tree_time.size >> 1
+    for p in range(leaves):
+        tree_time[p] = math.inf
+        tree_event[p] = -1
     for k in range(leaves):
         tree_time[leaves + k] = key[k] if k < key.size else math.inf
         tree_event[leaves + k] = k
-    tree_time[0] = math.inf
-    tree_event[0] = -1
-    for p in range(leaves - 1, 0, -1):
-        _pull(tree_time, tree_event, p)
+    level = leaves
+    while level > 1:
+        level >>= 2
+        for p in range(level, 2 * level):
+            _pull(tree_time, tree_event, p)
 
 
 @kernel(inline="always")
 def _advance(i, t, x, v, local_time):
-    """Bring rod ``i`` to time ``t`` (free flight); returns the time it flew.
+    """Bring rod ``i`` to time ``t`` (free flight); returns the time it flew and its new centre.
 
     Branch-free, so that numba's reference counts of the arrays cancel when
     it is inlined; the bath's relaxation is :func:`_relax_bath`, called only
     when there is damping.
     """
     dt = t - local_time[i]
-    x[i] += v[i] * dt
+    moved = x[i] + v[i] * dt
+    x[i] = moved
     local_time[i] = t
-    return dt
+    return dt, moved
 
 
 @kernel
@@ -486,7 +555,7 @@ def run_events(
             return STATUS_TIME_LIMIT, -1, done
         if not ring and (k == 0 or k == n):
             rod = 0 if k == 0 else n - 1
-            dt = _advance(rod, t, x, v, local_time)
+            dt, _ = _advance(rod, t, x, v, local_time)
             if decay_rate > 0.0:
                 _relax_bath(rod, dt, temperature, decay_rate, bath_modes, scalars)
             v[rod] = -v[rod]
@@ -507,8 +576,8 @@ def run_events(
             j = k
         if rule == RULE_EXTERNAL and pending[0] == 0.0:
             return STATUS_NEED_DRAW, k, done
-        dt_i = _advance(i, t, x, v, local_time)
-        dt_j = _advance(j, t, x, v, local_time)
+        dt_i, x_i = _advance(i, t, x, v, local_time)
+        dt_j, x_j = _advance(j, t, x, v, local_time)
         if decay_rate > 0.0:
             _relax_bath(i, dt_i, temperature, decay_rate, bath_modes, scalars)
             _relax_bath(j, dt_j, temperature, decay_rate, bath_modes, scalars)
@@ -635,14 +704,18 @@ def run_events(
         counters[COLLISIONS] = count
         done += 1
         if first_interior <= k <= last_interior:
-            # the usual case: the two new predictions from the velocities still in registers (event_time's
-            # arithmetic, without reading back what was just stored), and one shared path to the root
-            t_before = _pair_time(t, x[i - 1], v[i - 1], local_time[i - 1], x[i], vi, t, 0.0, reach[k - 1])
-            t_after = _pair_time(t, x[j], vj, t, x[j + 1], v[j + 1], local_time[j + 1], 0.0, reach[k + 1])
+            # the usual case: the two new predictions from the centres and velocities still in registers, and
+            # one shared path to the root.  Rods i and j are at time t, so event_time's term ``x + v (t - t)``
+            # is ``x`` (up to the sign of a zero, which the subtraction of ``reach > 0`` removes): the gaps
+            # come out bit for bit as event_time's, but do not wait for the new velocities
+            gap_before = x_i - (x[i - 1] + v[i - 1] * (t - local_time[i - 1])) - reach[k - 1]
+            gap_after = (x[j + 1] + v[j + 1] * (t - local_time[j + 1])) - x_j - reach[k + 1]
+            t_before = _closing_time(t, gap_before, v[i - 1] - vi)
+            t_after = _closing_time(t, gap_after, vj - v[j + 1])
             tree_time[leaves + k - 1] = t_before
             tree_time[leaves + k] = math.inf
             tree_time[leaves + k + 1] = t_after
-            t_next, k_next = _pull_range(tree_time, tree_event, k - 1, k + 1)
+            t_next, k_next = _pull_triple(tree_time, tree_event, leaves + k)
         else:
             tree_time[leaves + k] = math.inf
             before = k - 1

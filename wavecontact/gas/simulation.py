@@ -263,15 +263,16 @@ class GasSimulation:
         self.temperature = gas.bath_temperatures.copy()
         self.mass = lengths.copy()
         # per event
-        if ring:
-            left, right = np.arange(n), np.roll(np.arange(n), -1)
-            self.reach = 0.5 * (lengths[left] + lengths[right])
-        else:
-            left, right = np.arange(-1, n), np.arange(0, n + 1)
+        if ring:  # every event a pair of rods (k, k + 1 mod N)
+            l_left, l_right = lengths, np.roll(lengths, -1)
+            self.reach = 0.5 * (l_left + l_right)
+            inner = slice(None)
+        else:  # the walls (events 0 and N) count as partners of length 1
             self.reach = np.concatenate([[0.5 * lengths[0]], 0.5 * (lengths[1:] + lengths[:-1]), [0.5 * lengths[-1]]])
-        inner = (left >= 0) & (right < n)
-        l_left = np.where(inner, lengths[np.clip(left, 0, n - 1)], 1.0)
-        l_right = np.where(inner, lengths[np.clip(right, 0, n - 1)], 1.0)
+            left, right = np.arange(-1, n), np.arange(0, n + 1)
+            inner = (left >= 0) & (right < n)
+            l_left = np.where(inner, lengths[np.clip(left, 0, n - 1)], 1.0)
+            l_right = np.where(inner, lengths[np.clip(right, 0, n - 1)], 1.0)
         self.left_is_short = l_left <= l_right
         self.pair_gamma = np.minimum(l_left, l_right) / np.maximum(l_left, l_right)
         grid = rule.gamma_grid()
@@ -286,28 +287,28 @@ class GasSimulation:
                         f"the gas has length ratios {low:.4g}..{high:.4g} but the table covers gamma in "
                         f"[{covered[0]:g}, {covered[-1]:g}]: choose lengths inside it or a wider table")
         if grid.size == 1:
-            self.gamma_index, self.gamma_weight = np.zeros(left.size, np.int64), np.zeros(left.size)
+            self.gamma_index, self.gamma_weight = np.zeros(self.reach.size, np.int64), np.zeros(self.reach.size)
         else:
             g = np.clip(self.pair_gamma, grid[0], grid[-1])
             self.gamma_index = np.clip(np.searchsorted(grid, g, side="right") - 1, 0, grid.size - 2).astype(np.int64)
             self.gamma_weight = (g - grid[self.gamma_index]) / (grid[self.gamma_index + 1] - grid[self.gamma_index])
-        key = np.empty(left.size)
+        key = np.empty(self.reach.size)
         kernels.event_times(0.0, self.x, self.v, self.local_time, self.reach, ring, gas.system_length, key)
-        self.tree_time = np.empty(kernels.tree_size(left.size))
-        self.tree_event = np.empty(self.tree_time.size, np.int64)
+        self.tree_time = np.empty(kernels.tree_size(self.reach.size))
+        self.tree_event = np.empty(self.tree_time.size, np.int32)
         kernels.build_tree(key, self.tree_time, self.tree_event)
         self.window = np.zeros(2 * window)
         momentum = float(np.sum(self.mass * self.v))
         total_mass = float(self.mass.sum())
         self.scalars = np.zeros(8)
-        self.scalars[kernels.KINETIC] = gas.kinetic_energy()
-        self.scalars[kernels.KINETIC_REFERENCE] = gas.kinetic_energy()
+        self.scalars[kernels.KINETIC] = self.scalars[kernels.KINETIC_REFERENCE] = gas.kinetic_energy()
         self.scalars[kernels.MOMENTUM_ENERGY] = momentum**2 / (2 * total_mass) if ring else 0.0
         self.total_mass = total_mass
         self.counters = np.zeros(kernels.COUNTERS, np.int64)
         self.pending = np.zeros(3)
-        self.initial_energy = self._energies()[4]
-        self.scalars[kernels.ENERGY_FLOOR] = self.energy_floor * self._energies()[0]
+        energies = self._energies()
+        self.initial_energy = energies[4]
+        self.scalars[kernels.ENERGY_FLOOR] = self.energy_floor * energies[0]
         self.history = {name: [] for name in _HISTORY}
         self.frame_times, self.frames = [], []
         self.records = 0
@@ -339,18 +340,19 @@ class GasSimulation:
 
     def _energies(self):
         """(kinetic in the COM frame, bath, lost, dissipated, total) at the current time."""
-        now = self.time
-        kinetic = float(0.5 * np.sum(self.mass * self.v**2))
+        translational = float(0.5 * np.sum(self.mass * self.v**2))
+        kinetic = translational
         if self.ring:
             kinetic -= float(np.sum(self.mass * self.v)) ** 2 / (2.0 * self.total_mass)
-        temperatures = self._synced_temperatures(now)
-        modes = float(self.rule.bath_modes)
-        bath = modes * float(temperatures.sum()) if self.rule.code != kernels.RULE_FIXED else 0.0
+        bath = 0.0
         dissipated = float(self.scalars[kernels.DISSIPATED])
-        if self.rule.code != kernels.RULE_FIXED:
+        if self.rule.code != kernels.RULE_FIXED:  # the fixed rule has no baths
+            temperatures = self._synced_temperatures(self.time)
+            modes = float(self.rule.bath_modes)
+            bath = modes * float(temperatures.sum())
             dissipated += modes * float(np.sum(self.temperature - temperatures))
         lost = float(self.scalars[kernels.LOST])
-        total = float(0.5 * np.sum(self.mass * self.v**2)) + bath + lost + dissipated
+        total = translational + bath + lost + dissipated
         return kinetic, bath, lost, dissipated, total
 
     def positions(self):
@@ -515,14 +517,15 @@ class GasSimulation:
 
     def _result(self, wall, done) -> GasResult:
         history = {name: list(values) for name, values in self.history.items()}
+        energies = self._energies()
         if not history["collisions"] or history["collisions"][-1] != self.collisions:
             # a run that ends between records: the result's history ends with the final state (the
             # simulation's own records keep their cadence, so that a run in pieces records what one run does)
-            for name, value in zip(_HISTORY, self._record_row()):
+            for name, value in zip(_HISTORY, (self.time, self.collisions) + energies[:4]):
                 history[name].append(value)
         history = {name: np.asarray(values, dtype=np.int64 if name == "collisions" else float)
                    for name, values in history.items()}
-        total = self._energies()[4]
+        total = energies[4]
         frames = np.array(self.frames) if self.frames else np.zeros((0, 0), np.float32)
         return GasResult(
             status=self.status, message=self._message(), collisions=self.collisions,
