@@ -33,9 +33,6 @@ The rows per chunk are chosen at set-up among a few (:func:`candidate_rows`) so
 that as many rows as possible hold their coefficients as constants on meshes of
 equal elements (:func:`uniform_rows`).
 
-The step's speed depends on the physical pages its table lands on (docs/fem.md section 7), which cannot
-be chosen: :func:`settled_table` times a few fresh placements at set-up and keeps the fastest.
-
 The layout lives only inside the time loop (``kernels.advance``):
 :func:`pack_nodes` and :func:`unpack_nodes` convert at its start, at its energy
 checks and at its end.  The state and the
