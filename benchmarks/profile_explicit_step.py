@@ -93,8 +93,6 @@ def profile_row(name, order, mass, elements, repeats):
     arrays_table = interleaved_step.aligned_table(*table.shape) if interleaved else np.zeros(table.shape)
     arrays_table[:] = table
     arrays_table[interleaved_step.L_UNIFORM, :2] = 1.0
-    if interleaved:  # in the fastest of a few places, as the loop's own tables (interleaved_step.settled_table)
-        arrays_table = interleaved_step.settled_table(arrays_table, order)
     step = loop_step(disc, run.u[1].copy(), run.v[1].copy(), kind, table)
     arrays_step = loop_step(disc, run.u[1].copy(), run.v[1].copy(), kind, arrays_table)
     u, v, a = run.u[1].copy(), run.v[1].copy(), np.zeros(disc.n_nodes)

@@ -55,34 +55,6 @@ def test_table_rows_do_not_start_a_multiple_of_4_kib_apart():
 
 
 @pytest.mark.parametrize("order", [1, 2])
-def test_settled_tables_hold_the_same_bits_wherever_they_are_placed(order):
-    """The placement trial (``settled_table``) moves a table, never its values: two set-ups of the same mesh
-    give the same bits, the trial leaves the state rows as they were, and stepping the settled table gives
-    the bits of stepping a plain copy of it."""
-    disc = discretize_rod(Rod(1.0), np.linspace(0.0, 1.0, 1500 // order), order, "consistent")
-    _, first = prepare_mass(disc)
-    _, second = prepare_mass(disc)
-    assert first[L_SHAPE, 0] > 0
-    np.testing.assert_array_equal(first.view(np.int64), second.view(np.int64))
-    rng = np.random.default_rng(order)
-    plain = interleaved_step.aligned_table(*first.shape)
-    plain[:] = first
-    plain[interleaved_step.L_U, :] = rng.standard_normal(first.shape[1]) * (first[interleaved_step.L_FORWARD] != 0)
-    plain[interleaved_step.L_V, :] = rng.standard_normal(first.shape[1]) * (first[interleaved_step.L_FORWARD] != 0)
-    reference = plain.copy()
-    settled = interleaved_step.settled_table(plain, order, candidates=4)
-    assert settled.ctypes.data % 64 == 0 and settled.shape == plain.shape
-    np.testing.assert_array_equal(settled.view(np.int64), reference.view(np.int64))
-    assert interleaved_step.settled_table(plain, order, candidates=1) is plain
-    step = interleaved_step.step_tridiagonal if order == 1 else interleaved_step.step_condensed
-    dt = 1e-4
-    for _ in range(20):
-        step(settled, dt)
-        step(reference, dt)
-    np.testing.assert_array_equal(settled.view(np.int64), reference.view(np.int64))
-
-
-@pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("elements", [70, 333])  # 2 and 11 rows per chunk: fewer rows than the corrections span
 def test_short_chunks_equal_a_reference_step_with_a_banded_solve(monkeypatch, order, elements):
     """Chunks shorter than the rows their neighbour's correction reaches (the corrections then cross whole
