@@ -207,7 +207,6 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
         if wide:
             lanes.lane_rows(disc.stiffness_bands[1, : n - 1], table[T_CHAIN_INVERSE, :n], table[T_CHAIN_FORWARD, :n],
                             table[T_CHAIN_BACKWARD, :n], table)
-            table = lanes.settled_table(table, 1)
         return MASS_TRIDIAGONAL, table
     if disc.order != 2:
         raise ValueError(f"no mass solve for order {disc.order}")
@@ -236,7 +235,6 @@ def prepare_mass(disc, interleaved: bool = True) -> tuple:
         lanes.condensed_lane_rows(coefficients, table[T_CHAIN_INVERSE, :vertex_count].copy(),
                                   table[T_CHAIN_FORWARD, :vertex_count].copy(),
                                   table[T_CHAIN_BACKWARD, :vertex_count].copy(), table)
-        table = lanes.settled_table(table, 2)
     return MASS_CONDENSED, table
 
 

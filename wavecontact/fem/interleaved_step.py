@@ -44,15 +44,12 @@ compiler vectorizes.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-from .._jit import NUMBA_ENABLED, kernel
+from .._jit import kernel
 
 __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "aligned_table", "condensed_lane_rows", "lane_rows", "lanes_width",
-           "node_position", "pack_nodes", "settled_table", "step_condensed", "step_tridiagonal", "table_width",
-           "unpack_nodes"]
+           "node_position", "pack_nodes", "step_condensed", "step_tridiagonal", "table_width", "unpack_nodes"]
 
 LANES = 32
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
@@ -96,10 +93,6 @@ L_WEIGHT = 46  # G_i: per chunk, the product of the backward factors g above row
 L_BURN = 47  # scratch: per chunk, sum of G_i y_i over its rows so far
 L_ROWS_END = 48
 UNIFORM_ULPS_PER_ELEMENT = 4.0  # uniform to the rounding of the node coordinates (see uniform_rows)
-# the placement trial of settled_table: places tried, steps timed per place and round, rounds
-PLACEMENT_CANDIDATES = 4
-PLACEMENT_STEPS = 8
-PLACEMENT_ROUNDS = 3
 HELD_ROW_COST = 0.6  # a held row's cost against one read from the arrays (P2 step, 1333 elements, measured)
 P1_UNIFORM_ROWS = (L_LEFT, L_RIGHT, L_FORWARD, L_BACKWARD)
 P2_UNIFORM_ROWS = (L_C1, L_C2, L_C3, L_C4, L_MID_LEFT, L_MID_RIGHT, L_FORWARD, L_BACKWARD, L_BACK_LEFT,
@@ -145,60 +138,6 @@ def aligned_table(rows: int, width: int) -> np.ndarray:
     buffer = np.zeros(rows * width + 8)
     start = (-buffer.ctypes.data % 64) // 8
     return buffer[start : start + rows * width].reshape(rows, width)
-
-
-def settled_table(table: np.ndarray, order: int, candidates: int = PLACEMENT_CANDIDATES) -> np.ndarray:
-    """A copy of the filled interleaved ``table`` (same values, bit for bit) in the fastest of a few fresh places.
-
-    The step's speed depends on the physical pages its table lands on: the same table in fresh buffers takes
-    1.5 to 2 times as long on about one placement in five, and the slow ones follow the physical pages, not
-    the addresses (the same pages mapped at three addresses are equally slow; docs/fem.md section 7).  The
-    pages cannot be chosen, so the set-up measures: it puts ``table`` and ``candidates - 1`` copies in fresh
-    buffers, times ``PLACEMENT_STEPS`` steps of each (on the table's zero state, which costs the same
-    instructions as any other) in ``PLACEMENT_ROUNDS`` alternated rounds, keeps the one with the least
-    time and writes the original values back into it.  Which one is kept depends on the timing, never the
-    values: every candidate holds the same bits.  Without numba the table is returned as it is.
-
-    Parameters
-    ----------
-    table : ndarray
-        A table of :func:`aligned_table` filled by :func:`lane_rows` (``order`` 1) or
-        :func:`condensed_lane_rows` (``order`` 2), state rows zero.
-    order : int
-        1 (P1 consistent, :func:`step_tridiagonal`) or 2 (P2 consistent, :func:`step_condensed`).
-    candidates : int
-        Places tried, the original one included.
-
-    Returns
-    -------
-    ndarray
-        ``table`` itself or a copy, 64-byte aligned, with its values.
-    """
-    if not NUMBA_ENABLED or candidates <= 1:
-        return table
-    original = table.copy()
-    places = [table] + [aligned_table(*table.shape) for _ in range(candidates - 1)]
-    for place in places[1:]:
-        place[:] = original
-    best = [np.inf] * len(places)
-    for _ in range(PLACEMENT_ROUNDS):
-        for k, place in enumerate(places):
-            started = time.perf_counter_ns()
-            _repeat_steps(place, order, PLACEMENT_STEPS)
-            best[k] = min(best[k], time.perf_counter_ns() - started)
-    chosen = places[int(np.argmin(best))]
-    chosen[:] = original
-    return chosen
-
-
-@kernel(fastmath=False)
-def _repeat_steps(table, order, steps):
-    """``steps`` steps of the ``order``'s step on ``table`` with a zero time step (the placement trial)."""
-    for _ in range(steps):
-        if order == 1:
-            step_tridiagonal(table, 0.0)
-        else:
-            step_condensed(table, 0.0)
 
 
 def _interleave(values: np.ndarray, n: int) -> np.ndarray:
