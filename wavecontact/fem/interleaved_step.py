@@ -49,7 +49,8 @@ import numpy as np
 from .._jit import kernel
 
 __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "aligned_table", "condensed_lane_rows", "lane_rows", "lanes_width",
-           "node_position", "pack_nodes", "step_condensed", "step_tridiagonal", "table_width", "unpack_nodes"]
+           "node_position", "pack_nodes", "step_condensed", "step_condensed_loaded", "step_tridiagonal",
+           "step_tridiagonal_loaded", "table_width", "unpack_nodes"]
 
 LANES = 32
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
@@ -377,15 +378,18 @@ def _p1_rows_uniform(u, y, constants, count):
 
 
 @kernel(fastmath=False)
-def _forward_p1(u, y, left, right, forward, constants, n):
+def _forward_p1(u, y, left, right, forward, constants, n, where, load):
     """Stencil and local forward sweep of every chunk, fused: ``y_i = r_i + f_i y_(i-1)`` from ``y = 0``
     above each chunk (the first row of a chunk reads the last row of the chunk before it for the stencil; the
-    uniform rows of ``constants`` with the constants)."""
+    uniform rows of ``constants`` with the constants); ``load`` added to the scaled right-hand side at ``where``
+    (see :func:`step_tridiagonal_loaded`)."""
     last = (n - 1) * LANES
     y[0] = -(right[0] * (u[LANES] - u[0]))
     for c in range(LANES - 1):
         current = u[c + 1]
         y[c + 1] = -(left[c + 1] * (u[last + c] - current) + right[c + 1] * (u[LANES + c + 1] - current))
+    if 0 <= where < LANES:
+        y[where] += load
     lo = (int(constants[0]) - 1) * LANES  # rows 1 .. lo - 1, lo .. hi - 1, hi .. n - 2 (j: the row before)
     hi = (int(constants[1]) - 1) * LANES
     _p1_rows(u, y, left, right, forward, lo)
@@ -398,6 +402,8 @@ def _forward_p1(u, y, left, right, forward, constants, n):
     current = u[last + LANES - 1]
     force = -(left[last + LANES - 1] * (u[last - 1] - current))
     y[last + LANES - 1] = force + forward[last + LANES - 1] * y[last - 1]
+    if where >= LANES:
+        y[where] += load
 
 
 @kernel(fastmath=False)
@@ -483,6 +489,19 @@ def _backward_update(u, v, y, backward, constants, n, dt):
 def step_tridiagonal(table, dt):
     """One leapfrog step ``v += dt M^-1 (-K u)``, ``u += dt v`` of a P1 consistent rod held in the rows
     ``L_U``, ``L_V`` of its table (interleaved layout)."""
+    step_tridiagonal_loaded(table, dt, -1, 0.0)
+
+
+@kernel(fastmath=False)
+def step_tridiagonal_loaded(table, dt, where, load):
+    """:func:`step_tridiagonal` with a force on the rod's first or last unknown: ``v += dt M^-1 (-K u + F
+    e_k)``, ``load = F / D_k`` (``D_k`` the pivot of ``L D L^T`` at unknown ``k``), ``where`` its position in
+    the layout (:func:`node_position`; -1: no force).
+
+    The load is added to the scaled right-hand side where the forward sweep forms it (row 0) or after the
+    sweep (the last unknown: the rows after it in its chunk are decoupled padding), so the solve spreads the
+    force as ``M^-1 e_k`` exactly, with no column over the nodes near the end (an unknown inside the rod
+    would need the sweep's propagation within its chunk, which is not done here)."""
     n = int(table[L_SHAPE, 0])
     coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     u = table[L_U]
@@ -490,7 +509,7 @@ def step_tridiagonal(table, dt):
     y = table[L_WORK]
     forward = table[L_FORWARD]
     constants = table[L_UNIFORM]
-    _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n)
+    _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n, where, load)
     _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
                    table[L_CORRECTION], table[L_BURN], n, coupled_rows)
     _backward_update(u, v, y, table[L_BACKWARD], constants, n, dt)
@@ -576,14 +595,17 @@ def _condensed_rows_uniform(uv, um, y, share, constants, count):
 
 
 @kernel(fastmath=False)
-def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, constants, n):
+def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, constants, n, where, load):
     """Midpoint shares, condensed right-hand sides and the local forward sweep of every chunk, fused (the
-    uniform rows ``[lo, hi)`` of ``constants`` with the constants)."""
+    uniform rows ``[lo, hi)`` of ``constants`` with the constants); ``load`` added to the scaled right-hand
+    side at ``where`` (see :func:`step_tridiagonal_loaded`)."""
     last = (n - 1) * LANES
     y[0] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, 0, 0, LANES)
     for c in range(LANES - 1):
         y[c + 1] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, c + 1, last + c,
                                     LANES + c + 1)
+    if 0 <= where < LANES:
+        y[where] += load
     lo = (int(constants[0]) - 1) * LANES  # rows 1 .. lo - 1, lo .. hi - 1, hi .. n - 2 (j: the row before)
     hi = (int(constants[1]) - 1) * LANES
     _condensed_rows(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, lo)
@@ -597,6 +619,8 @@ def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, fo
     j = last + LANES - 1
     force = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, j, j - LANES, j)
     y[j] = force + forward[j] * y[j - LANES]
+    if where >= LANES:
+        y[where] += load
 
 
 @kernel(fastmath=False)
@@ -638,6 +662,15 @@ def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, coun
 def step_condensed(table, dt):
     """One leapfrog step of a P2 consistent rod held in the rows ``L_U``, ``L_V`` of its table (interleaved
     layout, :func:`pack_nodes`): midpoints condensed, the vertex system solved in chunks."""
+    step_condensed_loaded(table, dt, -1, 0.0)
+
+
+@kernel(fastmath=False)
+def step_condensed_loaded(table, dt, where, load):
+    """:func:`step_condensed` with a force ``F`` on the rod's first or last vertex (an end node): ``load = F /
+    D_k`` (``D_k`` the pivot of the condensed vertex mass's ``L D L^T`` at that vertex), ``where`` its
+    position (:func:`node_position`, -1: no force); as :func:`step_tridiagonal_loaded` (the midpoints see the
+    force through the vertices' accelerations only)."""
     n = int(table[L_SHAPE, 0])
     coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     width = n * LANES
@@ -653,7 +686,7 @@ def step_condensed(table, dt):
     back_right = table[L_BACK_RIGHT]
     constants = table[L_UNIFORM]
     _forward_condensed(uv, um, y, share, table[L_C1], table[L_C2], table[L_C3], table[L_C4], table[L_MID_LEFT],
-                       table[L_MID_RIGHT], forward, constants, n)
+                       table[L_MID_RIGHT], forward, constants, n, where, load)
     _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
                    table[L_CORRECTION], table[L_BURN], n, coupled_rows)
     # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the

@@ -30,15 +30,15 @@ from .contact_flows import (
     contact_potential,
     interface_gap,
 )
-from .explicit_step import MASS_CONDENSED, MASS_LUMPED, elastic_acceleration, step_rod
+from .explicit_step import MASS_CONDENSED, MASS_LUMPED, T_CHAIN_INVERSE, elastic_acceleration, step_rod
 from .interleaved_step import (
     L_SHAPE,
     L_U,
     L_V,
     node_position,
     pack_nodes,
-    step_condensed,
-    step_tridiagonal,
+    step_condensed_loaded,
+    step_tridiagonal_loaded,
     unpack_nodes,
 )
 
@@ -278,20 +278,27 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     for k in range(column2.size):
         where2[k] = node_position(k, rows2, order2) if rows2 else k
     fast = kind1 == MASS_LUMPED and kind2 == MASS_LUMPED and bands1.shape[0] == 2 and bands2.shape[0] == 2
+    # the force scheme's contact force on a rod in the interleaved layout enters its mass solve's right-hand side
+    # (scaled by the end's inverse pivot), which spreads it as M^-1 e_end: no column added over the end's nodes
+    loaded1 = rows1 > 0 and scheme == SCHEME_FORCE
+    loaded2 = rows2 > 0 and scheme == SCHEME_FORCE
+    scale1 = table1[T_CHAIN_INVERSE, last // order1] if loaded1 else 0.0
+    scale2 = table2[T_CHAIN_INVERSE, 0] if loaded2 else 0.0
     for step in range(max_steps):
         r_now = offset + U2[0] - U1[end1]
-        # 1. kick with the elastic forces and drift (central differences)
+        force = contact_force(law, r_now, alpha, strength, stiffness) if scheme == SCHEME_FORCE else 0.0
+        # 1. kick with the elastic forces (and the force scheme's contact force on loaded rods) and drift
         if fast:
             _leapfrog_p1(u1, v1, bands1, table1[0], dt)
             _leapfrog_p1(u2, v2, bands2, table2[0], dt)
         else:
-            _step(u1, v1, a1, bands1, kind1, table1, rows1, dt)
-            _step(u2, v2, a2, bands2, kind2, table2, rows2, dt)
+            _step(u1, v1, a1, bands1, kind1, table1, rows1, dt, end1 if loaded1 else -1, -force * scale1)
+            _step(u2, v2, a2, bands2, kind2, table2, rows2, dt, 0 if loaded2 else -1, force * scale2)
         # 2. contact, spread along M^-1 e_end
         r_free = offset + U2[0] - U1[end1]
         if scheme == SCHEME_FORCE:
             # plain central differences: the force at the start of the step, as a kick
-            impulse = contact_force(law, r_now, alpha, strength, stiffness) * dt
+            impulse = force * dt
             shift = impulse * dt
         elif scheme == SCHEME_SPLITTING:
             w0 = V2[0] - V1[end1]
@@ -304,10 +311,11 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
-        if impulse != 0.0 or shift != 0.0:
+        if (impulse != 0.0 or shift != 0.0) and not loaded1:
             for k in range(column1.size):
                 U1[where1[k]] -= column1[k] * shift
                 V1[where1[k]] -= column1[k] * impulse
+        if (impulse != 0.0 or shift != 0.0) and not loaded2:
             for k in range(column2.size):
                 U2[where2[k]] += column2[k] * shift
                 V2[where2[k]] += column2[k] * impulse
@@ -357,14 +365,15 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
 
 
 @kernel
-def _step(u, v, a, bands, kind, table, rows, dt):
-    """One rod's elastic step in its layout (``rows`` > 0: the interleaved one, on the table's copy)."""
+def _step(u, v, a, bands, kind, table, rows, dt, where, load):
+    """One rod's elastic step in its layout (``rows`` > 0: the interleaved one, on the table's copy, with
+    ``load`` on its scaled right-hand side at ``where``, an end node's position; -1: none)."""
     if rows == 0:
         step_rod(u, v, a, bands, kind, table, dt)
     elif kind == MASS_CONDENSED:
-        step_condensed(table, dt)
+        step_condensed_loaded(table, dt, where, load)
     else:
-        step_tridiagonal(table, dt)
+        step_tridiagonal_loaded(table, dt, where, load)
 
 
 @kernel
