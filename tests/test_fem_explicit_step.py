@@ -185,7 +185,8 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
     """WAVECONTACT_PURE_PYTHON=1 (no numba) in a separate process gives the compiled steps' bits, every kind.
 
     700 elements: the consistent masses take the chained solve (flat layout asked for), 1250 (graded) the
-    interleaved layout's arrays, 3001 and 800 (equal elements) also its constants of the uniform rows (800:
+    interleaved layout's arrays, 3001 and 800 (equal elements) also its constants of the uniform rows, and
+    these steps with a load on either end node (the force scheme's contact in the time loop) (800:
     P2's 801 vertices in chunks of 26 rows, the last chunk padding only, the padding after the first
     padding unknown held and the backward burn-in over whole chunks) (no reassociation, no fused
     multiply-add in the compiled kernels, so the vectorized passes round exactly as the plain Python loops
@@ -197,7 +198,8 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "sys.path.insert(0, sys.argv[2])\n"
         "from wavecontact import Rod\n"
         "from wavecontact.fem.discretization import discretize_rod\n"
-        "from wavecontact.fem.explicit_step import prepare_mass, step_rod\n"
+        "from wavecontact.fem import interleaved_step as lanes\n"
+        "from wavecontact.fem.explicit_step import T_CHAIN_INVERSE, prepare_mass, step_rod\n"
         "out = {}\n"
         "for order, mass, elements in ((1, 'lumped', 700), (2, 'lumped', 700), (1, 'consistent', 700),\n"
         "                              (2, 'consistent', 700), (1, 'consistent', 1250), (2, 'consistent', 1250),\n"
@@ -218,11 +220,19 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "        out[f'u{order}{mass}{elements}'], out[f'v{order}{mass}{elements}'] = u, v\n"
         "        out[f'layout{order}{mass}{elements}'] = table[24, :3]\n"
         "        out[f'uniform{order}{mass}{elements}'] = table[45, :2]\n"
+        "        if mass == 'consistent' and elements != 700:  # the interleaved step with an end load\n"
+        "            rows = int(table[lanes.L_SHAPE, 0])\n"
+        "            step = lanes.step_tridiagonal_loaded if order == 1 else lanes.step_condensed_loaded\n"
+        "            for node in (0, disc.n_nodes - 1):\n"
+        "                scale = table[T_CHAIN_INVERSE, node // order]\n"
+        "                for force in (1e3, -2e3, 5e2):\n"
+        "                    step(table, 1e-4, lanes.node_position(node, rows, order), force * scale)\n"
+        "            out[f'loaded{order}{elements}'] = table[lanes.L_U].copy() + table[lanes.L_V]\n"
         "np.savez(sys.argv[1], **out)\n"
     )
     root = Path(__file__).resolve().parents[1]  # this checkout's package
     outputs = pure_and_compiled_outputs(script, tmp_path, root)
-    assert len(outputs[0]) == 40
+    assert len(outputs[0]) == 46
     for order in (1, 2):
         lo, hi = outputs[1][f"uniform{order}consistent3001"]
         assert hi - lo > 50 and np.all(outputs[1][f"uniform{order}consistent1250"] == 1.0)  # constants / arrays

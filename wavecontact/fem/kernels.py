@@ -8,7 +8,11 @@ One step of central differences in leapfrog form (``v`` lives at half steps):
    exactly: either the force of the gap at the start of the step as a kick
    (``SCHEME_FORCE``: plain central differences, where the contact is
    resolved) or the facing end nodes moved to the gap the contact law gives
-   after the step (:mod:`.contact_flows`: interface schemes).
+   after the step (:mod:`.contact_flows`: interface schemes).  A rod in the
+   interleaved layout (:mod:`.interleaved_step`) takes the force scheme's
+   force in step 1 instead, on its mass solve's right-hand side, which spreads
+   it as ``M^-1 e_end`` (the same to rounding, without a pass over the nodes
+   near the end, each on its own cache line in that layout).
 
 Elastic forces are evaluated as ``-sum_j K_ij (u_j - u_i)`` (rows of ``K``
 sum to zero), so a rigid translation produces no force at all.
@@ -212,7 +216,9 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     columns : tuple of 2 arrays
         ``M1^-1 e_last`` on the last ``columns[0].size`` nodes of rod 1 and
         ``M2^-1 e_0`` on the first nodes of rod 2 (1/mass): how the contact
-        acts, so that momentum is exchanged exactly.
+        acts, so that momentum is exchanged exactly (not used for a rod in
+        the interleaved layout under the force scheme: its solve spreads the
+        force).
     contact : ndarray
         Law, its parameters, reference gap (``gap = offset + u2[0] - u1[-1]``),
         stop gap and ``m_inv`` (layout of ``lattice.C_*``).
