@@ -67,6 +67,7 @@ def test_short_chunks_equal_a_reference_step_with_a_banded_solve(monkeypatch, or
     kind, table = prepare_mass(disc)
     rows, forward_rows, backward_rows = table[L_SHAPE, :3]
     assert 2 <= rows <= min(forward_rows, backward_rows)  # every row of a chunk is corrected
+    assert table[L_SHAPE, 3] == 1.0  # the chunks' end values chained (a sequential pass)
     assert_steps_equal_a_banded_solve(disc, kind, table, rng)
 
 
@@ -293,6 +294,7 @@ def test_an_end_load_equals_a_banded_solve_with_the_force_on_the_end_node(order,
     if mesh != "graded":
         lo, hi = _uniform_rows(table)
         assert hi - lo >= 5
+        assert table[L_SHAPE, 3] == float(order == 1 and mesh == "equal 800")  # chained chunk ends, or not
     node = 0 if end == "first" else disc.n_nodes - 1
     (lower, upper), banded = _banded_mass(disc)
     stiffness = disc.stiffness

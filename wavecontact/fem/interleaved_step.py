@@ -61,7 +61,8 @@ LANE_MIN_UNKNOWNS = 400
 LANE_MIN_VERTICES = 600  # the same for the vertex system of P2 (condensed midpoints)
 
 # rows of the mass solve's table used by the interleaved layout (the flat solve's rows come first)
-L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward burn-in rows
+L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward burn-in rows,
+# [3]: 1 when the chunks' end values are chained (see _chunk_couplings)
 L_LEFT = 25  # stencil, P1: r_i = -(left_i (u_(i-1) - u_i) + right_i (u_(i+1) - u_i)), scaled by 1 / D_i
 L_RIGHT = 26
 L_FORWARD = 27  # f_i of y_i = r_i + f_i y_(i-1) (0 at the first unknown and on the padding)
@@ -183,7 +184,9 @@ def _chunk_couplings(table: np.ndarray, n: int) -> None:
     weights[:, 1:] = np.cumprod(backward[:, :-1], axis=1)
     table[L_WEIGHT, :] = 0.0
     table[L_WEIGHT, : n * LANES] = weights.T.ravel()
-    table[L_SHAPE, :3] = (n, forward_rows, min(backward_rows + 1, n))
+    # [3]: 1 when a chunk's whole product exceeds LANE_TOLERANCE, so that the chunks' true end values depend on
+    # each other (a sequential pass); else each is its local one up to terms the corrections leave out anyway
+    table[L_SHAPE, :4] = (n, forward_rows, min(backward_rows + 1, n), float(np.any(np.abs(end) > LANE_TOLERANCE)))
 
 
 def _fill_rows(table: np.ndarray, per_unknown: dict, held: tuple, m: int) -> None:
@@ -407,10 +410,12 @@ def _forward_p1(u, y, left, right, forward, constants, n, where, load):
 
 
 @kernel(fastmath=False)
-def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, rows):
+def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, rows, chained):
     """Couple the chunks' local forward sweeps ``y`` and prepare the backward sweep's exact starts.
 
-    Forward: ``carry[c]`` the true last value of chunk ``c`` (a short sequential pass), then ``delta_i = f_i
+    Forward: ``carry[c]`` the true last value of chunk ``c`` (with ``chained``, a short sequential pass; else
+    every chunk's product of factors ``end`` is below ``LANE_TOLERANCE``, its neighbour's share in its last
+    value is of the size of the terms the corrections leave out, and ``carry`` is the last row), then ``delta_i = f_i
     delta_(i-1)`` from ``delta_0 = f_0 carry[c - 1]`` added to the first ``rows`` rows.  In the same pass, per
     chunk, ``burn_i = burn_(i-1) + G_i y_i`` (``weight``: ``G_i``, the product of the backward factors above
     row ``i`` of the chunk) on the corrected ``y``: the chunk's first unknown after the backward sweep is
@@ -419,11 +424,15 @@ def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, r
     chunk before (row ``n`` of ``y``, lane ``c - 1``), where that chunk's backward sweep starts from it.
     """
     last = (n - 1) * LANES
-    previous = y[last]
-    carry[0] = previous
-    for c in range(1, LANES):
-        previous = y[last + c] + end[c] * previous
-        carry[c] = previous
+    if chained:
+        previous = y[last]
+        carry[0] = previous
+        for c in range(1, LANES):
+            previous = y[last + c] + end[c] * previous
+            carry[c] = previous
+    else:
+        for c in range(LANES):
+            carry[c] = y[last + c]
     correction[0] = 0.0
     burn[0] = weight[0] * y[0]
     for c in range(1, LANES):
@@ -511,7 +520,7 @@ def step_tridiagonal_loaded(table, dt, where, load):
     constants = table[L_UNIFORM]
     _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n, where, load)
     _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
-                   table[L_CORRECTION], table[L_BURN], n, coupled_rows)
+                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0)
     _backward_update(u, v, y, table[L_BACKWARD], constants, n, dt)
 
 
@@ -688,7 +697,7 @@ def step_condensed_loaded(table, dt, where, load):
     _forward_condensed(uv, um, y, share, table[L_C1], table[L_C2], table[L_C3], table[L_C4], table[L_MID_LEFT],
                        table[L_MID_RIGHT], forward, constants, n, where, load)
     _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
-                   table[L_CORRECTION], table[L_BURN], n, coupled_rows)
+                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0)
     # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the
     # arrays, the uniform rows between with the constants
     hi = int(constants[1]) * LANES
