@@ -67,7 +67,7 @@ def test_short_chunks_equal_a_reference_step_with_a_banded_solve(monkeypatch, or
     kind, table = prepare_mass(disc)
     rows, forward_rows, backward_rows = table[L_SHAPE, :3]
     assert 2 <= rows <= min(forward_rows, backward_rows)  # every row of a chunk is corrected
-    assert table[L_SHAPE, 3] == 1.0  # the chunks' end values chained (a sequential pass)
+    assert table[L_SHAPE, 3] == table[L_SHAPE, 4] == 1.0  # the chunks' boundary values chained (sequential)
     assert_steps_equal_a_banded_solve(disc, kind, table, rng)
 
 
@@ -294,7 +294,10 @@ def test_an_end_load_equals_a_banded_solve_with_the_force_on_the_end_node(order,
     if mesh != "graded":
         lo, hi = _uniform_rows(table)
         assert hi - lo >= 5
-        assert table[L_SHAPE, 3] == float(order == 1 and mesh == "equal 800")  # chained chunk ends, or not
+        # the chunks' boundary values from their neighbour's alone (no sequential pass); 800 elements: the
+        # backward sums cover whole chunks (their neighbour's first value added), 1333: they do not
+        assert table[L_SHAPE, 3] == table[L_SHAPE, 4] == 0.0
+        assert (table[L_SHAPE, 2] == table[L_SHAPE, 0]) == (mesh == "equal 800")
     node = 0 if end == "first" else disc.n_nodes - 1
     (lower, upper), banded = _banded_mass(disc)
     stiffness = disc.stiffness
@@ -311,3 +314,28 @@ def test_an_end_load_equals_a_banded_solve_with_the_force_on_the_end_node(order,
         u += dt * v
     np.testing.assert_allclose(w, v, rtol=0, atol=1e-11 * np.abs(v).max())
     np.testing.assert_allclose(x, u, rtol=0, atol=1e-11 * np.abs(u).max())
+
+
+@pytest.mark.parametrize("elements", [70, 800])
+def test_chunk_coupling_compiled_equals_its_pure_python_form_bit_for_bit(monkeypatch, elements):
+    """The coupling pass, chained (chunks of 3 rows) and from the neighbour's values alone (800 elements of
+    2^-10), compiled and as plain Python on the same forward values."""
+    monkeypatch.setattr(interleaved_step, "LANE_MIN_VERTICES", 0)
+    nodes = np.arange(elements + 1) * 2.0**-10
+    disc = discretize_rod(Rod(nodes[-1], 2.0, 3.0, 0.5), nodes, 2, "consistent")
+    _, table = prepare_mass(disc)
+    n = int(table[L_SHAPE, 0])
+    assert table[L_SHAPE, 3] == table[L_SHAPE, 4] == float(elements == 70)
+    rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
+    forward = np.random.default_rng(elements).normal(size=table.shape[1])
+    results = []
+    for couple in (interleaved_step._couple_chunks, interleaved_step._couple_chunks.py_func):
+        scratch = table.copy()
+        scratch[interleaved_step.L_WORK] = forward
+        couple(*(scratch[row] for row in (interleaved_step.L_WORK, interleaved_step.L_FORWARD,
+                                          interleaved_step.L_WEIGHT, interleaved_step.L_FORWARD_END,
+                                          interleaved_step.L_BACKWARD_START, interleaved_step.L_CARRY,
+                                          interleaved_step.L_CORRECTION, interleaved_step.L_BURN)),
+               n, rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
+        results.append(scratch[interleaved_step.L_WORK])
+    np.testing.assert_array_equal(results[0], results[1])

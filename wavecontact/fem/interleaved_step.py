@@ -62,7 +62,7 @@ LANE_MIN_VERTICES = 600  # the same for the vertex system of P2 (condensed midpo
 
 # rows of the mass solve's table used by the interleaved layout (the flat solve's rows come first)
 L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward burn-in rows,
-# [3]: 1 when the chunks' end values are chained (see _chunk_couplings)
+# [3], [4]: 1 when the chunks' end values (forward) and first values (backward) are chained (_chunk_couplings)
 L_LEFT = 25  # stencil, P1: r_i = -(left_i (u_(i-1) - u_i) + right_i (u_(i+1) - u_i)), scaled by 1 / D_i
 L_RIGHT = 26
 L_FORWARD = 27  # f_i of y_i = r_i + f_i y_(i-1) (0 at the first unknown and on the padding)
@@ -184,9 +184,16 @@ def _chunk_couplings(table: np.ndarray, n: int) -> None:
     weights[:, 1:] = np.cumprod(backward[:, :-1], axis=1)
     table[L_WEIGHT, :] = 0.0
     table[L_WEIGHT, : n * LANES] = weights.T.ravel()
-    # [3]: 1 when a chunk's whole product exceeds LANE_TOLERANCE, so that the chunks' true end values depend on
-    # each other (a sequential pass); else each is its local one up to terms the corrections leave out anyway
-    table[L_SHAPE, :4] = (n, forward_rows, min(backward_rows + 1, n), float(np.any(np.abs(end) > LANE_TOLERANCE)))
+    # [3], [4]: 1 when the whole products of two neighbouring chunks exceed LANE_TOLERANCE, so that the chunks'
+    # true end values (forward) or first values (backward) need a sequential pass over the chunks; else each
+    # is its local one plus its neighbour's share, up to terms below the tolerance (see _couple_chunks)
+    table[L_SHAPE, :5] = (n, forward_rows, min(backward_rows + 1, n), float(_chained(end)), float(_chained(start)))
+
+
+def _chained(products: np.ndarray) -> bool:
+    """Whether two neighbouring chunks' whole products of factors (``products``, one per chunk) exceed
+    ``LANE_TOLERANCE`` somewhere: then a chunk's boundary value depends on more than its neighbour's."""
+    return bool(np.any(np.abs(products[1:] * products[:-1]) > LANE_TOLERANCE))
 
 
 def _fill_rows(table: np.ndarray, per_unknown: dict, held: tuple, m: int) -> None:
@@ -410,18 +417,19 @@ def _forward_p1(u, y, left, right, forward, constants, n, where, load):
 
 
 @kernel(fastmath=False)
-def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, rows, chained):
+def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, rows, chained, chained_starts):
     """Couple the chunks' local forward sweeps ``y`` and prepare the backward sweep's exact starts.
 
-    Forward: ``carry[c]`` the true last value of chunk ``c`` (with ``chained``, a short sequential pass; else
-    every chunk's product of factors ``end`` is below ``LANE_TOLERANCE``, its neighbour's share in its last
-    value is of the size of the terms the corrections leave out, and ``carry`` is the last row), then ``delta_i = f_i
+    Forward: ``carry[c]`` the true last value of chunk ``c``, ``y_c + end_c carry[c - 1]`` (with
+    ``chained``, a short sequential pass; else the products ``end_c end_(c-1)`` are all below
+    ``LANE_TOLERANCE`` and the two terms ``y_c + end_c y_(c-1)`` of the local last values suffice), then ``delta_i = f_i
     delta_(i-1)`` from ``delta_0 = f_0 carry[c - 1]`` added to the first ``rows`` rows.  In the same pass, per
     chunk, ``burn_i = burn_(i-1) + G_i y_i`` (``weight``: ``G_i``, the product of the backward factors above
     row ``i`` of the chunk) on the corrected ``y``: the chunk's first unknown after the backward sweep is
     ``x_0 = burn_(rows-1) + G_n x_n`` (``x_n``: the next chunk's, ``G_n`` in ``start``; the last term only
-    when ``rows`` covers the chunk, else it is below ``LANE_TOLERANCE`` of an entry), written below the
-    chunk before (row ``n`` of ``y``, lane ``c - 1``), where that chunk's backward sweep starts from it.
+    when ``rows`` covers the chunk, else it is below ``LANE_TOLERANCE`` of an entry; sequential with
+    ``chained_starts``, else, as forward, two terms), written below the chunk before (row ``n`` of ``y``,
+    lane ``c - 1``), where that chunk's backward sweep starts from it.
     """
     last = (n - 1) * LANES
     if chained:
@@ -431,8 +439,9 @@ def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, r
             previous = y[last + c] + end[c] * previous
             carry[c] = previous
     else:
-        for c in range(LANES):
-            carry[c] = y[last + c]
+        carry[0] = y[last]
+        for c in range(1, LANES):
+            carry[c] = y[last + c] + end[c] * y[last + c - 1]
     correction[0] = 0.0
     burn[0] = weight[0] * y[0]
     for c in range(1, LANES):
@@ -450,13 +459,18 @@ def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, r
     sums = (rows - 1) * LANES
     below = n * LANES
     y[below + LANES - 1] = 0.0
-    following = 0.0
-    for c in range(LANES - 1, 0, -1):
-        value = burn[sums + c]
-        if rows == n:
-            value += start[c] * following
-        following = value
-        y[below + c - 1] = value
+    y[below + LANES - 2] = burn[sums + LANES - 1]
+    if rows == n and chained_starts:
+        following = burn[sums + LANES - 1]
+        for c in range(LANES - 2, 0, -1):
+            following = burn[sums + c] + start[c] * following
+            y[below + c - 1] = following
+    elif rows == n:
+        for c in range(1, LANES - 1):
+            y[below + c - 1] = burn[sums + c] + start[c] * burn[sums + c + 1]
+    else:
+        for c in range(1, LANES - 1):
+            y[below + c - 1] = burn[sums + c]
 
 
 @kernel(fastmath=False)
@@ -520,7 +534,8 @@ def step_tridiagonal_loaded(table, dt, where, load):
     constants = table[L_UNIFORM]
     _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n, where, load)
     _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
-                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0)
+                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0,
+                   table[L_SHAPE, 4] != 0.0)
     _backward_update(u, v, y, table[L_BACKWARD], constants, n, dt)
 
 
@@ -697,7 +712,8 @@ def step_condensed_loaded(table, dt, where, load):
     _forward_condensed(uv, um, y, share, table[L_C1], table[L_C2], table[L_C3], table[L_C4], table[L_MID_LEFT],
                        table[L_MID_RIGHT], forward, constants, n, where, load)
     _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
-                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0)
+                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0,
+                   table[L_SHAPE, 4] != 0.0)
     # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the
     # arrays, the uniform rows between with the constants
     hi = int(constants[1]) * LANES
