@@ -14,7 +14,9 @@ lanes.  Only a chunk's first and last rows see a neighbouring chunk.
 
 The forward sweep first runs every chunk from zero, then adds what the chunk
 before it contributes: the chunks' true end values follow from their local
-ones in a short sequential pass over the chunks, and their effect on a chunk,
+ones in a short sequential pass over the chunks (or, where the products of two
+neighbouring chunks' factors are below ``LANE_TOLERANCE``, from the neighbour's
+local one alone: two terms, no pass), and their effect on a chunk,
 ``P_i e`` with ``P_i`` the product of the sweep's factors from the chunk
 boundary to ``i`` and ``e`` the neighbour's end value, is added by the same
 recurrence without right-hand side (``delta_i = f_i delta_(i-1)``, a cheap
