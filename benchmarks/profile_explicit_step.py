@@ -77,7 +77,7 @@ def loop_step(rod, u, v, kind, table):
         interleaved_step.pack_nodes(u, table[interleaved_step.L_U], rows, rod.order)
         interleaved_step.pack_nodes(v, table[interleaved_step.L_V], rows, rod.order)
     a = np.zeros(rod.n_nodes)
-    return lambda dt: kernels._step(u, v, a, rod.stiffness_bands, kind, table, rows, dt)
+    return lambda dt: kernels._step(u, v, a, rod.stiffness_bands, kind, table, rows, dt, -1, 0.0)  # no end load
 
 
 def profile_row(name, order, mass, elements, repeats):
@@ -219,8 +219,8 @@ def _steps_only(rod1, rod2, kinds, tables, shape, dt, steps):
     u1, v1, a1, bands1 = rod1
     u2, v2, a2, bands2 = rod2
     for _ in range(steps):
-        kernels._step(u1, v1, a1, bands1, kinds[0], tables[0], shape[0], dt)
-        kernels._step(u2, v2, a2, bands2, kinds[1], tables[1], shape[1], dt)
+        kernels._step(u1, v1, a1, bands1, kinds[0], tables[0], shape[0], dt, -1, 0.0)
+        kernels._step(u2, v2, a2, bands2, kinds[1], tables[1], shape[1], dt, -1, 0.0)
 
 
 def loop_row(name, order, mass, elements, repeats):
