@@ -364,9 +364,10 @@ class GasSimulation:
             x = np.mod(x - drift * now, self.gas.system_length)
         return x
 
-    def _record_row(self):
-        """The values of one history record now, in the order of ``_HISTORY``."""
-        kinetic, bath, lost, dissipated, _ = self._energies()
+    def _record_row(self, energies=None):
+        """The values of one history record now, in the order of ``_HISTORY`` (``energies``: those of
+        :meth:`_energies`, if the caller already has them)."""
+        kinetic, bath, lost, dissipated, _ = self._energies() if energies is None else energies
         return self.time, self.collisions, kinetic, bath, lost, dissipated
 
     def _record(self):
@@ -521,7 +522,7 @@ class GasSimulation:
         if not history["collisions"] or history["collisions"][-1] != self.collisions:
             # a run that ends between records: the result's history ends with the final state (the
             # simulation's own records keep their cadence, so that a run in pieces records what one run does)
-            for name, value in zip(_HISTORY, (self.time, self.collisions) + energies[:4]):
+            for name, value in zip(_HISTORY, self._record_row(energies)):
                 history[name].append(value)
         history = {name: np.asarray(values, dtype=np.int64 if name == "collisions" else float)
                    for name, values in history.items()}
