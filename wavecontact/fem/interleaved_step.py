@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import kernel, row_view
 
 __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "aligned_table", "condensed_lane_rows", "lane_rows", "lanes_width",
            "node_position", "pack_nodes", "step_condensed", "step_condensed_loaded", "step_tridiagonal",
@@ -529,16 +529,16 @@ def step_tridiagonal_loaded(table, dt, where, load):
     would need the sweep's propagation within its chunk, which is not done here)."""
     n = int(table[L_SHAPE, 0])
     coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
-    u = table[L_U]
-    v = table[L_V]
-    y = table[L_WORK]
-    forward = table[L_FORWARD]
-    constants = table[L_UNIFORM]
-    _forward_p1(u, y, table[L_LEFT], table[L_RIGHT], forward, constants, n, where, load)
-    _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
-                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0,
-                   table[L_SHAPE, 4] != 0.0)
-    _backward_update(u, v, y, table[L_BACKWARD], constants, n, dt)
+    u = row_view(table, L_U)
+    v = row_view(table, L_V)
+    y = row_view(table, L_WORK)
+    forward = row_view(table, L_FORWARD)
+    constants = row_view(table, L_UNIFORM)
+    _forward_p1(u, y, row_view(table, L_LEFT), row_view(table, L_RIGHT), forward, constants, n, where, load)
+    _couple_chunks(y, forward, row_view(table, L_WEIGHT), row_view(table, L_FORWARD_END),
+                   row_view(table, L_BACKWARD_START), row_view(table, L_CARRY), row_view(table, L_CORRECTION),
+                   row_view(table, L_BURN), n, coupled_rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
+    _backward_update(u, v, y, row_view(table, L_BACKWARD), constants, n, dt)
 
 
 @kernel(fastmath=False)
@@ -700,22 +700,23 @@ def step_condensed_loaded(table, dt, where, load):
     n = int(table[L_SHAPE, 0])
     coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     width = n * LANES
-    uv = table[L_U, :width]
-    um = table[L_U, width : 2 * width]
-    vv = table[L_V, :width]
-    vm = table[L_V, width : 2 * width]
-    y = table[L_WORK]
-    share = table[L_SHARE]
-    forward = table[L_FORWARD]
-    backward = table[L_BACKWARD]
-    back_left = table[L_BACK_LEFT]
-    back_right = table[L_BACK_RIGHT]
-    constants = table[L_UNIFORM]
-    _forward_condensed(uv, um, y, share, table[L_C1], table[L_C2], table[L_C3], table[L_C4], table[L_MID_LEFT],
-                       table[L_MID_RIGHT], forward, constants, n, where, load)
-    _couple_chunks(y, forward, table[L_WEIGHT], table[L_FORWARD_END], table[L_BACKWARD_START], table[L_CARRY],
-                   table[L_CORRECTION], table[L_BURN], n, coupled_rows, table[L_SHAPE, 3] != 0.0,
-                   table[L_SHAPE, 4] != 0.0)
+    uv = row_view(table, L_U)[:width]
+    um = row_view(table, L_U)[width : 2 * width]
+    vv = row_view(table, L_V)[:width]
+    vm = row_view(table, L_V)[width : 2 * width]
+    y = row_view(table, L_WORK)
+    share = row_view(table, L_SHARE)
+    forward = row_view(table, L_FORWARD)
+    backward = row_view(table, L_BACKWARD)
+    back_left = row_view(table, L_BACK_LEFT)
+    back_right = row_view(table, L_BACK_RIGHT)
+    constants = row_view(table, L_UNIFORM)
+    _forward_condensed(uv, um, y, share, row_view(table, L_C1), row_view(table, L_C2), row_view(table, L_C3),
+                       row_view(table, L_C4), row_view(table, L_MID_LEFT), row_view(table, L_MID_RIGHT), forward,
+                       constants, n, where, load)
+    _couple_chunks(y, forward, row_view(table, L_WEIGHT), row_view(table, L_FORWARD_END),
+                   row_view(table, L_BACKWARD_START), row_view(table, L_CARRY), row_view(table, L_CORRECTION),
+                   row_view(table, L_BURN), n, coupled_rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
     # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the
     # arrays, the uniform rows between with the constants
     hi = int(constants[1]) * LANES
