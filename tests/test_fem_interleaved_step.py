@@ -14,6 +14,9 @@ from wavecontact.fem.explicit_step import T_CHAIN_INVERSE, prepare_mass, step_ro
 from wavecontact.fem.interleaved_step import (
     L_SHAPE,
     LANES,
+    ORIGIN,
+    lanes_width,
+    midpoint_origin,
     node_position,
     pack_nodes,
     table_width,
@@ -29,11 +32,12 @@ def test_packing_places_every_node_where_node_position_says(order, elements):
     unknowns = elements + 1  # P1 nodes, or P2 vertices
     rows = -(-unknowns // LANES)
     x = np.arange(nodes, dtype=float) + 1.0
-    packed = np.zeros(order * (rows + 1) * LANES)
+    packed = np.zeros(order * lanes_width(unknowns))
     pack_nodes(x, packed, rows, order)
     for node in range(nodes):
         assert packed[node_position(node, rows, order)] == x[node]
-    assert np.count_nonzero(packed) == nodes  # the padding stays zero
+    assert np.count_nonzero(packed) == nodes  # the ghost rows and the padding stay zero
+    assert np.all(packed[:ORIGIN] == 0.0) and np.all(packed[ORIGIN + rows * LANES : ORIGIN + (rows + 1) * LANES] == 0)
     back = np.zeros(nodes)
     unpack_nodes(packed, back, rows, order)
     np.testing.assert_array_equal(back, x)
@@ -248,12 +252,13 @@ def test_held_padding_stays_zero_and_the_steps_equal_a_banded_solve(order, monke
     held = (index > unknowns) & (np.arange(width) >= lo * LANES) & (np.arange(width) < hi * LANES)
     assert hi - lo >= 5 and held.any()  # chunk 31's rows among the held ones
     backward = interleaved_step.L_BACKWARD
-    assert table[backward, first_padding] == 0.0
-    assert np.all(table[backward, :width][held] == table[interleaved_step.L_UNIFORM, 5 if order == 1 else 9])
+    assert table[backward, ORIGIN + first_padding] == 0.0
+    held_value = table[interleaved_step.L_UNIFORM, 5 if order == 1 else 9]
+    assert np.all(table[backward, ORIGIN : ORIGIN + width][held] == held_value)
     assert_steps_equal_a_banded_solve(disc, kind, table, np.random.default_rng(order))
     for row in (interleaved_step.L_U, interleaved_step.L_V):
-        for half in range(order):
-            packed = table[row, half * width : (half + 1) * width]
+        for half, start in enumerate((ORIGIN, midpoint_origin(rows))[:order]):
+            packed = table[row, start : start + width]
             assert np.all(packed[index >= unknowns - half] == 0.0)  # P2 midpoints: one fewer than vertices
 
 
@@ -332,10 +337,11 @@ def test_chunk_coupling_compiled_equals_its_pure_python_form_bit_for_bit(monkeyp
     for couple in (interleaved_step._couple_chunks, interleaved_step._couple_chunks.py_func):
         scratch = table.copy()
         scratch[interleaved_step.L_WORK] = forward
-        couple(*(scratch[row] for row in (interleaved_step.L_WORK, interleaved_step.L_FORWARD,
-                                          interleaved_step.L_WEIGHT, interleaved_step.L_FORWARD_END,
-                                          interleaved_step.L_BACKWARD_START, interleaved_step.L_CARRY,
-                                          interleaved_step.L_CORRECTION, interleaved_step.L_BURN)),
-               n, rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
+        per_row = (scratch[row, ORIGIN:] for row in (interleaved_step.L_WORK, interleaved_step.L_FORWARD,
+                                                     interleaved_step.L_WEIGHT))  # as the steps pass them
+        per_chunk = (scratch[row] for row in (interleaved_step.L_FORWARD_END, interleaved_step.L_BACKWARD_START,
+                                              interleaved_step.L_CARRY, interleaved_step.L_CORRECTION,
+                                              interleaved_step.L_BURN))
+        couple(*per_row, *per_chunk, n, rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
         results.append(scratch[interleaved_step.L_WORK])
     np.testing.assert_array_equal(results[0], results[1])

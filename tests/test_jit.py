@@ -39,3 +39,24 @@ def test_first_call_reports_kernel_preparation_and_a_warm_call_does_not():
     assert first == str(NUMBA_ENABLED)  # a fresh process loads (or compiles) the delay kernels
     wc.collide(0.6, 100)
     assert wc.collide(0.6, 100).diagnostics["includes_kernel_preparation"] is False
+
+
+def test_row_view_reads_and_writes_the_row_it_names_in_compiled_and_plain_kernels():
+    """``row_view`` inside a kernel is the table's row itself (writes land in the table), compiled or not."""
+    import numpy as np
+
+    from wavecontact._jit import kernel, row_view
+
+    def scale_row(table, row, factor):
+        view = row_view(table, row)
+        for i in range(view.size):
+            view[i] *= factor
+        return view[0] + view[view.size - 1]
+
+    compiled = kernel(scale_row)
+    for function in (compiled, compiled.py_func):
+        table = np.arange(24.0).reshape(4, 6)
+        expected = table.copy()
+        expected[2] *= 3.0
+        assert function(table, 2, 3.0) == expected[2, 0] + expected[2, -1]
+        np.testing.assert_array_equal(table, expected)  # only row 2 changed

@@ -725,11 +725,11 @@ def step_rod(u, v, a, bands, kind, table, dt):
         return
     if kind == MASS_TRIDIAGONAL and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
         rows = int(table[lanes.L_SHAPE, 0])
-        lanes.pack(u, table[lanes.L_U], rows)
-        lanes.pack(v, table[lanes.L_V], rows)
+        lanes.pack_nodes(u, table[lanes.L_U], rows, 1)
+        lanes.pack_nodes(v, table[lanes.L_V], rows, 1)
         lanes.step_tridiagonal(table, dt)
-        lanes.unpack(table[lanes.L_U], u, rows)
-        lanes.unpack(table[lanes.L_V], v, rows)
+        lanes.unpack_nodes(table[lanes.L_U], u, rows, 1)
+        lanes.unpack_nodes(table[lanes.L_V], v, rows, 1)
         return
     if kind == MASS_TRIDIAGONAL:  # the solve's scaling in the stencil pass
         _scaled_tridiagonal_forces(u, bands[1], table[T_SCALE], a)

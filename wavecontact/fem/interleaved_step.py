@@ -6,11 +6,16 @@ latency of a multiplication and an addition per unknown.  Here the ``m``
 unknowns are cut into ``LANES`` = 32 consecutive chunks of ``n = ceil(m /
 LANES)`` and stored chunk-interleaved: unknown ``k = c n + i`` (chunk ``c``,
 position ``i``) at ``X[i LANES + c]`` (padding unknowns beyond ``m`` are
-decoupled and stay zero).  Row ``i`` of all chunks is then contiguous, the
+decoupled and stay zero), after one ghost row (``ORIGIN = LANES``: unknown ``k`` at
+``ORIGIN + position(k)`` of its table row).  Row ``i`` of all chunks is then contiguous, the
 stencil's neighbours ``i +- 1`` are the previous and next rows, and every pass
 (stencil, both sweeps, update) is one loop over the array whose iterations
 ``LANES`` apart depend on each other: the compiler runs the chunks as SIMD
-lanes.  Only a chunk's first and last rows see a neighbouring chunk.
+lanes.  Only a chunk's first and last rows see a neighbouring chunk: before
+each step the displacements' ghost rows before the first row and after the
+last receive, in lane ``c``, chunk ``c - 1``'s last row and chunk ``c + 1``'s
+first, so that those rows run in the same vectorized loop as the others (the
+ghosts of the rod's own ends meet zero coefficients).
 
 The forward sweep first runs every chunk from zero, then adds what the chunk
 before it contributes: the chunks' true end values follow from their local
@@ -50,11 +55,12 @@ import numpy as np
 
 from .._jit import kernel, row_view
 
-__all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "aligned_table", "condensed_lane_rows", "lane_rows", "lanes_width",
-           "node_position", "pack_nodes", "step_condensed", "step_condensed_loaded", "step_tridiagonal",
-           "step_tridiagonal_loaded", "table_width", "unpack_nodes"]
+__all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "ORIGIN", "aligned_table", "condensed_lane_rows",
+           "lane_rows", "lanes_width", "midpoint_origin", "node_position", "pack_nodes", "step_condensed",
+           "step_condensed_loaded", "step_tridiagonal", "step_tridiagonal_loaded", "table_width", "unpack_nodes"]
 
 LANES = 32
+ORIGIN = LANES  # index of row 0 in a table row of the layout: one ghost row before it
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
 # smaller systems keep the flat layout: with few rows per chunk the chunks' coupling covers most rows and
 # costs more than the lanes save (measured crossings: about 350 unknowns for P1, 550 vertices for P2;
@@ -67,15 +73,17 @@ L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction 
 # [3], [4]: 1 when the chunks' end values (forward) and first values (backward) are chained (_chunk_couplings)
 L_LEFT = 25  # stencil, P1: r_i = -(left_i (u_(i-1) - u_i) + right_i (u_(i+1) - u_i)), scaled by 1 / D_i
 L_RIGHT = 26
-L_FORWARD = 27  # f_i of y_i = r_i + f_i y_(i-1) (0 at the first unknown and on the padding)
+L_FORWARD = 27  # f_i of y_i = r_i + f_i y_(i-1) (0 on the padding; 1 at the rod's first unknown, whose
+# y_(i-1), the work row's ghost, carries the load on that unknown: see step_tridiagonal_loaded)
 L_BACKWARD = 28  # g_i of x_i = y_i + g_i x_(i+1) (0 at the last unknown and on the padding)
 L_FORWARD_END = 29  # per chunk: product of its forward factors (first LANES entries)
 L_BACKWARD_START = 30  # per chunk: product of its backward factors (first LANES entries)
 L_CARRY = 31  # scratch: true end values of the chunks
 L_CORRECTION = 32  # scratch: the forward sweep's corrections, then the backward burn-in
-L_WORK = 33  # scratch: the sweeps' values; its row n: the first unknown of the next chunk (backward)
+L_WORK = 33  # scratch: the sweeps' values; its row n: the first unknown of the next chunk (backward); its ghost
+# row: 0, but the load on the rod's first unknown in lane 0
 L_U = 34  # displacements in the interleaved layout (inside the time loop)
-L_V = 35  # velocities (P2: the vertices' first, then the midpoints', each n LANES long)
+L_V = 35  # velocities (P2: the vertices' first, then the midpoints' from midpoint_origin(n), each n LANES long)
 # P2 consistent (midpoints condensed), per vertex k: its condensed right-hand side from the displacements,
 # c1 (uv_(k-1) - uv_k) + c2 (um_(k-1) - uv_k) + c3 (um_k - uv_k) + c4 (uv_(k+1) - uv_k) (uv vertices, um the
 # midpoints, um_k that of element k, from vertex k to k + 1), scaled by 1 / D_k; per element k: the midpoint's
@@ -115,8 +123,15 @@ def candidate_rows(unknowns: int) -> range:
 
 def lanes_width(unknowns: int) -> int:
     """Length of a row of the interleaved layout for ``unknowns`` unknowns, for any of their
-    :func:`candidate_rows` (one spare row)."""
-    return (candidate_rows(unknowns)[-1] + 1) * LANES
+    :func:`candidate_rows` (the ghost row before, one row after)."""
+    return ORIGIN + (candidate_rows(unknowns)[-1] + 1) * LANES
+
+
+@kernel(fastmath=False)
+def midpoint_origin(n):
+    """Index of the P2 midpoints' row 0 in the displacement and velocity rows (``n`` rows per chunk): after the
+    vertices' rows and their ghost row after, and the midpoints' own ghost row before."""
+    return ORIGIN + n * LANES + 2 * LANES
 
 
 def table_width(minimum: int) -> int:
@@ -151,11 +166,6 @@ def _interleave(values: np.ndarray, n: int) -> np.ndarray:
     return padded.reshape(LANES, n).T.ravel()
 
 
-def _deinterleave(row: np.ndarray, n: int, m: int) -> np.ndarray:
-    """The first ``m`` values of the interleaved ``row`` (``n`` rows) in the rod's order."""
-    return row[: n * LANES].reshape(n, LANES).T.ravel()[:m].copy()
-
-
 def _correction_rows(factors: np.ndarray) -> tuple:
     """Per chunk (``factors``: one row per chunk), the products of its factors from its first row down: the
     whole chunk's product and the number of rows where it exceeds ``LANE_TOLERANCE`` (at least 1)."""
@@ -176,8 +186,9 @@ def _chunk_couplings(table: np.ndarray, n: int) -> None:
     rows; the last term only when they are all the chunk's rows, with ``G_n`` per chunk in
     ``L_BACKWARD_START``).
     """
-    forward = table[L_FORWARD, : n * LANES].reshape(n, LANES).T
-    backward = table[L_BACKWARD, : n * LANES].reshape(n, LANES).T
+    rows = slice(ORIGIN, ORIGIN + n * LANES)
+    forward = table[L_FORWARD, rows].reshape(n, LANES).T
+    backward = table[L_BACKWARD, rows].reshape(n, LANES).T
     end, forward_rows = _correction_rows(forward)
     start, backward_rows = _correction_rows(backward)
     table[L_FORWARD_END, :LANES] = end
@@ -185,7 +196,7 @@ def _chunk_couplings(table: np.ndarray, n: int) -> None:
     weights = np.ones((LANES, n))
     weights[:, 1:] = np.cumprod(backward[:, :-1], axis=1)
     table[L_WEIGHT, :] = 0.0
-    table[L_WEIGHT, : n * LANES] = weights.T.ravel()
+    table[L_WEIGHT, rows] = weights.T.ravel()
     # [3], [4]: 1 when the whole products of two neighbouring chunks exceed LANE_TOLERANCE, so that the chunks'
     # true end values (forward) or first values (backward) need a sequential pass over the chunks; else each
     # is its local one plus its neighbour's share, up to terms below the tolerance (see _couple_chunks)
@@ -215,13 +226,15 @@ def _fill_rows(table: np.ndarray, per_unknown: dict, held: tuple, m: int) -> Non
     n = best[1]
     _layout_rows(table, per_unknown, held, n, m)
     _chunk_couplings(table, n)
+    # the rod's first unknown has no y_(i-1): its factor 1 adds the work row's ghost, the load on that unknown
+    table[L_FORWARD, ORIGIN] = 1.0
 
 
 def _layout_rows(table: np.ndarray, per_unknown: dict, held: tuple, n: int, m: int) -> tuple:
     """:func:`_fill_rows` for ``n`` rows per chunk, without the couplings; returns the held rows ``(lo, hi)``."""
     for row, values in per_unknown.items():
         table[row, :] = 0.0
-        table[row, : n * LANES] = _interleave(values, n)
+        table[row, ORIGIN : ORIGIN + n * LANES] = _interleave(values, n)
     return uniform_rows(table, held, n, m)
 
 
@@ -261,10 +274,11 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
     middle[n // 4 : max(3 * n // 4, n // 4 + 1), 1 : LANES - 1] = True
     middle &= index < m - 2  # not the rod's end
     elements = max(m - 1, 1)
-    constants = np.array([np.mean(table[row, : n * LANES].reshape(n, LANES)[middle]) for row in rows])
+    layout = slice(ORIGIN, ORIGIN + n * LANES)
+    constants = np.array([np.mean(table[row, layout].reshape(n, LANES)[middle]) for row in rows])
     uniform = np.ones(n, dtype=bool)
     for row, value in zip(rows, constants):
-        entries = table[row, : n * LANES].reshape(n, LANES)
+        entries = table[row, layout].reshape(n, LANES)
         spread = np.max(np.abs(entries[middle] - value))
         tolerance = min(max(2.0 * spread, 4.0 * ulp * abs(value)), UNIFORM_ULPS_PER_ELEMENT * elements * ulp * abs(value))
         uniform &= np.all((np.abs(entries - value) <= tolerance) | free, axis=1)
@@ -280,9 +294,9 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
     if hi > lo:  # the held rows keep their own mean (their elements' mean length: the waves keep their time)
         held = np.zeros((n, LANES), dtype=bool)
         held[lo:hi] = index[lo:hi] < m
-        constants = np.array([np.mean(table[row, : n * LANES].reshape(n, LANES)[held]) for row in rows])
+        constants = np.array([np.mean(table[row, layout].reshape(n, LANES)[held]) for row in rows])
     for row, value in zip(rows, constants):
-        table[row, lo * LANES : hi * LANES] = value
+        table[row, ORIGIN + lo * LANES : ORIGIN + hi * LANES] = value
     table[L_UNIFORM, :] = 0.0
     table[L_UNIFORM, : 2 + len(rows)] = (lo, hi, *constants)
     return lo, hi
@@ -390,32 +404,33 @@ def _p1_rows_uniform(u, y, constants, count):
 
 
 @kernel(fastmath=False)
-def _forward_p1(u, y, left, right, forward, constants, n, where, load):
-    """Stencil and local forward sweep of every chunk, fused: ``y_i = r_i + f_i y_(i-1)`` from ``y = 0``
-    above each chunk (the first row of a chunk reads the last row of the chunk before it for the stencil; the
-    uniform rows of ``constants`` with the constants); ``load`` added to the scaled right-hand side at ``where``
-    (see :func:`step_tridiagonal_loaded`)."""
-    last = (n - 1) * LANES
-    y[0] = -(right[0] * (u[LANES] - u[0]))
-    for c in range(LANES - 1):
-        current = u[c + 1]
-        y[c + 1] = -(left[c + 1] * (u[last + c] - current) + right[c + 1] * (u[LANES + c + 1] - current))
-    if 0 <= where < LANES:
-        y[where] += load
-    lo = (int(constants[0]) - 1) * LANES  # rows 1 .. lo - 1, lo .. hi - 1, hi .. n - 2 (j: the row before)
-    hi = (int(constants[1]) - 1) * LANES
-    _p1_rows(u, y, left, right, forward, lo)
+def _ghost_rows(x, n, after):
+    """Fill the ghost rows of the displacements ``x`` (a view whose row 0 starts at ``LANES``, ``n`` rows):
+    before row 0, lane ``c >= 1`` gets the last row of chunk ``c - 1``; with ``after``, after row ``n - 1``
+    lane ``c <= LANES - 2`` gets the first row of chunk ``c + 1``.  Lane 0 before and lane ``LANES - 1``
+    after stay as they are (zero): beyond the rod's ends, where the stencil's coefficients are zero."""
+    last = n * LANES  # row n - 1
+    for c in range(1, LANES):
+        x[c] = x[last + c - 1]
+    if after:
+        following = (n + 1) * LANES
+        for c in range(LANES - 1):
+            x[following + c] = x[LANES + c + 1]
+
+
+@kernel(fastmath=False)
+def _forward_p1(u, y, left, right, forward, constants, n):
+    """Stencil and local forward sweep of every chunk, fused: ``y_i = r_i + f_i y_(i-1)`` from the work row's
+    ghost row (zero, or the load on the rod's first unknown) above each chunk, on table rows (row 0 at
+    ``ORIGIN``) whose ghost rows are filled first; rows ``[0, lo)`` and ``[hi, n)`` with the arrays, the
+    uniform rows ``[lo, hi)`` of ``constants`` with the constants, each run one vectorized loop."""
+    base = ORIGIN - LANES  # the views below start one row before the first row they compute
+    _ghost_rows(u[base:], n, True)
+    lo = base + int(constants[0]) * LANES
+    hi = base + int(constants[1]) * LANES
+    _p1_rows(u[base:], y[base:], left[base:], right[base:], forward[base:], lo - base)
     _p1_rows_uniform(u[lo:], y[lo:], constants, hi - lo)
-    _p1_rows(u[hi:], y[hi:], left[hi:], right[hi:], forward[hi:], last - LANES - hi)
-    for c in range(LANES - 1):
-        current = u[last + c]
-        force = -(left[last + c] * (u[last - LANES + c] - current) + right[last + c] * (u[c + 1] - current))
-        y[last + c] = force + forward[last + c] * y[last - LANES + c]
-    current = u[last + LANES - 1]
-    force = -(left[last + LANES - 1] * (u[last - 1] - current))
-    y[last + LANES - 1] = force + forward[last + LANES - 1] * y[last - 1]
-    if where >= LANES:
-        y[where] += load
+    _p1_rows(u[hi:], y[hi:], left[hi:], right[hi:], forward[hi:], base + n * LANES - hi)
 
 
 @kernel(fastmath=False)
@@ -521,69 +536,59 @@ def step_tridiagonal(table, dt):
 def step_tridiagonal_loaded(table, dt, where, load):
     """:func:`step_tridiagonal` with a force on the rod's first or last unknown: ``v += dt M^-1 (-K u + F
     e_k)``, ``load = F / D_k`` (``D_k`` the pivot of ``L D L^T`` at unknown ``k``), ``where`` its position in
-    the layout (:func:`node_position`; -1: no force).
+    the table row (:func:`node_position`; -1: no force).
 
-    The load is added to the scaled right-hand side where the forward sweep forms it (row 0) or after the
-    sweep (the last unknown: the rows after it in its chunk are decoupled padding), so the solve spreads the
-    force as ``M^-1 e_k`` exactly, with no column over the nodes near the end (an unknown inside the rod
-    would need the sweep's propagation within its chunk, which is not done here)."""
+    The load is added to the scaled right-hand side as the forward sweep forms it: on the first unknown
+    through the work row's ghost (its ``y_(i-1)``, with factor 1), on the last after the sweep (the rows
+    after it in its chunk are decoupled padding), so the solve spreads the force as ``M^-1 e_k`` exactly,
+    with no column over the nodes near the end (an unknown inside the rod would need the sweep's
+    propagation within its chunk, which is not done here)."""
     n = int(table[L_SHAPE, 0])
     coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     u = row_view(table, L_U)
-    v = row_view(table, L_V)
     y = row_view(table, L_WORK)
     forward = row_view(table, L_FORWARD)
     constants = row_view(table, L_UNIFORM)
-    _forward_p1(u, y, row_view(table, L_LEFT), row_view(table, L_RIGHT), forward, constants, n, where, load)
-    _couple_chunks(y, forward, row_view(table, L_WEIGHT), row_view(table, L_FORWARD_END),
+    y[ORIGIN - LANES] = load if where == ORIGIN else 0.0
+    _forward_p1(u, y, row_view(table, L_LEFT), row_view(table, L_RIGHT), forward, constants, n)
+    if where > ORIGIN:
+        y[where] += load
+    _couple_chunks(y[ORIGIN:], forward[ORIGIN:], row_view(table, L_WEIGHT)[ORIGIN:], row_view(table, L_FORWARD_END),
                    row_view(table, L_BACKWARD_START), row_view(table, L_CARRY), row_view(table, L_CORRECTION),
                    row_view(table, L_BURN), n, coupled_rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
-    _backward_update(u, v, y, row_view(table, L_BACKWARD), constants, n, dt)
+    _backward_update(u[ORIGIN:], row_view(table, L_V)[ORIGIN:], y[ORIGIN:], row_view(table, L_BACKWARD)[ORIGIN:],
+                     constants, n, dt)
 
 
 @kernel(fastmath=False)
 def pack_nodes(x, packed, n, order):
-    """:func:`pack` of a rod's nodes: P2's vertices (even nodes) into ``packed[:W]``, midpoints into
-    ``packed[W:]`` (``W = n LANES``)."""
+    """:func:`pack` of a rod's nodes into a table row from ``ORIGIN`` (P1: all; P2: the vertices, even nodes),
+    P2's midpoints from :func:`midpoint_origin` (the ghost rows untouched)."""
     if order == 1:
-        pack(x, packed, n)
+        pack(x, packed[ORIGIN:], n)
         return
-    width = n * LANES
-    pack(x[0::2], packed[:width], n)
-    pack(x[1::2], packed[width:], n)
+    pack(x[0::2], packed[ORIGIN:], n)
+    pack(x[1::2], packed[midpoint_origin(n):], n)
 
 
 @kernel(fastmath=False)
 def unpack_nodes(packed, x, n, order):
     """The inverse of :func:`pack_nodes`."""
     if order == 1:
-        unpack(packed, x, n)
+        unpack(packed[ORIGIN:], x, n)
         return
-    width = n * LANES
-    unpack(packed[:width], x[0::2], n)
-    unpack(packed[width:], x[1::2], n)
+    unpack(packed[ORIGIN:], x[0::2], n)
+    unpack(packed[midpoint_origin(n):], x[1::2], n)
 
 
 @kernel(fastmath=False)
 def node_position(node, n, order):
-    """Index of a rod's node in the layout of :func:`pack_nodes`."""
+    """Index of a rod's node in the table row of :func:`pack_nodes`."""
     if order == 1:
-        return position(node, n)
+        return ORIGIN + position(node, n)
     if node % 2 == 0:
-        return position(node // 2, n)
-    return n * LANES + position(node // 2, n)
-
-
-@kernel(fastmath=False, inline="always")
-def _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, j, before, after):
-    """Vertex ``j``'s scaled condensed right-hand side and (stored) its element's midpoint share; ``before``
-    and ``after`` index the vertex before and after ``j`` (``before`` is also the element before)."""
-    current = uv[j]
-    middle = um[j]
-    following = uv[after]
-    share[j] = -(mid_left[j] * (current - middle) + mid_right[j] * (following - middle))
-    return (c1[j] * (uv[before] - current) + c2[j] * (um[before] - current) + c3[j] * (middle - current)
-            + c4[j] * (following - current))
+        return ORIGIN + position(node // 2, n)
+    return midpoint_origin(n) + position(node // 2, n)
 
 
 @kernel(fastmath=False)
@@ -621,32 +626,22 @@ def _condensed_rows_uniform(uv, um, y, share, constants, count):
 
 
 @kernel(fastmath=False)
-def _forward_condensed(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, constants, n, where, load):
-    """Midpoint shares, condensed right-hand sides and the local forward sweep of every chunk, fused (the
-    uniform rows ``[lo, hi)`` of ``constants`` with the constants); ``load`` added to the scaled right-hand
-    side at ``where`` (see :func:`step_tridiagonal_loaded`)."""
-    last = (n - 1) * LANES
-    y[0] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, 0, 0, LANES)
-    for c in range(LANES - 1):
-        y[c + 1] = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, c + 1, last + c,
-                                    LANES + c + 1)
-    if 0 <= where < LANES:
-        y[where] += load
-    lo = (int(constants[0]) - 1) * LANES  # rows 1 .. lo - 1, lo .. hi - 1, hi .. n - 2 (j: the row before)
-    hi = (int(constants[1]) - 1) * LANES
-    _condensed_rows(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, lo)
-    _condensed_rows_uniform(uv[lo:], um[lo:], y[lo:], share[lo:], constants, hi - lo)
-    _condensed_rows(uv[hi:], um[hi:], y[hi:], share[hi:], c1[hi:], c2[hi:], c3[hi:], c4[hi:], mid_left[hi:],
-                    mid_right[hi:], forward[hi:], last - LANES - hi)
-    for c in range(LANES - 1):
-        force = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, last + c, last - LANES + c,
-                                 c + 1)
-        y[last + c] = force + forward[last + c] * y[last - LANES + c]
-    j = last + LANES - 1
-    force = _condensed_force(uv, um, c1, c2, c3, c4, mid_left, mid_right, share, j, j - LANES, j)
-    y[j] = force + forward[j] * y[j - LANES]
-    if where >= LANES:
-        y[where] += load
+def _forward_condensed(u, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, constants, n):
+    """Midpoint shares, condensed right-hand sides and the local forward sweep of every chunk, fused, as
+    :func:`_forward_p1`: ``u`` the displacement row (vertices from ``ORIGIN``, midpoints from
+    :func:`midpoint_origin`), the other rows indexed as the vertices."""
+    base = ORIGIN - LANES  # the views below start one row before the first row they compute
+    middle = midpoint_origin(n) - LANES
+    _ghost_rows(u[base:], n, True)
+    _ghost_rows(u[middle:], n, False)
+    lo = int(constants[0]) * LANES
+    hi = int(constants[1]) * LANES
+    _condensed_rows(u[base:], u[middle:], y[base:], share[base:], c1[base:], c2[base:], c3[base:], c4[base:],
+                    mid_left[base:], mid_right[base:], forward[base:], lo)
+    _condensed_rows_uniform(u[base + lo :], u[middle + lo :], y[base + lo :], share[base + lo :], constants, hi - lo)
+    at = base + hi
+    _condensed_rows(u[at:], u[middle + hi :], y[at:], share[at:], c1[at:], c2[at:], c3[at:], c4[at:], mid_left[at:],
+                    mid_right[at:], forward[at:], n * LANES - hi)
 
 
 @kernel(fastmath=False)
@@ -700,25 +695,33 @@ def step_condensed_loaded(table, dt, where, load):
     n = int(table[L_SHAPE, 0])
     coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     width = n * LANES
-    uv = row_view(table, L_U)[:width]
-    um = row_view(table, L_U)[width : 2 * width]
-    vv = row_view(table, L_V)[:width]
-    vm = row_view(table, L_V)[width : 2 * width]
+    mid = midpoint_origin(n)
+    u = row_view(table, L_U)
+    v = row_view(table, L_V)
     y = row_view(table, L_WORK)
     share = row_view(table, L_SHARE)
     forward = row_view(table, L_FORWARD)
-    backward = row_view(table, L_BACKWARD)
-    back_left = row_view(table, L_BACK_LEFT)
-    back_right = row_view(table, L_BACK_RIGHT)
     constants = row_view(table, L_UNIFORM)
-    _forward_condensed(uv, um, y, share, row_view(table, L_C1), row_view(table, L_C2), row_view(table, L_C3),
+    y[ORIGIN - LANES] = load if where == ORIGIN else 0.0
+    _forward_condensed(u, y, share, row_view(table, L_C1), row_view(table, L_C2), row_view(table, L_C3),
                        row_view(table, L_C4), row_view(table, L_MID_LEFT), row_view(table, L_MID_RIGHT), forward,
-                       constants, n, where, load)
-    _couple_chunks(y, forward, row_view(table, L_WEIGHT), row_view(table, L_FORWARD_END),
+                       constants, n)
+    if where > ORIGIN:
+        y[where] += load
+    _couple_chunks(y[ORIGIN:], forward[ORIGIN:], row_view(table, L_WEIGHT)[ORIGIN:], row_view(table, L_FORWARD_END),
                    row_view(table, L_BACKWARD_START), row_view(table, L_CARRY), row_view(table, L_CORRECTION),
                    row_view(table, L_BURN), n, coupled_rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
     # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the
-    # arrays, the uniform rows between with the constants
+    # arrays, the uniform rows between with the constants; the views from row 0
+    uv = u[ORIGIN:]
+    um = u[mid:]
+    vv = v[ORIGIN:]
+    vm = v[mid:]
+    y = y[ORIGIN:]
+    share = share[ORIGIN:]
+    backward = row_view(table, L_BACKWARD)[ORIGIN:]
+    back_left = row_view(table, L_BACK_LEFT)[ORIGIN:]
+    back_right = row_view(table, L_BACK_RIGHT)[ORIGIN:]
     hi = int(constants[1]) * LANES
     lo = int(constants[0]) * LANES
     _sweep_up_update_condensed(uv[hi:], vv[hi:], um[hi:], vm[hi:], y[hi:], share[hi:], backward[hi:], back_left[hi:],

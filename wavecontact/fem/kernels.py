@@ -277,6 +277,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     U1, V1 = _layout(u1, v1, table1, rows1, order1)
     U2, V2 = _layout(u2, v2, table2, rows2, order2)
     end1 = node_position(last, rows1, order1) if rows1 else last
+    start2 = node_position(0, rows2, order2) if rows2 else 0
     where1 = np.empty(column1.size, np.int64)
     for k in range(column1.size):
         where1[k] = node_position(c1_start + k, rows1, order1) if rows1 else c1_start + k
@@ -291,7 +292,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     scale1 = table1[T_CHAIN_INVERSE, last // order1] if loaded1 else 0.0
     scale2 = table2[T_CHAIN_INVERSE, 0] if loaded2 else 0.0
     for step in range(max_steps):
-        r_now = offset + U2[0] - U1[end1]
+        r_now = offset + U2[start2] - U1[end1]
         force = contact_force(law, r_now, alpha, strength, stiffness) if scheme == SCHEME_FORCE else 0.0
         # 1. kick with the elastic forces (and the force scheme's contact force on loaded rods) and drift
         if fast:
@@ -299,21 +300,21 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             _leapfrog_p1(u2, v2, bands2, table2[0], dt)
         else:
             _step(u1, v1, a1, bands1, kind1, table1, rows1, dt, end1 if loaded1 else -1, -force * scale1)
-            _step(u2, v2, a2, bands2, kind2, table2, rows2, dt, 0 if loaded2 else -1, force * scale2)
+            _step(u2, v2, a2, bands2, kind2, table2, rows2, dt, start2 if loaded2 else -1, force * scale2)
         # 2. contact, spread along M^-1 e_end
-        r_free = offset + U2[0] - U1[end1]
+        r_free = offset + U2[start2] - U1[end1]
         if scheme == SCHEME_FORCE:
             # plain central differences: the force at the start of the step, as a kick
             impulse = force * dt
             shift = impulse * dt
         elif scheme == SCHEME_SPLITTING:
-            w0 = V2[0] - V1[end1]
+            w0 = V2[start2] - V1[end1]
             r1, w1 = contact_flow(law, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv
             shift = (r1 - r_free) / m_inv
         else:
             # massless-end interface: the ends close at their current relative velocity
-            w0 = V2[0] - V1[end1]
+            w0 = V2[start2] - V1[end1]
             r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
@@ -331,7 +332,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
         time = state[S_TIME] + dt
         state[S_TIME] = time
         state[S_STEPS] += 1.0
-        gap = offset + U2[0] - U1[end1]
+        gap = offset + U2[start2] - U1[end1]
         vrel = state[S_MOMENTUM2] / mass2 - state[S_MOMENTUM1] / mass1
         hist_time[step] = time
         hist_force[step] = impulse / dt
