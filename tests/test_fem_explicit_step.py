@@ -203,13 +203,13 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
         "out = {}\n"
         "for order, mass, elements in ((1, 'lumped', 700), (2, 'lumped', 700), (1, 'consistent', 700),\n"
         "                              (2, 'consistent', 700), (1, 'consistent', 1250), (2, 'consistent', 1250),\n"
-        "                              (1, 'consistent', 3001), (2, 'consistent', 3001), (1, 'consistent', 800),\n"
-        "                              (2, 'consistent', 800)):\n"
+        "                              (1, 'consistent', 3001), (2, 'consistent', 3001), (1, 'consistent', 161),\n"
+        "                              (2, 'consistent', 161)):\n"
         "    if True:\n"
         "        rng = np.random.default_rng(order)\n"
         "        sizes = np.exp(rng.uniform(0.0, np.log(2.0), elements))\n"
         "        nodes = np.r_[0.0, np.cumsum(sizes)] / sizes.sum()\n"
-        "        if elements in (800, 3001):  # equal elements: the uniform rows run with constants\n"
+        "        if elements in (161, 3001):  # equal elements: the uniform rows run with constants\n"
         "            nodes = np.linspace(0.0, 1.0, elements + 1)\n"
         "        disc = discretize_rod(Rod(1.0, 2.0, 3.0, 0.5), nodes, order, mass)\n"
         "        kind, table = prepare_mass(disc, interleaved=elements != 700)\n"
@@ -236,9 +236,9 @@ def test_pure_python_steps_equal_the_compiled_ones_bit_for_bit(tmp_path):
     for order in (1, 2):
         lo, hi = outputs[1][f"uniform{order}consistent3001"]
         assert hi - lo > 50 and np.all(outputs[1][f"uniform{order}consistent1250"] == 1.0)  # constants / arrays
-        lo, hi = outputs[1][f"uniform{order}consistent800"]
+        lo, hi = outputs[1][f"uniform{order}consistent161"]
         assert hi - lo >= 5
-    assert outputs[1]["layout2consistent800"][0] == outputs[1]["layout2consistent800"][2] == 26  # burn-in: all rows
+    assert outputs[1]["layout2consistent161"][0] == outputs[1]["layout2consistent161"][2] == 22  # burn-in: all rows
     assert outputs[1]["layout1consistent1250"][0] > 0 and outputs[1]["layout2consistent1250"][0] > 0  # interleaved
     assert outputs[1]["layout1consistent700"][0] == 0
     for name in outputs[0]:

@@ -60,17 +60,18 @@ def test_table_rows_do_not_start_a_multiple_of_4_kib_apart():
 
 
 @pytest.mark.parametrize("order", [1, 2])
-@pytest.mark.parametrize("elements", [70, 333])  # 2 and 11 rows per chunk: fewer rows than the corrections span
-def test_short_chunks_equal_a_reference_step_with_a_banded_solve(monkeypatch, order, elements):
+@pytest.mark.parametrize("rows_per_chunk", [2, 11])  # fewer rows than the corrections span
+def test_short_chunks_equal_a_reference_step_with_a_banded_solve(monkeypatch, order, rows_per_chunk):
     """Chunks shorter than the rows their neighbour's correction reaches (the corrections then cross whole
     chunks): 400 steps near the stability limit against a step with LAPACK's banded solver."""
     monkeypatch.setattr(interleaved_step, "LANE_MIN_UNKNOWNS", 0)
     monkeypatch.setattr(interleaved_step, "LANE_MIN_VERTICES", 0)
+    elements = rows_per_chunk * LANES - 1
     rng = np.random.default_rng(elements + order)
     disc = discretize_rod(Rod(1.1, 2.0, 3.0, 0.5), _graded_nodes(rng, elements, 1.1, 3.0), order, "consistent")
     kind, table = prepare_mass(disc)
     rows, forward_rows, backward_rows = table[L_SHAPE, :3]
-    assert 2 <= rows <= min(forward_rows, backward_rows)  # every row of a chunk is corrected
+    assert rows == rows_per_chunk <= min(forward_rows, backward_rows)  # every row of a chunk is corrected
     assert table[L_SHAPE, 3] == table[L_SHAPE, 4] == 1.0  # the chunks' boundary values chained (sequential)
     assert_steps_equal_a_banded_solve(disc, kind, table, rng)
 
@@ -214,39 +215,41 @@ def test_held_constants_do_not_change_a_collision_beyond_the_rounding_of_the_coo
 
 @pytest.mark.parametrize("order", [1, 2])
 def test_more_rows_per_chunk_move_the_far_end_up_and_equal_a_banded_solve(order):
-    """1334 unknowns (P1) or vertices (P2) of equal elements of 2^-10: 42 rows per chunk would leave the far end
-    in row 31 of the last chunk (and its padding below unheld); 43 put it in row 0, among the start's
-    unconverged rows, and every row from there to the last but one is held.  400 steps against LAPACK."""
+    """162 unknowns (P1) or vertices (P2) of equal elements of 2^-10: the fewest rows per chunk, 21, would
+    leave the far end in row 14 of the last chunk (and its padding below unheld); 22 put it in row 7, among
+    the start's unconverged rows, and every row from there to the last but one is held.  400 steps against
+    LAPACK."""
     element = 2.0**-10
-    elements = 1333
+    elements = 161
     nodes = np.arange(elements + 1) * element
     disc = discretize_rod(Rod(elements * element, 2.0, 3.0, 0.5), nodes, order, "consistent")
     kind, table = prepare_mass(disc)
     rows = int(table[L_SHAPE, 0])
-    assert rows == 43 > -(-(elements + 1) // LANES)
-    assert elements == (LANES - 1) * rows  # the last unknown opens the last chunk
+    assert rows == 22 > -(-(elements + 1) // LANES) == 21
+    assert elements == (LANES - 1) * rows + 7  # the last unknown in row 7 of the last chunk
     lo, hi = _uniform_rows(table)
-    assert lo <= 16 and hi == rows - 1
+    assert 7 < lo <= 16 and hi == rows - 1
     assert_steps_equal_a_banded_solve(disc, kind, table, np.random.default_rng(order))
 
 
 @pytest.mark.parametrize("order", [1, 2])
 def test_held_padding_stays_zero_and_the_steps_equal_a_banded_solve(order, monkeypatch):
-    """801 unknowns (P1, threshold lowered) or vertices (P2) of equal elements of 2^-10 in chunks of 26 rows:
-    the last chunk is padding only and the one before it ends after 21 rows.  The padding after the first
-    padding unknown counts as uniform and takes the held constants; it must stay exactly zero while the rod
-    moves (400 steps against LAPACK), and the first padding unknown keeps its zero coefficients."""
+    """155 unknowns (P1) or vertices (P2) of equal elements of 2^-10 in chunks of 21 rows: the last chunk ends
+    after 8 rows, above the held ones, and 13 rows of padding follow.  The padding after the first padding
+    unknown counts as uniform and takes the held constants; it must stay exactly zero while the rod moves
+    (400 steps against LAPACK), and the first padding unknown keeps its zero coefficients."""
     monkeypatch.setattr(interleaved_step, "LANE_MIN_UNKNOWNS", 0)
+    monkeypatch.setattr(interleaved_step, "LANE_MIN_VERTICES", 0)
     element = 2.0**-10
-    elements = 800
+    elements = 154
     disc = discretize_rod(Rod(elements * element, 2.0, 3.0, 0.5), np.arange(elements + 1) * element, order,
                           "consistent")
     kind, table = prepare_mass(disc)
     rows = int(table[L_SHAPE, 0])
-    assert rows == 26 and table[L_SHAPE, 2] == rows  # the backward burn-in covers whole chunks
+    assert rows == 21 and table[L_SHAPE, 2] == rows  # the backward burn-in covers whole chunks
     lo, hi = _uniform_rows(table)
     unknowns = elements + 1
-    first_padding = interleaved_step.position(unknowns, rows)  # row 21 of chunk 30
+    first_padding = interleaved_step.position(unknowns, rows)  # row 8 of the last chunk
     width = rows * LANES
     index = np.arange(width).reshape(LANES, rows).T.ravel()  # the unknown at each place of the layout
     held = (index > unknowns) & (np.arange(width) >= lo * LANES) & (np.arange(width) < hi * LANES)
@@ -280,13 +283,14 @@ def _loaded_steps(disc, kind, table, end, forces, u, v, dt):
 
 
 @pytest.mark.parametrize("order", [1, 2])
-@pytest.mark.parametrize("mesh", ["graded", "equal 800", "equal 1333"])
+@pytest.mark.parametrize("mesh", ["graded", "equal 161", "equal 1333"])
 @pytest.mark.parametrize("end", ["first", "last"])
 def test_an_end_load_equals_a_banded_solve_with_the_force_on_the_end_node(order, mesh, end):
     """The force scheme's contact force entering the mass solve (``step_*_loaded``): 400 steps near the
     stability limit with a random force on the first or last node each step, against ``v += dt M^-1 (-K u +
     F e_end)`` with LAPACK's banded solve. Graded (the arrays), and equal elements of 2^-10 (exact nodes; the
-    held constants, the rod's far end in the last chunk's row 0 (1334 P2 vertices) or a padding chunk (801)."""
+    held constants; 161 elements: chunks of 22 rows, the far end in row 7 of the last chunk, the held rows
+    reaching into its padding)."""
     rng = np.random.default_rng(order + 10 * len(mesh) + len(end))
     if mesh == "graded":
         nodes = _graded_nodes(rng, 1250, 1.0, 2.0)
@@ -299,10 +303,10 @@ def test_an_end_load_equals_a_banded_solve_with_the_force_on_the_end_node(order,
     if mesh != "graded":
         lo, hi = _uniform_rows(table)
         assert hi - lo >= 5
-        # the chunks' boundary values from their neighbour's alone (no sequential pass); 800 elements: the
+        # the chunks' boundary values from their neighbour's alone (no sequential pass); 161 elements: the
         # backward sums cover whole chunks (their neighbour's first value added), 1333: they do not
         assert table[L_SHAPE, 3] == table[L_SHAPE, 4] == 0.0
-        assert (table[L_SHAPE, 2] == table[L_SHAPE, 0]) == (mesh == "equal 800")
+        assert (table[L_SHAPE, 2] == table[L_SHAPE, 0]) == (mesh == "equal 161")
     node = 0 if end == "first" else disc.n_nodes - 1
     (lower, upper), banded = _banded_mass(disc)
     stiffness = disc.stiffness

@@ -3,7 +3,7 @@
 A tridiagonal solve is two first-order recurrences, ``y_i = r_i + f_i y_(i-1)``
 downwards and ``x_i = y_i + g_i x_(i+1)`` upwards; as one chain each costs the
 latency of a multiplication and an addition per unknown.  Here the ``m``
-unknowns are cut into ``LANES`` = 32 consecutive chunks of ``n = ceil(m /
+unknowns are cut into ``LANES`` = 8 consecutive chunks of ``n = ceil(m /
 LANES)`` and stored chunk-interleaved: unknown ``k = c n + i`` (chunk ``c``,
 position ``i``) at ``X[i LANES + c]`` (padding unknowns beyond ``m`` are
 decoupled and stay zero), after one ghost row (``ORIGIN = LANES``: unknown ``k`` at
@@ -11,7 +11,7 @@ decoupled and stay zero), after one ghost row (``ORIGIN = LANES``: unknown ``k``
 stencil's neighbours ``i +- 1`` are the previous and next rows, and every pass
 (stencil, both sweeps, update) is one loop over the array whose iterations
 ``LANES`` apart depend on each other: the compiler runs the chunks as SIMD
-lanes.  Only a chunk's first and last rows see a neighbouring chunk: before
+lanes (a row of 8 doubles is one 512-bit vector, one cache line).  Only a chunk's first and last rows see a neighbouring chunk: before
 each step the displacements' ghost rows before the first row and after the
 last receive, in lane ``c``, chunk ``c - 1``'s last row and chunk ``c + 1``'s
 first, so that those rows run in the same vectorized loop as the others (the
@@ -27,7 +27,7 @@ boundary to ``i`` and ``e`` the neighbour's end value, is added by the same
 recurrence without right-hand side (``delta_i = f_i delta_(i-1)``, a cheap
 streaming pass) on the rows where ``|P_i|`` exceeds ``LANE_TOLERANCE`` (``w``
 rows; the mass matrices are diagonally dominant, so ``|f|, |g| <= 1/2`` and
-``w`` is about 33 on uniform meshes; all rows of chunks shorter than that).
+``w`` is about 33 on uniform meshes (P1, 26 for the P2 vertices); all rows of chunks shorter than that).
 The same pass sums, per chunk, ``G_i y_i`` over its first rows (``G_i`` the
 product of the backward factors above row ``i``): that sum is the chunk's first
 unknown after the backward sweep, up to terms below ``LANE_TOLERANCE``, and is
@@ -59,14 +59,15 @@ __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "ORIGIN", "aligned
            "lane_rows", "lanes_width", "midpoint_origin", "node_position", "pack_nodes", "step_condensed",
            "step_condensed_loaded", "step_tridiagonal", "step_tridiagonal_loaded", "table_width", "unpack_nodes"]
 
-LANES = 32
+LANES = 8  # measured against 4, 16 and 32 (docs/fem.md section 7): 8 was the fastest for P1 and P2 at 800 to
+# 12800 elements (with 32, the chunks' coupling over their first ~30 rows covered every row of a short rod)
 ORIGIN = LANES  # index of row 0 in a table row of the layout: one ghost row before it
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
 # smaller systems keep the flat layout: with few rows per chunk the chunks' coupling covers most rows and
-# costs more than the lanes save (measured crossings: about 350 unknowns for P1, 550 vertices for P2;
-# docs/fem.md section 7)
-LANE_MIN_UNKNOWNS = 400
-LANE_MIN_VERTICES = 600  # the same for the vertex system of P2 (condensed midpoints)
+# costs more than the lanes save (measured crossings, one rod's step alone, equal elements: between 60 and
+# 100 unknowns for P1, 100 and 150 vertices for P2; docs/fem.md section 7)
+LANE_MIN_UNKNOWNS = 100
+LANE_MIN_VERTICES = 150  # the same for the vertex system of P2 (condensed midpoints)
 
 # rows of the mass solve's table used by the interleaved layout (the flat solve's rows come first)
 L_SHAPE = 24  # [0]: rows n per chunk (0: flat layout), [1]: forward correction rows, [2]: backward burn-in rows,
@@ -105,7 +106,8 @@ L_WEIGHT = 46  # G_i: per chunk, the product of the backward factors g above row
 L_BURN = 47  # scratch: per chunk, sum of G_i y_i over its rows so far
 L_ROWS_END = 48
 UNIFORM_ULPS_PER_ELEMENT = 4.0  # uniform to the rounding of the node coordinates (see uniform_rows)
-HELD_ROW_COST = 0.6  # a held row's cost against one read from the arrays (P2 step, 1333 elements, measured)
+HELD_ROW_COST = 0.6  # a held row's cost against one read from the arrays (P2 step, 1333 elements, 32 lanes, measured)
+UNCONVERGED_ROWS = 16  # rows at the rod's start where the factorization's factors still differ from their limits
 P1_UNIFORM_ROWS = (L_LEFT, L_RIGHT, L_FORWARD, L_BACKWARD)
 P2_UNIFORM_ROWS = (L_C1, L_C2, L_C3, L_C4, L_MID_LEFT, L_MID_RIGHT, L_FORWARD, L_BACKWARD, L_BACK_LEFT,
                    L_BACK_RIGHT)
@@ -115,10 +117,14 @@ def candidate_rows(unknowns: int) -> range:
     """The rows per chunk the set-up chooses from for ``unknowns`` unknowns (see :func:`_fill_rows`).
 
     From the fewest, ``ceil(unknowns / LANES)``, upwards: one more row moves the rod's far end about
-    ``LANES - 1`` rows up its chunk, so these reach every position of it within a few rows of the top.
+    ``LANES - 1`` rows up its chunk, so a few reach every position of it within a few rows of the top.  An
+    extra row costs a row and can only pay by holding the rows it frees below the far end, at most the
+    chunk's padding (below ``LANES`` rows) and the start's unconverged rows, at ``1 - HELD_ROW_COST`` of a
+    row each: more extra rows than that never pay, and are not tried.
     """
     fewest = -(-unknowns // LANES)
-    return range(fewest, fewest + fewest // (LANES - 1) + 3)
+    worth = int((1.0 - HELD_ROW_COST) * (LANES + UNCONVERGED_ROWS))
+    return range(fewest, fewest + min(fewest // (LANES - 1) + 3, worth + 1))
 
 
 def lanes_width(unknowns: int) -> int:
@@ -147,10 +153,10 @@ def table_width(minimum: int) -> int:
 def aligned_table(rows: int, width: int) -> np.ndarray:
     """A zero ``(rows, width)`` table whose rows start on 64-byte boundaries (``width`` a multiple of 8).
 
-    A row of the layout is 32 doubles, four cache lines; on a table placed 16 bytes off a cache line every
-    vector load and store of the step straddles two lines, which cost the P1 step about half again and
-    the P2 step a quarter (1333-element rod: 2.07 against 1.37 and 2.9 against 2.35 ns per element;
-    numpy aligns large arrays to 16 bytes only).
+    A row of the layout is ``LANES`` doubles, a whole number of cache lines; on a table placed 16 bytes off a
+    cache line every vector load and store of the step straddles two lines, which cost the P1 step about half
+    again and the P2 step a quarter (measured with 32 lanes, 1333-element rod: 2.07 against 1.37 and 2.9
+    against 2.35 ns per element; numpy aligns large arrays to 16 bytes only).
     """
     if width % 8:
         raise ValueError(f"width must be a multiple of 8 doubles, got {width}")
@@ -247,17 +253,18 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
     lengths of ``L / E`` may differ by about an ulp of ``L``, a relative
     ``E 2^-52``, and so do the coefficients (measured: up to 1.5 ``E`` ulps on
     ``linspace`` nodes; none on nodes that are multiples of a power of two).
-    Each of ``rows`` gets its constant, its mean over the middle half of the
-    rows of the chunks 1 .. ``LANES - 2`` (their unknowns, all along the rod
-    but far from its ends; the mean, not one element's value, so that the
-    held elements keep the mesh's mean length and the waves their speed),
+    Each of ``rows`` gets its constant, its mean over the unknowns at least
+    ``UNCONVERGED_ROWS`` from either end of the rod (all along it, so that the
+    rounding of the coordinates in every binade they cover counts; the mean,
+    not one element's value, so that the held elements keep the mesh's mean
+    length and the waves their speed),
     and a tolerance: twice the largest distance from it over those
     unknowns, at least 4 ulps and at most
     ``UNIFORM_ULPS_PER_ELEMENT E`` ulps (``E = m - 1`` elements).  A row of
     the layout (all ``LANES`` chunks) is uniform when each of ``rows`` is
     within its tolerance at every unknown of the row (the run's constants
     then become the means over its own unknowns, so that the held elements
-    keep their mean length, not the middle's; on ``linspace`` nodes that
+    keep their mean length, not the whole rod's; on ``linspace`` nodes that
     halves epsilon's change at 3200 and 12800 elements, docs/fem.md); padding beyond the
     first padding unknown counts as uniform (it stays zero whatever its
     coefficients: the first one, after the rod's last unknown, keeps its
@@ -270,9 +277,9 @@ def uniform_rows(table: np.ndarray, rows: tuple, n: int, m: int) -> tuple:
     ulp = 2.0**-52
     index = np.arange(n * LANES).reshape(LANES, n).T  # the unknown at (row, chunk)
     free = index > m
-    middle = np.zeros((n, LANES), dtype=bool)
-    middle[n // 4 : max(3 * n // 4, n // 4 + 1), 1 : LANES - 1] = True
-    middle &= index < m - 2  # not the rod's end
+    middle = (index >= UNCONVERGED_ROWS) & (index < m - UNCONVERGED_ROWS)
+    if not middle.any():  # a rod too short for that: all its unknowns
+        middle = index < m
     elements = max(m - 1, 1)
     layout = slice(ORIGIN, ORIGIN + n * LANES)
     constants = np.array([np.mean(table[row, layout].reshape(n, LANES)[middle]) for row in rows])
