@@ -7,9 +7,9 @@ that other jobs on a shared machine do not count), medians of ``--repeats`` runs
 
 1. per element of one rod's step, for each discretization of the general path at 800
    and 12800 elements (the long rod of the gamma = 0.6 pair, 1333 and 21333
-   elements): the step as the time loop runs it (consistent masses of at least 1200
-   unknowns or vertices in the interleaved layout, ``interleaved_step.py``, on the
-   packed state), the same interleaved step reading the coefficients of its uniform
+   elements): the step as the time loop runs it (consistent masses from
+   ``interleaved_step.LANE_MIN_UNKNOWNS`` unknowns or ``LANE_MIN_VERTICES`` vertices in the
+   interleaved layout, ``interleaved_step.py``, on the packed state), the same interleaved step reading the coefficients of its uniform
    rows from the table's arrays instead of holding them as constants (the step before
    they were), the same step in the flat layout (``prepare_mass(...,
    interleaved=False)``; the three measured alternately), and two parts of the

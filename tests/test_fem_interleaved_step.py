@@ -161,7 +161,7 @@ def test_uniform_rows_with_far_end_remainders_equal_a_banded_solve(order, remain
     2^-10 (node coordinates exact, so the held constants are the entries up to the factors' rounding) whose
     far end carries the remainder of 0, 1/3 or 2/3 of an element as a lumped mass."""
     element = 2.0**-10
-    elements = 1599  # 1600 unknowns (P1) or vertices (P2): 32 chunks of 50 rows, no padding
+    elements = 1599  # 1600 unknowns (P1) or vertices (P2): 8 chunks of 200 rows, no padding
     length = (elements + remainder) * element
     nodes = matched_nodes(length, element, from_left=True)
     assert nodes.size == elements + 1 and np.all(np.diff(nodes) == element)
@@ -253,7 +253,7 @@ def test_held_padding_stays_zero_and_the_steps_equal_a_banded_solve(order, monke
     width = rows * LANES
     index = np.arange(width).reshape(LANES, rows).T.ravel()  # the unknown at each place of the layout
     held = (index > unknowns) & (np.arange(width) >= lo * LANES) & (np.arange(width) < hi * LANES)
-    assert hi - lo >= 5 and held.any()  # chunk 31's rows among the held ones
+    assert hi - lo >= 5 and held.any()  # the last chunk's padding rows among the held ones
     backward = interleaved_step.L_BACKWARD
     assert table[backward, ORIGIN + first_padding] == 0.0
     held_value = table[interleaved_step.L_UNIFORM, 5 if order == 1 else 9]
@@ -327,7 +327,7 @@ def test_an_end_load_equals_a_banded_solve_with_the_force_on_the_end_node(order,
 
 @pytest.mark.parametrize("elements", [70, 800])
 def test_chunk_coupling_compiled_equals_its_pure_python_form_bit_for_bit(monkeypatch, elements):
-    """The coupling pass, chained (chunks of 3 rows) and from the neighbour's values alone (800 elements of
+    """The coupling pass, chained (chunks of 9 rows) and from the neighbour's values alone (800 elements of
     2^-10), compiled and as plain Python on the same forward values."""
     monkeypatch.setattr(interleaved_step, "LANE_MIN_VERTICES", 0)
     nodes = np.arange(elements + 1) * 2.0**-10
