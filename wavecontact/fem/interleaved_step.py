@@ -59,8 +59,10 @@ __all__ = ["LANES", "LANE_MIN_UNKNOWNS", "LANE_MIN_VERTICES", "ORIGIN", "aligned
            "lane_rows", "lanes_width", "midpoint_origin", "node_position", "pack_nodes", "step_condensed",
            "step_condensed_loaded", "step_tridiagonal", "step_tridiagonal_loaded", "table_width", "unpack_nodes"]
 
-LANES = 8  # measured against 4, 16 and 32 (docs/fem.md section 7): 8 was the fastest for P1 and P2 at 800 to
-# 12800 elements (with 32, the chunks' coupling over their first ~30 rows covered every row of a short rod)
+LANES = 8  # measured against 4, 16 and 32 (benchmarks/interleaved_lanes.py, docs/fem.md section 7; an AVX-512
+# machine): 8 was the fastest for P1 and P2 at 800 to 12800 elements (with 32, the chunks' coupling over their
+# first ~30 rows covered every row of a short rod).  The results do not depend on the processor's vector
+# width: the lanes never mix, so a given LANES rounds the same everywhere (another one moves them at rounding)
 ORIGIN = LANES  # index of row 0 in a table row of the layout: one ghost row before it
 LANE_TOLERANCE = 2.0**-64  # contributions of a neighbouring chunk left out, relative to an entry of the result
 # smaller systems keep the flat layout: with few rows per chunk the chunks' coupling covers most rows and
