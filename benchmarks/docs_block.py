@@ -72,3 +72,18 @@ def run_and_write(main, page: str, name: str, update: bool, argv=None) -> None:
         main()
     if update:
         write_block(page, name, header + "\n\n" + tee.copy.getvalue())
+
+
+def repeats_main(argv, description: str, script: str, measure, page: str, name: str, repeats: int) -> None:
+    """The command line of a benchmark with ``--repeats`` and ``--update-docs``: parse ``argv`` (None: the
+    process's), run ``measure(args)`` and, with ``--update-docs``, write what it printed into block ``name``
+    of docs/``page`` (``script``: the benchmark's path in the repository, for the block's header)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--repeats", type=int, default=repeats)
+    parser.add_argument("--update-docs", action="store_true",
+                        help=f"also write the tables into docs/{page} (between its {name} markers)")
+    args = parser.parse_args(argv)
+    argv_used = None if argv is None else [script, *argv]
+    run_and_write(lambda: measure(args), page, name, args.update_docs, argv_used)

@@ -21,7 +21,6 @@ all alternated.  ``--update-docs`` writes the tables into docs/fem.md (block ``i
 
 from __future__ import annotations
 
-import argparse
 import functools
 import importlib.util
 import os
@@ -35,7 +34,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout this script lives in
 
-from docs_block import run_and_write
+from docs_block import repeats_main
 
 from wavecontact import Rod
 from wavecontact._jit import NUMBA_ENABLED, kernel
@@ -180,13 +179,8 @@ def measure(args):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--update-docs", action="store_true",
-                        help="also write the tables into docs/fem.md (between its interleaved-lanes markers)")
-    args = parser.parse_args(argv)
-    argv_used = None if argv is None else ["benchmarks/interleaved_lanes.py", *argv]
-    run_and_write(lambda: measure(args), "fem.md", "interleaved-lanes", args.update_docs, argv_used)
+    repeats_main(argv, __doc__.splitlines()[0], "benchmarks/interleaved_lanes.py", measure, "fem.md",
+                 "interleaved-lanes", repeats=5)
 
 
 if __name__ == "__main__":

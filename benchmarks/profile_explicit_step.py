@@ -26,7 +26,6 @@ that other jobs on a shared machine do not count), medians of ``--repeats`` runs
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
@@ -36,7 +35,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout this script lives in
 
-from docs_block import run_and_write
+from docs_block import repeats_main
 from peers.fem_scipy_loop import scipy_fem_run
 
 import wavecontact
@@ -268,13 +267,8 @@ def loop_row(name, order, mass, elements, repeats):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=7)
-    parser.add_argument("--update-docs", action="store_true",
-                        help="also write the tables into docs/fem.md (between its profile-explicit-step markers)")
-    args = parser.parse_args(argv)
-    argv_used = None if argv is None else ["benchmarks/profile_explicit_step.py", *argv]
-    run_and_write(lambda: measure(args), "fem.md", "profile-explicit-step", args.update_docs, argv_used)
+    repeats_main(argv, __doc__.splitlines()[0], "benchmarks/profile_explicit_step.py", measure, "fem.md",
+                 "profile-explicit-step", repeats=7)
 
 
 def measure(args):
