@@ -500,6 +500,17 @@ def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, r
 
 
 @kernel(fastmath=False)
+def _couple_table(table, n):
+    """:func:`_couple_chunks` on the rows of ``table`` (``n`` rows per chunk), after the forward sweep: its
+    corrected rows and its sequential passes as :func:`_chunk_couplings` set them up."""
+    coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
+    _couple_chunks(row_view(table, L_WORK)[ORIGIN:], row_view(table, L_FORWARD)[ORIGIN:],
+                   row_view(table, L_WEIGHT)[ORIGIN:], row_view(table, L_FORWARD_END), row_view(table, L_BACKWARD_START),
+                   row_view(table, L_CARRY), row_view(table, L_CORRECTION), row_view(table, L_BURN), n, coupled_rows,
+                   table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
+
+
+@kernel(fastmath=False)
 def _sweep_up_update(u, v, y, backward, count, dt):
     """The backward sweep over ``j = count - 1 .. 0`` with the leapfrog update of those unknowns."""
     for j in range(count - 1, -1, -1):
@@ -553,7 +564,6 @@ def step_tridiagonal_loaded(table, dt, where, load):
     with no column over the nodes near the end (an unknown inside the rod would need the sweep's
     propagation within its chunk, which is not done here)."""
     n = int(table[L_SHAPE, 0])
-    coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     u = row_view(table, L_U)
     y = row_view(table, L_WORK)
     forward = row_view(table, L_FORWARD)
@@ -562,9 +572,7 @@ def step_tridiagonal_loaded(table, dt, where, load):
     _forward_p1(u, y, row_view(table, L_LEFT), row_view(table, L_RIGHT), forward, constants, n)
     if where > ORIGIN:
         y[where] += load
-    _couple_chunks(y[ORIGIN:], forward[ORIGIN:], row_view(table, L_WEIGHT)[ORIGIN:], row_view(table, L_FORWARD_END),
-                   row_view(table, L_BACKWARD_START), row_view(table, L_CARRY), row_view(table, L_CORRECTION),
-                   row_view(table, L_BURN), n, coupled_rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
+    _couple_table(table, n)
     _backward_update(u[ORIGIN:], row_view(table, L_V)[ORIGIN:], y[ORIGIN:], row_view(table, L_BACKWARD)[ORIGIN:],
                      constants, n, dt)
 
@@ -702,7 +710,6 @@ def step_condensed_loaded(table, dt, where, load):
     position (:func:`node_position`, -1: no force); as :func:`step_tridiagonal_loaded` (the midpoints see the
     force through the vertices' accelerations only)."""
     n = int(table[L_SHAPE, 0])
-    coupled_rows = min(max(int(table[L_SHAPE, 1]), int(table[L_SHAPE, 2])), n)
     width = n * LANES
     mid = midpoint_origin(n)
     u = row_view(table, L_U)
@@ -717,9 +724,7 @@ def step_condensed_loaded(table, dt, where, load):
                        constants, n)
     if where > ORIGIN:
         y[where] += load
-    _couple_chunks(y[ORIGIN:], forward[ORIGIN:], row_view(table, L_WEIGHT)[ORIGIN:], row_view(table, L_FORWARD_END),
-                   row_view(table, L_BACKWARD_START), row_view(table, L_CARRY), row_view(table, L_CORRECTION),
-                   row_view(table, L_BURN), n, coupled_rows, table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
+    _couple_table(table, n)
     # every row of every chunk downwards from its exact start (row n of y): [hi, n) and [0, lo) with the
     # arrays, the uniform rows between with the constants; the views from row 0
     uv = u[ORIGIN:]
