@@ -45,7 +45,7 @@ from ..errors import InvalidParameterError
 from ..progress import Progress
 from .files import atomic_write
 
-__all__ = ["LOCK_NAME", "OutputLock", "RunController", "StopRequest", "claim_folder", "write_summary"]
+__all__ = ["LOCK_NAME", "BatchStore", "OutputLock", "RunController", "StopRequest", "claim_folder", "write_summary"]
 
 LOCK_NAME = ".wavecontact.lock"
 
@@ -409,3 +409,105 @@ class RunController:
         """Change the progress bar's label."""
         if self._bar is not None:
             self._bar.describe(text)
+
+
+# ----------------------------------------------------------------------------
+# Storage of a batched run (ensembles, Markov chains)
+# ----------------------------------------------------------------------------
+
+
+class BatchStore:
+    """The finished batches of a batched run: one checkpoint file per batch next to a JSON description.
+
+    A batch is durable once its file is written (atomically, checksummed); a run started again with
+    the same description skips the batches on disk, so an interrupt loses at most the batches in
+    progress.  Each batch's contents are checked on reading (``check``), whatever its checksum says.
+
+    Parameters
+    ----------
+    directory : path-like
+        The output folder.
+    description_name : str
+        File of the run's description (``ensemble.json``).
+    description : dict
+        JSON description of the run (schema, version, parameters); another one on disk is refused.
+    batch_name : callable
+        ``batch_name(start) -> str``, the file of the batch that begins at ``start``.
+    batch_pattern : str
+        Glob of every batch file (what ``overwrite`` deletes).
+    batch_schema : str
+        Checkpoint schema of a batch file.
+    version : int
+        Checkpoint format version of a batch file.
+    batch_parameters : callable
+        ``batch_parameters(start, stop) -> dict`` stored with (and checked against) each batch.
+    check : callable
+        ``check(arrays, start, stop)`` returns the batch's values, raising :class:`InvalidParameterError`
+        for any value no run can produce.
+    kind : str
+        What the run is, for messages (``"an ensemble"``).
+    """
+
+    def __init__(self, directory, description_name: str, description: dict, batch_name: Callable,
+                 batch_pattern: str, batch_schema: str, version: int, batch_parameters: Callable, check: Callable, kind: str):
+        self.directory = Path(directory)
+        self.description_path = self.directory / description_name
+        self.description = description
+        self.batch_name = batch_name
+        self.batch_pattern = batch_pattern
+        self.batch_schema = batch_schema
+        self.version = version
+        self.batch_parameters = batch_parameters
+        self.check = check
+        self.kind = kind
+
+    def open(self, batches, overwrite: bool = False) -> dict:
+        """Create or check the folder; return ``{start: values}`` of the batches already finished.
+
+        A folder holding another run's description is refused unless ``overwrite`` (then its
+        description and batch files are deleted).
+        """
+        from .checkpoint import read_checkpoint
+
+        path = self.description_path
+        if path.exists():
+            try:
+                found = json.loads(path.read_text())
+            except (OSError, ValueError):
+                found = None
+            if found != self.description:
+                if not overwrite:
+                    what = (f"holds {path.name}, which is not a description of {self.kind}" if found is None else
+                            f"holds {self.kind} with other parameters")
+                    raise InvalidParameterError(f"{self.directory} {what}; choose another --out, the same parameters "
+                                                "to resume, or --overwrite to replace it")
+                for stale in self.directory.glob(self.batch_pattern):
+                    stale.unlink()
+                path.unlink()
+        if not path.exists():
+            text = json.dumps(self.description, indent=1)
+            atomic_write(path, lambda handle: handle.write(text), binary=False)
+        done = {}
+        for start, stop in batches:
+            batch = self.directory / self.batch_name(start)
+            if batch.exists():
+                arrays, _meta = read_checkpoint(batch, self.batch_schema, self.version,
+                                                self.batch_parameters(start, stop))
+                try:
+                    done[start] = self.check(arrays, start, stop)
+                except (KeyError, ValueError, TypeError) as exc:
+                    reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                    if isinstance(exc, KeyError):
+                        reason = f"missing {reason}"
+                    from ..errors import CheckpointError
+
+                    raise CheckpointError(f"{batch} is not a valid finished batch ({reason}); delete it to "
+                                          "recompute that batch") from None
+        return done
+
+    def save(self, start: int, stop: int, arrays: dict) -> Path:
+        """Write one finished batch (atomically)."""
+        from .checkpoint import write_checkpoint
+
+        return write_checkpoint(self.directory / self.batch_name(start), self.batch_schema, self.version,
+                                self.batch_parameters(start, stop), arrays)
