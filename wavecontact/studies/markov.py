@@ -472,6 +472,11 @@ def _check_chains(spec: MarkovSpec):
         # the steps' own arithmetic, repeated: Eq. 28 for the energy (table and solve rules) and the bath
         if spec.rule != "glauber" and np.any(energy[:, 1:] != eps2 * energy[:, :-1]):
             raise InvalidParameterError("E_tr(j + 1) differs from eps2(j) E_tr(j)")
+        if spec.rule == "glauber":
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = np.where(energy[:, :-1] > 0.0, energy[:, 1:] / energy[:, :-1], np.inf)
+            if np.any(eps2 != ratio):
+                raise InvalidParameterError("eps2(j) differs from E_tr(j + 1) / E_tr(j)")
         share = 1.0 / (2 * spec.modes_per_rod)
         expected = temperature[:, :-1] + (energy[:, :-1] - energy[:, 1:]) * share
         if spec.bath == "conserved" and np.any(temperature[:, 1:] != expected):
