@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from wavecontact.errors import CheckpointError, InvalidParameterError
+from wavecontact.errors import InvalidParameterError
 from wavecontact.io import checkpoint as ckpt
 from wavecontact.io.run_controller import LOCK_NAME, OutputLock, RunController, claim_folder, write_summary
 
@@ -73,31 +73,33 @@ def test_no_checkpoint_at_an_inconsistent_point():
 # ----------------------------------------------------------------------------
 
 
+def _interrupted_at_step_7(every, interrupt):
+    """Run 100 steps, ``interrupt()`` inside step 7; return (checkpoints written, messages logged)."""
+    saved, messages = [], []
+    run = RunController(100, "t", unit="step", save=lambda: saved.append(run.done), every=every,
+                        log=messages.append)
+    with pytest.raises(KeyboardInterrupt), run:
+        for step in range(100):
+            if step == 7:
+                interrupt()
+            run.advance()
+    return saved, messages
+
+
 @pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
 def test_a_signal_stops_at_the_next_consistent_point_with_a_checkpoint(name):
-    saved, messages = [], []
-    with pytest.raises(KeyboardInterrupt):
-        with RunController(100, "t", unit="step", save=lambda: saved.append(run.done), every=50,
-                           log=messages.append) as run:
-            for step in range(100):
-                if step == 7:
-                    os.kill(os.getpid(), getattr(signal, name))  # arrives inside the step
-                run.advance()
-    assert saved == [8]
+    saved, messages = _interrupted_at_step_7(50, lambda: os.kill(os.getpid(), getattr(signal, name)))
+    assert saved == [8]  # the signal arrived inside step 7: handled after it, with a checkpoint of it
     assert messages == ["interrupted; run again to resume from the checkpoint after step 8"]
     # the handlers are restored afterwards
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
 def test_an_exception_inside_a_step_writes_no_checkpoint():
-    saved, messages = [], []
-    with pytest.raises(KeyboardInterrupt):
-        with RunController(100, "t", unit="step", save=lambda: saved.append(run.done), every=5,
-                           log=messages.append) as run:
-            for step in range(100):
-                if step == 7:
-                    raise KeyboardInterrupt  # the state may be half-updated: the last checkpoint stays
-                run.advance()
+    def interrupt():
+        raise KeyboardInterrupt  # the state may be half-updated: the last checkpoint stays
+
+    saved, messages = _interrupted_at_step_7(5, interrupt)
     assert saved == [5]
     assert messages == ["interrupted; run again to resume from the checkpoint after step 5"]
 
@@ -164,7 +166,8 @@ def test_no_hand_written_replace_outside_atomic_write():
         for name in files:
             if name.endswith(".py"):
                 path = os.path.join(folder, name)
-                text = open(path, encoding="utf-8").read()
+                with open(path, encoding="utf-8") as handle:
+                    text = handle.read()
                 if "os.replace(" in text and not path.endswith(os.path.join("io", "files.py")):
                     offenders.append(path)
                 if '.replace("Infinity"' in text:

@@ -449,8 +449,8 @@ class GasSimulation:
             self._record()
         target = self.collisions + collisions
         if controller is None:
-            with RunController(collisions, "gas", unit="collision", progress=bool(progress)) as controller:
-                return self._run_chunks(target, max_time, controller)
+            with RunController(collisions, "gas", unit="collision", progress=bool(progress)) as bar_only:
+                return self._run_chunks(target, max_time, bar_only)
         return self._run_chunks(target, max_time, controller)
 
     def _run_chunks(self, target, max_time, controller) -> GasResult:

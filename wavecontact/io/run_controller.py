@@ -36,6 +36,7 @@ import json
 import os
 import signal
 import socket
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -213,7 +214,8 @@ def write_summary(path, summary: dict) -> Path:
 class StopRequest:
     """SIGINT and SIGTERM as a flag while active (main thread only; elsewhere nothing changes).
 
-    The first signal sets :attr:`signal_name`; a second one raises
+    The first signal sets :attr:`signal_name` and says on stderr that the run stops after the
+    step in progress (a compiled kernel is never interrupted half-way); a second one raises
     :class:`KeyboardInterrupt` at once.
     """
 
@@ -231,6 +233,8 @@ class StopRequest:
         if self.signal_name is not None:
             raise KeyboardInterrupt
         self.signal_name = signal.Signals(number).name
+        print(f"wavecontact: {self.signal_name} received; stopping after the step in progress (send it again "
+              "to stop at once)", file=sys.stderr, flush=True)
 
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
@@ -359,9 +363,7 @@ class RunController:
     def _due(self, before: int) -> bool:
         if self.every is not None and (self.done // self.every > before // self.every or self.done == self.total):
             return True
-        if self.seconds is not None and time.monotonic() - self._last_save_time >= self.seconds:
-            return True
-        return False
+        return self.seconds is not None and time.monotonic() - self._last_save_time >= self.seconds
 
     def advance(self, count: int = 1, *, consistent: bool = True) -> None:
         """Record ``count`` more units of work; checkpoint when due; stop on a caught signal.
