@@ -295,3 +295,25 @@ def test_a_signalled_gas_process_leaves_a_checkpoint_that_resumes_bit_for_bit(tm
     for key, value in _state(straight).items():
         np.testing.assert_array_equal(value, getattr(sim, key), err_msg=key)
     assert not (out / ".wavecontact.lock").exists()
+
+
+def test_a_solve_rule_run_seeded_by_a_spawned_sequence_resumes_bit_for_bit(tmp_path):
+    """The per-collision seeds after a resume are those of the uninterrupted run even when the run's seed is a
+    spawned child (the command line's is): the checkpoint keeps the seed's spawn key, not only its entropy."""
+
+    def draw(gamma, temperature_ratio, seed):
+        return float(np.random.default_rng(seed).uniform(0.7, 0.95)) ** 2, 0.4
+
+    rule = VibrationSolve(draw, bath_modes=10)
+    gas = random_gas(60, seed=2, lengths=UniformLengths(0.5, 1.0))
+    def seed():  # a fresh object each time: spawning from a SeedSequence changes it
+        return np.random.SeedSequence(5).spawn(2)[1]
+
+    straight = GasSimulation(gas, rule, seed=seed(), record_every=50)
+    straight.run(400)
+    first = GasSimulation(gas, rule, seed=seed(), record_every=50)
+    first.run(200)
+    resumed = GasSimulation.resume(first.save_checkpoint(tmp_path / "gas.npz"), rule=rule)
+    resumed.run(200)
+    for name, value in _state(straight).items():
+        np.testing.assert_array_equal(value, getattr(resumed, name), err_msg=name)
