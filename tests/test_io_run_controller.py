@@ -138,6 +138,12 @@ def test_two_runs_into_one_folder_in_one_process_are_refused(tmp_path):
         assert (tmp_path / LOCK_NAME).exists()  # the refused one left the holder's lock alone
 
 
+def test_a_file_in_place_of_the_folder_is_refused_in_one_line(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InvalidParameterError, match="exists and is not a directory"):
+        OutputLock(tmp_path / "file").acquire()
+
+
 def test_claim_folder(tmp_path):
     assert claim_folder(tmp_path, ["c.npz"], resume=False, overwrite=False) is False
     with pytest.raises(InvalidParameterError, match="holds no checkpoint"):

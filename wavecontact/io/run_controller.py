@@ -109,6 +109,8 @@ class OutputLock:
 
     def acquire(self) -> OutputLock:
         """Take the lock; refuse (:class:`InvalidParameterError`) if a live process holds it."""
+        if self.directory.exists() and not self.directory.is_dir():
+            raise InvalidParameterError(f"{self.option}: {str(self.directory)!r} exists and is not a directory")
         self.directory.mkdir(parents=True, exist_ok=True)
         host = socket.gethostname()
         for _attempt in range(3):
