@@ -125,3 +125,116 @@ class _nothing:
 
     def __exit__(self, *exc):
         return False
+
+
+# ----------------------------------------------------------------------------
+# Long runs: the run controller (issue 23 items 4 and 8)
+# ----------------------------------------------------------------------------
+
+_BASE = ["gas", "--rods", "100", "--rule", "fixed", "--restitution", "0.97", "--seed", "5", "--json", "--no-progress"]
+
+
+def _state(out):
+    from wavecontact.gas import GasSimulation
+
+    sim = GasSimulation.resume(out / "gas_checkpoint.npz")
+    return sim.collisions, sim.v.copy(), sim.time
+
+
+def test_an_interrupted_resume_is_finished_by_the_same_command(tmp_path, capsys, monkeypatch):
+    """Interrupted while writing its outputs (after the last collision) or in the middle of its collisions,
+    the natural retry runs the interrupted run's collisions, not COLLISIONS more (issue 23: 9000 instead of 6000)."""
+    import os
+    import signal
+
+    import wavecontact.plotting.gas as plotting
+    from wavecontact.gas.simulation import GasSimulation
+
+    straight = _json(capsys, [*_BASE, "--collisions", "2000", "--out", str(tmp_path / "straight")])
+    out = tmp_path / "run"
+    _json(capsys, [*_BASE, "--collisions", "800", "--out", str(out)])
+    resume = [*_BASE, "--collisions", "1200", "--out", str(out), "--resume"]
+
+    def interrupted_plot(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as patch:
+        patch.setattr(plotting, "plot_gas", interrupted_plot)
+        assert main(resume) == 130
+    assert "interrupted" in capsys.readouterr().err
+    original = GasSimulation._record
+
+    def record_then_signal(self):
+        original(self)
+        if self.collisions == 1400:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with monkeypatch.context() as patch:
+        patch.setattr(GasSimulation, "_record", record_then_signal)
+        assert main(resume) == 130
+    err = capsys.readouterr().err
+    assert "the checkpoint holds collision 1400 of 2000" in err and "wavecontact: interrupted" in err
+    assert _state(out)[0] == 1400
+    finished = _json(capsys, resume)
+    assert finished["collisions"] == 2000
+    assert finished["final_energy"] == straight["final_energy"]
+    assert finished["simulated_time"] == straight["simulated_time"]
+    np.testing.assert_array_equal(_state(out)[1], _state(tmp_path / "straight")[1])
+    again = _json(capsys, resume)  # the run finished: the same command now continues it
+    assert again["collisions"] == 3200
+
+
+@pytest.mark.parametrize("change, option", [
+    (["--seed", "6"], "--seed"), (["--rods", "101"], "--rods"), (["--walls"], "--walls"),
+    (["--damping", "3"], "--damping"), (["--lengths", "0.5", "1.0"], "--lengths"), (["--packing", "0.3"], "--packing"),
+    (["--restitution", "0.9"], "fixed"),
+])
+def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys, change, option):
+    out = tmp_path / "run"
+    _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out)])
+    before = (out / "gas_checkpoint.npz").read_bytes()
+    argv = [*_BASE, "--collisions", "300", "--out", str(out), "--resume"]
+    if change[0] in argv:  # another value of an option the run was given
+        argv[argv.index(change[0]) + 1] = change[1]
+    else:
+        argv += change
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--resume" in err and option in err
+    assert (out / "gas_checkpoint.npz").read_bytes() == before
+
+
+def test_a_folder_with_a_checkpoint_needs_resume_or_overwrite(tmp_path, capsys):
+    out = tmp_path / "run"
+    first = _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out)])
+    assert main([*_BASE, "--collisions", "300", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--resume" in err and "--overwrite" in err
+    again = _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out), "--overwrite"])
+    assert again["final_energy"] == first["final_energy"] and _state(out)[0] == 300
+
+
+_GAS_TAMPERING = {
+    "NaN velocity": lambda a: a["v"].__setitem__(3, np.nan),
+    "infinite bath": lambda a: a["temperature"].__setitem__(0, np.inf),
+    "one velocity for every rod": lambda a: a.__setitem__("v", a["v"][:1]),
+    "resized positions": lambda a: a.__setitem__("x", np.concatenate([a["x"], a["x"]])),
+    "missing window": lambda a: a.pop("window"),
+    "history resized": lambda a: a.__setitem__("history_time", a["history_time"][:-1]),
+    "negative counter": lambda a: a["counters"].__setitem__(0, -5),
+    "local time ahead": lambda a: a["local_time"].__setitem__(0, 1e9),
+    "unknown status": lambda a: a.__setitem__("status", np.asarray("exploded")),
+    "segment ahead": lambda a: a.__setitem__("segment", np.array([10**6, 10**6, 0])),
+}
+
+
+@pytest.mark.parametrize("change", list(_GAS_TAMPERING), ids=list(_GAS_TAMPERING))
+def test_a_crafted_gas_checkpoint_is_refused_in_one_line(tmp_path, capsys, change):
+    from test_io_run_controller import tamper
+
+    out = tmp_path / "run"
+    _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out)])
+    tamper(out / "gas_checkpoint.npz", _GAS_TAMPERING[change])
+    assert main([*_BASE, "--collisions", "300", "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "checkpoint" in err and "Traceback" not in err

@@ -151,3 +151,71 @@ def test_finite_kappa_ensemble_keeps_each_samples_error_estimate(tmp_path):
     assert run.summary()["largest_error_estimate"] == np.max(run.error_estimate)
     resumed = ensemble(0.6173, 100.0, 0.5, 6, 3, bath_modes=20, batch_size=4, out=tmp_path / "r")
     assert np.array_equal(resumed.error_estimate, run.error_estimate)
+
+
+# ----------------------------------------------------------------------------
+# The run controller (issue 25 Deliver 3, issue 23 items 4 and 8)
+# ----------------------------------------------------------------------------
+
+
+def test_a_signal_ends_the_ensemble_after_the_batch_in_progress(tmp_path, monkeypatch):
+    import os
+    import signal
+
+    import wavecontact.studies.ensemble as module
+
+    original = module.run_batch
+
+    def terminate_in_second_batch(fields, start, stop):
+        if start == 4:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return original(fields, start, stop)
+
+    monkeypatch.setattr(module, "run_batch", terminate_in_second_batch)
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        ensemble(**HARD, batch_size=4, out=out)
+    assert sorted(p.name for p in out.glob("batch_*.npz")) == ["batch_000000000.npz", "batch_000000004.npz"]
+    assert not list(out.glob(".wavecontact.lock"))
+    monkeypatch.setattr(module, "run_batch", original)
+    assert np.array_equal(ensemble(**HARD, batch_size=4, out=out).restitution,
+                          ensemble(**HARD, batch_size=4).restitution)
+
+
+def test_a_crafted_batch_with_nan_restitution_is_refused(tmp_path):
+    from test_io_run_controller import tamper
+
+    from wavecontact.errors import CheckpointError
+
+    out = tmp_path / "run"
+    ensemble(**HARD, batch_size=8, out=out)
+    tamper(out / "batch_000000008.npz", lambda a: a["restitution"].__setitem__(2, np.nan))
+    with pytest.raises(CheckpointError, match="restitution must be finite") as info:
+        ensemble(**HARD, batch_size=8, out=out)
+    assert "\n" not in str(info.value)
+    tamper(out / "batch_000000008.npz", lambda a: a.__setitem__("restitution", a["restitution"][:1]))
+    with pytest.raises(CheckpointError, match="shapes"):
+        ensemble(**HARD, batch_size=8, out=out)
+
+
+def test_a_second_writer_is_refused_and_overwrite_replaces_another_ensemble(tmp_path):
+    import os
+
+    from wavecontact.io.run_controller import LOCK_NAME
+
+    out = tmp_path / "run"
+    first = ensemble(**HARD, batch_size=8, out=out)
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        (out / LOCK_NAME).write_text(f"{holder.pid} {os.uname().nodename}\n")
+        with pytest.raises(InvalidParameterError, match="in use by another wavecontact run"):
+            ensemble(**HARD, batch_size=8, out=out)
+    finally:
+        holder.kill()
+        holder.wait()
+    other = dict(HARD, seed=12)
+    with pytest.raises(InvalidParameterError, match="--overwrite"):
+        ensemble(**other, batch_size=8, out=out)
+    replaced = ensemble(**other, batch_size=8, out=out, overwrite=True)
+    assert np.array_equal(replaced.restitution, ensemble(**other, batch_size=8).restitution)
+    assert not np.array_equal(replaced.restitution, first.restitution)

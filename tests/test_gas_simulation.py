@@ -243,3 +243,77 @@ def test_per_collision_draws_agree_statistically_with_the_table_kernel():
     a, b = np.array(finals["table"]), np.array(finals["solve"])
     spread = math.sqrt(np.var(a, ddof=1) / a.size + np.var(b, ddof=1) / b.size)
     assert abs(a.mean() - b.mean()) < 4 * spread + 1e-3
+
+
+# ----------------------------------------------------------------------------
+# Long runs through the run controller (issue 23 item 4)
+# ----------------------------------------------------------------------------
+
+_SIGNALLED_RUN = """
+import sys
+from wavecontact.gas import FixedRestitution, GasSimulation, random_gas
+from wavecontact.gas.simulation import run_gas
+
+def new():
+    return GasSimulation(random_gas(60, seed=3), FixedRestitution(0.999), seed=4, record_every=500)
+
+print("started", flush=True)
+run_gas(new, 10**9, sys.argv[1], checkpoint_every=2000, checkpoint_seconds=None,
+        log=lambda m: print(m, file=sys.stderr, flush=True))
+"""
+
+
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_a_signalled_gas_process_leaves_a_checkpoint_that_resumes_bit_for_bit(tmp_path, name):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from wavecontact.gas.simulation import CHECKPOINT_NAME
+
+    out = tmp_path / "run"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    process = subprocess.Popen([sys.executable, "-c", _SIGNALLED_RUN, str(out)], env=env, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not (out / CHECKPOINT_NAME).exists():  # the first cadence checkpoint: the loop is running
+            assert process.poll() is None and time.monotonic() < deadline
+            time.sleep(0.05)
+        process.send_signal(getattr(signal, name))
+        _stdout, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode != 0
+    assert "interrupted; the checkpoint holds collision" in stderr
+    sim, segment = GasSimulation.resume(out / CHECKPOINT_NAME, with_segment=True)
+    assert segment == (0, 10**9, False) and sim.collisions > 0 and sim.collisions % 500 == 0
+    straight = GasSimulation(random_gas(60, seed=3), FixedRestitution(0.999), seed=4, record_every=500)
+    straight.run(sim.collisions)
+    for key, value in _state(straight).items():
+        np.testing.assert_array_equal(value, getattr(sim, key), err_msg=key)
+    assert not (out / ".wavecontact.lock").exists()
+
+
+def test_a_solve_rule_run_seeded_by_a_spawned_sequence_resumes_bit_for_bit(tmp_path):
+    """The per-collision seeds after a resume are those of the uninterrupted run even when the run's seed is a
+    spawned child (the command line's is): the checkpoint keeps the seed's spawn key, not only its entropy."""
+
+    def draw(gamma, temperature_ratio, seed):
+        return float(np.random.default_rng(seed).uniform(0.7, 0.95)) ** 2, 0.4
+
+    rule = VibrationSolve(draw, bath_modes=10)
+    gas = random_gas(60, seed=2, lengths=UniformLengths(0.5, 1.0))
+    def seed():  # a fresh object each time: spawning from a SeedSequence changes it
+        return np.random.SeedSequence(5).spawn(2)[1]
+
+    straight = GasSimulation(gas, rule, seed=seed(), record_every=50)
+    straight.run(400)
+    first = GasSimulation(gas, rule, seed=seed(), record_every=50)
+    first.run(200)
+    resumed = GasSimulation.resume(first.save_checkpoint(tmp_path / "gas.npz"), rule=rule)
+    resumed.run(200)
+    for name, value in _state(straight).items():
+        np.testing.assert_array_equal(value, getattr(resumed, name), err_msg=name)

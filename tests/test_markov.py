@@ -271,3 +271,69 @@ def test_boltzmann_defect_grows_when_the_bath_loses_modes():
             errors.append(change.std(ddof=1) / math.sqrt(change.size))
     assert defects[0] > 4.0 * errors[0]
     assert defects[0] - defects[1] > 3.0 * math.hypot(*errors)
+
+
+# ----------------------------------------------------------------------------
+# The run controller: finished batches of chains kept in --out (issue 25 Deliver 3, issue 23 items 4 and 8)
+# ----------------------------------------------------------------------------
+
+_RUN = dict(rule="glauber", chains=5, steps=40, seed=3, bath="conserved", modes_per_rod=5, batch_size=1)  # noqa: C408
+
+
+def test_an_interrupted_markov_run_resumes_from_its_batches(tmp_path, monkeypatch):
+    import wavecontact.studies.markov as module
+
+    original = module.run_chains
+
+    def interrupt_third(fields, start, stop):
+        if start == 2:
+            raise KeyboardInterrupt
+        return original(fields, start, stop)
+
+    monkeypatch.setattr(module, "run_chains", interrupt_third)
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        markov_chains(GAMMA, out=out, **_RUN)
+    stamps = {p.name: p.stat().st_mtime_ns for p in out.glob("chains_*.npz")}
+    assert sorted(stamps) == ["chains_000000000.npz", "chains_000000001.npz"]
+    monkeypatch.setattr(module, "run_chains", original)
+    resumed = markov_chains(GAMMA, out=out, **_RUN)
+    straight = markov_chains(GAMMA, **_RUN)
+    for name in ("energy", "temperature", "eps2"):
+        np.testing.assert_array_equal(getattr(resumed, name), getattr(straight, name))
+    assert all((out / name).stat().st_mtime_ns == stamp for name, stamp in stamps.items())  # not recomputed
+
+
+_CHAIN_TAMPERING = {
+    "NaN energy": (lambda a: a["energy"].__setitem__((0, 5), np.nan), "energy must be finite"),
+    "eps2 off Eq. 28": (lambda a: a["eps2"].__setitem__((0, 5), 0.5), "eps2"),
+    "bath off Eq. 28": (lambda a: a["temperature"].__setitem__((0, 5), 0.5), "T_B"),
+    "another start": (lambda a: a["energy"].__setitem__((0, 0), 2.0), "start"),
+    "resized": (lambda a: a.__setitem__("eps2", a["eps2"][:, :-1]), "shapes"),
+    "missing": (lambda a: a.pop("temperature"), "missing"),
+}
+
+
+@pytest.mark.parametrize("change", list(_CHAIN_TAMPERING), ids=list(_CHAIN_TAMPERING))
+def test_a_crafted_batch_of_chains_is_refused_in_one_line(tmp_path, change):
+    from test_io_run_controller import tamper
+
+    from wavecontact.errors import CheckpointError
+
+    out = tmp_path / "run"
+    markov_chains(GAMMA, out=out, **_RUN)
+    edit, message = _CHAIN_TAMPERING[change]
+    tamper(out / "chains_000000001.npz", edit)
+    with pytest.raises(CheckpointError, match=message) as info:
+        markov_chains(GAMMA, out=out, **_RUN)
+    assert "\n" not in str(info.value)
+
+
+def test_a_folder_with_another_markov_run_is_refused_unless_overwritten(tmp_path):
+    out = tmp_path / "run"
+    markov_chains(GAMMA, out=out, **_RUN)
+    other = dict(_RUN, seed=4)
+    with pytest.raises(InvalidParameterError, match="another --out, the same parameters to resume, or --overwrite"):
+        markov_chains(GAMMA, out=out, **other)
+    replaced = markov_chains(GAMMA, out=out, overwrite=True, **other)
+    np.testing.assert_array_equal(replaced.energy, markov_chains(GAMMA, **other).energy)

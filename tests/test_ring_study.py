@@ -463,3 +463,99 @@ def test_real_ring_paper_size():
     """The paper's run: gamma = 0.6173, kappa = 4000, N = 75, 4500 collisions, three realisations."""
     stats_ = _physics_checks(_realisations(75, 4500, 3), relax_median_max=120, corr_max=0.1)
     assert all(s.entropy_settling_collisions is not None for s in stats_)
+
+
+# ----------------------------------------------------------------------------
+# The run controller (issue 25 Deliver 3, issue 23 items 4 and 8)
+# ----------------------------------------------------------------------------
+
+
+def test_a_signal_during_a_collision_leaves_a_checkpoint_of_it(tmp_path):
+    import os
+    import signal
+
+    reference = _toy_run(collisions=80)
+
+    def terminate(index, record):
+        if index == 30:
+            os.kill(os.getpid(), signal.SIGTERM)  # handled after this collision, not inside it
+
+    messages = []
+    with pytest.raises(KeyboardInterrupt):
+        _toy_run(tmp_path, collisions=80, checkpoint_every=25, callback=terminate, log=messages.append)
+    assert messages == ["interrupted; run again to resume from the checkpoint after collision 31"]
+    resumed = _toy_run(tmp_path, collisions=80, checkpoint_every=25)
+    assert resumed.resumed_from == 31
+    _assert_same_run(reference, resumed)
+
+
+def test_a_second_run_into_the_folder_is_refused_and_overwrite_replaces_another_run(tmp_path):
+    import subprocess
+    import sys
+
+    from wavecontact.io.run_controller import LOCK_NAME
+
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        tmp_path.mkdir(exist_ok=True)
+        (tmp_path / LOCK_NAME).write_text(f"{holder.pid} {__import__('os').uname().nodename}\n")
+        with pytest.raises(InvalidParameterError, match="in use by another wavecontact run"):
+            _toy_run(tmp_path, collisions=20)
+        assert not (tmp_path / ring_study.CHECKPOINT_NAME).exists()
+    finally:
+        holder.kill()
+        holder.wait()
+    _toy_run(tmp_path, collisions=20, modes=4)
+    with pytest.raises(CheckpointError, match="modes"):
+        _toy_run(tmp_path, collisions=20, modes=5)
+    replaced = _toy_run(tmp_path, collisions=20, modes=5, overwrite=True)
+    assert replaced.resumed_from == 0
+    _assert_same_run(replaced, _toy_run(collisions=20, modes=5))
+
+
+_RING_TAMPERING = {
+    "pair out of range": lambda a: a["run/pair"].__setitem__(3, 7),
+    "NaN modal energy": lambda a: a["run/modal_energies"].__setitem__((2, 0, 1), np.nan),
+    "negative energy": lambda a: a["run/translational_energy"].__setitem__(0, -1.0),
+    "rows of unequal length": lambda a: a.__setitem__("run/restitution", a["run/restitution"][:-1]),
+    "missing rows": lambda a: a.pop("run/bath_energy"),
+    "state at another collision": lambda a: a.__setitem__("state/count", np.asarray(3)),
+    "NaN in the state": lambda a: a["state/energies"].__setitem__(0, np.nan),
+    "infinite wall time": lambda a: a.__setitem__("wall_time_s", np.asarray(np.inf)),
+}
+
+
+@pytest.mark.parametrize("change", list(_RING_TAMPERING), ids=list(_RING_TAMPERING))
+def test_a_crafted_ring_checkpoint_is_refused_in_one_line(tmp_path, change):
+    from test_io_run_controller import tamper
+
+    class CountedToy(ExchangeToyRing):  # a state that says at which collision it is, as RingSimulation's does
+        def get_state(self):
+            return {**super().get_state(), "collisions": np.asarray(self.count)}
+
+        def set_state(self, state):
+            super().set_state(state)
+
+    _toy_run(tmp_path, collisions=20, checkpoint_every=10)
+    tamper(tmp_path / ring_study.CHECKPOINT_NAME, _RING_TAMPERING[change])
+    if change == "state at another collision":
+        tamper(tmp_path / ring_study.CHECKPOINT_NAME, lambda a: a.__setitem__("state/collisions", np.asarray(3)))
+    with pytest.raises(CheckpointError) as info:
+        run_ring(0.6173, 4000, 6, 30, out_dir=tmp_path, progress=False, simulation_factory=CountedToy)
+    assert "\n" not in str(info.value) and "invalid" in str(info.value)
+
+
+def test_load_npz_refuses_garbage_and_impossible_rows_in_one_line(tmp_path):
+    (tmp_path / "garbage.npz").write_bytes(b"PK\x03\x04 not a zip")
+    with pytest.raises(InvalidParameterError, match="not a ring run") as info:
+        RingRun.load_npz(tmp_path / "garbage.npz")
+    assert "\n" not in str(info.value)
+    run = _toy_run(collisions=10, modes=3)
+    run.pair[4] = 3
+    run.save_npz(tmp_path / "bad.npz")
+    with pytest.raises(InvalidParameterError, match="pair") as info:
+        RingRun.load_npz(tmp_path / "bad.npz")
+    assert "\n" not in str(info.value)
+    np.save(tmp_path / "other.npy", np.zeros(3))
+    with pytest.raises(InvalidParameterError, match="not a ring run"):
+        RingRun.load_npz(tmp_path / "other.npy")

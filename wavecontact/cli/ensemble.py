@@ -41,6 +41,8 @@ def add_parser(subparsers):
     p.add_argument("--batch-size", type=positive_int, default=256, help="samples per task (default 256)")
     p.add_argument("--rtol", type=float, help="delay solver tolerance (default 1e-3 in ensembles: see docs/bath.md)")
     p.add_argument("--out", metavar="DIR", help="keep every finished batch here; a rerun resumes")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace another ensemble found in DIR (its description and batches) instead of refusing")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="draw p(eps^2) and D(eps^2) with confidence bands")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
@@ -86,7 +88,7 @@ def run(args) -> int:
     with executor_from(args.workers, args.scheduler) as executor:
         result = ensemble(args.gamma, args.kappa, temperature, args.samples, args.seed, solver=args.solver,
                           bath_modes=args.bath_modes, executor=executor, batch_size=args.batch_size, out=args.out,
-                          progress=args.progress and not args.json, **options)
+                          progress=args.progress and not args.json, overwrite=args.overwrite, **options)
     summary = result.summary()
     if args.out:
         result.save(args.out)

@@ -79,7 +79,11 @@ def add_parser(subparsers):
     p.add_argument("--walls", action="store_true", help="a box with elastic walls instead of a ring")
     p.add_argument("--out", metavar="DIR", help="write summary, histories, figure and a checkpoint into DIR")
     p.add_argument("--resume", action="store_true",
-                   help=f"continue the run checkpointed in DIR/{CHECKPOINT_NAME} by COLLISIONS more collisions")
+                   help=f"continue the run checkpointed in DIR/{CHECKPOINT_NAME} by COLLISIONS more collisions (an "
+                   "interrupted run: COLLISIONS counted from where it began, so the same command finishes it); the "
+                   "other options must be those of the checkpointed run")
+    p.add_argument("--overwrite", action="store_true",
+                   help=f"replace a checkpoint ({CHECKPOINT_NAME}) of another run found in DIR instead of refusing")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     p.set_defaults(run=run)
@@ -110,54 +114,86 @@ def _rule(args):
     return VibrationLaw(load_law(args.law) if args.law else default_law(), soft)
 
 
-def run(args) -> int:
-    from ..errors import InvalidParameterError
-    from ..gas import GasSimulation, UniformLengths, random_gas
+def _check_resumed(args, rule):
+    """Refuse ``--resume`` with options that contradict the checkpointed run."""
+    import numpy as np
 
-    out = Path(args.out) if args.out else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise InvalidParameterError(f"--out {args.out!r} exists and is not a directory")
-    rule = _rule(args)
-    if args.resume:
-        if out is None or not (out / CHECKPOINT_NAME).is_file():
-            raise InvalidParameterError(f"--resume needs --out DIR holding {CHECKPOINT_NAME}")
-        sim = GasSimulation.resume(out / CHECKPOINT_NAME)
+    from ..errors import InvalidParameterError
+    from ..gas import UniformLengths, random_gas
+
+    def check(sim):
+        params = sim._parameters()
+        if sim.gas.rods != args.rods:
+            raise InvalidParameterError(f"--resume: the checkpoint holds {sim.gas.rods} rods, not --rods {args.rods}")
+        if (params["boundary"] == "walls") != bool(args.walls):
+            raise InvalidParameterError(f"--resume: the checkpointed run has {params['boundary']} boundaries "
+                                        f"({'with' if params['boundary'] == 'walls' else 'without'} --walls)")
+        if params["seed_entropy"] != str(args.seed):
+            raise InvalidParameterError(f"--resume: the checkpoint was written with --seed {params['seed_entropy']}, "
+                                        f"not {args.seed}")
+        if sim.damping != args.damping:
+            raise InvalidParameterError(f"--resume: the checkpoint was written with --damping {sim.damping}, "
+                                        f"not {args.damping}")
         if sim.rule.describe() != rule.describe():
             raise InvalidParameterError(f"--resume: the checkpoint was written with {sim.rule.describe()}, "
                                         f"not {rule.describe()}")
         if sim.contact_stiffness != args.contact_stiffness:
             raise InvalidParameterError(f"--resume: the checkpoint was written with --contact-stiffness "
                                         f"{sim.contact_stiffness}, not {args.contact_stiffness}")
-    else:
-        shortest, longest = args.lengths
-        if longest < shortest:
-            raise InvalidParameterError(f"--lengths: LONGEST ({longest:g}) must be >= SHORTEST ({shortest:g})")
+        gas = random_gas(args.rods, seed=np.random.SeedSequence(args.seed).spawn(2)[0],
+                         lengths=UniformLengths(*args.lengths), packing_fraction=args.packing,
+                         boundary="walls" if args.walls else "ring")
+        if not (np.array_equal(gas.lengths, sim.gas.lengths) and gas.system_length == sim.gas.system_length):
+            raise InvalidParameterError("--resume: --lengths/--packing differ from those of the checkpointed run")
+
+    return check
+
+
+def run(args) -> int:
+    from ..errors import InvalidParameterError
+    from ..gas import GasSimulation, UniformLengths, random_gas
+    from ..gas.simulation import run_gas
+    from ..result import to_jsonable
+
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise InvalidParameterError(f"--out {args.out!r} exists and is not a directory")
+    rule = _rule(args)
+    shortest, longest = args.lengths
+    if longest < shortest:
+        raise InvalidParameterError(f"--lengths: LONGEST ({longest:g}) must be >= SHORTEST ({shortest:g})")
+    if args.resume and out is None:
+        raise InvalidParameterError(f"--resume needs --out DIR holding {CHECKPOINT_NAME}")
+
+    def new_simulation():
         import numpy as np
 
         initial, dynamics = np.random.SeedSequence(args.seed).spawn(2)
         gas = random_gas(args.rods, seed=initial, lengths=UniformLengths(shortest, longest),
                          packing_fraction=args.packing, boundary="walls" if args.walls else "ring")
-        sim = GasSimulation(gas, rule, damping=args.damping, contact_stiffness=args.contact_stiffness, seed=dynamics,
-                            record_every=max(1, args.collisions // 400), frame_every=1, max_frames=400)
+        return GasSimulation(gas, rule, damping=args.damping, contact_stiffness=args.contact_stiffness, seed=dynamics,
+                             record_every=max(1, args.collisions // 400), frame_every=1, max_frames=400)
+
+    def write_outputs(sim, result):
+        from ..plotting.gas import plot_gas
+
+        result.save(out)
+        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length)
+
     from .._jit import prepared_kernel_count
 
     prepared = prepared_kernel_count()
-    result = sim.run(args.collisions, progress=args.progress and sys.stderr.isatty())
+    sim, result = run_gas(new_simulation, args.collisions, out, resume=args.resume, overwrite=args.overwrite,
+                          check_resumed=_check_resumed(args, rule), write_outputs=write_outputs,
+                          progress=args.progress and sys.stderr.isatty(),
+                          log=lambda message: print(f"wavecontact gas: {message}", file=sys.stderr, flush=True))
     summary = {"rods": sim.gas.rods, **result.summary(), "damping": args.damping, "seed": args.seed,
                # True when this call paid numba's one-time compilation or cache load (slower rate)
                "includes_kernel_preparation": prepared_kernel_count() > prepared}
-    if out is not None:
-        from ..plotting.gas import plot_gas
-
-        out.mkdir(parents=True, exist_ok=True)
-        result.save(out)
-        if sim.status in ("completed", "time_limit"):
-            sim.save_checkpoint(out / CHECKPOINT_NAME)
-        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length)
     if result.status not in ("completed",):
         print(f"wavecontact gas: {result.message}", file=sys.stderr)
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json.dumps(to_jsonable(summary), indent=2))
     else:
         print(f"{summary['rods']} rods, rule {args.rule}: {result.message}")
         print(f"  collisions            {result.collisions}")

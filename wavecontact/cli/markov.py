@@ -44,7 +44,10 @@ def add_parser(subparsers):
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the chains on a dask.distributed scheduler (default: none, local processes)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write Fig. 10 (distribution of E_tr/T_B^0) to FILE")
-    p.add_argument("--out", metavar="DIR", help="write markov.npz and summary.json into DIR")
+    p.add_argument("--out", metavar="DIR", help="write markov.npz and summary.json into DIR (and each finished "
+                   "batch of chains: the same command again resumes)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace another Markov run found in DIR instead of refusing")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     p.set_defaults(run=run)
     return p
@@ -87,17 +90,17 @@ def run(args) -> int:
             args.gamma, kappa=args.kappa, rule=args.rule, chains=args.chains, steps=args.steps, seed=args.seed,
             bath=args.bath, modes_per_rod=args.modes_per_rod, initial_energy=args.initial_energy,
             bath_modes=args.bath_modes, solver=args.solver, table=args.table, executor=executor,
-            progress=None if args.progress else False,
+            progress=None if args.progress else False, out=args.out, overwrite=args.overwrite,
         )
     finally:
         if executor is not None:
             (executor.close if hasattr(executor, "close") else executor.shutdown)()
     summary = result.summary(args.burn_in)
     if args.out:
-        from ..io.files import atomic_write
+        from ..io.run_controller import write_summary
 
         result.save(args.out)
-        atomic_write(Path(args.out) / "summary.json", lambda h: h.write(json.dumps(summary, indent=1)), binary=False)
+        write_summary(Path(args.out) / "summary.json", summary)
     if args.plot:
         from ..plotting.markov import plot_stationary_distribution
 

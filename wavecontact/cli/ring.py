@@ -31,6 +31,8 @@ def add_parser(subparsers):
     add_ring_options(p)
     p.add_argument("--checkpoint-every", type=positive_int, default=100, metavar="K",
                    help="write a checkpoint every K collisions")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace a checkpoint of another run found in DIR instead of refusing it")
     p.add_argument("--transient", type=nonnegative_int, default=None,
                    help="collisions discarded before stationary averages (default: chosen from the relaxation)")
     p.add_argument("--max-lag", type=positive_int, default=20, help="largest lag k of C_eps(k)")
@@ -57,6 +59,7 @@ def _format(value, spec=".4g") -> str:
 
 def run(args) -> int:
     from ..errors import InvalidParameterError
+    from ..io.run_controller import write_summary
     from ..plotting.ring import plot_ring_figures
     from ..studies.ring import run_ring
 
@@ -79,6 +82,7 @@ def run(args) -> int:
         progress=args.progress,
         static_correction=args.static_correction,
         log=_log,
+        overwrite=args.overwrite,
     )
     stats = ring_run.statistics(transient=args.transient, max_lag=args.max_lag)
     summary = {
@@ -90,9 +94,7 @@ def run(args) -> int:
         **stats.as_dict(),
     }
     summary.pop("mean_relative_spectrum")
-    with open(out / SUMMARY_NAME, "w") as handle:
-        json.dump(summary, handle, indent=2)
-        handle.write("\n")
+    write_summary(out / SUMMARY_NAME, summary)
     _write_spectrum(out / SPECTRUM_NAME, stats.mean_relative_spectrum)
     figures = plot_ring_figures(ring_run, out, stats)
     files = report_written([out / "ring.npz", out / "ring.csv", out / SUMMARY_NAME, out / SPECTRUM_NAME,

@@ -16,16 +16,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidParameterError, require_positive
+from ..errors import CheckpointError, InvalidParameterError, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
-from ..progress import Progress
+from ..io.run_controller import RunController
 from ..restitution_table import RestitutionTable
 from . import kernels
 from .collision_law import LAW_ARRAYS, law_from_arrays
 from .model import RodGas
 from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable, rule_from_description
 
-__all__ = ["MAX_COLLISIONS", "GasResult", "GasSimulation"]
+__all__ = ["CHECKPOINT_NAME", "MAX_COLLISIONS", "GasResult", "GasSimulation", "run_gas"]
 
 MAX_COLLISIONS = 10**11
 MAX_RECORDS = 10**7  # history rows one run may add (6 floats each)
@@ -154,14 +154,14 @@ class GasResult:
         from pathlib import Path
 
         from ..io.files import atomic_write
+        from ..io.run_controller import write_summary
 
         directory = Path(directory)
         arrays = {f"history_{k}": v for k, v in self.history.items()}
         arrays.update(frame_times=self.frame_times, frames=self.frames, velocities=self.velocities,
                       bath_temperatures=self.bath_temperatures)
         atomic_write(directory / "gas_history.npz", lambda h: np.savez(h, **arrays))
-        text = json.dumps(self.summary(), indent=2) + "\n"
-        atomic_write(directory / "gas_summary.json", lambda h: h.write(text), binary=False)
+        write_summary(directory / "gas_summary.json", self.summary())
         return directory
 
 
@@ -250,6 +250,7 @@ class GasSimulation:
             raise InvalidParameterError(f"energy_floor must lie in [0, 1), got {energy_floor!r}")
         sequence = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
         self.seed_entropy = sequence.entropy
+        self.seed_spawn_key = tuple(sequence.spawn_key)
         levels, self._solve_seeds = sequence.spawn(2)  # table levels; parent of the per-collision seeds
         self._rng = np.random.Generator(np.random.PCG64(levels))
         n = gas.rods
@@ -419,7 +420,7 @@ class GasSimulation:
         self.pending[:] = (1.0, eps2, share)
 
     # ------------------------------------------------------------------- run
-    def run(self, collisions, *, max_time=math.inf, progress=False) -> GasResult:
+    def run(self, collisions, *, max_time=math.inf, progress=False, controller=None) -> GasResult:
         """Advance by ``collisions`` rod-rod collisions, or until ``max_time``, a collapse, or no events left.
 
         Parameters
@@ -429,7 +430,11 @@ class GasSimulation:
         max_time : float
             Absolute simulated time at which to stop.
         progress : bool
-            Show a tqdm bar.
+            Show a tqdm bar (ignored with ``controller``).
+        controller : RunController, optional
+            Told of every chunk of ``record_every`` collisions at the consistent point after it
+            (:class:`~wavecontact.io.run_controller.RunController`: progress, checkpoints, interrupts);
+            None: a progress bar only.
         """
         collisions = _count("collisions", collisions, 1, MAX_COLLISIONS)
         if math.isnan(float(max_time)) or float(max_time) < 0:
@@ -443,6 +448,12 @@ class GasSimulation:
         if self.records == 0:
             self._record()
         target = self.collisions + collisions
+        if controller is None:
+            with RunController(collisions, "gas", unit="collision", progress=bool(progress)) as bar_only:
+                return self._run_chunks(target, max_time, bar_only)
+        return self._run_chunks(target, max_time, controller)
+
+    def _run_chunks(self, target, max_time, controller) -> GasResult:
         rule = self.rule
         ratio, share_grid, probability, quantiles, share = rule.kernel_arrays()
         soft_law = self.contact_stiffness is not None and rule.code == kernels.RULE_LAW
@@ -451,7 +462,6 @@ class GasSimulation:
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
         no_uniforms = np.zeros(0)
-        bar = Progress(collisions, "gas", unit="collision", enabled=bool(progress))
         status = kernels.STATUS_DONE
         start = time.perf_counter()
         first = self.collisions
@@ -481,16 +491,15 @@ class GasSimulation:
             if rule.code in (kernels.RULE_TABLE, kernels.RULE_LAW) and used < chunk:
                 self._rng.bit_generator.state = state  # rewind: only the used levels are consumed
                 self._rng.bit_generator.advance(used)
-            bar.advance(used)
             if status == kernels.STATUS_DONE and self.collisions % self.record_every == 0:
                 self._record()
+            controller.advance(used, consistent=status == kernels.STATUS_DONE)
             if status != kernels.STATUS_DONE:
                 if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS, kernels.STATUS_COOLED,
                               kernels.STATUS_OFF_TABLE):
                     self._record()  # the final state of a run that cannot continue
                 break
         wall = time.perf_counter() - start
-        bar.close()
         self.status = _STATUS[status]
         return self._result(wall, self.collisions - first)
 
@@ -559,12 +568,22 @@ class GasSimulation:
             "collapse_factor": self.collapse_factor,
             "energy_floor": self.energy_floor,
             "seed_entropy": str(self.seed_entropy),
+            "seed_spawn_key": [int(k) for k in self.seed_spawn_key],
             "boundary": self.gas.boundary,
             "system_length": self.gas.system_length,
         }
 
-    def save_checkpoint(self, path):
-        """Write the whole state (npz + JSON, checksummed) so that :meth:`resume` continues bit for bit."""
+    def save_checkpoint(self, path, segment=None):
+        """Write the whole state (npz + JSON, checksummed) so that :meth:`resume` continues bit for bit.
+
+        Parameters
+        ----------
+        path : path-like
+            The checkpoint file.
+        segment : (int, int, bool), optional
+            ``(first, target, finished)`` of the run in progress (:func:`run_gas`): the collision count
+            it started from, the count it runs to, and whether its outputs are written.
+        """
         arrays = {name: getattr(self, name) for name in self._STATE}
         arrays.update(gas_lengths=self.gas.lengths, gas_positions=self.gas.positions,
                       gas_velocities=self.gas.velocities, gas_bath_temperatures=self.gas.bath_temperatures)
@@ -574,6 +593,8 @@ class GasSimulation:
         arrays["rng_state"] = np.asarray(json.dumps(self._rng.bit_generator.state))
         arrays["progress"] = np.array([self.records, self.drawn], np.int64)
         arrays["status"] = np.asarray(self.status)
+        if segment is not None:
+            arrays["segment"] = np.array([int(segment[0]), int(segment[1]), int(bool(segment[2]))], np.int64)
         if isinstance(self.rule, VibrationLaw):
             for prefix, law in (("law", self.rule.law), ("soft_law", self.rule.soft_law)):
                 if law is not None:
@@ -586,10 +607,29 @@ class GasSimulation:
         return write_checkpoint(path, CHECKPOINT_SCHEMA, CHECKPOINT_VERSION, self._parameters(), arrays)
 
     @classmethod
-    def resume(cls, path, rule=None):
-        """Rebuild a simulation from :meth:`save_checkpoint` (pass ``rule`` for a :class:`VibrationSolve`)."""
+    def resume(cls, path, rule=None, *, with_segment=False):
+        """Rebuild a simulation from :meth:`save_checkpoint` (pass ``rule`` for a :class:`VibrationSolve`).
+
+        The checkpoint's contents are checked as strictly as user input (shapes, finiteness, ranges,
+        consistency with its parameters), whatever its checksum says; a failed check raises
+        :class:`~wavecontact.errors.CheckpointError` with one line.  ``with_segment``: return
+        ``(simulation, segment)`` with the ``segment`` given to :meth:`save_checkpoint` (None if none).
+        """
         arrays, meta = read_checkpoint(path, CHECKPOINT_SCHEMA, CHECKPOINT_VERSION)
-        params = meta["parameters"]
+        try:
+            sim, segment = cls._from_checkpoint(path, arrays, meta["parameters"], rule)
+        except CheckpointError:
+            raise
+        except (KeyError, ValueError, TypeError, IndexError, AttributeError, OverflowError) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            if isinstance(exc, KeyError):
+                reason = f"missing {reason}"
+            raise CheckpointError(f"checkpoint {path} is incomplete or invalid ({reason}); delete it or pass "
+                                  "--overwrite to start afresh") from None
+        return (sim, segment) if with_segment else sim
+
+    @classmethod
+    def _from_checkpoint(cls, path, arrays, params, rule):
         if rule is None:
             table = None
             soft_law = None
@@ -611,10 +651,14 @@ class GasSimulation:
                                         f"not {rule.describe()}")
         gas = RodGas(arrays["gas_lengths"], arrays["gas_positions"], arrays["gas_velocities"],
                      arrays["gas_bath_temperatures"], params["system_length"], params["boundary"])
-        sim = cls(gas, rule, damping=params["damping"], contact_stiffness=params["contact_stiffness"], seed=np.random.SeedSequence(int(params["seed_entropy"])),
+        seed = np.random.SeedSequence(int(params["seed_entropy"]),
+                                      spawn_key=tuple(int(k) for k in params.get("seed_spawn_key", ())))
+        sim = cls(gas, rule, damping=params["damping"], contact_stiffness=params["contact_stiffness"], seed=seed,
                   record_every=params["record_every"], frame_every=params["frame_every"],
                   max_frames=params["max_frames"], frame_rods=params["frame_rods"],
-                  collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"], energy_floor=params["energy_floor"])
+                  collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"],
+                  energy_floor=params["energy_floor"])
+        segment = _check_checkpoint_arrays(path, sim, arrays)
         for name in cls._STATE:
             getattr(sim, name)[...] = arrays[name]
         kernels.build_tree(sim.event_times.copy(), sim.tree_time, sim.tree_event)
@@ -625,4 +669,147 @@ class GasSimulation:
         sim.frames = list(arrays["frames"])
         sim.records, sim.drawn = (int(a) for a in arrays["progress"])
         sim.status = str(arrays["status"])
-        return sim
+        return sim, segment
+
+
+def _check_checkpoint_arrays(path, sim: GasSimulation, arrays: dict):
+    """Refuse a gas checkpoint whose state no run can reach (the same checks as user input); return its segment."""
+
+    def refuse(what):
+        raise CheckpointError(f"checkpoint {path}: {what}; delete it or pass --overwrite to start afresh")
+
+    for name in GasSimulation._STATE:
+        value, target = np.asarray(arrays[name]), getattr(sim, name)
+        if value.shape != target.shape:
+            refuse(f"{name} has shape {value.shape}, this gas needs {target.shape}")
+        if value.dtype.kind not in ("iu" if target.dtype.kind in "iu" else "iuf"):
+            refuse(f"{name} has dtype {value.dtype}, expected {target.dtype}")
+        if name == "event_times":
+            if np.any(np.isnan(value)) or np.any(value == -np.inf):
+                refuse("event_times holds NaN or -inf")
+        elif not np.all(np.isfinite(value)):
+            refuse(f"{name} holds NaN or infinite values")
+    if np.any(arrays["temperature"] < 0.0):
+        refuse("bath temperatures must be >= 0")
+    if np.any(arrays["counters"] < 0):
+        refuse("counters must be >= 0")
+    now = float(arrays["scalars"][kernels.T_NOW])
+    if now < 0.0 or np.any(arrays["local_time"] < 0.0) or np.any(arrays["local_time"] > now):
+        refuse("local times must lie in [0, t] with t the simulation time")
+    collisions = int(arrays["counters"][kernels.COLLISIONS])
+    names = [f"history_{k}" for k in _HISTORY]
+    rows = np.asarray(arrays[names[0]]).shape
+    for name in names:
+        value = np.asarray(arrays[name])
+        if value.ndim != 1 or value.shape != rows or value.dtype.kind != "f" or not np.all(np.isfinite(value)):
+            refuse(f"{name} must be a finite 1-d array as long as history_time")
+    counts = np.asarray(arrays["history_collisions"])
+    if np.any(np.diff(counts) < 0) or (counts.size and (counts[0] < 0 or counts[-1] > collisions)):
+        refuse("history_collisions must be non-decreasing and at most the collision count")
+    progress = np.asarray(arrays["progress"])
+    if progress.shape != (2,) or progress.dtype.kind not in "iu" or progress[0] != rows[0] or progress[1] < 0:
+        refuse("progress must be [records, draws] with one record per history row")
+    frames, frame_times = np.asarray(arrays["frames"]), np.asarray(arrays["frame_times"])
+    if (frames.ndim != 2 or frame_times.ndim != 1 or (frames.size and frames.shape[0] != frame_times.size)
+            or frames.shape[0] > sim.max_frames or not np.all(np.isfinite(frames))
+            or not np.all(np.isfinite(frame_times))):
+        refuse("frames and frame_times do not match")
+    if str(arrays["status"]) not in _STATUS.values():
+        refuse(f"unknown status {str(arrays['status'])!r}")
+    state = json.loads(str(arrays["rng_state"]))
+    if not isinstance(state, dict) or state.get("bit_generator") != "PCG64":
+        refuse("rng_state is not a PCG64 state")
+    segment = None
+    if "segment" in arrays:
+        value = np.asarray(arrays["segment"])
+        if value.shape != (3,) or value.dtype.kind not in "iu":
+            refuse("segment must be [first, target, finished]")
+        first, target, finished = (int(v) for v in value)
+        if not (0 <= first <= collisions and first <= target and finished in (0, 1)):
+            refuse(f"segment {value.tolist()} is inconsistent with {collisions} collisions")
+        segment = (first, target, bool(finished))
+    return segment
+
+
+CHECKPOINT_NAME = "gas_checkpoint.npz"
+
+
+def run_gas(new_simulation, collisions: int, out_dir=None, *, resume: bool = False, overwrite: bool = False,
+            check_resumed=None, write_outputs=None, progress: bool | None = False, checkpoint_seconds=60.0,
+            checkpoint_every: int | None = None, log=None):
+    """Run a gas as a long run: checkpoints at a cadence and on SIGINT/SIGTERM, resume, one writer per folder.
+
+    Parameters
+    ----------
+    new_simulation : callable
+        ``new_simulation() -> GasSimulation`` for a fresh run.
+    collisions : int
+        Collisions of this run: a fresh run goes from 0 to ``collisions``; ``resume`` continues the
+        checkpoint by ``collisions`` more, counted from where its run began if that run was interrupted
+        (so that the same command run again finishes the interrupted run, not a longer one).
+    out_dir : path-like or None
+        Folder of the checkpoint (``gas_checkpoint.npz``) and of ``write_outputs``' files; None: nothing
+        is written.
+    resume, overwrite : bool
+        Continue the checkpoint in ``out_dir``, or replace it; neither: a folder holding one is refused.
+    check_resumed : callable, optional
+        ``check_resumed(simulation)`` refuses (raises) a resumed simulation that contradicts the caller's options.
+    write_outputs : callable, optional
+        ``write_outputs(simulation, result)`` writes the run's files; the checkpoint that marks the run as
+        finished is written after it returns.
+    progress : bool or None
+        Progress bar on stderr.
+    checkpoint_seconds : float or None
+        Wall time between checkpoints (s).
+    checkpoint_every : int or None
+        Also checkpoint whenever the collision count (of this run) crosses a multiple of this.
+    log : callable, optional
+        Receives one-line messages (what an interrupt left).
+
+    Returns
+    -------
+    (GasSimulation, GasResult)
+    """
+    from pathlib import Path
+
+    from ..io.run_controller import OutputLock, claim_folder
+
+    collisions = _count("collisions", collisions, 1, MAX_COLLISIONS)
+    if out_dir is None:
+        if resume:
+            raise InvalidParameterError("--resume needs --out DIR")
+        sim = new_simulation()
+        return sim, sim.run(collisions, progress=progress)
+    out_dir = Path(out_dir)
+    path = out_dir / CHECKPOINT_NAME
+    with OutputLock(out_dir):
+        if claim_folder(out_dir, [CHECKPOINT_NAME], resume=resume, overwrite=overwrite):
+            sim, segment = GasSimulation.resume(path, with_segment=True)
+            if check_resumed is not None:
+                check_resumed(sim)
+            first = sim.collisions if segment is None or segment[2] else segment[0]
+            if first + collisions < sim.collisions:
+                raise InvalidParameterError(
+                    f"--collisions: the checkpoint holds collision {sim.collisions} of an interrupted run that "
+                    f"began at {first}; give at least {sim.collisions - first} to finish it")
+        else:
+            sim, first = new_simulation(), 0
+        target = first + collisions
+        segment = (first, target, False)
+
+        def describe(done):
+            return (f"interrupted; the checkpoint holds collision {first + done} of {target}: run the same "
+                    "command with --resume to finish the run")
+
+        run = RunController(collisions, "gas", unit="collision", save=lambda: sim.save_checkpoint(path, segment),
+                            every=checkpoint_every, seconds=checkpoint_seconds, progress=progress, log=log,
+                            describe_resume=describe)
+        with run:
+            if sim.collisions > first:
+                run.resumed(sim.collisions - first)
+            remaining = target - sim.collisions
+            result = sim.run(remaining, controller=run) if remaining else sim._result(0.0, 0)
+            if write_outputs is not None:
+                write_outputs(sim, result)
+            sim.save_checkpoint(path, (first, target, True))  # after the outputs it records are durable
+    return sim, result

@@ -15,7 +15,6 @@ from __future__ import annotations
 import concurrent.futures
 import json
 import math
-import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -23,8 +22,8 @@ import numpy as np
 
 from ..bath.model import ThermalBath
 from ..errors import AccuracyError, InvalidParameterError, WavecontactError
-from ..io.checkpoint import read_checkpoint, write_checkpoint
-from ..progress import Progress
+from ..io.files import atomic_write
+from ..io.run_controller import BatchStore, RunController, write_summary
 from ..scene import validate_gamma_kappa
 
 __all__ = ["ENSEMBLE_DELAY_OPTIONS", "ENSEMBLE_RTOL", "GRID_BIAS_SAMPLES", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec",
@@ -410,12 +409,10 @@ class EnsembleResult:
         if self.grid_bias is not None:
             extra = {"grid_bias_indices": grid_bias_indices(self.restitution.size),
                      "grid_bias_check_restitution": self.grid_bias.check_restitution}
-        _atomic_savez(out / "samples.npz", restitution=self.restitution,
-                      vibration_energy_gain=self.vibration_energy_gain, error_estimate=self.error_estimate,
-                      **extra)
-        tmp = out / "summary.json.part"
-        tmp.write_text(json.dumps(self.summary(), indent=1))
-        os.replace(tmp, out / "summary.json")
+        arrays = dict(restitution=self.restitution, vibration_energy_gain=self.vibration_energy_gain,
+                      error_estimate=self.error_estimate, **extra)
+        atomic_write(out / "samples.npz", lambda handle: np.savez(handle, **arrays))
+        write_summary(out / "summary.json", self.summary())
         return out
 
     def summary(self) -> dict:
@@ -444,10 +441,6 @@ class EnsembleResult:
         }
 
 
-def _description_path(out: Path) -> Path:
-    return out / "ensemble.json"
-
-
 def _batch_path(out: Path, start: int) -> Path:
     return out / f"batch_{start:09d}.npz"
 
@@ -456,47 +449,34 @@ def _batch_parameters(spec: EnsembleSpec, start: int, stop: int) -> dict:
     return {"spec": spec.describe(), "start": int(start), "stop": int(stop)}
 
 
-def _atomic_savez(path: Path, **arrays):
-    tmp = path.with_name(path.name + ".part")
-    with open(tmp, "wb") as handle:
-        np.savez(handle, **arrays)
-    os.replace(tmp, path)
+def _check_batch(spec: EnsembleSpec):
+    """The values of a stored batch, refused unless a run of ``spec`` could have produced them."""
+
+    def check(arrays, start, stop):
+        values = np.asarray(arrays["restitution"])
+        gains = np.asarray(arrays["vibration_energy_gain"])
+        errors = np.asarray(arrays["error_estimate"])
+        n = stop - start
+        if values.shape != (n,) or gains.shape != (n, 2) or errors.shape != (n,):
+            raise InvalidParameterError(f"arrays of shapes {values.shape}, {gains.shape}, {errors.shape}, "
+                                        f"expected ({n},), ({n}, 2), ({n},)")
+        if any(a.dtype.kind != "f" for a in (values, gains, errors)):
+            raise InvalidParameterError("arrays must hold floating-point numbers")
+        if not np.all(np.isfinite(values)) or np.any(values < 0.0):
+            raise InvalidParameterError("restitution must be finite and >= 0")
+        if not np.all(np.isfinite(gains)) or (not spec.energy_split and np.any(gains != 0.0)):
+            raise InvalidParameterError("vibration_energy_gain must be finite (and zero without energy_split)")
+        if np.any(np.isinf(errors)) or np.any(errors < 0.0):
+            raise InvalidParameterError("error_estimate must be >= 0 or NaN (none)")
+        return values.astype(float), gains.astype(float), errors.astype(float)
+
+    return check
 
 
-def _prepare_output(out, spec: EnsembleSpec) -> dict:
-    """Create or check ``out``; return the finished batches ``{start: samples}``."""
-    out = Path(out)
-    description = {"schema": _SCHEMA, "version": _VERSION, "spec": spec.describe()}
-    path = _description_path(out)
-    if path.exists():
-        try:
-            found = json.loads(path.read_text())
-        except (OSError, ValueError):
-            raise InvalidParameterError(f"{path} is not an ensemble description; choose another --out") from None
-        if found != description:
-            raise InvalidParameterError(
-                f"{out} holds an ensemble with other parameters; choose another --out or the same parameters to resume"
-            )
-    else:
-        out.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".part")
-        tmp.write_text(json.dumps(description, indent=1))
-        os.replace(tmp, path)
-    done = {}
-    for start, stop in spec.batches():
-        batch = _batch_path(out, start)
-        if batch.exists():
-            arrays, _meta = read_checkpoint(batch, _BATCH_SCHEMA, _VERSION, _batch_parameters(spec, start, stop))
-            try:
-                values = np.asarray(arrays["restitution"], dtype=float)
-                gains = np.asarray(arrays["vibration_energy_gain"], dtype=float)
-                errors = np.asarray(arrays["error_estimate"], dtype=float)
-            except KeyError:
-                raise InvalidParameterError(f"{batch} is not a finished batch; delete it to recompute that batch") from None
-            if values.shape != (stop - start,) or gains.shape != (stop - start, 2) or errors.shape != values.shape:
-                raise InvalidParameterError(f"{batch} has the wrong size; delete it to recompute that batch")
-            done[start] = (values, gains, errors)
-    return done
+def _store(out, spec: EnsembleSpec) -> BatchStore:
+    return BatchStore(out, "ensemble.json", {"schema": _SCHEMA, "version": _VERSION, "spec": spec.describe()},
+                      lambda start: _batch_path(Path(out), start).name, "batch_*.npz", _BATCH_SCHEMA, _VERSION,
+                      lambda start, stop: _batch_parameters(spec, start, stop), _check_batch(spec), "an ensemble")
 
 
 def run_batches(pool, function, fields, batches, on_result) -> None:
@@ -528,7 +508,7 @@ def _executor_for(executor):
 
 
 def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", bath_modes=250, executor=None,
-             batch_size=256, out=None, progress=False, energy_split=False, tolerance=None,
+             batch_size=256, out=None, progress=False, energy_split=False, tolerance=None, overwrite=False,
              **options) -> EnsembleResult:
     """Collide ``samples`` independent realisations of the thermal bath.
 
@@ -552,7 +532,10 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
     batch_size : int
         Samples per task.
     out : path or None
-        Directory for the description and the finished batches (resume).
+        Directory for the description and the finished batches (resume), locked against a second
+        run while this one writes; a folder holding another ensemble is refused (unless ``overwrite``),
+        a batch whose values no run can produce is refused (:class:`~wavecontact.errors.CheckpointError`).
+        SIGINT or SIGTERM end the run after the batch in progress; every finished batch is on disk.
     progress : bool
         Show a progress bar (tqdm) on stderr.
     energy_split : bool
@@ -562,6 +545,8 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         bias plus two of its standard errors); a larger one raises
         :class:`~wavecontact.errors.AccuracyError` with a ``hard_core_resolution``
         that should meet it (the samples are kept on ``out`` all the same).
+    overwrite : bool
+        Replace another ensemble's description and batches found in ``out``.
     **options
         Solver options (e.g. ``rtol=1e-6``; ``hard_core_resolution`` for ``kappa = inf``).
 
@@ -579,29 +564,27 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
                                         "(kappa = inf) only; finite kappa takes rtol")
         if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0.0 < tolerance < math.inf:
             raise InvalidParameterError(f"tolerance must be a number in (0, inf), got {tolerance!r}")
-    done = {} if out is None else _prepare_output(out, spec)
-    todo = [(a, b) for a, b in spec.batches() if a not in done]
     fields = asdict(spec)
-    bar = Progress(spec.samples, "ensemble", unit="sample", enabled=bool(progress),
-                   initial=spec.samples - sum(b - a for a, b in todo))
-
-    def finish(start, values, gains, errors):
-        done[start] = (values, gains, errors)
-        if out is not None:
-            write_checkpoint(_batch_path(Path(out), start), _BATCH_SCHEMA, _VERSION,
-                             _batch_parameters(spec, start, start + values.size),
-                             {"restitution": values, "vibration_energy_gain": gains, "error_estimate": errors})
-        bar.advance(values.size)
-
+    store = None if out is None else _store(out, spec)
     pool = _executor_for(executor)
-    try:
-        run_batches(pool, run_batch, fields, todo, lambda out: finish(*out))
-    except WavecontactError:
-        raise
-    except OSError as exc:
-        raise InvalidParameterError(f"ensemble could not reach its workers: {exc}") from None
-    finally:
-        bar.close()
+    with RunController(spec.samples, "ensemble", unit="sample", out_dir=out, progress=bool(progress)) as run:
+        done = {} if store is None else store.open(spec.batches(), overwrite=overwrite)
+        todo = [(a, b) for a, b in spec.batches() if a not in done]
+        run.resumed(spec.samples - sum(b - a for a, b in todo))
+
+        def finish(start, values, gains, errors):
+            done[start] = (values, gains, errors)
+            if store is not None:
+                store.save(start, start + values.size,
+                           {"restitution": values, "vibration_energy_gain": gains, "error_estimate": errors})
+            run.advance(values.size)
+
+        try:
+            run_batches(pool, run_batch, fields, todo, lambda out: finish(*out))
+        except WavecontactError:
+            raise
+        except OSError as exc:
+            raise InvalidParameterError(f"ensemble could not reach its workers: {exc}") from None
     values, gains, errors = (np.concatenate([done[a][k] for a, _b in spec.batches()]) for k in range(3))
     result = EnsembleResult(spec, values, gains, errors, grid_bias(spec, values) if _hard_core(spec) else None)
     if tolerance is not None:

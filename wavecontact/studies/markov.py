@@ -445,9 +445,60 @@ def load_result(directory, spec: MarkovSpec | None = None) -> MarkovResult:
     return MarkovResult(MarkovSpec(**fields), arrays["energy"], arrays["temperature"], arrays["eps2"])
 
 
+def _check_chains(spec: MarkovSpec):
+    """The arrays of a stored batch of chains, refused unless a run of ``spec`` could have produced them."""
+
+    def check(arrays, start, stop):
+        energy, temperature, eps2 = (np.asarray(arrays[k]) for k in ("energy", "temperature", "eps2"))
+        n = stop - start
+        shapes = ((n, spec.steps + 1), (n, spec.steps + 1), (n, spec.steps))
+        if (energy.shape, temperature.shape, eps2.shape) != shapes:
+            raise InvalidParameterError(f"arrays of shapes {energy.shape}, {temperature.shape}, {eps2.shape}, "
+                                        f"expected {', '.join(map(str, shapes))}")
+        if any(a.dtype.kind != "f" for a in (energy, temperature, eps2)):
+            raise InvalidParameterError("arrays must hold floating-point numbers")
+        for name, value in (("energy", energy), ("temperature", temperature)):
+            if not np.all(np.isfinite(value)) or np.any(value < 0.0):
+                raise InvalidParameterError(f"{name} must be finite and >= 0")
+        # eps2 is inf only after Glauber's total loss (E_tr = 0), never NaN or negative
+        if np.any(np.isnan(eps2)) or np.any(eps2 < 0.0) or (spec.rule != "glauber" and np.any(np.isinf(eps2))):
+            raise InvalidParameterError("eps2 must be >= 0 (inf only with the glauber rule), never NaN")
+        if spec.initial_energy != "boltzmann" and np.any(energy[:, 0] != spec.initial_energy):
+            raise InvalidParameterError(f"the chains do not start at E_tr(0) = {spec.initial_energy!r}")
+        if np.any(temperature[:, 0] != spec.initial_temperature):
+            raise InvalidParameterError("the chains do not start at the run's bath temperature")
+        if spec.bath == "fixed" and np.any(temperature != temperature[:, :1]):
+            raise InvalidParameterError("a fixed bath's temperature changed along a chain")
+        # the steps' own arithmetic, repeated: Eq. 28 for the energy (table and solve rules) and the bath
+        if spec.rule != "glauber" and np.any(energy[:, 1:] != eps2 * energy[:, :-1]):
+            raise InvalidParameterError("E_tr(j + 1) differs from eps2(j) E_tr(j)")
+        if spec.rule == "glauber":
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = np.where(energy[:, :-1] > 0.0, energy[:, 1:] / energy[:, :-1], np.inf)
+            if np.any(eps2 != ratio):
+                raise InvalidParameterError("eps2(j) differs from E_tr(j + 1) / E_tr(j)")
+        share = 1.0 / (2 * spec.modes_per_rod)
+        expected = temperature[:, :-1] + (energy[:, :-1] - energy[:, 1:]) * share
+        if spec.bath == "conserved" and np.any(temperature[:, 1:] != expected):
+            raise InvalidParameterError("T_B(j + 1) differs from T_B(j) + (E_tr(j) - E_tr(j + 1)) / (2 N_mod)")
+        return energy, temperature, eps2
+
+    return check
+
+
+def _store(out, spec: MarkovSpec):
+    from ..io.run_controller import BatchStore
+
+    return BatchStore(out, "markov.json", {"schema": _SCHEMA, "version": _VERSION, "spec": spec.describe()},
+                      lambda start: f"chains_{start:09d}.npz", "chains_*.npz", _SCHEMA + "_batch", _VERSION,
+                      lambda start, stop: {"spec": spec.describe(), "start": int(start), "stop": int(stop)},
+                      _check_chains(spec), "a Markov run")
+
+
 def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000, seed=0, bath="fixed",
                   modes_per_rod=250, initial_energy=1.0, bath_modes=250, solver="delay", table=None,
-                  executor=None, batch_size=None, progress=False, **options) -> MarkovResult:
+                  executor=None, batch_size=None, progress=False, out=None, overwrite=False,
+                  **options) -> MarkovResult:
     """Run ``chains`` independent Markov chains of ``steps`` collisions (see module docstring).
 
     Parameters
@@ -462,6 +513,14 @@ def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000
         task when ``executor`` is None, else about 16 tasks.
     progress : bool or None
         Show a progress bar over chains on stderr (``None``: when stderr is a terminal).
+    out : path or None
+        Folder for the run's description (``markov.json``) and each finished batch of chains
+        (``chains_*.npz``), locked against a second run while this one writes: the same call
+        again skips the batches on disk (an interrupt loses only the batches in progress; a batch
+        is all its chains' steps).  A folder holding another Markov run is refused unless ``overwrite``;
+        a stored batch whose values no run can produce is refused.
+    overwrite : bool
+        Replace another Markov run's description and batches found in ``out``.
     **options
         Solver options of the ``solve`` rule.
 
@@ -469,7 +528,7 @@ def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000
     -------
     MarkovResult
     """
-    from ..progress import Progress
+    from ..io.run_controller import RunController
     from .ensemble import _executor_for, run_batches
 
     if batch_size is None:
@@ -478,15 +537,22 @@ def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000
                       solver, dict(options), table, min(int(batch_size), 100_000) if isinstance(batch_size, int) else batch_size)
     _load_table(spec)  # a bad table file fails here, before any task is sent
     fields = asdict(spec)
-    done = {}
+    store = None if out is None else _store(out, spec)
     pool = _executor_for(executor)
-    with Progress(spec.chains, "markov", unit="chain", enabled=progress) as bar:
-        try:
-            def collect(out):
-                done[out[0]] = out
-                bar.advance(out[1].shape[0])
+    with RunController(spec.chains, "markov", unit="chain", out_dir=out, progress=progress) as run:
+        done = {} if store is None else {a: (a, *v) for a, v in store.open(spec.batches(), overwrite).items()}
+        todo = [(a, b) for a, b in spec.batches() if a not in done]
+        run.resumed(spec.chains - sum(b - a for a, b in todo))
 
-            run_batches(pool, run_chains, fields, spec.batches(), collect)
+        def collect(result):
+            done[result[0]] = result
+            if store is not None:
+                store.save(result[0], result[0] + result[1].shape[0],
+                           {"energy": result[1], "temperature": result[2], "eps2": result[3]})
+            run.advance(result[1].shape[0])
+
+        try:
+            run_batches(pool, run_chains, fields, todo, collect)
         except WavecontactError:
             raise
         except OSError as exc:

@@ -21,7 +21,8 @@ from __future__ import annotations
 
 import csv
 import json
-import time as _time
+import math
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,10 +30,11 @@ from pathlib import Path
 import numpy as np
 
 from ..analytic import equilibrium_translational_energy
-from ..errors import InvalidParameterError, require_positive
+from ..errors import CheckpointError, InvalidParameterError, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
-from ..progress import Progress
+from ..io.run_controller import RunController
+from ..result import to_jsonable
 from ..scene import two_rods_on_a_ring
 from ..solvers import get_solver
 from .ring_statistics import RingStatistics, relative_modal_energies, ring_statistics, spectral_entropy
@@ -174,20 +176,31 @@ class RingRun:
 
     @classmethod
     def load_npz(cls, path) -> RingRun:
-        """Read a file written by :meth:`save_npz`."""
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: np.array(data[name]) for name in cls._ARRAYS}
-            scalars = {
-                "gamma": float(data["gamma"]),
-                "kappa": float(data["kappa"]),
-                "modes": int(data["modes"]),
-                "static_correction": bool(data["static_correction"]),
-                "reduced_mass": float(data["reduced_mass"]),
-                "initial_energy": float(data["initial_energy"]),
-                "wall_time_s": float(data["wall_time_s"]),
-                "resumed_from": int(data["resumed_from"]),
-            }
-            metadata = json.loads(str(data["metadata_json"]))
+        """Read a file written by :meth:`save_npz` (refused in one line unless it is a complete, valid ring run)."""
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {name: np.array(data[name]) for name in cls._ARRAYS}
+                scalars = {
+                    "gamma": float(data["gamma"]),
+                    "kappa": float(data["kappa"]),
+                    "modes": int(data["modes"]),
+                    "static_correction": bool(data["static_correction"]),
+                    "reduced_mass": float(data["reduced_mass"]),
+                    "initial_energy": float(data["initial_energy"]),
+                    "wall_time_s": float(data["wall_time_s"]),
+                    "resumed_from": int(data["resumed_from"]),
+                }
+                metadata = json.loads(str(data["metadata_json"]))
+        except (OSError, ValueError, EOFError, KeyError, TypeError, zipfile.BadZipFile) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InvalidParameterError(f"{path} is not a ring run written by RingRun.save_npz ({reason})") from None
+        try:
+            _validate(scalars["gamma"], scalars["kappa"], scalars["modes"], 1, 1)
+            check_rows(arrays, scalars["modes"])
+            if not isinstance(metadata, dict):
+                raise InvalidParameterError("metadata_json is not a JSON object")
+        except InvalidParameterError as exc:
+            raise InvalidParameterError(f"{path} is not a valid ring run: {exc}") from None
         return cls(**scalars, **arrays, metadata=metadata)
 
     def save_csv(self, path) -> Path:
@@ -285,11 +298,71 @@ def _validate(gamma, kappa, modes, collisions, checkpoint_every):
     return g, k, int(modes), int(collisions), int(checkpoint_every)
 
 
+def check_rows(arrays: dict, modes: int) -> int:
+    """Refuse per-collision rows that no ring run can produce (a checkpoint or a ring.npz is user input).
+
+    Returns the number of rows; raises :class:`InvalidParameterError` naming the array.
+    """
+    missing = [name for name in RingRun._ARRAYS if name not in arrays]
+    if missing:
+        raise InvalidParameterError(f"missing arrays {', '.join(missing)}")
+    count = np.asarray(arrays["time"]).shape[0] if np.asarray(arrays["time"]).ndim == 1 else -1
+    for name in RingRun._ARRAYS:
+        value = np.asarray(arrays[name])
+        shape = (count, 2, modes) if name == "modal_energies" else (count,)
+        if count < 0 or value.shape != shape:
+            raise InvalidParameterError(f"{name} has shape {value.shape}, expected {shape}")
+        if name == "pair":
+            if value.dtype.kind not in "iu" or np.any((value != 0) & (value != 1)):
+                raise InvalidParameterError("pair must hold 0 (near ends) or 1 (far ends) only")
+            continue
+        if value.dtype.kind != "f" or not np.all(np.isfinite(value)):
+            raise InvalidParameterError(f"{name} must hold finite numbers")
+        if name != "time" and np.any(value < 0.0):
+            raise InvalidParameterError(f"{name} must not be negative")
+    if np.any(np.diff(arrays["time"]) < 0.0) or (count and arrays["time"][0] < 0.0):
+        raise InvalidParameterError("the collision times must be >= 0 and non-decreasing")
+    return int(count)
+
+
+def _check_state(state: dict, stored: int) -> None:
+    """A simulation state from a checkpoint: plain finite numbers, at the collision the rows end at."""
+    for name, value in state.items():
+        value = np.asarray(value)
+        if value.dtype.kind not in "biuf":
+            raise InvalidParameterError(f"state {name!r} is not numeric")
+        if value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+            raise InvalidParameterError(f"state {name!r} holds NaN or infinite values")
+    if "collisions" in state and int(np.asarray(state["collisions"])) != stored:
+        raise InvalidParameterError(
+            f"the state is at collision {int(np.asarray(state['collisions']))} but the rows end at {stored}")
+
+
 def _write_checkpoint(path: Path, parameters: dict, simulation, recorder: _Recorder, wall_time: float):
     arrays = {f"state/{k}": np.asarray(v) for k, v in simulation.get_state().items()}
     arrays.update({f"run/{k}": v for k, v in recorder.arrays().items()})
     arrays["wall_time_s"] = np.asarray(float(wall_time))
     write_checkpoint(path, _CHECKPOINT_SCHEMA, _CHECKPOINT_VERSION, parameters, arrays)
+
+
+def _resume(checkpoint: Path, arrays: dict, simulation, recorder: _Recorder) -> tuple:
+    """Load a checkpoint's ``arrays`` into ``simulation`` and ``recorder``; return ``(collisions stored, wall time
+    before)``.  Its values are checked as strictly as user input, whatever its checksum says."""
+    try:
+        state = {key[len("state/"):]: value for key, value in arrays.items() if key.startswith("state/")}
+        rows = {key[len("run/"):]: value for key, value in arrays.items() if key.startswith("run/")}
+        stored = check_rows(rows, recorder.modes)
+        _check_state(state, stored)
+        wall_before = float(arrays["wall_time_s"])
+        if not (np.asarray(arrays["wall_time_s"]).shape == () and math.isfinite(wall_before) and wall_before >= 0):
+            raise InvalidParameterError("wall_time_s must be a finite number >= 0")
+        simulation.set_state(state)
+        recorder.load(rows, stored)
+    except (KeyError, ValueError, IndexError, TypeError, InvalidParameterError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise CheckpointError(
+            f"checkpoint {checkpoint} is incomplete or invalid ({reason}); delete it to start afresh") from None
+    return stored, wall_before
 
 
 def run_ring(
@@ -308,6 +381,8 @@ def run_ring(
     simulation_factory: Callable | None = None,
     callback: Callable | None = None,
     log: Callable[[str], None] | None = None,
+    overwrite: bool = False,
+    checkpoint_seconds: float | None = 600.0,
 ) -> RingRun:
     """Run ``collisions`` successive collisions of two rods on a ring.
 
@@ -323,13 +398,15 @@ def run_ring(
         Total number of collisions wanted (including any already in a checkpoint).
     out_dir : path, optional
         Directory for the checkpoint (``checkpoint.npz``) and the data
-        (``ring.npz``, ``ring.csv``).  If it holds a checkpoint of the same
-        run, the run resumes from there; a checkpoint of another run, of
-        another build of the kernels, or one that fails its checksum is
-        refused (:class:`~wavecontact.errors.CheckpointError`).  ``None``:
-        nothing is written.
+        (``ring.npz``, ``ring.csv``), locked against a second run while this
+        one writes (:class:`~wavecontact.io.run_controller.OutputLock`).  If it
+        holds a checkpoint of the same run, the run resumes from there; a
+        checkpoint of another run (unless ``overwrite``), of another build of
+        the kernels, or one that fails its checksum or holds values no run can
+        produce is refused (:class:`~wavecontact.errors.CheckpointError`).
+        ``None``: nothing is written.
     checkpoint_every : int
-        Write a checkpoint after every so many collisions (and at the end).
+        Write a checkpoint whenever the collision count reaches a multiple of this (and at the end).
     progress : bool
         Show a progress bar on stderr.
     static_correction : bool
@@ -350,10 +427,19 @@ def run_ring(
         stays valid.
     log : callable, optional
         Receives one-line messages (e.g. that a checkpoint was resumed).
+    overwrite : bool
+        Replace a checkpoint of another run found in ``out_dir`` instead of refusing it.
+    checkpoint_seconds : float or None
+        Also write a checkpoint when this much wall time (s) has passed since the last one.
 
     Returns
     -------
     RingRun
+
+    Notes
+    -----
+    SIGINT or SIGTERM end the run after the collision in progress, with a checkpoint of it
+    (:class:`~wavecontact.io.run_controller.RunController`); a retry of the same call resumes there.
     """
     g, k, n, m, every = _validate(gamma, kappa, modes, collisions, checkpoint_every)
     options = {**(solver_options or {}), "modes": n, "static_correction": bool(static_correction)}
@@ -362,75 +448,61 @@ def run_ring(
     scene = two_rods_on_a_ring(g, k, circumference)
     parameters = {"gamma": g, "kappa": k, "circumference": scene.ring_circumference, "solver": solver,
                   "options": {key: value for key, value in options.as_dict().items()}}
-    parameters = json.loads(json.dumps(parameters, default=repr).replace("Infinity", '"inf"'))
+    parameters = json.loads(json.dumps(to_jsonable(parameters), default=repr))
     checkpoint = None
     if out_dir is not None:
         out_dir = check_output_directory("out_dir", out_dir)
-        out_dir.mkdir(parents=True, exist_ok=True)
         checkpoint = out_dir / CHECKPOINT_NAME
     simulation = (simulation_factory or engine.simulate)(scene, options)
     recorder = _Recorder(n)
     wall_before = 0.0
     resumed_from = 0
-    if checkpoint is not None and checkpoint.exists():
-        arrays, _meta = read_checkpoint(checkpoint, _CHECKPOINT_SCHEMA, _CHECKPOINT_VERSION, parameters)
-        try:
-            state = {key[len("state/"):]: value for key, value in arrays.items() if key.startswith("state/")}
-            simulation.set_state(state)
-            stored = int(arrays["run/time"].size)
-            recorder.load({key[len("run/"):]: value for key, value in arrays.items() if key.startswith("run/")},
-                          stored)
-            wall_before = float(arrays["wall_time_s"])
-        except (KeyError, ValueError, IndexError, InvalidParameterError) as exc:
-            raise InvalidParameterError(
-                f"checkpoint {checkpoint} is incomplete ({exc}); delete it to start afresh") from None
-        resumed_from = stored
-        if log is not None:
-            if stored > m:
-                log(f"the checkpoint {checkpoint} holds {stored} collisions; keeping the first {m} "
-                    f"(the checkpoint is left as it is)")
+
+    def save():
+        _write_checkpoint(checkpoint, parameters, simulation, recorder, wall_before + run.elapsed)
+
+    run = RunController(m, "ring", unit="collision", out_dir=out_dir, save=save if checkpoint else None,
+                        every=every, seconds=checkpoint_seconds, progress=progress, log=log, option="out_dir")
+    with run:
+        if checkpoint is not None and checkpoint.exists():
+            try:
+                arrays, _meta = read_checkpoint(checkpoint, _CHECKPOINT_SCHEMA, _CHECKPOINT_VERSION, parameters)
+            except CheckpointError:
+                if not overwrite:
+                    raise
+                checkpoint.unlink()
             else:
-                log(f"resuming from checkpoint {checkpoint} after collision {stored}")
-
-    start = _time.perf_counter()
-    last_checkpoint = resumed_from if checkpoint is not None and resumed_from else None
-    with Progress(m, "ring", unit="collision", enabled=progress, initial=min(resumed_from, m)) as bar:
-        try:
-            while len(recorder) < m:
-                record = simulation.next_collision()
-                recorder.add(record)
-                bar.advance()
-                if callback is not None:
-                    callback(len(recorder) - 1, record)
-                done = len(recorder)
-                if checkpoint is not None and (done % every == 0 or done == m):
-                    _write_checkpoint(
-                        checkpoint, parameters, simulation, recorder, wall_before + _time.perf_counter() - start
-                    )
-                    last_checkpoint = done
-        except KeyboardInterrupt:
+                resumed_from, wall_before = _resume(checkpoint, arrays, simulation, recorder)
+        if resumed_from:
+            run.resumed(resumed_from)
             if log is not None:
-                if last_checkpoint:
-                    log(f"interrupted; run again to resume from the checkpoint after collision {last_checkpoint}")
-                elif checkpoint is not None:
-                    log("interrupted before the first checkpoint; a new run will start from the beginning")
-            raise
-    wall = wall_before + _time.perf_counter() - start
+                if resumed_from > m:
+                    log(f"the checkpoint {checkpoint} holds {resumed_from} collisions; keeping the first {m} "
+                        f"(the checkpoint is left as it is)")
+                else:
+                    log(f"resuming from checkpoint {checkpoint} after collision {resumed_from}")
+        while len(recorder) < m:
+            record = simulation.next_collision()
+            recorder.add(record)
+            if callback is not None:
+                callback(len(recorder) - 1, record)
+            run.advance()
+        wall = wall_before + run.elapsed
 
-    arrays = {name: values[:m] for name, values in recorder.arrays().items()}
-    run = RingRun(
-        gamma=g,
-        kappa=k,
-        modes=n,
-        static_correction=bool(static_correction),
-        reduced_mass=float(simulation.reduced_mass),
-        initial_energy=float(simulation.total_energy),
-        wall_time_s=wall,
-        resumed_from=min(resumed_from, m),
-        metadata={"circumference": scene.ring_circumference, "solver": solver, "checkpoint_every": every},
-        **arrays,
-    )
-    if out_dir is not None:
-        run.save_npz(out_dir / DATA_NPZ_NAME)
-        run.save_csv(out_dir / DATA_CSV_NAME)
-    return run
+        arrays = {name: values[:m] for name, values in recorder.arrays().items()}
+        result = RingRun(
+            gamma=g,
+            kappa=k,
+            modes=n,
+            static_correction=bool(static_correction),
+            reduced_mass=float(simulation.reduced_mass),
+            initial_energy=float(simulation.total_energy),
+            wall_time_s=wall,
+            resumed_from=min(resumed_from, m),
+            metadata={"circumference": scene.ring_circumference, "solver": solver, "checkpoint_every": every},
+            **arrays,
+        )
+        if out_dir is not None:
+            result.save_npz(out_dir / DATA_NPZ_NAME)
+            result.save_csv(out_dir / DATA_CSV_NAME)
+    return result
