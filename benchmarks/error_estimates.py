@@ -67,8 +67,19 @@ DOCS_PAGE = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, 
 SHARP_ABOVE = 1e-10
 
 
-def draw(solver: str, index: int, stream: np.random.Generator) -> dict:
-    """One random collision: ``gamma``, ``kappa`` and the solver's options."""
+def draw(solver: str, index: int, stream: np.random.Generator, distribution: str = "acceptance") -> dict:
+    """One random collision: ``gamma``, ``kappa`` and the solver's options.
+
+    ``distribution``: ``"acceptance"`` (the module docstring's) or ``"probe"`` (FE only, the draws of
+    issue 23's probe: gamma uniform in (0.05, 1], kappa log-uniform in [1, 1e5], order 1 or 2 and
+    lumped or consistent mass at random, elements uniform among the integers 8 ... 400).
+    """
+    if distribution == "probe":
+        gamma = float(1.0 - stream.uniform(0.0, 0.95))
+        kappa = float(10.0 ** stream.uniform(0.0, 5.0))
+        options = {"elements": int(stream.integers(8, 401)), "order": int(stream.integers(1, 3)),
+                   "mass": ("lumped", "consistent")[int(stream.integers(0, 2))]}
+        return {"gamma": gamma, "kappa": kappa, "options": options}
     gamma = float(stream.uniform(0.05, 1.0))
     kappa = math.inf if stream.random() < 0.15 else float(10.0 ** stream.uniform(-1.0, 6.0))
     if solver == "fem":
@@ -164,6 +175,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=200, help="collisions per solver (default 200)")
     parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--distribution", choices=("acceptance", "probe"), default="acceptance",
+                        help="how the collisions are drawn (probe: issue 23's FE draws, see draw())")
     parser.add_argument("--solver", nargs="+", choices=("fem", "modal"), default=["fem", "modal"])
     parser.add_argument("--max-work", type=float, default=None,
                         help="work limit of each solve (default: the library's, 2e11 updates); larger ones are refused")
@@ -202,6 +215,7 @@ def main(argv=None) -> int:
             rows = [reapply(row) for row in rows if row["solver"] == "fem"]
         return _report({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver}, args)
     part, parts = (int(x) for x in args.part.split("/"))
+    print(f"seed {args.seed}, distribution {args.distribution}, {args.samples} samples, part {args.part}", flush=True)
     tables = {}
     with open(args.save, "w", encoding="utf-8") if args.save else contextlib.nullcontext() as save:
         for solver in args.solver:
@@ -211,7 +225,7 @@ def main(argv=None) -> int:
                 if index % parts != part - 1:
                     continue
                 row = {"solver": solver, "index": index,
-                       **run_sample(solver, draw(solver, index, stream), args.max_work)}
+                       **run_sample(solver, draw(solver, index, stream, args.distribution), args.max_work)}
                 rows.append(row)
                 if args.verbose:
                     print(row, flush=True)

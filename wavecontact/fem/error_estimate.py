@@ -27,6 +27,7 @@ __all__ = [
     "QUADRATURE_NOISE_BELOW",
     "RESOLVED_BELOW",
     "ROUNDING_FLOOR",
+    "TOO_FAST_MARGIN",
     "UNRESOLVED_ORDER",
     "estimate_from_levels",
     "estimate_with_finer",
@@ -57,6 +58,11 @@ CHARACTERISTIC_FLOOR = 1e-9
 #: on the characteristic lattice, differences of the runs that change sign below this size are the
 #: quadrature's noise (its errors reach about 1e-8, docs/fem.md section 7), not a convergence
 QUADRATURE_NOISE_BELOW = 1e-7
+#: an order observed on the three runs above the declared one by more than this is read as two finest
+#: runs that agree by accident (the error changed sign between the coarser runs: issue 23's
+#: gamma = 0.7558, kappa = 140.8, P2 lumped on 65 elements, errors +2.2e-4, -1.64e-4, -1.65e-4 on 16, 32,
+#: 65 elements, observed order 9), not as a faster convergence
+TOO_FAST_MARGIN = 2.0
 #: round-off of a run of many steps in an O(1) restitution
 ROUNDING_FLOOR = 1e-12
 
@@ -70,19 +76,23 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
 
     * ``x <= RESOLVED_BELOW``: the declared order;
     * ``RESOLVED_BELOW < x <= OBSERVED_BELOW`` (not the characteristic lattice), where the runs
-      converge monotonically: the order observed on the three finest runs, clamped to
-      ``[UNRESOLVED_ORDER, declared]``;
+      converge monotonically and not too fast (below): the order observed on the three finest runs,
+      clamped to ``[UNRESOLVED_ORDER, declared]``;
     * otherwise :data:`UNRESOLVED_ORDER`; on the characteristic lattice
       :data:`P1_LUMPED_PARTLY_RESOLVED_ORDER` up to ``x = LATTICE_STEP_BELOW``, then
       :data:`P1_LUMPED_UNRESOLVED_ORDER`.
 
-    Further coarser levels, if given, are not used.  Two guards: where ``x > RESOLVED_BELOW`` and the runs do not converge monotonically, the
-    next coarser difference carried down to ``N`` is a second lower bound (two runs may agree by
-    accident), except where that difference is of the other sign and more than
-    :data:`CROSSING_RATIO` times larger (a fast convergence that crossed the limit); on the
-    characteristic lattice, where the two finest differences change sign below
-    :data:`QUADRATURE_NOISE_BELOW` (the quadrature's noise), the larger of them.  Floors: :data:`CHARACTERISTIC_FLOOR` (characteristic lattice, finite
-    stiffness) or :data:`ROUNDING_FLOOR`.
+    Further coarser levels, if given, are not used.  Three guards: where the runs converge faster
+    than the declared order allows (an observed order above ``declared + TOO_FAST_MARGIN``: the
+    error changed sign between the coarser runs and the two finest agree by accident), the sequence
+    is treated as not monotone (the regime's lowest order where ``x > RESOLVED_BELOW``) and the next
+    coarser difference carried down to ``N`` is a second lower bound, at any ``x``; the same
+    carried difference where ``x > RESOLVED_BELOW`` and the runs do not converge monotonically,
+    except where that difference is of the other sign and more than :data:`CROSSING_RATIO` times
+    larger (a fast convergence that crossed the limit); on the characteristic lattice, where the
+    two finest differences change sign below :data:`QUADRATURE_NOISE_BELOW` (the quadrature's
+    noise), the larger of them.  Floors: :data:`CHARACTERISTIC_FLOOR` (characteristic lattice,
+    finite stiffness) or :data:`ROUNDING_FLOOR`.
 
     Parameters
     ----------
@@ -113,17 +123,22 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     d = [a - b for a, b in itertools.pairwise(values)]
     ratio = [a / b for a, b in itertools.pairwise(elements)]
     monotone = len(d) > 1 and d[0] * d[1] > 0.0 and abs(d[1]) > abs(d[0])
+    # a finest difference smaller than the declared order allows (by TOO_FAST_MARGIN) is two runs that
+    # agree by accident (the error changed sign between the coarser runs), not a faster convergence
+    too_fast = monotone and abs(d[1]) > ratio[1] ** (declared + TOO_FAST_MARGIN) * abs(d[0])
     if x <= RESOLVED_BELOW:
         order, how = declared, "declared"
-    elif x <= OBSERVED_BELOW and monotone and not characteristic:
+    elif x <= OBSERVED_BELOW and monotone and not too_fast and not characteristic:
         observed = math.log(abs(d[1]) / abs(d[0])) / math.log(ratio[1])
         order, how = min(max(observed, lowest), declared), f"observed {observed:.3g}, clamped"
     else:
-        order, how = lowest, "unresolved contact" if monotone or len(d) < 2 else "not monotone"
+        order = lowest
+        how = "faster than the declared order" if too_fast else \
+            "unresolved contact" if monotone or len(d) < 2 else "not monotone"
     estimate = ESTIMATE_SAFETY * abs(d[0]) / (ratio[0] ** order - 1.0)
     if len(d) > 1:
         crossing = d[0] * d[1] < 0.0 and abs(d[1]) > CROSSING_RATIO * abs(d[0])
-        if x > RESOLVED_BELOW and not monotone and not crossing:
+        if too_fast or (x > RESOLVED_BELOW and not monotone and not crossing):
             carried = ESTIMATE_SAFETY * abs(d[1]) / (ratio[1] ** order - 1.0) / ratio[0] ** order
             estimate, how = max(estimate, carried), how + ", coarser pair carried down"
         if characteristic and d[0] * d[1] < 0.0 and max(abs(d[0]), abs(d[1])) < QUADRATURE_NOISE_BELOW:
