@@ -67,7 +67,8 @@ TOO_FAST_MARGIN = 2.0
 ROUNDING_FLOOR = 1e-12
 
 
-def estimate_from_levels(levels, resolution: float, declared: float, characteristic: bool) -> tuple:
+def estimate_from_levels(levels, resolution: float, declared: float, characteristic: bool,
+                         scheme_order: float | None = None) -> tuple:
     """``(estimate, rule)``: the error of the first level's restitution.
 
     Richardson extrapolation ``SAFETY |d0| / (r**p - 1)`` of the finest difference
@@ -83,7 +84,7 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
       :data:`P1_LUMPED_UNRESOLVED_ORDER`.
 
     Further coarser levels, if given, are not used.  Three guards: where the runs converge faster
-    than the declared order allows (an observed order above ``declared + TOO_FAST_MARGIN``: the
+    than their scheme allows (an observed order above ``scheme_order + TOO_FAST_MARGIN``: the
     error changed sign between the coarser runs and the two finest agree by accident), the sequence
     is treated as not monotone (the regime's lowest order where ``x > RESOLVED_BELOW``) and the next
     coarser difference carried down to ``N`` is a second lower bound, at any ``x``; the same
@@ -106,6 +107,9 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     characteristic : bool
         Whether the run uses the characteristic interface with the sub-step gap quadrature
         (P1 lumped, Courant number 1, exponential contact).
+    scheme_order : float or None
+        The order in ``h`` of the contact scheme all the runs use (the massless-end interface: 1,
+        below the declared order; None: ``declared``), the base of the too-fast guard.
 
     Returns
     -------
@@ -123,9 +127,10 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     d = [a - b for a, b in itertools.pairwise(values)]
     ratio = [a / b for a, b in itertools.pairwise(elements)]
     monotone = len(d) > 1 and d[0] * d[1] > 0.0 and abs(d[1]) > abs(d[0])
-    # a finest difference smaller than the declared order allows (by TOO_FAST_MARGIN) is two runs that
+    # a finest difference smaller than the scheme's order allows (by TOO_FAST_MARGIN) is two runs that
     # agree by accident (the error changed sign between the coarser runs), not a faster convergence
-    too_fast = monotone and abs(d[1]) > ratio[1] ** (declared + TOO_FAST_MARGIN) * abs(d[0])
+    fastest = (declared if scheme_order is None else scheme_order) + TOO_FAST_MARGIN
+    too_fast = monotone and abs(d[1]) > ratio[1] ** fastest * abs(d[0])
     if x <= RESOLVED_BELOW:
         order, how = declared, "declared"
     elif x <= OBSERVED_BELOW and monotone and not too_fast and not characteristic:
@@ -148,7 +153,8 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
             f"order {order:.3g} ({how}; alpha V h / c = {x:.3g}), safety {ESTIMATE_SAFETY:g}, floor {floor:g}")
 
 
-def estimate_with_finer(finer, levels, resolution: float, declared: float, characteristic: bool) -> tuple:
+def estimate_with_finer(finer, levels, resolution: float, declared: float, characteristic: bool,
+                        scheme_order: float | None = None) -> tuple:
     """``(estimate, rule)``: the error of ``levels[0]``'s restitution from a run on a finer mesh.
 
     By the triangle inequality ``|e(N)| <= |eps(N) - eps(2N)| + |e(2N)|``: the first term is
@@ -173,6 +179,8 @@ def estimate_with_finer(finer, levels, resolution: float, declared: float, chara
         The discretization's order where the contact is resolved.
     characteristic : bool
         Whether the run uses the characteristic interface with the sub-step gap quadrature.
+    scheme_order : float or None
+        As in :func:`estimate_from_levels`.
 
     Returns
     -------
@@ -181,6 +189,7 @@ def estimate_with_finer(finer, levels, resolution: float, declared: float, chara
         one-line account of the rule.
     """
     difference = abs(levels[0][1] - finer[1])
-    finer_error, rule = estimate_from_levels([tuple(finer), *levels], resolution, declared, characteristic)
+    finer_error, rule = estimate_from_levels([tuple(finer), *levels], resolution, declared, characteristic,
+                                             scheme_order)
     return (difference + finer_error,
             f"|eps(N) - eps({finer[0]})| = {difference:.3g} plus the error of the run at {finer[0]}: {rule}")
