@@ -18,6 +18,7 @@ import math
 
 __all__ = [
     "CHARACTERISTIC_FLOOR",
+    "CROSSING_MARGIN",
     "CROSSING_RATIO",
     "ESTIMATE_SAFETY",
     "LATTICE_STEP_BELOW",
@@ -58,11 +59,16 @@ CHARACTERISTIC_FLOOR = 1e-9
 #: on the characteristic lattice, differences of the runs that change sign below this size are the
 #: quadrature's noise (its errors reach about 1e-8, docs/fem.md section 7), not a convergence
 QUADRATURE_NOISE_BELOW = 1e-7
-#: an order observed on the three runs above the declared one by more than this is read as two finest
-#: runs that agree by accident (the error changed sign between the coarser runs: issue 23's
-#: gamma = 0.7558, kappa = 140.8, P2 lumped on 65 elements, errors +2.2e-4, -1.64e-4, -1.65e-4 on 16, 32,
-#: 65 elements, observed order 9), not as a faster convergence
+#: a finest difference below the coarser one by more than an order this much above the runs' scheme's
+#: is read as two finest runs that agree by accident (the error changed sign between the coarser runs:
+#: issue 23's gamma = 0.7558, kappa = 140.8, P2 lumped on 65 elements, errors +2.2e-4, -1.64e-4, -1.65e-4
+#: on 16, 32, 65 elements, observed order 9; or stalled), not as a faster convergence.  2 keeps the
+#: characteristic lattice's third order (docs/fem.md section 7) out of it
 TOO_FAST_MARGIN = 2.0
+#: where the two differences are of opposite signs the limit on their ratio is this much higher: a
+#: fast convergence that crossed the limit between the coarser runs (CROSSING_RATIO) is not an accident
+#: (issue 23's seed 42045: P1 lumped on 358 elements, errors -6.66e-7, -6.53e-7, -1.53e-5, ratio 1100)
+CROSSING_MARGIN = 2.0
 #: round-off of a run of many steps in an O(1) restitution
 ROUNDING_FLOOR = 1e-12
 
@@ -83,14 +89,16 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
       :data:`P1_LUMPED_PARTLY_RESOLVED_ORDER` up to ``x = LATTICE_STEP_BELOW``, then
       :data:`P1_LUMPED_UNRESOLVED_ORDER`.
 
-    Further coarser levels, if given, are not used.  Three guards: where the runs converge faster
-    than their scheme allows (an observed order above ``scheme_order + TOO_FAST_MARGIN``: the
-    error changed sign between the coarser runs and the two finest agree by accident), the sequence
-    is treated as not monotone (the regime's lowest order where ``x > RESOLVED_BELOW``) and the next
-    coarser difference carried down to ``N`` is a second lower bound, at any ``x``; the same
+    Further coarser levels, if given, are not used.  Three guards: where the finest difference is
+    below the coarser one by more than the runs' scheme allows (``|d1| / |d0| > r**(scheme_order +
+    TOO_FAST_MARGIN)``, the exponent raised by :data:`CROSSING_MARGIN` where the differences are of
+    opposite signs: the error changed sign between the coarser runs or stalled,
+    and the two finest agree by accident), the sequence is treated as not monotone (the regime's
+    lowest order where ``x > RESOLVED_BELOW``) and the next coarser difference carried down to ``N``
+    is a second lower bound, at any ``x``; the same
     carried difference where ``x > RESOLVED_BELOW`` and the runs do not converge monotonically,
     except where that difference is of the other sign and more than :data:`CROSSING_RATIO` times
-    larger (a fast convergence that crossed the limit); on the characteristic lattice, where the
+    larger, but not too fast (a fast convergence that crossed the limit); on the characteristic lattice, where the
     two finest differences change sign below :data:`QUADRATURE_NOISE_BELOW` (the quadrature's
     noise), the larger of them.  Floors: :data:`CHARACTERISTIC_FLOOR` (characteristic lattice,
     finite stiffness) or :data:`ROUNDING_FLOOR`.
@@ -128,9 +136,12 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     ratio = [a / b for a, b in itertools.pairwise(elements)]
     monotone = len(d) > 1 and d[0] * d[1] > 0.0 and abs(d[1]) > abs(d[0])
     # a finest difference smaller than the scheme's order allows (by TOO_FAST_MARGIN) is two runs that
-    # agree by accident (the error changed sign between the coarser runs), not a faster convergence
+    # agree by accident (the error changed sign between the coarser runs, or stalled), not a faster
+    # convergence; the sign of so small a difference says nothing
     fastest = (declared if scheme_order is None else scheme_order) + TOO_FAST_MARGIN
-    too_fast = monotone and abs(d[1]) > ratio[1] ** fastest * abs(d[0])
+    if not monotone:
+        fastest += CROSSING_MARGIN
+    too_fast = len(d) > 1 and abs(d[1]) > ratio[1] ** fastest * abs(d[0])
     if x <= RESOLVED_BELOW:
         order, how = declared, "declared"
     elif x <= OBSERVED_BELOW and monotone and not too_fast and not characteristic:
@@ -138,7 +149,7 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
         order, how = min(max(observed, lowest), declared), f"observed {observed:.3g}, clamped"
     else:
         order = lowest
-        how = "faster than the declared order" if too_fast else \
+        how = "faster than the scheme's order" if too_fast else \
             "unresolved contact" if monotone or len(d) < 2 else "not monotone"
     estimate = ESTIMATE_SAFETY * abs(d[0]) / (ratio[0] ** order - 1.0)
     if len(d) > 1:
