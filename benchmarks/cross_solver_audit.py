@@ -3,7 +3,7 @@
 One command::
 
     python benchmarks/cross_solver_audit.py [--scenes 300] [--seed 2323] [--families cold hard materials bath]
-        [--elements 200] [--modes 60] [--max-work 2e9] [--verbose]
+        [--elements 400] [--modes 60] [--max-work 2e9] [--verbose]
 
 draws ``--scenes`` random scenes, one random stream each (``SeedSequence(seed).spawn``), the
 families in turn:
@@ -16,7 +16,9 @@ materials
     two rods of different materials and sections (rod 1: l = rho = E = A = 1; rod 2: impedance ratio
     and ratio of the wave's transit times log-uniform in [1/4, 4], wave speed and section in [1/2, 2]),
     rod 1 moving at 1 towards rod 2 at rest, hard contact or the exponential law with
-    ``kappa = alpha V l / c`` log-uniform in [1, 1e4] (in the delay solver's units);
+    ``kappa = alpha V l / c`` log-uniform in [1, 1e4] (in the delay solver's units), all in a random
+    unit system (length unit 10^[-1, 1], mass unit 10^[-3, 3], time unit 10^[-4, 0]: the restitution
+    does not depend on it);
 bath
     the paper's rods with a thermal bath: T_B / E_tr log-uniform in [0.1, 3], 10 to 40 bath modes,
     gamma in [0.3, 1], kappa log-uniform in [10, 1000], one realisation per scene.
@@ -66,22 +68,27 @@ def draw_scene(family: str, stream: np.random.Generator) -> dict:
         impedance_ratio, time_ratio = (float(4.0 ** stream.uniform(-1.0, 1.0)) for _ in range(2))
         speed, area = (float(2.0 ** stream.uniform(-1.0, 1.0)) for _ in range(2))
         hard = stream.random() < 0.3
+        kappa = math.inf if hard else float(10.0 ** stream.uniform(0.0, 4.0))
+        # a random unit system (length, mass and time units): the restitution does not depend on it
+        length, mass, tick = (float(10.0 ** stream.uniform(*span)) for span in ((-1.0, 1.0), (-3.0, 3.0), (-4.0, 0.0)))
         density = impedance_ratio / (speed * area)
-        rod_2 = Rod(speed / time_ratio, density=density, youngs_modulus=density * speed**2, area=area)
-        rods = (Rod(1.0), rod_2)
+        rods = tuple(Rod(l * length, density=rho * mass / length**3, youngs_modulus=rho * c**2 * mass / (length * tick**2),
+                         area=a * length**2)
+                     for l, rho, c, a in ((1.0, 1.0, 1.0, 1.0), (speed / time_ratio, density, speed, area)))
+        velocities = (length / tick, 0.0)
         if hard:
-            contact, contact_code, kappa = Hard(), "Hard()", math.inf
+            contact, contact_code = Hard(), "Hard()"
         else:
-            kappa = float(10.0 ** stream.uniform(0.0, 4.0))
-            unit = delay_parameters(Scene(rods=rods, velocities=(1.0, 0.0), contact=Hard())).time_unit
-            contact = Exponential(kappa / unit)
-            contact_code = f"Exponential({kappa / unit!r})"
-        scene = Scene(rods=rods, velocities=(1.0, 0.0), contact=contact)
-        code = (f"Scene(rods=(Rod(1.0), Rod({rod_2.length!r}, density={rod_2.density!r}, "
-                f"youngs_modulus={rod_2.youngs_modulus!r}, area={rod_2.area!r})), velocities=(1.0, 0.0), "
-                f"contact={contact_code})")
+            unit = delay_parameters(Scene(rods=rods, velocities=velocities, contact=Hard())).time_unit
+            alpha = kappa / (unit * velocities[0])
+            contact, contact_code = Exponential(alpha), f"Exponential({alpha!r})"
+        scene = Scene(rods=rods, velocities=velocities, contact=contact)
+        code = ("Scene(rods=(" + ", ".join(f"Rod({r.length!r}, density={r.density!r}, youngs_modulus={r.youngs_modulus!r}, "
+                                           f"area={r.area!r})" for r in rods)
+                + f"), velocities=({velocities[0]!r}, 0.0), contact={contact_code})")
         return {"family": family, "scene": scene, "code": code,
-                "label": f"Z2/Z1={impedance_ratio:.3g} T1/T2={time_ratio:.3g} kappa={kappa:.4g}"}
+                "label": f"Z2/Z1={impedance_ratio:.3g} T1/T2={time_ratio:.3g} kappa={kappa:.4g} units L={length:.2g} "
+                         f"M={mass:.2g} T={tick:.2g}"}
     if family == "bath":
         gamma = float(stream.uniform(0.3, 1.0))
         kappa = float(10.0 ** stream.uniform(1.0, 3.0))
@@ -149,7 +156,7 @@ def reproducer(drawn: dict, runs: dict, a: str, b: str) -> str:
             f"print({call(a)}, {call(b)})")
 
 
-def audit(scenes: int, seed: int, families=FAMILIES, elements: int = 200, modes: int = 60,
+def audit(scenes: int, seed: int, families=FAMILIES, elements: int = 400, modes: int = 60,
           max_work: float | None = 2e9, verbose: bool = False, indices=None) -> list:
     """Run the audit: one record per scene, ``{"index", "family", "label", "code", "runs", "pairs"}``
     (``indices``: only these scenes of the ``scenes`` streams, the others skipped; same streams)."""
@@ -215,7 +222,7 @@ def main(argv=None) -> int:
     parser.add_argument("--scenes", type=int, default=300, help="random scenes (default 300)")
     parser.add_argument("--seed", type=int, default=2323)
     parser.add_argument("--families", nargs="+", choices=FAMILIES, default=list(FAMILIES))
-    parser.add_argument("--elements", type=int, default=200, help="FE elements on the shorter rod (default 200)")
+    parser.add_argument("--elements", type=int, default=400, help="FE elements on the shorter rod (default 400)")
     parser.add_argument("--modes", type=int, default=60, help="modal solver's modes per rod (default 60)")
     parser.add_argument("--max-work", type=float, default=2e9, help="work limit of each solve (updates)")
     parser.add_argument("--part", default="1/1", metavar="K/N", help="only the K-th of N slices of the scenes")

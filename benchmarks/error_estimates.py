@@ -49,6 +49,7 @@ from __future__ import annotations
 import argparse
 import ast
 import contextlib
+import importlib
 import json
 import math
 import os
@@ -138,6 +139,29 @@ def reapply(row: dict) -> dict:
             "rough": FEM.rough_estimate(scene, options)}
 
 
+def use_rule_from(revision: str) -> None:
+    """Make :func:`reapply` use the FE rule of git revision ``revision`` (its
+    ``wavecontact/fem/error_estimate.py``, run from git's copy) instead of the present one, to compare a
+    rule with an earlier one on the same stored runs (``--rule-from``).  Rules older than the
+    ``scheme_order`` argument are called without it."""
+    import inspect
+    import subprocess
+    import types
+
+    source = subprocess.run(["git", "show", f"{revision}:wavecontact/fem/error_estimate.py"], check=True,
+                            capture_output=True, text=True, cwd=os.path.dirname(os.path.abspath(__file__))).stdout
+    module = types.ModuleType(f"error_estimate_{revision}")
+    exec(compile(source, module.__name__, "exec"), module.__dict__)  # noqa: S102 - the repository's own file
+
+    def adapted(function, count):
+        takes = len(inspect.signature(function).parameters)
+        return lambda *args: function(*args[:min(count, takes)])
+
+    fem_solver = importlib.import_module("wavecontact.fem.solver")
+    fem_solver._estimate_from_levels = adapted(module.estimate_from_levels, 5)
+    fem_solver._estimate_with_finer = adapted(module.estimate_with_finer, 6)
+
+
 def add_finer(row: dict) -> tuple:
     """``(row, drift)``: ``row`` with the run at twice the elements appended to its levels where the solver
     now runs it (fewer than ``FINER_BELOW`` elements) and the stored sweep lacks it (sweeps saved before the
@@ -193,6 +217,8 @@ def main(argv=None) -> int:
     parser.add_argument("--add-finer", metavar="FILE",
                         help="run the level at twice the elements for the stored FE samples under "
                              f"{FINER_BELOW} elements that lack it, and rewrite FILE with it (seconds)")
+    parser.add_argument("--rule-from", metavar="REV",
+                        help="with --offline: apply the FE rule of git revision REV instead of the present one")
     parser.add_argument("--misses", action="store_true",
                         help="also list the FE collisions the estimate does not bound or is not within 10x of")
     parser.add_argument("--update-docs", action="store_true",
@@ -212,6 +238,8 @@ def main(argv=None) -> int:
     if args.summarize or args.offline:
         rows = [row for name in args.summarize or args.offline for row in load_rows(name)]
         if args.offline:
+            if args.rule_from:
+                use_rule_from(args.rule_from)
             rows = [reapply(row) for row in rows if row["solver"] == "fem"]
         return _report({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver}, args)
     part, parts = (int(x) for x in args.part.split("/"))
@@ -335,6 +363,12 @@ def table_lines(tables: dict) -> list:
         total, median, count = estimate_share(rows)
         lines.append(f"\n{solver}: the coarser runs of the estimate took {total:.2f} of the requested runs' time in "
                      f"all, {median:.2f} (median) for the {count} requested runs of a second or more.")
+        if solver == "fem":
+            solved = [r for r in rows if r["status"] == "ok"]
+            bound = [r["estimate"] + r["reference_estimate"] for r in solved]
+            under = sum(r["error"] > b for r, b in zip(solved, bound))
+            far = sum(r["error"] > 10.0 * b for r, b in zip(solved, bound))
+            lines.append(f"Not bounded: {under} of {len(solved)}, {far} of them by more than 10x.")
         ratio, longest, small = finer_share(rows) if solver == "fem" else (math.nan, math.nan, 0)
         if small:
             lines.append(f"Under {FINER_BELOW} elements (with the run at 2N): {ratio:.2f} of the requested run's time "
