@@ -1,11 +1,17 @@
 """Cross-solver random audit (benchmarks/cross_solver_audit.py, seeded and small): every pair of solvers of
 the registry that takes a scene agrees within the sum of their stated error estimates.
 
-The FE estimate bounds its error in about 97 % of random collisions and is never off by more than a
-factor 10 (docs/error_estimates.md section 2): a pair with FE is held to ten times the summed estimates
-one by one, and to the sum in all but a few of the pairs together.  The modal solver with a thermal bath
-and with two materials in small units is wrong with an estimate of 1e-11 (issue 23, items 1 and 2); its
-pairs on those scenes are marked xfail(strict) until the fix on branch h/modal is merged."""
+Scenes of seed 2323 (the families in turn: cold, hard, two materials in random units, thermal bath), six
+in the default run and the rest of 24 marked slow, plus one two-material scene of seed 5 (materials only).
+The failures the audit finds today are marked xfail(strict), so that the test fails once they are fixed
+and the mark is left behind:
+
+* the modal solver with a thermal bath, and with two materials in a small time unit, is wrong with an
+  estimate of 1e-11 (issue 23, items 1 and 2): the fix is on branch h/modal;
+* the delay solver with a bath leaves the interpolation error of its noise table (``noise_resolution``,
+  32 nodes per period) out of its estimate: 2e-9 to 3e-8 against estimates near 5e-10 (with 128 nodes
+  and rtol 1e-13 it agrees with the modal solver to 1e-11); found by this audit, not fixed.
+"""
 
 import functools
 import sys
@@ -18,74 +24,65 @@ import cross_solver_audit as audit
 
 from wavecontact.solvers import SOLVER_NAMES
 
-SEED = 2323
-FAST = (0, 1, 2, 3, 4, 6)  # of the slow sample's scenes: cold, hard, materials, bath, cold, materials
-SCENES = 24
+SEED, SCENES = 2323, 24
+FAST = (0, 1, 2, 3, 6, 7)  # cold, hard, materials, bath, materials, bath
+UNITS = (5, 12, 11)  # seed 5, 12 two-material scenes: scene 11 is in a time unit of 1e-4
 ELEMENTS, MODES = 400, 60
 MODAL_FIX = pytest.mark.xfail(strict=True, reason="modal bath/two-material fix on branch h/modal")
-# (scene, pair) the audit finds wrong today: the modal solver with a bath (item 1) and with two materials
-# in a small time unit (item 2); filled in from the audit's output, each one checked to fail
-MODAL_FAILURES = {
-    (3, ("delay", "modal")), (3, ("fem", "modal")),
+DELAY_NOISE = pytest.mark.xfail(strict=True, reason="delay with a bath: the noise table's interpolation error is "
+                                                    "not in its estimate (found by the cross-solver audit)")
+# (seed, scene, pair) that the audit finds wrong today (benchmarks/cross_solver_audit.py --scenes 24 --seed 2323
+# --verbose, and --scenes 12 --seed 5 --families materials): each checked to fail
+KNOWN = {
+    (SEED, 7, ("delay", "modal")): MODAL_FIX, (SEED, 7, ("fem", "modal")): MODAL_FIX,
+    (SEED, 23, ("delay", "modal")): MODAL_FIX, (SEED, 23, ("fem", "modal")): MODAL_FIX,
+    (5, 11, ("delay", "modal")): MODAL_FIX, (5, 11, ("fem", "modal")): MODAL_FIX,
+    (SEED, 3, ("delay", "modal")): DELAY_NOISE, (SEED, 11, ("delay", "modal")): DELAY_NOISE,
+    (SEED, 19, ("delay", "modal")): DELAY_NOISE,
 }
+PAIRS = [(a, b) for i, a in enumerate(SOLVER_NAMES) for b in SOLVER_NAMES[i + 1:]]
 
 
 @functools.cache
-def _scene(index):
-    (record,) = audit.audit(SCENES, SEED, elements=ELEMENTS, modes=MODES, indices={index})
+def _scene(seed, index):
+    scenes, families = (SCENES, audit.FAMILIES) if seed == SEED else (UNITS[1], ("materials",))
+    (record,) = audit.audit(scenes, seed, families, elements=ELEMENTS, modes=MODES, indices={index})
     return record
 
 
-def _pair(index, pair):
-    record = _scene(index)
+def _cases(keys):
+    return [pytest.param(seed, index, pair, marks=[KNOWN[(seed, index, pair)]] if (seed, index, pair) in KNOWN else [],
+                         id=f"seed{seed}-scene{index}-{pair[0]}-{pair[1]}")
+            for seed, index in keys for pair in PAIRS]
+
+
+def _check(seed, index, pair):
+    record = _scene(seed, index)
     verdicts = [p for p in record["pairs"] if p[:2] == pair]
-    return record, verdicts[0] if verdicts else None
-
-
-def _cases(indices):
-    cases = []
-    for index in indices:
-        for pair in ((a, b) for i, a in enumerate(SOLVER_NAMES) for b in SOLVER_NAMES[i + 1:]):
-            marks = [MODAL_FIX] if (index, pair) in MODAL_FAILURES else []
-            cases.append(pytest.param(index, pair, marks=marks, id=f"scene{index}-{pair[0]}-{pair[1]}"))
-    return cases
-
-
-def _check(index, pair):
-    record, verdict = _pair(index, pair)
-    if verdict is None:  # one of the two does not take the scene (the registry decides)
+    if not verdicts:  # one of the two does not take the scene (the registry decides)
         statuses = {name: record["runs"][name]["status"] for name in pair}
         assert "unsupported" in statuses.values(), statuses
         return
-    a, b, outcome, difference, allowed = verdict
+    a, b, outcome, difference, allowed = verdicts[0]
     assert outcome != "no estimate", (record["code"], record["runs"][a]["method"], record["runs"][b]["method"])
-    bound = 10.0 * allowed if "fem" in pair else allowed
-    assert difference <= bound, audit.reproducer(record["drawn"], record["runs"], a, b)
+    assert difference <= allowed, audit.reproducer(record["drawn"], record["runs"], a, b)
 
 
-@pytest.mark.parametrize("index, pair", _cases(FAST))
-def test_pairs_agree_within_their_estimates(index, pair):
-    _check(index, pair)
+@pytest.mark.parametrize("seed, index, pair", _cases([(SEED, i) for i in FAST] + [UNITS[::2]]))
+def test_pairs_agree_within_their_estimates(seed, index, pair):
+    _check(seed, index, pair)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("index, pair", _cases([i for i in range(SCENES) if i not in FAST]))
-def test_pairs_agree_within_their_estimates_slow(index, pair):
-    _check(index, pair)
+@pytest.mark.parametrize("seed, index, pair", _cases([(SEED, i) for i in range(SCENES) if i not in FAST]))
+def test_pairs_agree_within_their_estimates_slow(seed, index, pair):
+    _check(seed, index, pair)
 
 
 def test_every_solver_takes_the_two_rod_scenes():
     # the registry's three solvers all take two rods on a line, cold, hard, two materials or with a bath
     for index in FAST:
-        assert {run["status"] for run in _scene(index)["runs"].values()} == {"ok"}, index
-
-
-def test_pairs_with_fem_agree_within_the_sum_in_most_scenes():
-    # the FE estimate's coverage (0.97 on the acceptance sweeps): at most one of the fast sample's pairs with FE
-    # outside the summed estimates (a pair the other solver gets wrong is excluded: it is listed above)
-    outside = [(index, verdict) for index in FAST for verdict in _scene(index)["pairs"]
-               if "fem" in verdict[:2] and (index, verdict[:2]) not in MODAL_FAILURES and verdict[2] == "disagree"]
-    assert len(outside) <= 1, outside
+        assert {run["status"] for run in _scene(SEED, index)["runs"].values()} == {"ok"}, index
 
 
 def test_audit_sees_a_wrong_estimate():
