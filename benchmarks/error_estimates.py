@@ -15,7 +15,9 @@ come from ``--solver fem --seed S --offline benchmarks/sweeps/fem_S.jsonl --upda
 S = 2027 ... 2031, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
 ``--add-finer FILE`` adds to a sweep stored before the solver ran the level at twice the elements
 (below ``FINER_BELOW`` elements) that level, in seconds, so that ``--offline`` applies the
-present rule (seeds 2027 ... 2030).
+present rule (seeds 2027 ... 2030).  ``--distribution probe`` draws the FE collisions as issue 23's
+probe did (see :func:`draw`; the sweeps ``benchmarks/sweeps/fem_probe_S.jsonl``), and ``--rule-from REV``
+re-applies, with ``--offline``, the FE rule of an earlier git revision to the same stored runs.
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements

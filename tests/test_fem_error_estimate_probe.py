@@ -84,7 +84,7 @@ def _misses(samples):
 
 def test_probe_draws_seeded_subset():
     # 16 scenes drawn like the probe (seed 23, elements capped at 200 to keep the test fast): the estimate
-    # bounds the error with coverage 0.965 on the fresh acceptance sweep (docs/error_estimates.md section 2);
+    # bounds the error with coverage 0.99 on the acceptance sweep of seed 42654 (docs/error_estimates.md section 2);
     # here at most 2 misses of 16 (binomial, p = 0.05: P(3 or more) = 0.04) and none by more than 10x
     samples = _probe_sample(16, 23)
     for s in samples:
