@@ -15,7 +15,9 @@ come from ``--solver fem --seed S --offline benchmarks/sweeps/fem_S.jsonl --upda
 S = 2027 ... 2031, the stored sweeps of ``--solver fem --seed S --max-work 2e10 --save FILE``.
 ``--add-finer FILE`` adds to a sweep stored before the solver ran the level at twice the elements
 (below ``FINER_BELOW`` elements) that level, in seconds, so that ``--offline`` applies the
-present rule (seeds 2027 ... 2030).
+present rule (seeds 2027 ... 2030).  ``--distribution probe`` draws the FE collisions as issue 23's
+probe did (see :func:`draw`; the sweeps ``benchmarks/sweeps/fem_probe_S.jsonl``), and ``--rule-from REV``
+re-applies, with ``--offline``, the FE rule of an earlier git revision to the same stored runs.
 
 draws ``--samples`` random collisions per solver (gamma uniform in [0.05, 1];
 kappa log-uniform in [0.1, 1e6], or inf with probability 0.15; FE: elements
@@ -49,6 +51,7 @@ from __future__ import annotations
 import argparse
 import ast
 import contextlib
+import importlib
 import json
 import math
 import os
@@ -67,8 +70,19 @@ DOCS_PAGE = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, 
 SHARP_ABOVE = 1e-10
 
 
-def draw(solver: str, index: int, stream: np.random.Generator) -> dict:
-    """One random collision: ``gamma``, ``kappa`` and the solver's options."""
+def draw(solver: str, index: int, stream: np.random.Generator, distribution: str = "acceptance") -> dict:
+    """One random collision: ``gamma``, ``kappa`` and the solver's options.
+
+    ``distribution``: ``"acceptance"`` (the module docstring's) or ``"probe"`` (FE only, the draws of
+    issue 23's probe: gamma uniform in (0.05, 1], kappa log-uniform in [1, 1e5], order 1 or 2 and
+    lumped or consistent mass at random, elements uniform among the integers 8 ... 400).
+    """
+    if distribution == "probe":
+        gamma = float(1.0 - stream.uniform(0.0, 0.95))
+        kappa = float(10.0 ** stream.uniform(0.0, 5.0))
+        options = {"elements": int(stream.integers(8, 401)), "order": int(stream.integers(1, 3)),
+                   "mass": ("lumped", "consistent")[int(stream.integers(0, 2))]}
+        return {"gamma": gamma, "kappa": kappa, "options": options}
     gamma = float(stream.uniform(0.05, 1.0))
     kappa = math.inf if stream.random() < 0.15 else float(10.0 ** stream.uniform(-1.0, 6.0))
     if solver == "fem":
@@ -127,6 +141,29 @@ def reapply(row: dict) -> dict:
             "rough": FEM.rough_estimate(scene, options)}
 
 
+def use_rule_from(revision: str) -> None:
+    """Make :func:`reapply` use the FE rule of git revision ``revision`` (its
+    ``wavecontact/fem/error_estimate.py``, run from git's copy) instead of the present one, to compare a
+    rule with an earlier one on the same stored runs (``--rule-from``).  Rules older than the
+    ``scheme_order`` argument are called without it."""
+    import inspect
+    import subprocess
+    import types
+
+    source = subprocess.run(["git", "show", f"{revision}:wavecontact/fem/error_estimate.py"], check=True,
+                            capture_output=True, text=True, cwd=os.path.dirname(os.path.abspath(__file__))).stdout
+    module = types.ModuleType(f"error_estimate_{revision}")
+    exec(compile(source, module.__name__, "exec"), module.__dict__)  # noqa: S102 - the repository's own file
+
+    def adapted(function, count):
+        takes = len(inspect.signature(function).parameters)
+        return lambda *args: function(*args[:min(count, takes)])
+
+    fem_solver = importlib.import_module("wavecontact.fem.solver")
+    fem_solver._estimate_from_levels = adapted(module.estimate_from_levels, 5)
+    fem_solver._estimate_with_finer = adapted(module.estimate_with_finer, 6)
+
+
 def add_finer(row: dict) -> tuple:
     """``(row, drift)``: ``row`` with the run at twice the elements appended to its levels where the solver
     now runs it (fewer than ``FINER_BELOW`` elements) and the stored sweep lacks it (sweeps saved before the
@@ -164,6 +201,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=200, help="collisions per solver (default 200)")
     parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--distribution", choices=("acceptance", "probe"), default="acceptance",
+                        help="how the collisions are drawn (probe: issue 23's FE draws, see draw())")
     parser.add_argument("--solver", nargs="+", choices=("fem", "modal"), default=["fem", "modal"])
     parser.add_argument("--max-work", type=float, default=None,
                         help="work limit of each solve (default: the library's, 2e11 updates); larger ones are refused")
@@ -180,6 +219,8 @@ def main(argv=None) -> int:
     parser.add_argument("--add-finer", metavar="FILE",
                         help="run the level at twice the elements for the stored FE samples under "
                              f"{FINER_BELOW} elements that lack it, and rewrite FILE with it (seconds)")
+    parser.add_argument("--rule-from", metavar="REV",
+                        help="with --offline: apply the FE rule of git revision REV instead of the present one")
     parser.add_argument("--misses", action="store_true",
                         help="also list the FE collisions the estimate does not bound or is not within 10x of")
     parser.add_argument("--update-docs", action="store_true",
@@ -199,9 +240,12 @@ def main(argv=None) -> int:
     if args.summarize or args.offline:
         rows = [row for name in args.summarize or args.offline for row in load_rows(name)]
         if args.offline:
+            if args.rule_from:
+                use_rule_from(args.rule_from)
             rows = [reapply(row) for row in rows if row["solver"] == "fem"]
         return _report({solver: [r for r in rows if r["solver"] == solver] for solver in args.solver}, args)
     part, parts = (int(x) for x in args.part.split("/"))
+    print(f"seed {args.seed}, distribution {args.distribution}, {args.samples} samples, part {args.part}", flush=True)
     tables = {}
     with open(args.save, "w", encoding="utf-8") if args.save else contextlib.nullcontext() as save:
         for solver in args.solver:
@@ -211,7 +255,7 @@ def main(argv=None) -> int:
                 if index % parts != part - 1:
                     continue
                 row = {"solver": solver, "index": index,
-                       **run_sample(solver, draw(solver, index, stream), args.max_work)}
+                       **run_sample(solver, draw(solver, index, stream, args.distribution), args.max_work)}
                 rows.append(row)
                 if args.verbose:
                     print(row, flush=True)
@@ -321,6 +365,12 @@ def table_lines(tables: dict) -> list:
         total, median, count = estimate_share(rows)
         lines.append(f"\n{solver}: the coarser runs of the estimate took {total:.2f} of the requested runs' time in "
                      f"all, {median:.2f} (median) for the {count} requested runs of a second or more.")
+        if solver == "fem":
+            solved = [r for r in rows if r["status"] == "ok"]
+            bound = [r["estimate"] + r["reference_estimate"] for r in solved]
+            under = sum(r["error"] > b for r, b in zip(solved, bound))
+            far = sum(r["error"] > 10.0 * b for r, b in zip(solved, bound))
+            lines.append(f"Not bounded: {under} of {len(solved)}, {far} of them by more than 10x.")
         ratio, longest, small = finer_share(rows) if solver == "fem" else (math.nan, math.nan, 0)
         if small:
             lines.append(f"Under {FINER_BELOW} elements (with the run at 2N): {ratio:.2f} of the requested run's time "

@@ -18,6 +18,7 @@ import math
 
 __all__ = [
     "CHARACTERISTIC_FLOOR",
+    "CROSSING_MARGIN",
     "CROSSING_RATIO",
     "ESTIMATE_SAFETY",
     "LATTICE_STEP_BELOW",
@@ -27,6 +28,7 @@ __all__ = [
     "QUADRATURE_NOISE_BELOW",
     "RESOLVED_BELOW",
     "ROUNDING_FLOOR",
+    "TOO_FAST_MARGIN",
     "UNRESOLVED_ORDER",
     "estimate_from_levels",
     "estimate_with_finer",
@@ -57,11 +59,22 @@ CHARACTERISTIC_FLOOR = 1e-9
 #: on the characteristic lattice, differences of the runs that change sign below this size are the
 #: quadrature's noise (its errors reach about 1e-8, docs/fem.md section 7), not a convergence
 QUADRATURE_NOISE_BELOW = 1e-7
+#: a finest difference below the coarser one by more than an order this much above the runs' scheme's
+#: is read as two finest runs that agree by accident (the error changed sign between the coarser runs:
+#: issue 23's gamma = 0.7558, kappa = 140.8, P2 lumped on 65 elements, errors +2.2e-4, -1.64e-4, -1.65e-4
+#: on 16, 32, 65 elements, observed order 9; or stalled), not as a faster convergence.  2 keeps the
+#: characteristic lattice's third order (docs/fem.md section 7) out of it
+TOO_FAST_MARGIN = 2.0
+#: where the two differences are of opposite signs the limit on their ratio is this much higher: a
+#: fast convergence that crossed the limit between the coarser runs (CROSSING_RATIO) is not an accident
+#: (issue 23's seed 42045: P1 lumped on 358 elements, errors -6.66e-7, -6.53e-7, -1.53e-5, ratio 1100)
+CROSSING_MARGIN = 2.0
 #: round-off of a run of many steps in an O(1) restitution
 ROUNDING_FLOOR = 1e-12
 
 
-def estimate_from_levels(levels, resolution: float, declared: float, characteristic: bool) -> tuple:
+def estimate_from_levels(levels, resolution: float, declared: float, characteristic: bool,
+                         scheme_order: float | None = None) -> tuple:
     """``(estimate, rule)``: the error of the first level's restitution.
 
     Richardson extrapolation ``SAFETY |d0| / (r**p - 1)`` of the finest difference
@@ -70,19 +83,25 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
 
     * ``x <= RESOLVED_BELOW``: the declared order;
     * ``RESOLVED_BELOW < x <= OBSERVED_BELOW`` (not the characteristic lattice), where the runs
-      converge monotonically: the order observed on the three finest runs, clamped to
-      ``[UNRESOLVED_ORDER, declared]``;
+      converge monotonically and not too fast (below): the order observed on the three finest runs,
+      clamped to ``[UNRESOLVED_ORDER, declared]``;
     * otherwise :data:`UNRESOLVED_ORDER`; on the characteristic lattice
       :data:`P1_LUMPED_PARTLY_RESOLVED_ORDER` up to ``x = LATTICE_STEP_BELOW``, then
       :data:`P1_LUMPED_UNRESOLVED_ORDER`.
 
-    Further coarser levels, if given, are not used.  Two guards: where ``x > RESOLVED_BELOW`` and the runs do not converge monotonically, the
-    next coarser difference carried down to ``N`` is a second lower bound (two runs may agree by
-    accident), except where that difference is of the other sign and more than
-    :data:`CROSSING_RATIO` times larger (a fast convergence that crossed the limit); on the
-    characteristic lattice, where the two finest differences change sign below
-    :data:`QUADRATURE_NOISE_BELOW` (the quadrature's noise), the larger of them.  Floors: :data:`CHARACTERISTIC_FLOOR` (characteristic lattice, finite
-    stiffness) or :data:`ROUNDING_FLOOR`.
+    Further coarser levels, if given, are not used.  Three guards: where the finest difference is
+    below the coarser one by more than the runs' scheme allows (``|d1| / |d0| > r**(scheme_order +
+    TOO_FAST_MARGIN)``, the exponent raised by :data:`CROSSING_MARGIN` where the differences are of
+    opposite signs: the error changed sign between the coarser runs or stalled,
+    and the two finest agree by accident), the sequence is treated as not monotone (the regime's
+    lowest order where ``x > RESOLVED_BELOW``) and the next coarser difference carried down to ``N``
+    is a second lower bound, at any ``x``; the same
+    carried difference where ``x > RESOLVED_BELOW`` and the runs do not converge monotonically,
+    except where that difference is of the other sign and more than :data:`CROSSING_RATIO` times
+    larger, but not too fast (a fast convergence that crossed the limit); on the characteristic lattice, where the
+    two finest differences change sign below :data:`QUADRATURE_NOISE_BELOW` (the quadrature's
+    noise), the larger of them.  Floors: :data:`CHARACTERISTIC_FLOOR` (characteristic lattice,
+    finite stiffness) or :data:`ROUNDING_FLOOR`.
 
     Parameters
     ----------
@@ -96,6 +115,9 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     characteristic : bool
         Whether the run uses the characteristic interface with the sub-step gap quadrature
         (P1 lumped, Courant number 1, exponential contact).
+    scheme_order : float or None
+        The order in ``h`` of the contact scheme all the runs use (the massless-end interface: 1,
+        below the declared order; None: ``declared``), the base of the too-fast guard.
 
     Returns
     -------
@@ -113,17 +135,26 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     d = [a - b for a, b in itertools.pairwise(values)]
     ratio = [a / b for a, b in itertools.pairwise(elements)]
     monotone = len(d) > 1 and d[0] * d[1] > 0.0 and abs(d[1]) > abs(d[0])
+    # a finest difference smaller than the scheme's order allows (by TOO_FAST_MARGIN) is two runs that
+    # agree by accident (the error changed sign between the coarser runs, or stalled), not a faster
+    # convergence; the sign of so small a difference says nothing
+    fastest = (declared if scheme_order is None else scheme_order) + TOO_FAST_MARGIN
+    if not monotone:
+        fastest += CROSSING_MARGIN
+    too_fast = len(d) > 1 and abs(d[1]) > ratio[1] ** fastest * abs(d[0])
     if x <= RESOLVED_BELOW:
         order, how = declared, "declared"
-    elif x <= OBSERVED_BELOW and monotone and not characteristic:
+    elif x <= OBSERVED_BELOW and monotone and not too_fast and not characteristic:
         observed = math.log(abs(d[1]) / abs(d[0])) / math.log(ratio[1])
         order, how = min(max(observed, lowest), declared), f"observed {observed:.3g}, clamped"
     else:
-        order, how = lowest, "unresolved contact" if monotone or len(d) < 2 else "not monotone"
+        order = lowest
+        how = "faster than the scheme's order" if too_fast else \
+            "unresolved contact" if monotone or len(d) < 2 else "not monotone"
     estimate = ESTIMATE_SAFETY * abs(d[0]) / (ratio[0] ** order - 1.0)
     if len(d) > 1:
         crossing = d[0] * d[1] < 0.0 and abs(d[1]) > CROSSING_RATIO * abs(d[0])
-        if x > RESOLVED_BELOW and not monotone and not crossing:
+        if too_fast or (x > RESOLVED_BELOW and not monotone and not crossing):
             carried = ESTIMATE_SAFETY * abs(d[1]) / (ratio[1] ** order - 1.0) / ratio[0] ** order
             estimate, how = max(estimate, carried), how + ", coarser pair carried down"
         if characteristic and d[0] * d[1] < 0.0 and max(abs(d[0]), abs(d[1])) < QUADRATURE_NOISE_BELOW:
@@ -133,7 +164,8 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
             f"order {order:.3g} ({how}; alpha V h / c = {x:.3g}), safety {ESTIMATE_SAFETY:g}, floor {floor:g}")
 
 
-def estimate_with_finer(finer, levels, resolution: float, declared: float, characteristic: bool) -> tuple:
+def estimate_with_finer(finer, levels, resolution: float, declared: float, characteristic: bool,
+                        scheme_order: float | None = None) -> tuple:
     """``(estimate, rule)``: the error of ``levels[0]``'s restitution from a run on a finer mesh.
 
     By the triangle inequality ``|e(N)| <= |eps(N) - eps(2N)| + |e(2N)|``: the first term is
@@ -158,6 +190,8 @@ def estimate_with_finer(finer, levels, resolution: float, declared: float, chara
         The discretization's order where the contact is resolved.
     characteristic : bool
         Whether the run uses the characteristic interface with the sub-step gap quadrature.
+    scheme_order : float or None
+        As in :func:`estimate_from_levels`.
 
     Returns
     -------
@@ -166,6 +200,7 @@ def estimate_with_finer(finer, levels, resolution: float, declared: float, chara
         one-line account of the rule.
     """
     difference = abs(levels[0][1] - finer[1])
-    finer_error, rule = estimate_from_levels([tuple(finer), *levels], resolution, declared, characteristic)
+    finer_error, rule = estimate_from_levels([tuple(finer), *levels], resolution, declared, characteristic,
+                                             scheme_order)
     return (difference + finer_error,
             f"|eps(N) - eps({finer[0]})| = {difference:.3g} plus the error of the run at {finer[0]}: {rule}")
