@@ -218,7 +218,8 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
         records = np.empty((1024, 3 + stages))
     else:
         ends = np.zeros(end_response.ENDS_SIZE)
-        free_q, free_v = np.zeros_like(system.q), np.zeros_like(system.v)
+        # warm modes' starting motion: only its amplitudes are used (they bound the step, see collocation)
+        free_q, free_v = system.q.copy(), system.v.copy()
         records = np.empty((0, 3 + stages))
     while True:
         status = collocation.run_collision(
