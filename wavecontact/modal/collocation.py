@@ -795,8 +795,9 @@ def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate
     modes' acceleration; the contact force only opens the gap).  Exponential law: that fall times
     ``alpha`` is at most ``exponent_step`` e-folds of the force, plus the e-folds by which the force
     is still below ``exp(-30) force_scale``.  Laws without range (penalty, hard): while the pair is
-    open, the fall is at most the gap itself, or ``1e-3 travel`` (``travel = V h_top``, the step
-    ladder's own length) near touching, after which the error control takes over.
+    open, the fall is at most the gap itself, or ``5e-4 exponent_step travel`` (``travel = V h_top``,
+    the step ladder's own length) near touching, after which the error control takes over (a touch
+    between the nodes can then go that deep unseen: the error estimate's finer run halves it).
     """
     speed = abs(rate)
     if law == LAW_EXPONENTIAL:
@@ -806,7 +807,7 @@ def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate
         return 2.0 * room / (scaled + math.sqrt(scaled * scaled + 2.0 * alpha * accel * room))
     if force > 0.0:
         return math.inf
-    room = max(gap, 1e-3 * travel)
+    room = max(gap, 5e-4 * exponent_step * travel)
     return 2.0 * room / (speed + math.sqrt(speed * speed + 2.0 * accel * room))
 
 
