@@ -256,13 +256,17 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             matrix[i, i] += 1.0 + y
         _solve_small(matrix, rhs, delta)
         change = 0.0
+        capped = False
         for i in range(s):
             step = min(delta[i], 2.0)  # a convex exponential: never overshoot upwards
+            capped = capped or delta[i] > 2.0
             v[i] += step
             change = max(change, abs(step) * forces[i])
         if not math.isfinite(change):
             return False
-        if change <= 1e-13 * (force_scale + biggest):
+        # a capped step is still climbing: its force may be tiny now, yet far too small for its gap (a node
+        # driven deep into overlap within one step would otherwise pass with a negligible force)
+        if change <= 1e-13 * (force_scale + biggest) and not capped:
             for i in range(s):
                 forces[i] = math.exp(v[i])
             return True
@@ -511,6 +515,11 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     for j in range(n_modes):
         if free_q[j] != 0.0 or free_v[j] != 0.0:
             warm = True
+    # modes that start warm (a bath, initial fields) move the gap between the nodes faster than any
+    # rate seen at a step boundary: the bound on their acceleration limits the step (_warm_step_limit)
+    warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm else 0.0
+    # the gap's round-off: a hard contact's active set cannot settle below it (V T_long, see _solve_hard)
+    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact else 0.0
 
     # state at the start (or where the last call stopped)
     sq = 0.0
@@ -543,12 +552,19 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         sv += zeta * force_now
     have_previous = False
     h_previous = 1.0
+    travel = (zeta * force_scale if exact else abs(rigid_rate)) * h_top  # the top step's length scale
     # first step from the contact's rate
+    # (alpha is a rate per length for the exponential law only; the other laws carry a placeholder)
+    approach = alpha * abs(rigid_rate + sv) if law == LAW_EXPONENTIAL else 0.0
     if exact:
-        rate = alpha * abs(rigid_rate + sv) + (zeta * k_now if math.isfinite(k_now) else 0.0)
+        rate = approach + (zeta * k_now if math.isfinite(k_now) else 0.0)
     else:
-        rate = alpha * abs(rigid_rate + sv) + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
+        rate = approach + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
     h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
+    if warm:
+        h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
+                                                  ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
+                                                  force_now, warm_accel, travel))
     level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-12)))  # noqa: RUF046
     steps_here = 0
 
@@ -617,6 +633,11 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         elif hard:
             converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
                                     active, matrix, delta, counters)
+            if not converged and gap_floor > 1e-10 * zeta * h * force_scale:
+                # at small steps the node gaps are round-off of O(V T) terms, and an overlap tolerance
+                # relative to the step alone (V h) lies below it: the active set then cycles on noise
+                converged = _solve_hard(free_gap, step_response, predicted, gap_floor, forces, active, matrix,
+                                        delta, counters)
         else:
             converged = _newton_forces(free_gap, step_response, law, alpha, strength, stiffness, compliance,
                                        force_scale, forces, residual, stiff, delta, matrix, counters)
@@ -747,9 +768,47 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             room = exponent_step + max(0.0, -math.log(force_now / force_scale) - 30.0)
             if rate * h_wanted > room:
                 h_wanted = room / rate
+        if warm:
+            h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
+                                                      ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
+                                                      force_now, warm_accel, travel))
         level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
         if hard:
             level = min(level, n_levels - 1)
+
+
+@kernel(error_model="numpy")
+def _free_acceleration_bound(coupling, omega, free_q, free_v):
+    """Bound on ``|d^2/dt^2 sum_j c_j q_j(t)|`` of freely oscillating modes (their amplitudes are constant)."""
+    bound = 0.0
+    for j in range(omega.size):
+        w = omega[j]
+        bound += abs(coupling[j]) * w * math.sqrt(w * w * free_q[j] * free_q[j] + free_v[j] * free_v[j])
+    return bound
+
+
+@kernel(error_model="numpy")
+def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate, force, accel, travel):
+    """Largest step over which warm modes cannot bring an unseen contact between the collocation nodes.
+
+    Over a step ``h`` the gap falls at most ``|rate| h + accel h^2 / 2`` (``accel`` bounds the free
+    modes' acceleration; the contact force only opens the gap).  Exponential law: that fall times
+    ``alpha`` is at most ``exponent_step`` e-folds of the force, plus the e-folds by which the force
+    is still below ``exp(-30) force_scale``.  Laws without range (penalty, hard): while the pair is
+    open, the fall is at most the gap itself, or ``5e-4 exponent_step travel`` (``travel = V h_top``,
+    the step ladder's own length) near touching, after which the error control takes over (a touch
+    between the nodes can then go that deep unseen: the error estimate's finer run halves it).
+    """
+    speed = abs(rate)
+    if law == LAW_EXPONENTIAL:
+        distance = alpha * gap - math.log(alpha * strength / force_scale)  # -log(F / force_scale), no compliance
+        room = exponent_step + max(0.0, distance - 30.0)
+        scaled = alpha * speed
+        return 2.0 * room / (scaled + math.sqrt(scaled * scaled + 2.0 * alpha * accel * room))
+    if force > 0.0:
+        return math.inf
+    room = max(gap, 5e-4 * exponent_step * travel)
+    return 2.0 * room / (speed + math.sqrt(speed * speed + 2.0 * accel * room))
 
 
 @kernel(error_model="numpy")

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bath.model import _ModeSum
 from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
@@ -94,7 +95,17 @@ _START_MARGIN = 5.0
 
 
 def _project_field(rod, modes, field):
-    """Mean and modal coordinates (mass-normalised) of a field ``f(s)``, ``s in [0, l]``."""
+    """Mean and modal coordinates (mass-normalised) of a field ``f(s)``, ``s in [0, l]``.
+
+    A field that is itself a sum of this rod's free-free modes (a bath realisation,
+    :class:`wavecontact.bath.model.BathRealisation`) is read off exactly; any other is
+    projected by Gauss-Legendre quadrature.
+    """
+    if isinstance(field, _ModeSum) and math.isclose(field.length, rod.length, rel_tol=1e-12):
+        kept = min(modes.count, field.amplitudes.size)
+        coords = np.zeros(modes.count)
+        coords[:kept] = math.sqrt(rod.mass) * field.scale * np.asarray(field.amplitudes[:kept], dtype=float)
+        return 0.0, coords
     points = max(4 * modes.count, 256)
     nodes, weights = np.polynomial.legendre.leggauss(points)
     s = 0.5 * rod.length * (nodes + 1.0)
@@ -107,6 +118,12 @@ def _project_field(rod, modes, field):
     nu = np.arange(1, modes.count + 1)
     shapes = math.sqrt(2.0 / rod.mass) * np.cos(np.outer(nu, s) * math.pi / rod.length)
     return mean, density * shapes @ (w * values)
+
+
+def _excited_modes(scene) -> int:
+    """Modes per rod that a bath realisation in ``scene`` excites (0 without one)."""
+    vibrations = getattr(scene, "vibrations", None)
+    return 0 if vibrations is None else int(vibrations.modes)
 
 
 def _resolve_correction(correction, static_correction, mode_source, step_method) -> str:
@@ -141,6 +158,16 @@ def _build(scene: Scene, modes, correction, mode_source, fe_elements, fe_order, 
             f"the modal solver computes the restitution of two rods on a line, got {len(scene.rods)} rods"
         )
     rod_a, rod_b = scene.rods
+    excited = _excited_modes(scene)
+    if excited > modes:
+        if correction != "end-response":
+            raise UnsupportedSceneError(
+                f"the bath excites {excited} modes per rod and modes={modes} keeps fewer: the {correction!r} "
+                f"correction would drop the rest of the thermal motion; use modes >= {excited} (the "
+                "end-response correction keeps them itself)")
+        # the end-response correction is exact for any number of kept modes once every warm mode is
+        # among them (the omitted ones must start at rest): keep the excited ones
+        modes = excited
     basis = [rod_modes(r, modes, mode_source, elements=fe_elements, order=fe_order) for r in scene.rods]
     velocities = np.array(scene.velocities, dtype=float)
     shift = np.zeros(2)
@@ -200,7 +227,7 @@ def _collocation_tables(system, coupling, stages):
     return tables
 
 
-def _run_collocation(system, stages, tolerance, buffer, chunks):
+def _run_collocation(system, stages, tolerance, buffer, chunks, exponent_step=_EXPONENT_STEP):
     """Advance ``system`` (two rods, one pair) through its collision by exponential collocation.
 
     Returns the last history chunk, the work counters and the step records (exact ends; else empty).
@@ -218,13 +245,14 @@ def _run_collocation(system, stages, tolerance, buffer, chunks):
         records = np.empty((1024, 3 + stages))
     else:
         ends = np.zeros(end_response.ENDS_SIZE)
-        free_q, free_v = np.zeros_like(system.q), np.zeros_like(system.v)
+        # warm modes' starting motion: only its amplitudes are used (they bound the step, see collocation)
+        free_q, free_v = system.q.copy(), system.v.copy()
         records = np.empty((0, 3 + stages))
     while True:
         status = collocation.run_collision(
             system.q, system.v, system.omega, coupling, system.X, system.U, system.mass, system.half,
             float(system.pair_compliance[0]), system.law_code, system.alpha, system.strength, system.stiffness,
-            system.contact_range, system.force_scale, float(tolerance), _EXPONENT_STEP, *tables.arrays(),
+            system.contact_range, system.force_scale, float(tolerance), float(exponent_step), *tables.arrays(),
             ends, free_q, free_v, records, system.clock, counters, buffer, 100_000_000,
         )
         system.check_status(status)
@@ -306,18 +334,43 @@ class ModalSolver(SolverBase):
         ten (the integrator's error, what is left)."""
         correction = _resolve_correction(options.correction, options.static_correction, options.mode_source,
                                          options.step_method)
+        work = fields.get("work", {})
+        if correction == "end-response" and "fallback" in work:
+            # the collocation failed and the run is the splitting's with the static correction, which the
+            # collocation tolerance does not enter: estimate it as such a run (Richardson in the modes)
+            static = options.replace(correction="static", step_method="splitting", modes=int(work["modes"]),
+                                     history=False)
+            estimate, method, levels = self._richardson(scene, static, fields)
+            return estimate, f"{method} (the collocation fell back to the splitting: {work['fallback']})", levels
         if correction != "end-response":
-            return super()._error_estimate(scene, options, fields)
+            return self._richardson(scene, options, fields)
         tolerance = options.collocation_tolerance or _DEFAULT_TOLERANCE[correction]
         finer = options.replace(collocation_tolerance=tolerance / 10.0, history=False)
+        # warm modes: through the contact the step is set by how far their free motion may move the gap
+        # (the exponent step, see collocation._warm_step_limit), which the tolerance does not change
+        warm = _excited_modes(scene) > 0 or scene.initial_displacement is not None or \
+            scene.initial_velocity is not None
+        exponent_step = _EXPONENT_STEP / 2.0 if warm else _EXPONENT_STEP
         try:
-            value = float(self._collide(scene, finer)["restitution"])
+            run = _collide(scene, **finer.as_dict(), exponent_step=exponent_step)
         except SolverFailure as failure:
             return math.nan, f"none (the run at a tenth of the collocation tolerance failed: {failure})", []
-        change = abs(value - float(fields["restitution"]))
+        change = abs(float(run["restitution"]) - float(fields["restitution"]))
+        finer_text = f"{tolerance / 10:g}" + (f" and exponent step {exponent_step:g}" if warm else "")
+        if "fallback" in run["work"]:
+            finer_text += f" (which fell back to the splitting: {run['work']['fallback']})"
         return (max(self.error_safety * change, END_RESPONSE_FLOOR),
-                (f"collocation tolerance {tolerance:g} against {tolerance / 10:g}: change {change:.3g}, "
+                (f"collocation tolerance {tolerance:g} against {finer_text}: change {change:.3g}, "
                 f"safety {self.error_safety:g}"), [])
+
+    def _richardson(self, scene: Scene, options: ModalOptions, fields: dict) -> tuple:
+        """Richardson in the modes, unless a coarser run would drop modes the bath excites."""
+        coarsest = options.modes // 2 ** self.coarser_levels(options)
+        if _excited_modes(scene) > coarsest:
+            needed = 2 ** self.coarser_levels(options) * _excited_modes(scene)
+            why = f"none (the runs at fewer modes would drop modes the bath excites; keep modes >= {needed})"
+            return math.nan, why, []
+        return super()._error_estimate(scene, options, fields)
 
     def coarser_options(self, options: ModalOptions):
         """Half the modes, no histories."""
@@ -380,7 +433,7 @@ class ModalSolver(SolverBase):
 
 def _collide(scene: Scene, *, modes, static_correction, correction, mode_source, fe_elements, fe_order,
              step_accuracy, step_reach, step_order, step_method, collocation_stages, collocation_tolerance,
-             history) -> dict:
+             history, exponent_step=_EXPONENT_STEP) -> dict:
     """One collision of two rods on a line with the modal expansion.
 
     ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
@@ -406,7 +459,8 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
     if step_method == "collocation":
         try:
             tail, work, (steps, free_q, free_v) = _run_collocation(system, collocation_stages,
-                                                                   collocation_tolerance, buffer, chunks)
+                                                                   collocation_tolerance, buffer, chunks,
+                                                                   exponent_step)
             if system.exact_ends:
                 omitted_energy = _omitted_mode_energy(system, steps, free_q, free_v)
         except SolverFailure as failure:
@@ -414,7 +468,7 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
             # splitting takes any contact (its step follows the force), so start over with it
             if correction == "end-response":
                 correction = "static"  # the splitting knows only the static correction
-            system, gap = _build(scene, modes, correction, mode_source, fe_elements, fe_order,
+            system, gap = _build(scene, system.rod_modes[0].count, correction, mode_source, fe_elements, fe_order,
                                  step_accuracy, step_reach, step_order)
             chunks = []
             tail, work = _run_splitting(system, buffer, chunks)
@@ -441,7 +495,8 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
         "contact_force": force if history else None,
         "energy_drift": abs(energy_after - energy_before) / energy_before,
         "momentum_drift": abs(system.momentum() - momentum_before) / (reduced_mass * abs(w_before)),
-        "work": {"modes": int(modes), "mode_source": mode_source, "step_method": step_method, **work},
+        "work": {"modes": int(system.rod_modes[0].count), "mode_source": mode_source, "step_method": step_method,
+                 **({} if system.rod_modes[0].count == modes else {"modes_requested": int(modes)}), **work},
         "extra": {
             "modal_energies": np.array(energies) if energies[0].size == energies[1].size else energies,
             "vibration_energy": [float(np.sum(e)) for e in energies],

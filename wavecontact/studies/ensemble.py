@@ -319,10 +319,11 @@ class EnsembleResult:
 
     @property
     def largest_error_estimate(self) -> float | None:
-        """The largest per-sample error estimate (None if the solver gives none)."""
+        """The largest per-sample error estimate (None if the solver gives none; NaN if only some samples
+        have one: the others' errors are unknown)."""
         if self.error_estimate is None or not np.any(np.isfinite(self.error_estimate)):
             return None
-        return float(np.nanmax(self.error_estimate))
+        return float(np.max(self.error_estimate))
 
     @property
     def total_error(self) -> float:
