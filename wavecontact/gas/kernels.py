@@ -651,7 +651,8 @@ def run_events(
         if t == math.inf:
             # on a ring this means all velocities are equal: the gas has merged into one block. If the
             # collisions before were accelerating, that is the end of a collapse lost in the rounding.
-            # Collapse only if a cluster of touching rods is left (else the gas froze: relative velocities lost)
+            # A collapse may end so (its cluster's velocities rounded to equal before 16 collisions fell within
+            # the clock's rounding): a collapse if a cluster of touching rods is left, else the gas froze.
             count = counters[COLLISIONS]
             if ring and collapse[COLLAPSE_FACTOR] > 0.0 and _accelerating(window, count, 1.0, math.inf):
                 now = scalars[T_NOW]
@@ -663,8 +664,7 @@ def run_events(
                     for e in range(first, last + 1 if last >= first else last + 1 + n):
                         rod = e % n
                         rounding = max(rounding, abs(x[rod] + v[rod] * (now - local_time[rod])))
-                    if rounding * collapse[FROZEN_POSITION] < collapse[COLLAPSE_GAP] and _accelerating(
-                            window, count, collapse[COLLAPSE_FACTOR], collapse[COLLAPSE_CLOCK]):
+                    if rounding * collapse[FROZEN_POSITION] < collapse[COLLAPSE_GAP]:
                         return STATUS_COLLAPSE, -1, done
                 return STATUS_FROZEN, -1, done
             return STATUS_NO_EVENTS, -1, done
@@ -881,15 +881,17 @@ def run_events(
             # motion), the same test on the shorter history tells collapse from cooling.
             # A false alarm (no cluster, velocities resolved) goes on: the test fires again at the next collision.
             if _accelerating(window, count, collapse[COLLAPSE_FACTOR], collapse[COLLAPSE_CLOCK]):
-                # Frozen first: positions whose rounding reaches the gap floor (after a drift at the rounding
-                # of the centre-of-mass velocity over a very long time) cannot show a cluster, and a pair
-                # whose relative velocity is a few hundred ulps of its speed has lost it in the rounding.
-                if max(abs(x_i), abs(x_j)) * collapse[FROZEN_POSITION] >= collapse[COLLAPSE_GAP] or abs(
-                        approach) <= collapse[FROZEN_SPEED] * max(abs(vi), abs(vj)):
+                # Positions whose rounding reaches the gap floor (after a drift at the rounding of the
+                # centre-of-mass velocity over a very long time) cannot show a cluster: frozen.  Else a cluster
+                # is a collapse, and without one a pair whose relative velocity is a few thousand ulps of its
+                # speed has lost it in the rounding: frozen too.
+                if max(abs(x_i), abs(x_j)) * collapse[FROZEN_POSITION] >= collapse[COLLAPSE_GAP]:
                     return STATUS_FROZEN, k, done
                 _, _, members = collapse_cluster(k, t, x, v, local_time, reach, ring, box, collapse[COLLAPSE_GAP])
                 if members >= collapse[COLLAPSE_RODS]:
                     return STATUS_COLLAPSE, k, done
+                if abs(approach) <= collapse[FROZEN_SPEED] * max(abs(vi), abs(vj)):
+                    return STATUS_FROZEN, k, done
             if cooled:
                 return STATUS_COOLED, k, done
         k = k_next

@@ -42,7 +42,7 @@ _STATUS = {
     kernels.STATUS_FROZEN: "frozen",
 }
 COLLAPSE_RODS = 3  # bodies a collapsing cluster joins at least (McNamara & Young's smallest collapse: three rods)
-FROZEN_SPEED = 2.0**-40  # a relative velocity below this fraction of the pair's speed is rounding (4096 ulps)
+FROZEN_SPEED = 2.0**-50  # a relative velocity below this fraction of the pair's speed is rounding (4 ulps)
 FROZEN_POSITION = 2.0**-48  # a gap below this fraction of the centres' magnitude is rounding (16 ulps)
 COLLAPSE_CLOCK = 2.0**-50  # collisions within this fraction of the clock happen at one time (4 ulps)
 
@@ -214,14 +214,17 @@ class GasSimulation:
     frame_rods : int
         At most this many rods (evenly chosen) in each frame.
     collapse_window, collapse_factor, collapse_gap : int, float, float
-        (``collapse_window`` a power of two.)  Inelastic collapse (docs/gas.md, "Stopping rules") is
-        declared when the collisions accelerate geometrically, the last ``collapse_window`` collisions
-        taking less than ``collapse_factor`` times as long as the ``collapse_window`` before them, *and*
-        the colliding pair belongs to a cluster of at least three bodies (rods, or a wall) whose gaps all
-        lie below ``collapse_gap`` times the mean free spacing (free length over the number of gaps): a
-        cluster that would collide infinitely often in a finite time.  Acceleration without such a cluster
-        is a false alarm and the run goes on, unless the pair's relative velocity was lost in the rounding
-        (at most ``2^-40`` of its speed): then the gas has frozen numerically (status ``frozen``).
+        (``collapse_window`` a power of two.)  Inelastic collapse (docs/gas.md, "Stopping rules"):
+        infinitely many collisions in a finite time, seen in floating point as collisions that
+        accelerate (the last ``collapse_window`` took less than ``collapse_factor`` times as long as the
+        ``collapse_window`` before them) until all of the last ``collapse_window`` fall within the rounding
+        of the clock (``2^-50 t``), in a cluster of at least three bodies (rods, or a wall) around the
+        colliding pair whose gaps all lie below ``collapse_gap`` times the mean free spacing (the free
+        length over the number of gaps).  A collapse whose cluster's velocities round to equal first (no
+        events left on a ring) counts too.  Acceleration without such a cluster goes on (a false alarm),
+        unless the relative motion was lost in the rounding (a pair's relative velocity within 4 ulps of its
+        speed, or centres so far out that their rounding reaches the gap floor): then the gas froze
+        numerically (status ``frozen``).
     continue_after_collapse : bool
         Do not stop at a detected collapse: note it (:attr:`GasResult.collapse`), switch the detector
         off and go on, to see what happens next.
@@ -555,9 +558,10 @@ class GasSimulation:
             cluster = self.collapse_detected
             return (f"inelastic collapse at collision {c} (t = {t:.6g}): a cluster of {cluster['cluster_rods']} "
                     f"rods ({cluster['first_rod']} to {cluster['last_rod']}) closer than {self.collapse_gap:g} of "
-                    f"the mean free spacing while the last {w} collisions took less than {self.collapse_factor:g} "
-                    f"times as long as the {w} before them (infinitely many collisions in a finite time); the "
-                    f"run was stopped (continue_after_collapse goes on)")
+                    f"the mean free spacing, whose collisions accelerated (the last {w} took less than "
+                    f"{self.collapse_factor:g} times as long as the {w} before them) until {w} of them fell within "
+                    f"the clock's rounding: infinitely many collisions in a finite time; the run was stopped "
+                    f"(continue_after_collapse goes on)")
         if self.status == "off_table":
             gamma, ratio = self.off_table
             grid = self.rule.table.temperature_ratio
