@@ -156,24 +156,24 @@ def test_a_detected_collapse_can_be_continued_and_says_where_it_was():
     assert going.collapse == stopped.collapse  # the same detection, noted
     assert going.collisions == stopped.collisions + 2000 and going.status == "completed"
     assert f"detected at collision {stopped.collisions}" in going.message
-    # right after the collapse the cluster keeps colliding at the time of the collapse: in floating point the
-    # count has diverged there
-    assert going.history["time"][stopped.collisions + 100] <= stopped.simulated_time * (1 + 2.0**-50)
+    # the history up to the detection is the stopped run's, bit for bit
+    np.testing.assert_array_equal(going.history["time"][:stopped.collisions + 1], stopped.history["time"])
 
 
 def test_continue_after_collapse_is_checkpointed(tmp_path):
-    seed = np.random.SeedSequence([ROOT, 32, 80]).spawn(12)[0]
-    gas = random_gas(32, seed=seed, lengths=EqualLengths(0.01), packing_fraction=0.01)
+    seed = 5  # (a checkpoint keeps an integer root seed)
+    gas = random_gas(32, seed=np.random.SeedSequence([ROOT, 32, 80]).spawn(12)[0], lengths=EqualLengths(0.01),
+                     packing_fraction=0.01)
     first = GasSimulation(gas, FixedRestitution(0.8), seed=seed, record_every=1000, max_frames=0, energy_floor=0.0,
                           continue_after_collapse=True)
-    first.run(30_000)
+    first.run(40_000)  # past the detection at collision 33,790
     first.save_checkpoint(tmp_path / "gas.npz")
     resumed = GasSimulation.resume(tmp_path / "gas.npz")
     straight = GasSimulation(gas, FixedRestitution(0.8), seed=seed, record_every=1000, max_frames=0,
                              energy_floor=0.0, continue_after_collapse=True)
-    a, b = resumed.run(50_000), straight.run(80_000)
+    a, b = resumed.run(40_000), straight.run(80_000)
     np.testing.assert_array_equal(resumed.v, straight.v)
-    assert a.collapse == b.collapse
+    assert a.collapse == b.collapse and a.collapse is not None and a.collapse["collision"] < 40_000
 
 
 def test_damped_vibration_runs_that_go_on_are_not_collapsed():
