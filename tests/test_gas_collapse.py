@@ -95,7 +95,7 @@ def test_fixed_restitution_cells_either_side_of_the_threshold(restitution, rods,
     assert sum(verdicts) >= 11 if collapses else sum(verdicts) == 0, verdicts
 
 
-@pytest.mark.slow  # ~1 min: the six cells of issue 24, 72 runs up to 2.4 million collisions
+@pytest.mark.slow  # ~10 s: the six cells, 72 runs up to 2.4 million collisions each
 @pytest.mark.parametrize("restitution, rods, collapses", CELLS)
 def test_all_six_cells_of_the_mcnamara_young_threshold(restitution, rods, collapses):
     test_fixed_restitution_cells_either_side_of_the_threshold(restitution, rods, collapses)
@@ -191,7 +191,8 @@ def test_continue_after_collapse_is_checkpointed(tmp_path):
 
 def test_damped_vibration_runs_that_go_on_are_not_collapsed():
     """docs/gas.md section 7, tau_diss = 10, realisation 0 (seeds spawned from 40): the earlier detector (a
-    thousandfold acceleration alone) stopped it at 670,865 collisions; it goes on for millions."""
+    thousandfold acceleration alone, the kernel of commit eab1b34) stopped it at 670,865 collisions; it goes on
+    for millions (4,000,000 in the slow test below)."""
     seed = np.random.SeedSequence(40).spawn(6)[0]
     initial, dynamics = seed.spawn(2)
     gas = random_gas(200, seed=initial, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2)
@@ -201,7 +202,7 @@ def test_damped_vibration_runs_that_go_on_are_not_collapsed():
     assert result.status == "completed" and result.collapse is None, result.message
 
 
-@pytest.mark.slow  # ~2 min: the six tau_diss = 10 runs of docs/gas.md section 7 to 4 million collisions
+@pytest.mark.slow  # ~40 s: the six tau_diss = 10 runs of docs/gas.md section 7 to 4 million collisions
 def test_damped_runs_of_section_7_that_reach_four_million_collisions_are_not_collapsed():
     from wavecontact.studies.gas import gas_ensemble
 
