@@ -95,7 +95,8 @@ class GasResult:
         Relative change of kinetic + bath + lost + dissipated energy since the start.
     collapse : dict or None
         Where the collapse detector fired (``collision``, ``time``, ``cluster_rods``, ``first_rod``,
-        ``last_rod``), also when the run went on (``continue_after_collapse``); None if it never did.
+        ``last_rod``; in a box -1 and N stand for the left and right wall), also when the run went on
+        (``continue_after_collapse``); None if it never did.
     """
 
     status: str
