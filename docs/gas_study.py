@@ -1,8 +1,9 @@
 """Regenerates docs/gas_results.md, docs/gas_vibration_results.md and the figures docs/figures/gas_*.png.
 
-Run from the repository root: ``python docs/gas_study.py [fixed|vibration|all]`` (default all; a few
+Run from the repository root: ``python docs/gas_study.py [fixed|vibration|collapse|all]`` (default all; a few
 minutes on two shared cores).  ``fixed`` writes sections 1-3 to docs/gas_results.md, ``vibration``
-sections 4-8 to docs/gas_vibration_results.md.
+sections 4-8 to docs/gas_vibration_results.md, ``collapse`` sections C1-C3 (the collapse detector) to
+docs/gas_collapse_results.md.
 
 Every number in those two files is printed by this script; docs/gas.md
 quotes them.  The vibration rule uses the restitution table computed from rod
@@ -18,7 +19,9 @@ Sections:
 6. the vibration rule against the fixed rule with the same mean restitution (and the one-temperature law's
    bath-limited draws, and a run with a contact stiffness);
 7. bath damping: the late-time decay exponent of the translational energy;
-8. a space-time picture of a damped vibration gas.
+8. a space-time picture of a damped vibration gas;
+C1. the collapse detector on fixed-restitution cells either side of McNamara and Young's threshold;
+C2. what happens after a collapse; C3. the damped gas with the one-temperature law.
 """
 
 from __future__ import annotations
@@ -142,38 +145,55 @@ def n_rods():
     say()
 
 
+HAFF_ROOT = 2026  # realisation i of the Haff study: SeedSequence(HAFF_ROOT).spawn(HAFF_REALISATIONS)[i]
+HAFF_REALISATIONS = 12
+
+
+def _haff_run(seed, restitution, rods, length, collisions):
+    """Fixed-restitution gas of equal rods: (t / t0_kinetic, T / T0) at every half-N collisions."""
+    gas = random_gas(rods, seed=seed, lengths=EqualLengths(length), packing_fraction=0.01)
+    temperature = 2 * gas.kinetic_energy() / rods
+    density = rods / gas.free_length
+    t0 = math.sqrt(math.pi * length) / ((1 - restitution**2) * density * math.sqrt(temperature))
+    result = GasSimulation(gas, FixedRestitution(restitution), seed=seed, record_every=rods // 2,
+                           max_frames=0).run(collisions)
+    return result.history["time"] / t0, 2 * result.history["kinetic_energy"] / rods / temperature
+
+
 def haff():
     say("## 3. Haff's law")
     say()
     restitution, rods, length = 0.98, 50, 0.01
-    exponents, times, curves = [], [], []
+    seeds = np.random.SeedSequence(HAFF_ROOT).spawn(HAFF_REALISATIONS)
     grid = np.geomspace(0.01, 300, 60)
-    for seed in range(8):
-        gas = random_gas(rods, seed=seed, lengths=EqualLengths(length), packing_fraction=0.01)
-        temperature = 2 * gas.kinetic_energy() / rods
-        density = rods / gas.free_length
-        t0 = math.sqrt(math.pi * length) / ((1 - restitution**2) * density * math.sqrt(temperature))
-        result = GasSimulation(gas, FixedRestitution(restitution), seed=seed, record_every=rods // 2,
-                               max_frames=0).run(200 * rods)
-        t = result.history["time"] / t0
-        ratio = 2 * result.history["kinetic_energy"] / rods / temperature
-        (a, c), _ = curve_fit(lambda s, a, c: -a * np.log1p(s / c), t[t > 0], np.log(ratio[t > 0]), p0=(2, 1))
-        exponents.append(a)
-        times.append(c)
-        curves.append(np.interp(grid, t, ratio))
     sem = lambda x: np.std(x, ddof=1) / math.sqrt(len(x))
-    say(f"r = {restitution}, N = {rods} equal rods (N_c = {-math.log(0.02) / 0.02:.0f}), packing 0.01, 200 N "
-        "collisions, 8 realisations; T(t) = T0 / (1 + t/t0)^a fitted per realisation, t in units of the "
-        "kinetic-theory t0 = sqrt(pi m) / ((1 - r^2) n sqrt(T0)).")
+    runs = [_haff_run(seed, restitution, rods, length, 200 * rods) for seed in seeds]
+    say(f"r = {restitution}, N = {rods} equal rods (N_c = {-math.log(0.02) / 0.02:.0f}), packing 0.01, "
+        f"{HAFF_REALISATIONS} realisations (SeedSequence({HAFF_ROOT}).spawn({HAFF_REALISATIONS})), 200 N collisions "
+        "each; t in units of the kinetic-theory t0 = sqrt(pi m) / ((1 - r^2) n sqrt(T0)). Fits per realisation "
+        "over the first K N collisions: T(t) = T0 / (1 + t/t0)^a (a and t0 free), and the same with a = 2 (Haff); "
+        "mean +- standard error over the realisations.")
     say()
-    say(f"- exponent a = {np.mean(exponents):.3f} +- {sem(exponents):.3f} (Haff: 2)")
-    say(f"- t0 / kinetic theory = {np.mean(times):.3f} +- {sem(times):.3f}")
+    say("| collisions fitted | exponent a (2 free) | t0 / kinetic theory (2 free) | t0 / kinetic theory (a = 2) |")
+    say("|---|---|---|---|")
+    for per_rod in (50, 100, 200):
+        exponents, times, fixed = [], [], []
+        for t, ratio in runs:
+            keep = (t > 0) & (np.arange(t.size) * (rods // 2) <= per_rod * rods)
+            (a, c), _ = curve_fit(lambda s, a, c: -a * np.log1p(s / c), t[keep], np.log(ratio[keep]), p0=(2, 1))
+            (c2,), _ = curve_fit(lambda s, c: -2 * np.log1p(s / c), t[keep], np.log(ratio[keep]), p0=(1,))
+            exponents.append(a)
+            times.append(c)
+            fixed.append(c2)
+        say(f"| {per_rod} N | {np.mean(exponents):.3f} +- {sem(exponents):.3f} | {np.mean(times):.3f} +- "
+            f"{sem(times):.3f} | {np.mean(fixed):.3f} +- {sem(fixed):.3f} |")
     say()
+    curves = [np.interp(grid, t, ratio) for t, ratio in runs]
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
     for curve in curves:
         ax.loglog(grid, curve, "-", color="0.6", lw=0.8)
-    ax.loglog(grid, np.mean(curves, axis=0), "C0-", lw=1.8, label="mean of 8 realisations")
+    ax.loglog(grid, np.mean(curves, axis=0), "C0-", lw=1.8, label=f"mean of {HAFF_REALISATIONS} realisations")
     ax.loglog(grid, (1 + grid) ** -2.0, "k--", lw=1.0, label=r"Haff: $(1 + t/t_0)^{-2}$, kinetic-theory $t_0$")
     ax.set_xlabel(r"$t / t_0$")
     ax.set_ylabel(r"$T / T_0$")
@@ -486,14 +506,113 @@ def picture():
         say()
 
 
+COLLAPSE_ROOT = 20261206  # realisation i of cell (r, N): SeedSequence([COLLAPSE_ROOT, N, 100 r]).spawn(12)[i]
+COLLAPSE_CELLS = ((0.8, 24), (0.8, 32), (0.9, 46), (0.9, 69), (0.95, 60), (0.95, 120))
+
+
+def _cell_runs(restitution, rods, floor, equal=True, **options):
+    """The 12 realisations of a fixed-restitution cell run until a stop (at most 4 million collisions)."""
+    seeds = np.random.SeedSequence([COLLAPSE_ROOT, rods, round(100 * restitution)]).spawn(12)
+    results = []
+    for seed in seeds:
+        gas = (random_gas(rods, seed=seed, lengths=EqualLengths(0.01), packing_fraction=0.01) if equal else
+               random_gas(rods, seed=seed, lengths=UniformLengths(0.5, 1.0), packing_fraction=0.2))
+        sim = GasSimulation(gas, FixedRestitution(restitution), seed=seed, record_every=10**7, max_frames=0,
+                            energy_floor=floor, **options)
+        results.append(sim.run(4_000_000))
+    return results
+
+
+def collapse_cells():
+    say("## C1. The collapse detector on fixed-restitution cells either side of McNamara and Young's threshold")
+    say()
+    say(f"12 realisations per cell, realisation i from SeedSequence([{COLLAPSE_ROOT}, N, 100 r]).spawn(12)[i]; "
+        "each run goes until it stops (at most 4,000,000 collisions). 'equal rods': lengths 0.01, packing 0.01 "
+        "(the set-up of gas_results.md section 2); 'unequal rods': lengths uniform in [0.5, 1], packing 0.2 "
+        "(random_gas's default lengths). energy floor: the run stops as 'cooled' below that fraction of the initial "
+        "kinetic energy (0: no floor, the run goes on until it collapses or freezes numerically). Cell: collapsed / "
+        "frozen / cooled (completed), then for the collapses the median collision count, the range of the cluster "
+        "sizes (rods) and the median log10 of the kinetic energy left.")
+    say()
+    say("| rods | energy floor | r | N | N / N_c | collapsed | frozen | cooled (completed) | collisions at the "
+        "collapse (median) | cluster rods (range) | log10 E/E0 at the collapse (median) |")
+    say("|---|---|---|---|---|---|---|---|---|---|---|")
+    for equal, floor in ((True, 1e-20), (True, 0.0), (False, 0.0)):
+        for restitution, rods in COLLAPSE_CELLS:
+            results = _cell_runs(restitution, rods, floor, equal)
+            collapsed = [r for r in results if r.collapsed]
+            statuses = [r.status for r in results]
+            critical = -math.log(1 - restitution) / (1 - restitution)
+            if collapsed:
+                sizes = [r.collapse["cluster_rods"] for r in collapsed]
+                left = [math.log10(max(r.final_energy, 1e-300) / r.history["kinetic_energy"][0]) for r in collapsed]
+                details = (f"{np.median([r.collisions for r in collapsed]):,.0f} | {min(sizes)}-{max(sizes)} | "
+                           f"{np.median(left):.0f}")
+            else:
+                details = "- | - | -"
+            say(f"| {'equal' if equal else 'unequal'} | {floor:g} | {restitution} | {rods} | {rods / critical:.1f} | "
+                f"{len(collapsed)}/12 | {statuses.count('frozen')} | {statuses.count('cooled')} "
+                f"({statuses.count('completed')}) | {details} |")
+    say()
+
+
+def after_collapse():
+    say("## C2. What happens after a collapse (continue_after_collapse)")
+    say()
+    say("The 12 realisations of the cell r = 0.8, N = 32 (equal rods, no energy floor), each run once until the "
+        "detector stops it and once with continue_after_collapse for 100,000 collisions more: the collisions after "
+        "the detection that fall at the time of the collapse (within 4 ulps of the clock), the time reached, and "
+        "the kinetic energy then over the energy at the collapse.")
+    say()
+    say("| realisation | collapse at collision | cluster rods | collisions at the collapse's time afterwards | "
+        "t at the end / t at the collapse | E at the end / E at the collapse |")
+    say("|---|---|---|---|---|---|")
+    stopped = _cell_runs(0.8, 32, 0.0)
+    seeds = np.random.SeedSequence([COLLAPSE_ROOT, 32, 80]).spawn(12)
+    for index, (seed, first) in enumerate(zip(seeds, stopped)):
+        gas = random_gas(32, seed=seed, lengths=EqualLengths(0.01), packing_fraction=0.01)
+        sim = GasSimulation(gas, FixedRestitution(0.8), seed=seed, record_every=1, max_frames=0, energy_floor=0.0,
+                            continue_after_collapse=True)
+        going = sim.run(first.collisions + 100_000)
+        times = going.history["time"][first.collisions + 1:]
+        stuck = int(np.sum(times <= first.simulated_time * (1 + 2.0**-50)))
+        say(f"| {index} | {first.collisions:,} | {first.collapse['cluster_rods']} | {stuck:,} | "
+            f"{going.simulated_time / first.simulated_time:.3g} | {going.final_energy / first.final_energy:.3g} |")
+    say()
+
+
+def damped_one_temperature():
+    say("## C3. Damped gas with the one-temperature law (the s = 1/2 slice of the law)")
+    say()
+    say("The runs of gas_vibration_results.md section 7 (200 rods, lengths in [0.6, 1], packing 0.2, cold baths, "
+        "6 realisations per tau_diss from seed 40, at most 4,000,000 collisions) with the law's s = 1/2 slice, "
+        "which splits each collision's loss as if both baths had the pair's mean temperature: does the temperature "
+        "split decide the collapse?")
+    say()
+    say("| tau_diss | law | collapsed / runs | collisions at the collapses | completed runs: E_tr end / start (median) |")
+    say("|---|---|---|---|---|")
+    for tau in (1.0, 10.0, 100.0):
+        ensemble = gas_ensemble(6, rods=200, collisions=4_000_000, rule=VibrationLaw(LAW.equal_temperature_slice()),
+                                seed=40, lengths=UniformLengths(0.6, 1.0), packing_fraction=0.2, damping=tau,
+                                record_every=10_000)
+        collapses = [r.collisions for r in ensemble.results if r.collapsed]
+        others = [r.final_energy / r.history["kinetic_energy"][0] for r in ensemble.results if not r.collapsed]
+        say(f"| {tau:g} | one temperature (s = 1/2) | {len(collapses)}/6 | "
+            f"{', '.join(f'{c:,}' for c in sorted(collapses)) or '-'} | "
+            f"{np.median(others) if others else float('nan'):.3g} |")
+    say()
+
+
 def main(argv):
     which = argv[0] if argv else "all"
-    if which not in ("fixed", "vibration", "all"):
-        print("usage: python docs/gas_study.py [fixed|vibration|all]", file=sys.stderr)
+    if which not in ("fixed", "vibration", "collapse", "all"):
+        print("usage: python docs/gas_study.py [fixed|vibration|collapse|all]", file=sys.stderr)
         return 2
     parts = {"fixed": ("gas_results.md", "Rod gas", (three_rods, n_rods, haff)),
              "vibration": ("gas_vibration_results.md", "Rod gas, vibration rule",
-                           (law, limit_exploration, soft_law, solve_vs_law, vibration_vs_fixed, damping, picture))}
+                           (law, limit_exploration, soft_law, solve_vs_law, vibration_vs_fixed, damping, picture)),
+             "collapse": ("gas_collapse_results.md", "Rod gas, the collapse detector",
+                          (collapse_cells, after_collapse, damped_one_temperature))}
     for name, (page, title, sections) in parts.items():
         if which not in (name, "all"):
             continue

@@ -77,6 +77,9 @@ def add_parser(subparsers):
     p.add_argument("--packing", type=_fraction("packing"), default=0.2,
                    help="total rod length over system length, in (0, 1) (default 0.2)")
     p.add_argument("--walls", action="store_true", help="a box with elastic walls instead of a ring")
+    p.add_argument("--continue-after-collapse", action="store_true",
+                   help="do not stop at a detected inelastic collapse: report where it was detected and go on with "
+                   "the detector off, to see what happens next (a new run only; a resumed run keeps its setting)")
     p.add_argument("--out", metavar="DIR", help="write summary, histories, figure and a checkpoint into DIR")
     p.add_argument("--resume", action="store_true",
                    help=f"continue the run checkpointed in DIR/{CHECKPOINT_NAME} by COLLISIONS more collisions (an "
@@ -172,7 +175,8 @@ def run(args) -> int:
         gas = random_gas(args.rods, seed=initial, lengths=UniformLengths(shortest, longest),
                          packing_fraction=args.packing, boundary="walls" if args.walls else "ring")
         return GasSimulation(gas, rule, damping=args.damping, contact_stiffness=args.contact_stiffness, seed=dynamics,
-                             record_every=max(1, args.collisions // 400), frame_every=1, max_frames=400)
+                             record_every=max(1, args.collisions // 400), frame_every=1, max_frames=400,
+                             continue_after_collapse=args.continue_after_collapse)
 
     def write_outputs(sim, result):
         from ..plotting.gas import plot_gas
@@ -202,6 +206,9 @@ def run(args) -> int:
         print(f"  collisions per second {result.collisions_per_second:.4g} (wall time {result.wall_time_s:.3g} s{note})")
         print(f"  final kinetic energy  {result.final_energy:.6g}")
         print(f"  collapsed             {result.collapsed}")
+        if result.collapse is not None and not result.collapsed:
+            print(f"  collapse detected     at collision {result.collapse['collision']} (t = "
+                  f"{result.collapse['time']:.6g}, a cluster of {result.collapse['cluster_rods']} rods); went on")
         if args.rule == "vibration":
             print(f"  bath-limited draws    {result.bath_limited} ({summary['bath_limited_fraction']:.3g} of all)")
             if args.contact_stiffness is not None:

@@ -42,11 +42,13 @@ __all__ = [
     "STATUS_COLLAPSE",
     "STATUS_COOLED",
     "STATUS_DONE",
+    "STATUS_FROZEN",
     "STATUS_NEED_DRAW",
     "STATUS_NO_EVENTS",
     "STATUS_OFF_TABLE",
     "STATUS_TIME_LIMIT",
     "build_tree",
+    "collapse_cluster",
     "empty_soft_law",
     "event_time",
     "event_times",
@@ -57,6 +59,10 @@ __all__ = [
 RULE_FIXED, RULE_TABLE, RULE_EXTERNAL, RULE_LAW = 0, 1, 2, 3
 STATUS_DONE, STATUS_TIME_LIMIT, STATUS_NEED_DRAW, STATUS_COLLAPSE, STATUS_NO_EVENTS, STATUS_COOLED = 0, 1, 2, 3, 4, 5
 STATUS_OFF_TABLE = 6  # a pair met at a temperature ratio outside the table: the run stops (never clipped)
+STATUS_FROZEN = 7  # the collisions accelerate, but only because relative velocities are lost in the rounding
+# indices into the float64 ``collapse`` array of :func:`run_events` (the collapse detector's parameters)
+COLLAPSE_FACTOR, COLLAPSE_GAP, COLLAPSE_RODS, FROZEN_SPEED, FROZEN_POSITION, COLLAPSE_CLOCK = range(6)
+COLLAPSE_PARAMETERS = 6
 
 # indices into the float64 ``scalars`` array
 T_NOW, KINETIC, LOST, DISSIPATED, MOMENTUM_ENERGY, ENERGY_FLOOR, KINETIC_CARRY, KINETIC_REFERENCE = range(8)
@@ -443,13 +449,108 @@ def _recount_kinetic(v, mass, ring, scalars):
 
 
 @kernel
+def _event_gap(e, now, x, v, local_time, reach, ring, box):
+    """Distance beyond contact of the partners of event ``e`` at time ``now`` (a wall counts as a partner)."""
+    n = x.size
+    if not ring and e == 0:
+        return x[0] + v[0] * (now - local_time[0]) - reach[0]
+    if not ring and e == n:
+        return box - reach[n] - (x[n - 1] + v[n - 1] * (now - local_time[n - 1]))
+    i, j, offset = (e, e + 1, 0.0) if ring else (e - 1, e, 0.0)
+    if j == n:
+        j = 0
+        offset = box
+    return (x[j] + v[j] * (now - local_time[j]) + offset) - (x[i] + v[i] * (now - local_time[i])) - reach[e]
+
+
+@kernel
+def collapse_cluster(k, now, x, v, local_time, reach, ring, box, gap_floor):
+    """The cluster of event ``k``: ``(first, last, members)``, the events ``first .. last`` (cyclic on a ring)
+    next to each other whose gaps at time ``now`` all lie below ``gap_floor``, and the bodies they join
+    (rods, and a wall that takes part).  ``members`` is 0 when the gap of ``k`` itself does not lie below
+    the floor.  ``k < 0``: the largest such cluster anywhere (``O(N)``; ties: the first found).
+
+    Only called when the collisions accelerate, so its cost (the cluster's size) does not enter the loop.
+    """
+    events = reach.size
+    n = x.size
+    if k >= 0:
+        if not _event_gap(k, now, x, v, local_time, reach, ring, box) < gap_floor:
+            return k, k, 0
+        first = k
+        last = k
+        pairs = 1
+        while pairs < events:
+            e = first - 1
+            if e < 0:
+                if not ring:
+                    break
+                e = events - 1
+            if not _event_gap(e, now, x, v, local_time, reach, ring, box) < gap_floor:
+                break
+            first = e
+            pairs += 1
+        while pairs < events:
+            e = last + 1
+            if e == events:
+                if not ring:
+                    break
+                e = 0
+            if not _event_gap(e, now, x, v, local_time, reach, ring, box) < gap_floor:
+                break
+            last = e
+            pairs += 1
+        return first, last, (n if ring and pairs == events else pairs + 1)
+    # the largest cluster: scan once around the ring from an event outside every cluster
+    start = -1
+    for e in range(events):
+        if not _event_gap(e, now, x, v, local_time, reach, ring, box) < gap_floor:
+            start = e
+            break
+    if start < 0:
+        return 0, events - 1, (n if ring else events + 1)
+    best_first, best_last, best = -1, -1, 0
+    run = 0
+    first = -1
+    for m in range(1, events + 1):
+        e = (start + m) % events
+        if not ring and e == 0:
+            run = 0  # the box does not close: no cluster across its two walls
+        if _event_gap(e, now, x, v, local_time, reach, ring, box) < gap_floor:
+            if run == 0:
+                first = e
+            run += 1
+            if run > best:
+                best, best_first, best_last = run, first, e
+        else:
+            run = 0
+    return best_first, best_last, (best + 1 if best > 0 else 0)
+
+
+@kernel
+def _accelerating(window, count, factor, clock):
+    """Whether the last half of the window of collision times took less than ``factor`` times its first half
+    and no more than ``clock`` times the time itself (the clock's rounding; ``inf``: no such condition), on
+    the history there is (at least 2 collisions per half)."""
+    size = window.size
+    mask = size - 1
+    half = (min(count, size) - 1) // 2  # window[(c - 1) & mask] holds the time of collision c
+    if half < 2:
+        return False
+    last = window[(count - 1) & mask]
+    middle = window[(count - half - 1) & mask]
+    return last - middle < factor * (middle - window[(count - 2 * half - 1) & mask]) and (
+        last - middle <= clock * abs(last))
+
+
+@kernel
 def run_events(
     x, v, local_time, temperature, mass, reach, pair_gamma, pair_gamma_index, pair_gamma_weight, left_is_short,
     tree_time, tree_event, ring, box,
     rule, restitution_squared, table_ratio, share_grid, probability, uniform_levels, quantiles, share, bath_modes,
     decay_rate, stiffness, soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains,
     uniforms, pending, max_collisions, time_limit,
-    window, collapse_factor, scalars, counters,
+    window, collapse, scalars, counters,
 ):
     """Process events until ``max_collisions`` rod-rod collisions, a stop condition, or a needed draw.
 
@@ -504,9 +605,17 @@ def run_events(
         Stop before any event later than this.
     window : ndarray, shape (2 W,)
         Times of the last ``2 W`` collisions (ring buffer; ``2 W`` a power of two).
-    collapse_factor : float
-        Collapse when the last ``W`` collisions took less than
-        ``collapse_factor`` times the time the ``W`` before them took.
+    collapse : ndarray, shape (6,)
+        The collapse detector (indices ``COLLAPSE_*``, ``FROZEN_*``).  When the last ``W`` collisions
+        took less than ``collapse[COLLAPSE_FACTOR]`` times the time the ``W`` before them took and no more
+        than ``collapse[COLLAPSE_CLOCK]`` times the clock (the collisions accelerated until their count
+        diverged at the clock's rounding), the run stops as frozen if the pair's relative velocity was at most
+        ``collapse[FROZEN_SPEED]`` times the larger of its two speeds, or if ``collapse[FROZEN_POSITION]``
+        times its centres' magnitude (their rounding) reaches ``collapse[COLLAPSE_GAP]`` (the relative motion
+        is lost in the rounding); else as collapsed if the colliding pair's cluster
+        (:func:`collapse_cluster`) joins at least ``collapse[COLLAPSE_RODS]`` bodies by gaps below
+        ``collapse[COLLAPSE_GAP]`` (a length); else it goes on (a false alarm).
+        ``collapse[COLLAPSE_FACTOR] = 0`` switches the detector off.
     scalars, counters : ndarray
         Running clock and energies, and counters (see the module constants).
         The run stops (``STATUS_COOLED``) once the kinetic energy in the
@@ -542,14 +651,22 @@ def run_events(
         if t == math.inf:
             # on a ring this means all velocities are equal: the gas has merged into one block. If the
             # collisions before were accelerating, that is the end of a collapse lost in the rounding.
+            # A collapse may end so (its cluster's velocities rounded to equal before 16 collisions fell within
+            # the clock's rounding): a collapse if a cluster of touching rods is left, else the gas froze.
             count = counters[COLLISIONS]
-            size = window.size
-            half = (min(count, size) - 1) // 2
-            if ring and half >= 2:
-                last = window[(count - 1) & (size - 1)]
-                middle = window[(count - half - 1) & (size - 1)]
-                if last - middle < middle - window[(count - 2 * half - 1) & (size - 1)]:
-                    return STATUS_COLLAPSE, -1, done
+            if ring and collapse[COLLAPSE_FACTOR] > 0.0 and _accelerating(window, count, 1.0, math.inf):
+                now = scalars[T_NOW]
+                first, last, members = collapse_cluster(-1, now, x, v, local_time, reach, ring, box,
+                                                        collapse[COLLAPSE_GAP])
+                if members >= collapse[COLLAPSE_RODS]:
+                    # the positions must resolve the floor (a rod far out on its unwrapped path cannot)
+                    rounding = 0.0
+                    for e in range(first, last + 1 if last >= first else last + 1 + n):
+                        rod = e % n
+                        rounding = max(rounding, abs(x[rod] + v[rod] * (now - local_time[rod])))
+                    if rounding * collapse[FROZEN_POSITION] < collapse[COLLAPSE_GAP]:
+                        return STATUS_COLLAPSE, -1, done
+                return STATUS_FROZEN, -1, done
             return STATUS_NO_EVENTS, -1, done
         if t > time_limit:
             return STATUS_TIME_LIMIT, -1, done
@@ -762,11 +879,19 @@ def run_events(
             # equal velocities, which a half-window of 16 collisions still sees.  When the energy
             # floor is reached earlier (a small system whose whole thermal energy is the collapsing
             # motion), the same test on the shorter history tells collapse from cooling.
-            half = (min(count, size) - 1) // 2  # window[(c - 1) & mask] holds the time of collision c
-            if half >= 2:
-                middle = window[(count - half - 1) & mask]
-                if t - middle < collapse_factor * (middle - window[(count - 2 * half - 1) & mask]):
+            # A false alarm (no cluster, velocities resolved) goes on: the test fires again at the next collision.
+            if _accelerating(window, count, collapse[COLLAPSE_FACTOR], collapse[COLLAPSE_CLOCK]):
+                # Positions whose rounding reaches the gap floor (after a drift at the rounding of the
+                # centre-of-mass velocity over a very long time) cannot show a cluster: frozen.  Else a cluster
+                # is a collapse, and without one a pair whose relative velocity is a few thousand ulps of its
+                # speed has lost it in the rounding: frozen too.
+                if max(abs(x_i), abs(x_j)) * collapse[FROZEN_POSITION] >= collapse[COLLAPSE_GAP]:
+                    return STATUS_FROZEN, k, done
+                _, _, members = collapse_cluster(k, t, x, v, local_time, reach, ring, box, collapse[COLLAPSE_GAP])
+                if members >= collapse[COLLAPSE_RODS]:
                     return STATUS_COLLAPSE, k, done
+                if abs(approach) <= collapse[FROZEN_SPEED] * max(abs(vi), abs(vj)):
+                    return STATUS_FROZEN, k, done
             if cooled:
                 return STATUS_COOLED, k, done
         k = k_next

@@ -39,7 +39,12 @@ _STATUS = {
     kernels.STATUS_NO_EVENTS: "no_events",
     kernels.STATUS_COOLED: "cooled",
     kernels.STATUS_OFF_TABLE: "off_table",
+    kernels.STATUS_FROZEN: "frozen",
 }
+COLLAPSE_RODS = 3  # bodies a collapsing cluster joins at least (McNamara & Young's smallest collapse: three rods)
+FROZEN_SPEED = 2.0**-50  # a relative velocity below this fraction of the pair's speed is rounding (4 ulps)
+FROZEN_POSITION = 2.0**-48  # a gap below this fraction of the centres' magnitude is rounding (16 ulps)
+COLLAPSE_CLOCK = 2.0**-50  # collisions within this fraction of the clock happen at one time (4 ulps)
 
 
 @dataclass
@@ -49,7 +54,8 @@ class GasResult:
     Attributes
     ----------
     status : str
-        ``completed``, ``collapsed``, ``cooled`` (below ``energy_floor``), ``time_limit``, ``no_events``
+        ``completed``, ``collapsed``, ``cooled`` (below ``energy_floor``), ``frozen`` (the relative
+        velocities were lost in the rounding: not a collapse), ``time_limit``, ``no_events``
         or ``off_table`` (a pair met at a temperature ratio outside the restitution table; the run stops
         there rather than extrapolate or clip the table).
     message : str
@@ -87,6 +93,10 @@ class GasResult:
         ``alpha`` of the run (None: hard core).
     energy_drift : float
         Relative change of kinetic + bath + lost + dissipated energy since the start.
+    collapse : dict or None
+        Where the collapse detector fired (``collision``, ``time``, ``cluster_rods``, ``first_rod``,
+        ``last_rod``; in a box -1 and N stand for the left and right wall), also when the run went on
+        (``continue_after_collapse``); None if it never did.
     """
 
     status: str
@@ -108,6 +118,7 @@ class GasResult:
     softer_than_law: int = 0
     soft_floored: int = 0
     contact_stiffness: float | None = None
+    collapse: dict | None = None
 
     @property
     def collapsed(self) -> bool:
@@ -146,6 +157,7 @@ class GasResult:
             "softer_than_law": self.softer_than_law,
             "soft_floored": self.soft_floored,
             "contact_stiffness": self.contact_stiffness,
+            "collapse": self.collapse,
             "rule": self.rule,
         }
 
@@ -202,14 +214,21 @@ class GasSimulation:
         Frames kept (later ones are dropped).
     frame_rods : int
         At most this many rods (evenly chosen) in each frame.
-    collapse_window, collapse_factor : int, float
-        (``collapse_window`` a power of two.)  Inelastic collapse is declared when the last ``collapse_window``
-        collisions took less than ``collapse_factor`` times as long as the
-        ``collapse_window`` collisions before them: collisions accelerating
-        geometrically, as in a cluster that would collide infinitely often in
-        a finite time.  (A homogeneously cooling gas slows down instead, and
-        in a large gas the 16 collisions of a half-window are too many for
-        the shot noise of a steady rate to shrink a thousandfold.)
+    collapse_window, collapse_factor, collapse_gap : int, float, float
+        (``collapse_window`` a power of two.)  Inelastic collapse (docs/gas.md, "Stopping rules"):
+        infinitely many collisions in a finite time, seen in floating point as collisions that
+        accelerate (the last ``collapse_window`` took less than ``collapse_factor`` times as long as the
+        ``collapse_window`` before them) until all of the last ``collapse_window`` fall within the rounding
+        of the clock (``2^-50 t``), in a cluster of at least three bodies (rods, or a wall) around the
+        colliding pair whose gaps all lie below ``collapse_gap`` times the mean free spacing (the free
+        length over the number of gaps).  A collapse whose cluster's velocities round to equal first (no
+        events left on a ring) counts too.  Acceleration without such a cluster goes on (a false alarm),
+        unless the relative motion was lost in the rounding (a pair's relative velocity within 4 ulps of its
+        speed, or centres so far out that their rounding reaches the gap floor): then the gas froze
+        numerically (status ``frozen``).
+    continue_after_collapse : bool
+        Do not stop at a detected collapse: note it (:attr:`GasResult.collapse`), switch the detector
+        off and go on, to see what happens next.
     energy_floor : float
         Stop (status ``cooled``) once the kinetic energy in the centre-of-mass
         frame falls below this fraction of its initial value: velocities then
@@ -218,7 +237,7 @@ class GasSimulation:
 
     def __init__(self, gas: RodGas, rule, *, damping=None, contact_stiffness=None, seed=0, record_every=1000,
                  frame_every=1, max_frames=400, frame_rods=2000, collapse_window=16, collapse_factor=1e-3,
-                 energy_floor=1e-20):
+                 energy_floor=1e-20, collapse_gap=1e-6, continue_after_collapse=False):
         if not isinstance(gas, RodGas):
             raise InvalidParameterError("gas must be a RodGas (see wavecontact.gas.random_gas)")
         if not isinstance(rule, (FixedRestitution, VibrationLaw, VibrationTable, VibrationSolve)):
@@ -245,6 +264,11 @@ class GasSimulation:
         if window & (window - 1):
             raise InvalidParameterError(f"collapse_window must be a power of two, got {window}")
         self.collapse_factor = require_positive("collapse_factor", collapse_factor)
+        self.collapse_gap = require_positive("collapse_gap", collapse_gap)
+        if not self.collapse_gap < 1.0:
+            raise InvalidParameterError(f"collapse_gap must lie in (0, 1) (of the mean free spacing), got {collapse_gap!r}")
+        self.continue_after_collapse = bool(continue_after_collapse)
+        self.collapse_detected = None  # where the detector fired (a dict, see GasResult.collapse)
         self.energy_floor = float(energy_floor)
         if not 0.0 <= self.energy_floor < 1.0:
             raise InvalidParameterError(f"energy_floor must lie in [0, 1), got {energy_floor!r}")
@@ -299,6 +323,9 @@ class GasSimulation:
         self.tree_event = np.empty(self.tree_time.size, np.int32)
         kernels.build_tree(key, self.tree_time, self.tree_event)
         self.window = np.zeros(2 * window)
+        spacing = gas.free_length / (n if ring else n + 1)  # mean free spacing: the free length over the gaps
+        self.collapse = np.array([self.collapse_factor, self.collapse_gap * spacing, COLLAPSE_RODS, FROZEN_SPEED,
+                                  FROZEN_POSITION, COLLAPSE_CLOCK])
         momentum = float(np.sum(self.mass * self.v))
         total_mass = float(self.mass.sum())
         self.scalars = np.zeros(8)
@@ -481,9 +508,14 @@ class GasSimulation:
                     uniform, quantiles, share, float(rule.bath_modes), self._decay_rate(), stiffness, *soft,
                     uniforms[self.collisions - before:],
                     self.pending, chunk - (self.collisions - before), float(max_time), self.window,
-                    self.collapse_factor, self.scalars, self.counters)
+                    self.collapse, self.scalars, self.counters)
                 if status == kernels.STATUS_OFF_TABLE:
                     self.off_table = self._pair_state(event)
+                if status == kernels.STATUS_COLLAPSE and self.collapse_detected is None:
+                    self.collapse_detected = self._cluster(event)
+                    if self.continue_after_collapse:
+                        self.collapse[kernels.COLLAPSE_FACTOR] = 0.0  # noted; the detector is off from here
+                        continue
                 if status != kernels.STATUS_NEED_DRAW:
                     break
                 self._draw_external(event)
@@ -496,23 +528,50 @@ class GasSimulation:
             controller.advance(used, consistent=status == kernels.STATUS_DONE)
             if status != kernels.STATUS_DONE:
                 if status in (kernels.STATUS_COLLAPSE, kernels.STATUS_NO_EVENTS, kernels.STATUS_COOLED,
-                              kernels.STATUS_OFF_TABLE):
+                              kernels.STATUS_OFF_TABLE, kernels.STATUS_FROZEN):
                     self._record()  # the final state of a run that cannot continue
                 break
         wall = time.perf_counter() - start
         self.status = _STATUS[status]
         return self._result(wall, self.collisions - first)
 
+    def _cluster(self, event):
+        """Where the detector fired: the collision, its time and the cluster of ``event`` (-1: the largest)."""
+        n = self.gas.rods
+        first, last, members = kernels.collapse_cluster(
+            int(event), self.time, self.x, self.v, self.local_time, self.reach, self.ring, self.gas.system_length,
+            float(self.collapse[kernels.COLLAPSE_GAP]))
+        # event e joins rods (e, e + 1 mod N) on a ring and (e - 1, e) in a box (a wall at either end)
+        first_rod, last_rod = (int(first), int(last + 1) % n) if self.ring else (int(first) - 1, int(last))
+        return {"collision": self.collisions, "time": self.time, "cluster_rods": int(members),
+                "first_rod": first_rod, "last_rod": last_rod}
+
     def _message(self):
+        noted = self.collapse_detected
+        if noted is not None and self.status != "collapsed":
+            return (f"{self._status_message()}; an inelastic collapse was detected at collision {noted['collision']} "
+                    f"(t = {noted['time']:.6g}, a cluster of {noted['cluster_rods']} rods) and the run went on "
+                    f"(continue_after_collapse) with the detector off")
+        return self._status_message()
+
+    def _status_message(self):
         t, c = self.time, self.collisions
+        if self.status == "frozen":
+            return (f"the gas froze numerically after {c} collisions (t = {t:.6g}): its collisions accelerated, but its "
+                    f"relative motion was lost in the rounding (a relative velocity below {FROZEN_SPEED:.2g} of the "
+                    f"speed, or rod centres drifted so far that their rounding reaches the gap floor); not a collapse")
         if self.status == "cooled":
             return (f"the gas cooled below {self.energy_floor:g} of its initial kinetic energy after {c} collisions "
                     f"(t = {t:.6g}); further collisions would be lost in the rounding of the velocities")
         if self.status == "collapsed":
             w = self.window.size // 2
-            return (f"inelastic collapse at t = {t:.6g} after {c} collisions: the last {w} collisions took "
-                    f"less than {self.collapse_factor:g} times as long as the {w} before them (collisions "
-                    f"accelerating towards infinitely many in a finite time); the run was stopped")
+            cluster = self.collapse_detected
+            return (f"inelastic collapse at collision {c} (t = {t:.6g}): a cluster of {cluster['cluster_rods']} "
+                    f"rods ({cluster['first_rod']} to {cluster['last_rod']}) closer than {self.collapse_gap:g} of "
+                    f"the mean free spacing, whose collisions accelerated (the last {w} took less than "
+                    f"{self.collapse_factor:g} times as long as the {w} before them) until {w} of them fell within "
+                    f"the clock's rounding: infinitely many collisions in a finite time; the run was stopped "
+                    f"(continue_after_collapse goes on)")
         if self.status == "off_table":
             gamma, ratio = self.off_table
             grid = self.rule.table.temperature_ratio
@@ -548,7 +607,7 @@ class GasSimulation:
             rule=self.rule.describe(),
             beyond_law=int(self.counters[kernels.OFF_TABLE]) if self.rule.code == kernels.RULE_LAW else 0,
             softer_than_law=int(self.counters[kernels.SOFTER]), soft_floored=int(self.counters[kernels.FLOORED]),
-            contact_stiffness=self.contact_stiffness,
+            contact_stiffness=self.contact_stiffness, collapse=self.collapse_detected,
         )
 
     # ------------------------------------------------------------ checkpoint
@@ -567,6 +626,9 @@ class GasSimulation:
             "collapse_window": int(self.window.size // 2),
             "collapse_factor": self.collapse_factor,
             "energy_floor": self.energy_floor,
+            "collapse_gap": self.collapse_gap,
+            "continue_after_collapse": self.continue_after_collapse,
+            "collapse_detected": self.collapse_detected,
             "seed_entropy": str(self.seed_entropy),
             "seed_spawn_key": [int(k) for k in self.seed_spawn_key],
             "boundary": self.gas.boundary,
@@ -657,7 +719,11 @@ class GasSimulation:
                   record_every=params["record_every"], frame_every=params["frame_every"],
                   max_frames=params["max_frames"], frame_rods=params["frame_rods"],
                   collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"],
-                  energy_floor=params["energy_floor"])
+                  energy_floor=params["energy_floor"], collapse_gap=params.get("collapse_gap", 1e-6),
+                  continue_after_collapse=params.get("continue_after_collapse", False))
+        sim.collapse_detected = params.get("collapse_detected")
+        if sim.collapse_detected is not None:
+            sim.collapse[kernels.COLLAPSE_FACTOR] = 0.0
         segment = _check_checkpoint_arrays(path, sim, arrays)
         for name in cls._STATE:
             getattr(sim, name)[...] = arrays[name]
