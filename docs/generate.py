@@ -177,10 +177,10 @@ BLOCKS = [
     Block("materials-map", "docs/materials.md",
           (("map", "--kappa", "inf", "100", "--out", "{figures}/material_map", "--no-progress"),), markdown=True),
     Block("materials-striker", "docs/materials.md",
-          (("python", "examples/steel_striker_on_aluminium_bar.py", "{figures}"),)),
+          (("python", "examples/steel_striker_on_aluminium_bar.py", "--out", "{figures}"),)),
     Block("theory-two-material-contacts", "docs/theory.md", (("python", "docs/two_material_contacts.py"),)),
     # the examples write their figures where docs/examples.md shows them
-    *(Block(f"example-{name[:-3]}", "docs/examples.md", (("python", f"examples/{name}", "{figures}/examples"),))
+    *(Block(f"example-{name[:-3]}", "docs/examples.md", (("python", f"examples/{name}", "--out", "{figures}/examples"),))
       for name in EXAMPLES),
 ]
 
