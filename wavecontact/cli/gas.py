@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from .common import nonnegative_int, positive_int
@@ -110,6 +111,20 @@ def _rule(args):
     return VibrationLaw(load_law(args.law) if args.law else default_law(), soft)
 
 
+@contextmanager
+def _compile_timer():
+    """``[seconds]`` that numba spends compiling inside the block (not loading kernels from its cache, which
+    fires no compile event); stays 0 without numba."""
+    seconds = [0.0]
+    try:
+        from numba.core import event
+    except ImportError:
+        yield seconds
+        return
+    with event.install_timer("numba:compile", lambda duration: seconds.__setitem__(0, duration)):
+        yield seconds
+
+
 def run(args) -> int:
     from ..errors import InvalidParameterError
     from ..gas import GasSimulation, UniformLengths, random_gas
@@ -142,10 +157,13 @@ def run(args) -> int:
     from .._jit import prepared_kernel_count
 
     prepared = prepared_kernel_count()
-    result = sim.run(args.collisions, progress=args.progress and sys.stderr.isatty())
+    with _compile_timer() as compiling:
+        result = sim.run(args.collisions, progress=args.progress and sys.stderr.isatty())
     summary = {"rods": sim.gas.rods, **result.summary(), "damping": args.damping, "seed": args.seed,
                # True when this call paid numba's one-time compilation or cache load (slower rate)
-               "includes_kernel_preparation": prepared_kernel_count() > prepared}
+               "includes_kernel_preparation": prepared_kernel_count() > prepared,
+               # of the wall time, the seconds numba spent compiling (0 when the kernels came from its cache)
+               "kernel_compile_s": compiling[0]}
     if out is not None:
         from ..plotting.gas import plot_gas
 
@@ -162,7 +180,11 @@ def run(args) -> int:
         print(f"{summary['rods']} rods, rule {args.rule}: {result.message}")
         print(f"  collisions            {result.collisions}")
         print(f"  simulated time        {result.simulated_time:.6g}")
-        note = ", includes compiling the kernels" if summary["includes_kernel_preparation"] else ""
+        note = ""
+        if compiling[0] > 0:
+            note = f", of which {compiling[0]:.3g} s compiling numba's kernels"
+        elif summary["includes_kernel_preparation"]:
+            note = ", kernels loaded from numba's cache"
         print(f"  collisions per second {result.collisions_per_second:.4g} (wall time {result.wall_time_s:.3g} s{note})")
         print(f"  final kinetic energy  {result.final_energy:.6g}")
         print(f"  collapsed             {result.collapsed}")
