@@ -111,6 +111,14 @@ def _rule(args):
     return VibrationLaw(load_law(args.law) if args.law else default_law(), soft)
 
 
+def _figure_title(summary: dict) -> str:
+    """The run's parameters for the figure: rods, rule, damping, seed."""
+    rule = summary["rule"] if isinstance(summary["rule"], dict) else {"rule": summary["rule"]}
+    rule = ", ".join(f"{key} {rule[key]}" for key in ("rule", "restitution", "kappa", "bath_modes") if key in rule)
+    damping = "no damping" if summary["damping"] is None else f"damping tau = {summary['damping']:g}"
+    return f"{summary['rods']} rods, {rule}, {damping}, seed {summary['seed']}"
+
+
 @contextmanager
 def _compile_timer():
     """``[seconds]`` that numba spends compiling inside the block (not loading kernels from its cache, which
@@ -171,7 +179,7 @@ def run(args) -> int:
         result.save(out)
         if sim.status in ("completed", "time_limit"):
             sim.save_checkpoint(out / CHECKPOINT_NAME)
-        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length)
+        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length, title=_figure_title(summary))
     if result.status not in ("completed",):
         print(f"wavecontact gas: {result.message}", file=sys.stderr)
     if args.json:
