@@ -50,6 +50,7 @@ NOT_RUN = {
     r"^pip install": "installs the package (this checkout is already installed)",
     r"^python -m pytest": "the test suite itself",
     r"--update-docs": "rewrites a block of a page in docs/ (run it by hand to refresh that page)",
+    r"^python -m sphinx": "builds the documentation site from this checkout (tests/test_docs_site.py, marked slow)",
 }
 PATH_OPTIONS = ("--out", "--plot", "--xt-plot", "--fields", "--page")
 SYNOPSIS = re.compile(r"\[|\.\.\.|\||<\w")

@@ -7,10 +7,9 @@ correction for the omitted modes (their exact end response), with the static
 correction, and plain truncation. Printed: epsilon, error against the reference
 value and wall time of each.
 
-    python examples/compare_discretizations_and_solvers.py [OUTPUT_DIR]
+    python examples/compare_discretizations_and_solvers.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
-import sys
 from pathlib import Path
 
 import wavecontact
@@ -30,7 +29,8 @@ RUNS = {
 }
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     results = {}
     for label, options in RUNS.items():
         wavecontact.collide(0.6, 100, **options)  # first call: numba prepares kernels; not timed
@@ -61,4 +61,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

@@ -7,10 +7,9 @@ order is the slope of log(error) against log(elements), fitted by least squares.
 Central differences are second-order accurate in time and P1/P2 elements at
 least second order in space, so the fit should show about 2.
 
-    python examples/mesh_convergence_study.py [OUTPUT_DIR]
+    python examples/mesh_convergence_study.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
-import sys
 from pathlib import Path
 
 from wavecontact.plotting.convergence import plot_convergence
@@ -20,7 +19,7 @@ from wavecontact.studies.convergence import convergence_study
 EXPECTED = {"order_p1_consistent": (2.0, 0.3, "second-order central differences and P1 elements")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     table = convergence_study(0.6, 20, orders=(1, 2), masses=("consistent", "lumped"),
                               elements=(25, 50, 100, 200), progress=False)
@@ -35,4 +34,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

@@ -8,11 +8,10 @@ run's parameters. read_fields reads the series back. The x-t diagram shows the
 compression wave: stress -Z V / 2 (wave theory) running through the short rod
 and back, then through the long rod.
 
-    python examples/paraview_fields.py [OUTPUT_DIR]
+    python examples/paraview_fields.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
 import math
-import sys
 from pathlib import Path
 
 import wavecontact
@@ -23,7 +22,8 @@ from wavecontact.plotting.xt import plot_xt_diagram
 EXPECTED = {"peak_compression": (-0.5, 1e-6, "wave theory: stress -Z V / 2")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     out = Path(out_dir)
     result = wavecontact.collide(0.6, math.inf, solver="fem", elements=100, record_fields=True,
                                  field_samples=60)
@@ -42,4 +42,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

@@ -5,10 +5,9 @@ them in threads. Along gamma = 1 the rods are equal and the collision is
 elastic whatever kappa; towards large kappa epsilon approaches the hard-core
 value gamma; towards small kappa it approaches 1.
 
-    python examples/restitution_map_gamma_kappa.py [OUTPUT_DIR]
+    python examples/restitution_map_gamma_kappa.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,8 @@ from wavecontact.studies.sweep import restitution_map
 EXPECTED = {"equal_rods_min": (1.0, 1e-8, "gamma = 1: epsilon = 1 for every kappa")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     gammas = np.linspace(0.3, 1.0, 15)
     kappas = np.logspace(0, 4, 17)
     epsilon = restitution_map(gammas, kappas, progress=False)
@@ -49,4 +49,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

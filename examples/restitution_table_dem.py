@@ -12,11 +12,10 @@ It builds a small table (two gammas, three temperatures, 30 samples a point,
 kappa = 100, 20 bath modes), saves it as NPZ, JSON and CSV, loads it back,
 uses it both ways and plots the tabulated quantile functions.
 
-    python examples/restitution_table_dem.py [OUTPUT_DIR]
+    python examples/restitution_table_dem.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +45,7 @@ def restitution_callback(table, rng):
     return rule
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     table = restitution_table(list(GAMMAS), list(TEMPERATURES), samples=30, seed=5, kappa=100.0, bath_modes=20,
@@ -87,4 +86,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else ".")
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

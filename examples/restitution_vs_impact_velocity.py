@@ -7,11 +7,10 @@ contact (epsilon towards gamma). Two steel rods of 60 mm and 100 mm (gamma = 0.6
 1 / alpha = 1 micrometre. The scene is given in SI units and solved by the delay
 equation directly.
 
-    python examples/restitution_vs_impact_velocity.py [OUTPUT_DIR]
+    python examples/restitution_vs_impact_velocity.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +37,8 @@ def restitution_at(speed):
     return solve(scene, "delay")
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     wave_speed = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
     effective_length = 2 * LENGTHS[0] * LENGTHS[1] / sum(LENGTHS)
     speeds = np.logspace(-3, 1.5, 40)
@@ -74,4 +74,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

@@ -5,10 +5,9 @@ Eq. 23: soft contacts (small kappa) are nearly elastic, hard ones (large kappa)
 approach the wave-theory value epsilon = gamma. Eq. 23 holds from about
 kappa = 20 on.
 
-    python examples/restitution_vs_kappa.py [OUTPUT_DIR]
+    python examples/restitution_vs_kappa.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +20,8 @@ GAMMA = 0.6
 EXPECTED = {"restitution_at_100": (0.646697087, 1e-9, "independent reference value")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     kappas = np.logspace(-1, 4, 61)  # 12 points per decade: kappa = 100 is on the grid
     at_100 = int(np.argmin(abs(kappas - 100.0)))
     kappas[at_100] = 100.0  # exactly, not 100 to round-off
@@ -53,4 +53,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

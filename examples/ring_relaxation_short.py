@@ -7,10 +7,9 @@ vibrations until it fluctuates around the equipartition value mu V^2 / (2 (2 N +
 (Eq. 8); the spectral entropy of the modes falls towards Eq. 11. The paper runs
 4500 collisions with 75 modes (wavecontact ring); this is a 200-collision sketch.
 
-    python examples/ring_relaxation_short.py [OUTPUT_DIR]
+    python examples/ring_relaxation_short.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +25,8 @@ EXPECTED = {"first_restitution": (wavecontact.collide(GAMMA, KAPPA).restitution,
                                   "delay solver, same collision")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     run = run_ring(GAMMA, KAPPA, MODES, COLLISIONS, progress=False)
     e_eq = equilibrium_translational_energy(MODES)
     late = run.translational_energy[COLLISIONS // 2:]
@@ -67,4 +67,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

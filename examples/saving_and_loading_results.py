@@ -5,11 +5,10 @@ force, solver extras) into a NumPy .npz archive with the scalars, options and
 diagnostics as JSON inside; CollisionResult.load_npz reads it back, without
 pickle. to_json() gives the scalars alone, for logs and tables.
 
-    python examples/saving_and_loading_results.py [OUTPUT_DIR]
+    python examples/saving_and_loading_results.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ from wavecontact import CollisionResult
 EXPECTED = {"loaded_restitution": (0.7530132413, 5e-8, "independent reference; fem error on 200 elements ~1e-8")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     result = wavecontact.collide(0.6, 20, solver="fem", elements=200)
@@ -53,4 +52,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

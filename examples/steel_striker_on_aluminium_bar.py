@@ -1,7 +1,7 @@
 """A steel striker hits an aluminium bar (SI units): three solvers, the stress x-t
 diagram and the restitution against the impact velocity.
 
-    python examples/steel_striker_on_aluminium_bar.py [OUTPUT_DIR]
+    python examples/steel_striker_on_aluminium_bar.py [--out DIR]    # writes into DIR, default examples_output/
 
 Both rods have a 20 mm diameter.  The striker is the stiffer rod (impedance
 about 2.95 times the bar's) and has the shorter round trip, so the contact
@@ -13,7 +13,6 @@ the impact speed V, so epsilon approaches the hard-core value as V grows.
 """
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -73,7 +72,8 @@ def characteristic_restitution(striker, bar, speed):
 EXPECTED = {"hard": (characteristic_restitution(*rods(), SPEED), 1e-12, "end responses of the two rods")}
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     out = Path(out_dir)
     striker, bar = rods()
     speed = SPEED
@@ -125,4 +125,6 @@ def _plot_restitution(speeds, restitution, hard, path):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

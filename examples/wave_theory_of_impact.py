@@ -8,11 +8,10 @@ rod leaves at rest internally and epsilon = gamma; the long rod keeps
 the paper. Units: rho = c = A = 1, effective length l = 1, approach speed V = 1
 (so Z V / 2 = 0.5 and 2 l1 / c = 1 + gamma).
 
-    python examples/wave_theory_of_impact.py [OUTPUT_DIR]
+    python examples/wave_theory_of_impact.py [--out DIR]    # writes into DIR, default examples_output/
 """
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +44,8 @@ def long_rod_modal_energies(result, modes):
     return np.array(energies)
 
 
-def main(out_dir="."):
+def main(out_dir="examples_output"):
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     # P1 elements with lumped mass at the stable step are exact for hard contact (docs/fem.md)
     result = wavecontact.collide(GAMMA, math.inf, solver="fem", elements=400, record_fields=True)
     plateau = float(np.median(result.contact_force[result.contact_force > 0.01]))
@@ -87,4 +87,6 @@ def main(out_dir="."):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    from _output import output_folder  # examples/_output.py: the --out option
+
+    main(output_folder(__doc__))

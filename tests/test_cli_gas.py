@@ -238,3 +238,24 @@ def test_a_crafted_gas_checkpoint_is_refused_in_one_line(tmp_path, capsys, chang
     assert main([*_BASE, "--collisions", "300", "--out", str(out), "--resume"]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "checkpoint" in err and "Traceback" not in err
+
+
+def test_the_timing_line_tells_compiling_from_running(capsys):
+    """Compile time is numba's compile events only: a fresh function compiles (seconds > 0), a compiled one
+    or a kernel loaded from the cache does not; a second run in one process says neither."""
+    numba = pytest.importorskip("numba")
+    from wavecontact.cli.gas import _compile_timer
+
+    fresh = numba.njit(cache=False)(lambda x: 2 * x + 1)
+    with _compile_timer() as compiling:
+        fresh(3)
+    assert compiling[0] > 0
+    with _compile_timer() as compiling:
+        fresh(4)
+    assert compiling[0] == 0
+    argv = ["gas", "--rods", "10", "--collisions", "50", "--rule", "fixed", "--restitution", "0.9", "--no-progress"]
+    main(argv)
+    capsys.readouterr()
+    main(argv)  # the kernels are ready in this process: nothing to prepare
+    line = next(x for x in capsys.readouterr().out.splitlines() if "collisions per second" in x)
+    assert "compiling" not in line and "cache" not in line, line

@@ -126,6 +126,39 @@ def test_masking_ignores_the_padding_of_a_time_of_another_width():
     assert generate.mask(block, fast) != generate.mask(block, fast.replace("1.472e-07", "1.473e-07"))
 
 
+def test_every_column_of_wall_times_is_masked_and_nothing_else():
+    """A printed table's time column (``time [ms]``, ``time (ms)``, ``median ms``...) differs from run to run:
+    a new run's times must not make a block stale, a changed epsilon or error must."""
+    block = BLOCKS["example-compare_discretizations_and_solvers"]
+    text = block_text(block.name)
+    rows = [line for line in text.splitlines() if line.startswith(("delay ", "fem P1 lumped"))]
+    assert len(rows) == 2
+    slower = text
+    for row in rows:
+        cells = row.rsplit(None, 1)
+        slower = slower.replace(row, f"{cells[0]}  {float(cells[1]) * 7.3 + 100:.3f}")
+    assert slower != text and generate.mask(block, slower) == generate.mask(block, text)
+    epsilon = rows[0].split()[1]
+    changed = text.replace(epsilon, epsilon[:-1] + ("1" if epsilon[-1] != "1" else "2"), 1)
+    assert generate.mask(block, changed) != generate.mask(block, text)
+    # in every block, other digits under a time column's header leave the masked text as it was
+    columns = 0
+    for name, block in BLOCKS.items():
+        span, lines = None, []
+        for line in block_text(name).split("\n"):
+            header = generate.TIME_HEADER.search(line)
+            if header:
+                span, columns = header.span(), columns + 1
+            elif not line.strip():
+                span = None
+            elif span is not None:
+                cell = re.sub(r"\d", "7", line[span[0]:span[1]])
+                line = line[:span[0]] + cell + line[span[1]:]
+            lines.append(line)
+        assert generate.mask(block, "\n".join(lines)) == generate.mask(block, block_text(name)), name
+    assert columns >= 5
+
+
 def _converge_rows(text: str) -> dict:
     """``{(label, elements): restitution text}`` of a `wavecontact converge` output."""
     rows, label = {}, None
@@ -573,3 +606,21 @@ def test_bath_page_quotes_its_ensemble_and_bench_blocks():
                   if row[0] == "delay sample, kappa 250, nu_max 250, rtol 1e-6 Gauss-Kronrod (CPU)")
     assert len(same) == 2
     assert f"cost {min(same) / before:.2f} to {max(same) / before:.2f} of it" in prose
+
+
+def test_every_cell_of_the_fem_default_table_fits_the_limit_its_command_states():
+    """``python docs/generate.py --check`` must be able to rerun the table: each FE solve's estimated cost
+    (what the solver checks before it starts; read from its refusal at max_work=1) is within the
+    ``--max-work`` that the command shown in docs/fem.md passes."""
+    from wavecontact.errors import LimitError
+
+    (command,) = BLOCKS["fem-default"].commands
+    stated = float(command[command.index("--max-work") + 1])
+    assert f"`$ {generate.display(command)}`" in block_text("fem-default")
+    for gamma, kappa in [(float(r[0]), float(r[1])) for r in _table_rows("fem-default")]:
+        if math.isinf(kappa):
+            continue
+        with pytest.raises(LimitError) as refusal:
+            wavecontact.collide(gamma, kappa, solver="fem", elements=3200, max_work=1)
+        work = float(re.search(r"about ([\d.e+]+) updates", str(refusal.value)).group(1))
+        assert work <= stated, f"gamma {gamma}, kappa {kappa}: {work:.2g} updates > --max-work {stated:g}"

@@ -117,7 +117,7 @@ def test_fig8_and_fig9_use_the_papers_kappa_and_sizes_through_the_bath_figure_en
 
 def test_quick_run_of_two_cheap_figures_writes_images_page_and_verdicts(tmp_path, capsys):
     out = tmp_path / "figs"
-    assert main(["paper-figures", "--out", str(out), "--quick", "--only", "6", "4", "--no-progress"]) == 0
+    assert main(["paper-figures", "--out", str(out), "--quick", "--only", "6", "4"]) == 0  # log on stderr
     page = (out / "paper_figures.md").read_text()
     assert "wavecontact paper-figures --out" in page and "--quick --only 6 4" in page
     assert (out / "fig4_noise_covariance.png").stat().st_size > 5000
@@ -126,7 +126,14 @@ def test_quick_run_of_two_cheap_figures_writes_images_page_and_verdicts(tmp_path
     assert len(rows) == 2
     # the cold collision is deterministic: Eq. 22 at kappa = 100 and Eq. 24 at kappa = inf hold
     assert "**reproduced**" in rows[1]
-    assert "| 6 | reproduced |" in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert "| 6 | reproduced |" in printed.out
+    # quick sizes cannot judge the paper: each place that prints verdicts says so
+    from wavecontact.cli.paper_figures import QUICK_CAVEAT, QUICK_NOTE
+
+    assert QUICK_NOTE in page and printed.out.startswith(QUICK_NOTE)
+    logged = [line for line in printed.err.splitlines() if ": Fig. " in line]
+    assert len(logged) == 2 and all(line.endswith(f"[{QUICK_CAVEAT}]") for line in logged)
 
 
 def test_refuses_unknown_figure_numbers(capsys):

@@ -75,3 +75,37 @@ def test_dem_example_callback_draws_and_refuses_states_off_the_table(tmp_path):
     assert 0.0 < rule(0.6, 0.5, 1.0, 0.125) < 3.0
     with pytest.raises(InvalidParameterError, match="temperature_ratio"):
         rule(0.6, 0.5, 1.0, 10.0)  # T_B / E_tr = 40: outside the table, refused rather than clipped
+
+
+def test_each_rods_gain_at_a_hot_bath_against_single_collisions(table):
+    """At T_B/E_tr = 0.5 each rod's mean gain and its standard error are those of the 24 collisions solved
+    one by one through ``collide`` (the sample seeds spawned here, the gains converted from E_tr = 1/4
+    units here); ``rod1_share`` is their pooled ratio, and it is the gains, not the share, that stay
+    meaningful where a bath gives energy back (some collisions here take energy from a rod)."""
+    seeds = np.random.SeedSequence(3 + 1).spawn(24)  # point (0, 1) of the table uses seed + 1
+    gains = np.array([wavecontact.collide(0.6, 30.0, bath_temperature=0.5, bath_modes=10, seed=s, rtol=1e-8)
+                      .extra["vibration_energy_gain"] for s in seeds]) / 0.25
+    assert np.any(gains < 0.0), "no collision took energy from a rod: the case this test is about is missing"
+    mean = gains.mean(axis=0)
+    standard_error = np.array([np.std(gains[:, k], ddof=1) for k in (0, 1)]) / math.sqrt(24)
+    # the ensemble's batched energy split and collide's gains from the fields agree to ~1e-6 E_tr per collision
+    # (both at rtol = 1e-8), far below the standard errors (~0.1 E_tr) that the table states
+    assert np.all(standard_error > 1e-2)
+    assert np.allclose(table.rod_gain[0, 1], mean, rtol=0, atol=1e-5)
+    assert np.allclose(table.rod_gain_standard_error[0, 1], standard_error, rtol=1e-4, atol=0)
+    assert table.rod1_share[0, 1] == pytest.approx(gains[:, 0].sum() / gains.sum(), abs=1e-4)
+    cold = wavecontact.collide(0.6, 30.0, "delay", rtol=1e-10).extra["vibration_energy_gain"] / 0.25
+    assert np.allclose(table.rod_gain[0, 0], cold, atol=1e-6)  # a cold bath: every sample is this collision
+    assert np.all(table.rod_gain_standard_error[0, 0] < 1e-6)
+
+
+def test_gains_survive_the_files_and_are_optional(table, tmp_path):
+    for suffix in (".npz", ".json"):
+        back = load(table.save(tmp_path / f"g{suffix}"))
+        assert np.array_equal(back.rod_gain, table.rod_gain)
+        assert np.array_equal(back.rod_gain_standard_error, table.rod_gain_standard_error)
+    shipped = load(Path(wavecontact.__file__).parent / "data" / "restitution_table_kappa100.npz")
+    assert shipped.rod_gain is None  # written before the gains were recorded: still loads
+    with pytest.raises(InvalidParameterError, match="go together"):
+        type(table)(table.gamma, table.temperature_ratio, table.probability, table.eps2_quantiles, table.rod1_share,
+                    rod_gain=table.rod_gain)

@@ -3,8 +3,10 @@
 A :class:`RestitutionTable` holds, on a grid of length ratios ``gamma`` and
 bath temperature ratios ``T_B / E_tr``, the quantile function of
 ``epsilon^2`` (the fraction of the pair's translational energy that survives
-a collision) and the mean share of the lost energy that goes into the short
-rod's vibrations.  Tables are produced from ensembles of stochastic
+a collision), the split of the lost energy between the two rods' vibrations
+that conserves energy on average (``rod1_share``, what the gas's collision rule
+uses) and, for tables computed from ensembles, each rod's mean vibrational
+energy gain with its standard error (``rod_gain``, ``rod_gain_standard_error``).  Tables are produced from ensembles of stochastic
 collisions (the thermal-bath study) and consumed by event-driven gases
 (:mod:`wavecontact.gas`), which draw ``epsilon^2`` by inverse-transform
 sampling.
@@ -17,7 +19,7 @@ so sampling stays exact for grid points and monotone in ``u`` everywhere.
 
 Files: ``.npz`` (arrays plus a JSON ``schema`` string; loaded with
 ``allow_pickle=False``), ``.json`` (lists) and ``.csv`` (long format,
-written only: it does not carry ``rod1_share``).
+written only: it does not carry ``rod1_share`` nor the gains).
 """
 
 from __future__ import annotations
@@ -44,9 +46,14 @@ _COLUMNS = {
     "temperature_ratio": "bath temperature over the pair's translational energy T_B/E_tr (dimensionless, >= 0)",
     "probability": "probability level u of the quantile function (dimensionless, in [0, 1])",
     "eps2_quantile": "epsilon^2 below which a fraction u of collisions lies (dimensionless, >= 0)",
-    "rod1_share": "mean fraction of the lost translational energy that goes into rod 1's (the short rod's) "
-    "vibrations, per (gamma, temperature_ratio) (dimensionless)",
+    "rod1_share": "sum of rod 1's (the short rod's) vibrational gains over the sum of both rods' gains, per "
+    "(gamma, temperature_ratio) (dimensionless; the split of the lost energy that conserves energy on average; "
+    "outside [0, 1] where a bath gives energy back on balance, as near T_B/E_tr = 1)",
+    "rod_gain": "optional, shape (G, R, 2): each rod's mean vibrational energy gain per collision, in units of E_tr "
+    "(negative where its bath gives energy back)",
+    "rod_gain_standard_error": "optional, shape (G, R, 2): the standard error of rod_gain (units of E_tr)",
 }
+_OPTIONAL = ("rod_gain", "rod_gain_standard_error")
 
 
 def _ascending(name, values, *, strict=True):
@@ -76,8 +83,11 @@ class RestitutionTable:
         ``eps2_quantiles[g, r, k]`` is the ``probability[k]`` quantile of
         ``epsilon^2`` (dimensionless, finite, >= 0, non-decreasing in k).
     rod1_share : array_like, shape (G, R)
-        Mean fraction of the translational energy lost in a collision that
-        goes into rod 1's (the short rod's) vibrations, finite.
+        ``sum Delta E_1 / sum (Delta E_1 + Delta E_2)`` over the collisions of a point: the
+        split of the lost translational energy between rod 1's (the short rod's) and rod 2's
+        vibrations that conserves energy on average, finite. It is a fraction in [0, 1] only
+        where both rods gain on balance (always for a cold bath); where a bath gives energy
+        back (``T_B > 0``) the denominator may be near zero or negative: read ``rod_gain``.
     kappa : float
         Hardness ``alpha V l / c`` the table was computed at (``inf``: hard core).
     bath_modes : int
@@ -88,6 +98,11 @@ class RestitutionTable:
         Name of the solver (or model) that produced the samples.
     seed : int
         Root seed of the ensemble (>= 0).
+    rod_gain : array_like, shape (G, R, 2), optional
+        Each rod's mean vibrational energy gain per collision, in units of ``E_tr``
+        (None: not recorded, as for analytic tables).
+    rod_gain_standard_error : array_like, shape (G, R, 2), optional
+        Standard error of ``rod_gain`` (units of ``E_tr``); given with ``rod_gain``.
     """
 
     gamma: np.ndarray
@@ -100,6 +115,8 @@ class RestitutionTable:
     samples_per_point: int = 0
     solver: str = "unknown"
     seed: int = 0
+    rod_gain: np.ndarray | None = None
+    rod_gain_standard_error: np.ndarray | None = None
 
     def __post_init__(self):
         values = {}
@@ -133,6 +150,18 @@ class RestitutionTable:
             raise InvalidParameterError(f"restitution table rod1_share must have shape {shape[:2]}, got {share.shape}")
         if not np.all(np.isfinite(share)):
             raise InvalidParameterError("restitution table rod1_share must be finite")
+        if (self.rod_gain is None) != (self.rod_gain_standard_error is None):
+            raise InvalidParameterError("restitution table rod_gain and rod_gain_standard_error go together")
+        if self.rod_gain is not None:
+            for name in _OPTIONAL:
+                array = np.array(getattr(self, name), dtype=np.float64, order="C")
+                if array.shape != shape[:2] + (2,) or not np.all(np.isfinite(array)):
+                    raise InvalidParameterError(f"restitution table {name} must be finite with shape {shape[:2] + (2,)}, "
+                                                f"got {array.shape}")
+                array.setflags(write=False)
+                values[name] = array
+            if np.any(values["rod_gain_standard_error"] < 0.0):
+                raise InvalidParameterError("restitution table rod_gain_standard_error must be >= 0")
         for name, array in values.items():
             object.__setattr__(self, name, array)
         kappa = float(self.kappa)
@@ -285,12 +314,13 @@ class RestitutionTable:
         """Write ``.npz``, ``.json`` or ``.csv`` (chosen by the suffix); returns the path."""
         path = Path(path)
         suffix = path.suffix.lower()
+        names = _ARRAYS + (_OPTIONAL if self.rod_gain is not None else ())
         if suffix == ".npz":
-            arrays = {name: getattr(self, name) for name in _ARRAYS}
+            arrays = {name: getattr(self, name) for name in names}
             schema = np.array(json.dumps(self.metadata()))
             atomic_write(path, lambda handle: np.savez(handle, schema=schema, **arrays))
         elif suffix == ".json":
-            document = dict(self.metadata(), **{name: getattr(self, name).tolist() for name in _ARRAYS})
+            document = dict(self.metadata(), **{name: getattr(self, name).tolist() for name in names})
             text = json.dumps(document, indent=1) + "\n"
             atomic_write(path, lambda handle: handle.write(text), binary=False)
         elif suffix == ".csv":
@@ -322,6 +352,7 @@ def _from_document(document, source):
     try:
         return RestitutionTable(
             **{name: document[name] for name in _ARRAYS},
+            **{name: document[name] for name in _OPTIONAL if name in document},
             kappa=math.inf if kappa == "inf" else kappa,
             bath_modes=meta.get("bath_modes"),
             samples_per_point=meta.get("samples_per_point"),

@@ -119,7 +119,7 @@ def _pcg_words(pool: list, count: int) -> np.ndarray:
 
 
 def spawned_states(seed: int, start: int, stop: int) -> np.ndarray:
-    """PCG64 seed words of ``SeedSequence(seed, spawn_key=(j,))`` for ``j = start .. stop - 1``.
+    """PCG64 seed words of ``SeedSequence(seed, spawn_key=(j,))`` for ``j`` from ``start`` to ``stop - 1``.
 
     Parameters
     ----------

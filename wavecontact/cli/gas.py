@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from .common import nonnegative_int, positive_int
@@ -152,6 +153,28 @@ def _check_resumed(args, rule):
     return check
 
 
+def _figure_title(summary: dict) -> str:
+    """The run's parameters for the figure: rods, rule, damping, seed."""
+    rule = summary["rule"] if isinstance(summary["rule"], dict) else {"rule": summary["rule"]}
+    rule = ", ".join(f"{key} {rule[key]}" for key in ("rule", "restitution", "kappa", "bath_modes") if key in rule)
+    damping = "no damping" if summary["damping"] is None else f"damping tau = {summary['damping']:g}"
+    return f"{summary['rods']} rods, {rule}, {damping}, seed {summary['seed']}"
+
+
+@contextmanager
+def _compile_timer():
+    """``[seconds]`` that numba spends compiling inside the block (not loading kernels from its cache, which
+    fires no compile event); stays 0 without numba."""
+    seconds = [0.0]
+    try:
+        from numba.core import event
+    except ImportError:
+        yield seconds
+        return
+    with event.install_timer("numba:compile", lambda duration: seconds.__setitem__(0, duration)):
+        yield seconds
+
+
 def run(args) -> int:
     from ..errors import InvalidParameterError
     from ..gas import GasSimulation, UniformLengths, random_gas
@@ -182,18 +205,22 @@ def run(args) -> int:
         from ..plotting.gas import plot_gas
 
         result.save(out)
-        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length)
+        title = _figure_title({"rods": sim.gas.rods, **result.summary(), "damping": args.damping, "seed": args.seed})
+        plot_gas(result, out / FIGURE_NAME, system_length=sim.gas.system_length, title=title)
 
     from .._jit import prepared_kernel_count
 
     prepared = prepared_kernel_count()
-    sim, result = run_gas(new_simulation, args.collisions, out, resume=args.resume, overwrite=args.overwrite,
-                          check_resumed=_check_resumed(args, rule), write_outputs=write_outputs,
-                          progress=args.progress and sys.stderr.isatty(),
-                          log=lambda message: print(f"wavecontact gas: {message}", file=sys.stderr, flush=True))
+    with _compile_timer() as compiling:
+        sim, result = run_gas(new_simulation, args.collisions, out, resume=args.resume, overwrite=args.overwrite,
+                              check_resumed=_check_resumed(args, rule), write_outputs=write_outputs,
+                              progress=args.progress and sys.stderr.isatty(),
+                              log=lambda message: print(f"wavecontact gas: {message}", file=sys.stderr, flush=True))
     summary = {"rods": sim.gas.rods, **result.summary(), "damping": args.damping, "seed": args.seed,
                # True when this call paid numba's one-time compilation or cache load (slower rate)
-               "includes_kernel_preparation": prepared_kernel_count() > prepared}
+               "includes_kernel_preparation": prepared_kernel_count() > prepared,
+               # of the wall time, the seconds numba spent compiling (0 when the kernels came from its cache)
+               "kernel_compile_s": compiling[0]}
     if result.status not in ("completed",):
         print(f"wavecontact gas: {result.message}", file=sys.stderr)
     if args.json:
@@ -202,7 +229,11 @@ def run(args) -> int:
         print(f"{summary['rods']} rods, rule {args.rule}: {result.message}")
         print(f"  collisions            {result.collisions}")
         print(f"  simulated time        {result.simulated_time:.6g}")
-        note = ", includes compiling the kernels" if summary["includes_kernel_preparation"] else ""
+        note = ""
+        if compiling[0] > 0:
+            note = f", of which {compiling[0]:.3g} s compiling numba's kernels"
+        elif summary["includes_kernel_preparation"]:
+            note = ", kernels loaded from numba's cache"
         print(f"  collisions per second {result.collisions_per_second:.4g} (wall time {result.wall_time_s:.3g} s{note})")
         print(f"  final kinetic energy  {result.final_energy:.6g}")
         print(f"  collapsed             {result.collapsed}")

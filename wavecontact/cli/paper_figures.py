@@ -40,6 +40,12 @@ def add_parser(subparsers):
     return p
 
 
+# --quick: what its verdicts are worth, said wherever they are printed (page, table on stdout, log on stderr)
+QUICK_NOTE = ("Quick mode: sizes far below the paper's, for testing the command; the statistical verdicts "
+              "(Fig. 1-3, 8-10) mean little at these sizes.")
+QUICK_CAVEAT = "quick sizes: not a judgement of the paper"
+
+
 def _log(message: str) -> None:
     print(f"wavecontact paper-figures: {message}", file=sys.stderr, flush=True)
 
@@ -68,15 +74,19 @@ def run(args) -> int:
     check_output_file("--page", page, (".md",))
     out.mkdir(parents=True, exist_ok=True)
     page.parent.mkdir(parents=True, exist_ok=True)
+    log = _log if args.progress else None
+    if log is not None and args.quick:  # every verdict printed carries the caveat, on stderr too
+        def log(message):
+            _log(f"{message} [{QUICK_CAVEAT}]")
     with executor_from(args.workers, None) as executor:
-        reports = run_figures(out, quick=args.quick, only=args.only, executor=executor,
-                              log=_log if args.progress else None)
+        reports = run_figures(out, quick=args.quick, only=args.only, executor=executor, log=log)
     machine = (f"Run with {args.workers} worker process(es) on a 2-core machine shared with other jobs; "
                "wall times are indicative only.")
     if args.quick:
-        machine += (" Quick mode: sizes far below the paper's, for testing the command; the statistical verdicts "
-                    "(Fig. 1-3, 8-10) mean little at these sizes.")
+        machine += f" {QUICK_NOTE}"
     write_page(reports, page, command_line(args), machine)
+    if args.quick:
+        print(f"{QUICK_NOTE}\n")
     print("| Fig. | verdict | measured |")
     print("|---:|---|---|")
     for r in reports:

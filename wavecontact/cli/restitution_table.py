@@ -40,9 +40,12 @@ def run(args) -> int:
     for path in args.out:
         table.save(path)
         print(f"wrote {path}")
-    print("gamma    T_B/E_tr  mean eps   mean eps^2  rod1 share")
-    for g in table.gamma:
-        for r in table.temperature_ratio:
+    # each rod's mean vibrational gain with its standard error: defined at any T_B (a ratio of the two, the
+    # file's rod1_share, is not a fraction where a bath gives energy back)
+    print("gamma    T_B/E_tr  mean eps   mean eps^2  gain rod 1 / E_tr       gain rod 2 / E_tr")
+    for i, g in enumerate(table.gamma):
+        for j, r in enumerate(table.temperature_ratio):
+            gain, error = table.rod_gain[i, j], table.rod_gain_standard_error[i, j]
             print(f"{g:<8g} {r:<9g} {table.mean_restitution(g, r):.4f}     {table.mean_eps2(g, r):.4f}      "
-                  f"{table.share(g, r):.4f}")
+                  f"{gain[0]:+.4f} +/- {error[0]:.4f}    {gain[1]:+.4f} +/- {error[1]:.4f}")
     return 0

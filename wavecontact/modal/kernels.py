@@ -291,7 +291,9 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                 cos_table, sin_table, omega_sin_table, clock, episode, counters, history, max_steps):
     """Integrate until the current collision (episode) is over.
 
-    Parameters (all arrays are modified in place where they hold state)
+    All arrays are modified in place where they hold state.
+
+    Parameters
     ----------
     q, v : float arrays (M,)
         Mass-normalised mode coordinates and velocities.
@@ -304,7 +306,8 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass : arrays (K,)
         Contact pairs (right end of a, left end of b), offset added to b's
         position, residual compliance, inverse effective end mass.
-    law, alpha, strength, stiffness : contact law (see :func:`contact_response`).
+    law, alpha, strength, stiffness : int and floats
+        The contact law (see :func:`contact_response`).
     contact_range : float
         Gap beyond which the force is negligible (length).
     step_accuracy, step_reach : float

@@ -3,7 +3,7 @@
 :class:`ModalSystem` packs everything the compiled integrator needs into flat
 arrays once, and offers the bookkeeping around it (energies, modal energies,
 state snapshots).  Both the single-collision solver
-(:mod:`wavecontact.modal.solver`) and the ring (:mod:`.ring`) are built on it.
+(:mod:`wavecontact.modal.solver`) and the ring (:mod:`wavecontact.modal.ring`) are built on it.
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ def covariance_figure(data):
     ax.plot(data["lag"], data["eq19"], "k--", lw=1, label="Eq. 19")
     ax.set_xlabel(r"$\tau$")
     ax.set_ylabel(r"$C_Q(\tau) / \sigma^2$")
-    ax.set_title(rf"noise covariance, $\gamma$ = {data['gamma']}, $\nu_{{max}}$ = {data['modes']}")
+    ax.set_title(rf"noise covariance, $\gamma$ = {data['gamma']:g}, $\nu_{{max}}$ = {data['modes']}")
     ax.legend()
     return fig
 
@@ -59,35 +59,46 @@ def spread_figure(data):
                     label=rf"$\Delta\epsilon$, $\gamma$ = {gamma}")
     ax.set_xlabel(r"$T_B / E_{tr}$")
     ax.set_ylabel(r"$\langle\epsilon\rangle$, $\Delta\epsilon$")
-    ax.set_title(rf"$\kappa$ = {data['kappa']}, {data['samples']} samples per point")
+    ax.set_title(rf"$\kappa$ = {data['kappa']:g}, {data['samples']} samples per point")
     ax.legend(fontsize=8)
     return fig
 
 
 def _draw_law(ax, result, bins=40):
+    """The density ``p(eps^2)`` on ``ax`` (left axis) and the distribution function ``D(eps^2)`` on a twin
+    axis from 0 to 1 (right), each with its 95 % band and one legend for both; returns the twin axis."""
     edges, density, low, high = result.density(bins)
     centres = 0.5 * (edges[1:] + edges[:-1])
     ax.fill_between(centres, low, high, color="C1", alpha=0.25, step="mid")
-    ax.step(centres, density, where="mid", color="C1", ls=":", label=r"$p(\epsilon^2)$")
+    lines = ax.step(centres, density, where="mid", color="C1", ls=":", label=r"density $p(\epsilon^2)$ (left)")
+    ax.set_ylabel(r"probability density $p(\epsilon^2)$", color="C1")
+    ax.set_ylim(bottom=0.0)
+    twin = ax.twinx()
     x, d, dl, dh = result.distribution()
-    scale = max(float(np.max(high)), 1.0)
-    ax.fill_between(x, dl * scale, dh * scale, color="C0", alpha=0.2, step="post")
-    ax.step(x, d * scale, where="post", color="C0", label=rf"$D(\epsilon^2)$ (x{scale:.2g})")
+    twin.fill_between(x, dl, dh, color="C0", alpha=0.2, step="post")
+    lines += twin.step(x, d, where="post", color="C0", label=r"distribution $D(\epsilon^2)$ (right)")
+    twin.set_ylim(0.0, 1.02)
+    twin.set_ylabel(r"distribution function $D(\epsilon^2)$", color="C0")
     spec = result.spec
-    ax.set_title(rf"$\gamma$ = {spec.gamma}, $E_{{tr}}/T_B$ = {1.0 / spec.temperature[0]:.3g}", fontsize=9)
+    ax.set_title(rf"$\gamma$ = {spec.gamma:g}, $E_{{tr}}/T_B$ = {1.0 / spec.temperature[0]:.3g}, "
+                 f"{spec.samples} samples; bands: 95 %", fontsize=9)
     ax.set_xlabel(r"$\epsilon^2$")
+    twin.legend(lines, [line.get_label() for line in lines], fontsize=7, loc="upper left")
+    return twin
 
 
 def law_figure(results, gamma_step=0.6173):
     fig, axes = _figure((4.0 * (len(results) + 1), 3.6), cols=len(results) + 1)
     for ax, result in zip(axes, results):
         _draw_law(ax, result)
-        ax.legend(fontsize=7)
     ax = axes[-1]
     x = np.linspace(0.0, 1.0, 401)
-    ax.plot(x, (x >= gamma_step**2).astype(float), color="C0")
-    ax.set_title(rf"deterministic: $D = \Theta(\epsilon^2 - \gamma^2)$, $\gamma$ = {gamma_step}", fontsize=9)
+    ax.plot(x, (x >= gamma_step**2).astype(float), color="C0", label=r"$D(\epsilon^2)$, cold collision")
+    ax.set_title(rf"deterministic: $D = \Theta(\epsilon^2 - \gamma^2)$, $\gamma$ = {gamma_step:g}", fontsize=9)
     ax.set_xlabel(r"$\epsilon^2$")
+    ax.set_ylabel(r"distribution function $D(\epsilon^2)$")
+    ax.set_ylim(0.0, 1.02)
+    ax.legend(fontsize=7, loc="upper left")
     return fig
 
 
@@ -95,5 +106,4 @@ def plot_law(result, path) -> Path:
     """``p(eps^2)`` and ``D(eps^2)`` of one ensemble, with 95 % bands, to ``path``."""
     fig, ax = _figure()
     _draw_law(ax, result)
-    ax.legend()
     return save(fig, path)

@@ -87,6 +87,7 @@ def convergence_figure(table):
     ax_n.set_xlabel("elements on the shorter rod N")
     ax_n.set_ylabel(r"error $|\epsilon - \epsilon_\mathrm{ref}|$")
     ax_t.set_xlabel("wall time per collision [s]")
+    ax_t.set_ylabel(r"error $|\epsilon - \epsilon_\mathrm{ref}|$")
     for ax in (ax_n, ax_t):
         ax.grid(True, which="major", alpha=0.3)
         ax.grid(True, which="minor", alpha=0.1)

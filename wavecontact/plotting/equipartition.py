@@ -41,6 +41,7 @@ def plot_equipartition(study: EquipartitionStudy, path, dpi: int = 150) -> Path:
         ax.axhline(study.threshold * level, ls=":", color=colour, lw=0.8)
     ax.axvline(PAPER_SETTLING_COLLISIONS, color="0.3", lw=0.8, ls="-.", label="paper: about 5 collisions")
     ax.set_xscale("log")
+    _plain_log_ticks(ax.xaxis)
     ax.set_xlim(1, max(s.shape[1] for s in study.entropy.values()))
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("collision number")
@@ -68,9 +69,22 @@ def plot_equipartition(study: EquipartitionStudy, path, dpi: int = 150) -> Path:
     ax_n.axhline(PAPER_SETTLING_COLLISIONS, color="0.3", lw=0.8, ls="-.", label="paper: about 5, any N")
     ax_n.set_xscale("log")
     ax_n.set_yscale("log")
+    ax_n.set_xticks(study.modes)  # one labelled tick per mode count: log minor labels would overlap
+    _plain_log_ticks(ax_n.xaxis, with_locator=False)
+    _plain_log_ticks(ax_n.yaxis)
     ax_n.set_xlabel("modes per rod N")
     ax_n.set_ylabel("settling collision")
     ax_n.set_title("collisions until equipartition", fontsize=9)
     ax_n.legend(loc="upper left", fontsize=8, framealpha=0.9)
     ax_n.grid(alpha=0.3, which="both")
     return _save(fig, path, dpi)
+
+
+def _plain_log_ticks(axis, with_locator=True) -> None:
+    """Label a log axis at 1, 2, 5 x 10^k as plain numbers ("20", not "2 x 10^1"), minor ticks unlabelled."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    if with_locator:
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.set_minor_formatter(NullFormatter())

@@ -27,8 +27,12 @@ def _free_flight_time(result) -> float:
 
 
 def velocity_history_figure(result):
-    """Figure with ``W(tau)`` (or, for ``kappa = inf``, ``v_rel(tau)``) and the
-    asymptotic curve: Eq. 21/22 for finite kappa, Eq. 24 in the hard limit."""
+    """Figure with ``W(tau) / kappa`` (or, for ``kappa = inf``, ``v_rel(tau)``) and the
+    asymptotic curve: Eq. 21/22 for finite kappa, Eq. 24 in the hard limit.
+
+    ``W`` is shown over ``kappa``, as in the paper's Fig. 6 and 7 (and ``wavecontact paper-figures``),
+    so that curves of different kappa share one scale: ``W / kappa`` is the change of the relative
+    velocity in units of the approach speed ``V``, from 0 to ``1 + epsilon`` (Eq. 16)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -40,14 +44,14 @@ def velocity_history_figure(result):
     label = f"{result.solver} solver"
     if kappa is not None and math.isfinite(kappa):
         tau_free = _free_flight_time(result)
-        ax.plot(tau - tau_free, result.velocity_increase, lw=2, label=label)
+        ax.plot(tau - tau_free, np.asarray(result.velocity_increase) / kappa, lw=2, label=label)
         fine = np.linspace(tau.min(), tau.max(), 2000)
         ax.plot(
             fine - tau_free,
-            asymptotic_velocity_increase(fine, result.gamma, kappa, tau_free),
+            asymptotic_velocity_increase(fine, result.gamma, kappa, tau_free) / kappa,
             "k--", lw=1, label="asymptotic, Eq. 21-22",
         )
-        ax.set_ylabel(r"velocity increase $W(\tau)$")
+        ax.set_ylabel(r"velocity increase $W(\tau) / \kappa$  (units of $V$)")
         ax.set_xlabel(r"$\tau - \tau_{free}$  (units of $l/c$)")
         kappa_text = f"{kappa:g}"
     else:

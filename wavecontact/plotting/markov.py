@@ -80,6 +80,10 @@ def plot_cooling(results: dict, path, dpi: int = 150) -> Path:
     ax.set_xlabel("collision $j$")
     ax.set_ylabel("$\\langle E_{tr}(j) \\rangle / T_B^0$")
     ax.legend(fontsize=8)
+    specs = [result.spec for result in results.values()]
+    gammas = ", ".join(sorted({f"{s.gamma:g}" for s in specs}))
+    ax.set_title(f"cooling from $E_{{tr}}(0)$: $\\gamma$ = {gammas}, {specs[0].chains} chains per run; bands: 2 SE",
+                 fontsize=9)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=dpi)

@@ -170,7 +170,7 @@ def _hard_core(spec: EnsembleSpec) -> bool:
 
 
 def _hard_core_batch(spec: EnsembleSpec, start: int, stop: int) -> np.ndarray:
-    """epsilon of samples ``start .. stop - 1`` in the stochastic hard-core mode (one batched call)."""
+    """epsilon of samples ``start`` to ``stop - 1`` in the stochastic hard-core mode (one batched call)."""
     from ..bath.streams import SpawnedSeeds
     from ..solvers import get_solver
 
@@ -270,7 +270,7 @@ def sample_restitution(spec: EnsembleSpec, index: int) -> float:
 
 
 def run_batch(spec_fields: dict, start: int, stop: int) -> tuple:
-    """Samples ``start .. stop - 1`` (a task: plain arguments, plain results).
+    """Samples ``start`` to ``stop - 1`` (a task: plain arguments, plain results).
 
     Returns ``(start, epsilon (n,), gains (n, 2), error estimates (n,))``.
     """

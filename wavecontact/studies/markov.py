@@ -299,7 +299,7 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
 
 
 def run_chains(spec_fields: dict, start: int, stop: int) -> tuple:
-    """Chains ``start .. stop - 1`` of a run (a task: plain arguments, plain results).
+    """Chains ``start`` to ``stop - 1`` of a run (a task: plain arguments, plain results).
 
     Returns
     -------

@@ -53,7 +53,10 @@ def restitution_table(gammas, temperatures, samples, seed, *, kappa=100.0, bath_
     -------
     RestitutionTable
         ``eps2_quantiles`` are the empirical quantiles (linear between order
-        statistics); ``rod1_share`` is ``sum Delta E_1 / sum (Delta E_1 + Delta E_2)``.
+        statistics); ``rod1_share`` is ``sum Delta E_1 / sum (Delta E_1 + Delta E_2)``;
+        ``rod_gain`` and ``rod_gain_standard_error`` are each rod's mean gain per collision and
+        its standard error (sample standard deviation over ``sqrt(samples)``), in units of
+        ``E_tr``.
     """
     gammas = np.asarray(gammas, dtype=float)
     temperatures = np.asarray(temperatures, dtype=float)
@@ -66,11 +69,24 @@ def restitution_table(gammas, temperatures, samples, seed, *, kappa=100.0, bath_
     probability = np.linspace(0.0, 1.0, int(levels))
     quantiles = np.zeros((gammas.size, temperatures.size, probability.size))
     share = np.zeros((gammas.size, temperatures.size))
+    gain, gain_error = np.zeros(share.shape + (2,)), np.zeros(share.shape + (2,))
     for a, gamma in enumerate(gammas):
         for b, temperature in enumerate(temperatures):
             result = ensemble(gamma, kappa, temperature, samples, seed + a * temperatures.size + b,
                               bath_modes=bath_modes, executor=executor, progress=progress, energy_split=True, **options)
             quantiles[a, b] = np.quantile(result.restitution**2, probability)
             share[a, b] = result.rod1_share
+            gain[a, b], gain_error[a, b] = _mean_and_standard_error(result.vibration_energy_gain / ENSEMBLE_E_TR)
     return RestitutionTable(gammas, temperatures, probability, quantiles, share, kappa=float(kappa),
-                            bath_modes=bath_modes, samples_per_point=int(samples), solver="delay", seed=int(seed))
+                            bath_modes=bath_modes, samples_per_point=int(samples), solver="delay", seed=int(seed),
+                            rod_gain=gain, rod_gain_standard_error=gain_error)
+
+
+ENSEMBLE_E_TR = 0.25  # the translational energy of the ensembles' collisions (mu V^2 / 2 with mu = 1/2, V = 1)
+
+
+def _mean_and_standard_error(values: np.ndarray) -> tuple:
+    """Column means of ``values`` (samples along axis 0) and their standard errors (0 for one sample)."""
+    n = values.shape[0]
+    spread = np.std(values, axis=0, ddof=1) if n > 1 else np.zeros(values.shape[1:])
+    return np.mean(values, axis=0), spread / np.sqrt(n)
