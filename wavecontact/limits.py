@@ -41,6 +41,7 @@ __all__ = [
     "available_memory",
     "check_cost",
     "check_kappa",
+    "check_study_cost",
     "format_bytes",
 ]
 
@@ -174,11 +175,43 @@ def check_cost(solver: str, cost: Cost | None, limits: Limits) -> None:
         )
 
 
-def check_kappa(kappa) -> None:
-    """Refuse a finite ``kappa`` outside the supported range [:data:`KAPPA_MIN`, :data:`KAPPA_MAX`]."""
-    if math.isfinite(kappa) and not KAPPA_MIN <= kappa <= KAPPA_MAX:
+def check_study_cost(what: str, cost: Cost, limits: Limits, advice: str) -> None:
+    """Refuse a study (many solves) whose estimated total cost exceeds ``limits``.
+
+    Parameters
+    ----------
+    what : str
+        The run, for the message (``"ring: 5 collisions at N = 20000"``).
+    cost : Cost
+        Its estimated total work (updates) and memory (bytes held at once).
+    limits : Limits
+        The bounds (``max_work`` default :data:`DEFAULT_MAX_WORK`).
+    advice : str
+        How to make the run smaller (``"use fewer --collisions"``); the message
+        adds how to raise the bound.
+
+    Raises
+    ------
+    LimitError
+        With the estimate, the bound and how to proceed.
+    """
+    detail = f" ({cost.detail})" if cost.detail else ""
+    if not cost.memory <= limits.max_memory:
+        source = "half the available memory" if limits._memory_default else "max_memory"
+        raise LimitError(f"{what} would hold about {format_bytes(cost.memory)}{detail}, more than "
+                         f"{format_bytes(limits.max_memory)} ({source}); {advice}")
+    if not cost.work <= limits.max_work:
+        raise LimitError(f"{what} would take about {cost.work:.2g} updates{detail}, more than "
+                         f"max_work = {limits.max_work:.3g} (a few ns each); {advice}, or pass "
+                         f"--max-work {cost.work:.2g} to allow it")
+
+
+def check_kappa(kappa, name: str = "kappa") -> None:
+    """Refuse a finite ``kappa`` outside the supported range [:data:`KAPPA_MIN`, :data:`KAPPA_MAX`]
+    (``name``: how the message calls it, e.g. ``--kappa``)."""
+    if math.isnan(kappa) or (math.isfinite(kappa) and not KAPPA_MIN <= kappa <= KAPPA_MAX):
         raise InvalidParameterError(
-            f"kappa must lie in [{KAPPA_MIN:g}, {KAPPA_MAX:g}] or be inf (hard contact), got {kappa:g}: "
+            f"{name} must lie in [{KAPPA_MIN:g}, {KAPPA_MAX:g}] or be inf (hard contact), got {kappa:g}: "
             "softer contacts last longer than the solvers' step limits allow; stiffer ones differ from "
             "the hard limit by about ln(kappa)/kappa < 2e-6 (use kappa=inf)"
         )

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analytic import equilibrium_translational_energy
-from ..errors import InvalidParameterError, require_positive
+from ..errors import CheckpointError, InvalidParameterError, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
 from ..progress import Progress
@@ -174,7 +174,20 @@ class RingRun:
 
     @classmethod
     def load_npz(cls, path) -> RingRun:
-        """Read a file written by :meth:`save_npz`."""
+        """Read a file written by :meth:`save_npz`; anything else is refused with
+        :class:`~wavecontact.errors.CheckpointError` (never a traceback of the reader)."""
+        import zipfile
+
+        try:
+            return cls._read_npz(path)
+        except (OSError, EOFError, KeyError, ValueError, TypeError, zipfile.BadZipFile) as exc:
+            if isinstance(exc, FileNotFoundError):
+                raise CheckpointError(f"{path}: no such file") from None
+            raise CheckpointError(f"{path} is not a ring run written by RingRun.save_npz "
+                                  f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
+
+    @classmethod
+    def _read_npz(cls, path) -> RingRun:
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: np.array(data[name]) for name in cls._ARRAYS}
             scalars = {
