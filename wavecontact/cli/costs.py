@@ -11,9 +11,9 @@ The work of one solve is the solver's own estimate
 and modal solvers).  Where none exists, the bounds below are stated from
 counts measured on this package (the commands that measured them are named):
 
-* :data:`RING_STEPS_PER_MODE`: the modal ring integrator takes at most this
-  many steps per collision and mode per rod (``tests/test_cli_costs.py``
-  checks it), each step touching the ``2 N`` modes;
+* :func:`ring_steps`: the modal ring integrator takes at most
+  ``N (RING_STEPS_PER_MODE + RING_SOFT_STEPS_PER_MODE / kappa)`` steps per
+  collision (``tests/test_cli_costs.py`` checks it), each touching the ``2 N`` modes;
 * :data:`THERMAL_SAMPLE_UPDATES_PER_MODE`, :data:`HARD_CORE_SAMPLE_UPDATES`,
   :data:`COVARIANCE_REALISATION_UPDATES`: the delay solver's thermal samples
   and Fig. 4's realisations, as updates of 4 ns (their CPU time on a 2-core
@@ -39,12 +39,14 @@ __all__ = [
     "covariance_cost",
     "methods_cost",
     "ring_cost",
+    "ring_steps",
     "thermal_samples_cost",
 ]
 
-#: Largest steps per collision and per mode N of the ring integrator (measured at most 443 N over
-#: N = 50-1000, kappa = 1, 100, inf: ``next_collision().steps``).
-RING_STEPS_PER_MODE = 500
+#: Steps per collision of the ring integrator are at most ``N (RING_STEPS_PER_MODE + RING_SOFT_STEPS_PER_MODE / kappa)``
+#: (measured: up to 746 N for stiff contacts and 2212 N at kappa = 0.01, gamma 0.2-1, N = 8-1000, the
+#: counter ``next_collision().steps``; tests/test_cli_costs.py checks the bound).
+RING_STEPS_PER_MODE, RING_SOFT_STEPS_PER_MODE = 800, 25
 #: Bytes held per recorded ring collision and mode (modal energies in lists, then one array) and the rest.
 RING_BYTES_PER_MODE, RING_BYTES_PER_COLLISION = 32, 400
 #: Updates (4 ns) of one finite-kappa thermal delay sample, per bath mode nu_max.
@@ -71,14 +73,19 @@ def check_run(args, what: str, cost: Cost, advice: str) -> None:
     check_study_cost(what, cost, Limits(max_work=getattr(args, "max_work", None)), advice)
 
 
-def ring_cost(modes, collisions: int, copies: int = 1) -> Cost:
+def ring_steps(kappa: float, modes: int) -> float:
+    """Bound on the steps of one ring collision with ``modes`` modes per rod at softness ``kappa``."""
+    return float(modes) * (RING_STEPS_PER_MODE + RING_SOFT_STEPS_PER_MODE / kappa)
+
+
+def ring_cost(kappa: float, modes, collisions: int, copies: int = 1) -> Cost:
     """``copies`` runs of ``collisions`` ring collisions at each mode count in ``modes``."""
     modes = [int(n) for n in modes]
-    steps = sum(float(RING_STEPS_PER_MODE) * n * collisions * copies for n in modes)
-    work = sum(float(RING_STEPS_PER_MODE) * n * 2.0 * n * collisions * copies for n in modes)
+    steps = sum(ring_steps(kappa, n) * collisions * copies for n in modes)
+    work = sum(ring_steps(kappa, n) * 2.0 * n * collisions * copies for n in modes)
     memory = max(float(collisions) * (RING_BYTES_PER_MODE * 2 * n + RING_BYTES_PER_COLLISION) for n in modes)
     return Cost(steps=steps, work=work, memory=memory,
-                detail=f"at most {RING_STEPS_PER_MODE} N steps per collision over 2N modes, "
+                detail=f"at most {ring_steps(kappa, max(modes)):.3g} steps per collision over 2N modes, "
                        f"{format_bytes(memory)} of records")
 
 

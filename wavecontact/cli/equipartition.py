@@ -51,7 +51,7 @@ def run(args) -> int:
         raise InvalidParameterError(f"--modes: every N must be at least 2, got {min(args.modes)}")
     check_outputs(directories=[("--out", args.out, (ENTROPY_NAME, SUMMARY_NAME, FIGURE_NAME))])
     check_run(args, f"equipartition: {args.realisations} x {args.collisions} collisions at N = "
-              f"{', '.join(map(str, args.modes))}", ring_cost(args.modes, args.collisions, args.realisations),
+              f"{', '.join(map(str, args.modes))}", ring_cost(args.kappa, args.modes, args.collisions, args.realisations),
               "use fewer --collisions, --realisations or --modes")
     study = equipartition_by_modes(
         args.gamma, args.kappa, modes=args.modes, collisions=args.collisions, realisations=args.realisations,

@@ -79,7 +79,7 @@ def run(args) -> int:
             f"--transient must be at most collisions - 3 = {args.collisions - 3}, got {args.transient}"
         )
     check_outputs(directories=[("--out", args.out, output_names())])
-    check_run(args, f"ring: {args.collisions} collisions at N = {args.modes}", ring_cost([args.modes], args.collisions),
+    check_run(args, f"ring: {args.collisions} collisions at N = {args.modes}", ring_cost(args.kappa, [args.modes], args.collisions),
               "use fewer --collisions or --modes")
     ring_run = run_ring(
         args.gamma,
