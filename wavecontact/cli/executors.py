@@ -13,7 +13,8 @@ connect only to a scheduler whose workers you trust.
 
 from __future__ import annotations
 
-import _thread
+import os
+import signal
 import threading
 import time
 from contextlib import contextmanager
@@ -41,6 +42,12 @@ def connect(scheduler: str):
         from distributed import Client
     except ImportError:  # pragma: no cover
         raise InvalidParameterError("--scheduler needs dask.distributed installed") from None
+    import logging
+
+    # the client logs a traceback when the scheduler goes away; the command says it in one line instead
+    for name in ["distributed", *logging.root.manager.loggerDict]:
+        if name.split(".")[0] == "distributed":
+            logging.getLogger(name).setLevel(logging.CRITICAL)
     try:
         return Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S:g}s")
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
@@ -73,7 +80,8 @@ class Watchdog(threading.Thread):
             since = time.monotonic() if since is None else since
             if time.monotonic() - since >= self.patience:
                 _LOST[:] = [f"{reason} for {self.patience:g} s; the run was stopped"]
-                _thread.interrupt_main()
+                # a real signal: it wakes the main thread from a blocking wait (interrupt_main would not)
+                os.kill(os.getpid(), signal.SIGINT)
                 return
 
     def stop(self):
