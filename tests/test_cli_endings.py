@@ -130,3 +130,21 @@ def test_a_scheduler_at_a_closed_port_is_given_up_within_the_connect_timeout():
     assert "cannot reach" in str(caught.value) and "--scheduler" in str(caught.value)
     assert time.monotonic() - started < executors.CONNECT_TIMEOUT_S + 10
     assert not [t for t in threading.enumerate() if t.name == "wavecontact-dask-watchdog"]
+
+
+def test_the_entry_points_behind_the_commands_refuse_bad_paths_by_name(tmp_path):
+    """ensemble(out=FILE) and RingRun.load_npz(garbage): a WavecontactError naming the problem, not an OSError."""
+    from wavecontact.errors import CheckpointError, InvalidParameterError
+    from wavecontact.studies.ensemble import ensemble
+    from wavecontact.studies.ring import RingRun
+
+    a_file = tmp_path / "afile"
+    a_file.write_text("x")
+    with pytest.raises(InvalidParameterError, match="not a directory"):
+        ensemble(0.6, 100.0, 1.0, 2, 0, bath_modes=10, out=a_file)
+    for content in (b"", b"garbage", b"PK\x03\x04broken"):
+        a_file.write_bytes(content)
+        with pytest.raises(CheckpointError, match="not a ring run"):
+            RingRun.load_npz(a_file)
+    with pytest.raises(CheckpointError, match="no such file"):
+        RingRun.load_npz(tmp_path / "missing.npz")

@@ -97,3 +97,14 @@ def test_files_written_are_listed_once_and_no_bar_goes_into_redirected_stderr(tm
     if as_json:
         record = json.loads(captured.out)
         assert record["files_written"] == listed
+
+
+def test_no_bar_goes_into_a_pipe(tmp_path):
+    """bath-figure 8 wrote 40 tqdm lines with cursor codes into a redirected stderr; now only its file list."""
+    import subprocess
+
+    done = subprocess.run([sys.executable, "-m", "wavecontact", "bath-figure", "8", "--samples", "2", "--bath-modes",
+                           "10", "--out", str(tmp_path / "f8.png")], capture_output=True, text=True, timeout=600,
+                          check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == f"wavecontact: wrote {tmp_path / 'f8.png'}\n"
