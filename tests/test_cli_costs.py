@@ -53,3 +53,13 @@ def test_a_study_above_the_bound_is_refused_with_the_bound_the_estimate_and_the_
     check_study_cost("demo", Cost(0.0, 3e11, 1.0), Limits(max_work=4e11), "")  # raised bound: accepted
     with pytest.raises(LimitError, match="memory|GiB|TiB"):
         check_study_cost("demo", Cost(0.0, 1.0, 2.0**60), Limits(), "use fewer --runs")
+
+
+def test_run_ring_refuses_records_that_cannot_fit_before_any_collision():
+    from wavecontact.studies.ring import run_ring
+
+    def no_simulation(scene, options):
+        raise AssertionError("the simulation was built: the refusal came after the work had started")
+
+    with pytest.raises(LimitError, match="collisions"):
+        run_ring(0.6, 100.0, 20, 10**12, progress=False, simulation_factory=no_simulation)

@@ -26,7 +26,16 @@ from __future__ import annotations
 
 import math
 
-from ..limits import DEFAULT_MAX_WORK, Cost, Limits, check_study_cost, format_bytes
+from ..limits import (  # noqa: F401 - the ring bound lives with the limits (run_ring checks it too)
+    DEFAULT_MAX_WORK,
+    RING_SOFT_STEPS_PER_MODE,
+    RING_STEPS_PER_MODE,
+    Cost,
+    Limits,
+    check_study_cost,
+    ring_cost,
+    ring_steps,
+)
 
 __all__ = [
     "COVARIANCE_REALISATION_UPDATES",
@@ -43,12 +52,6 @@ __all__ = [
     "thermal_samples_cost",
 ]
 
-#: Steps per collision of the ring integrator are at most ``N (RING_STEPS_PER_MODE + RING_SOFT_STEPS_PER_MODE / kappa)``
-#: (measured: up to 746 N for stiff contacts and 2212 N at kappa = 0.01, gamma 0.2-1, N = 8-1000, the
-#: counter ``next_collision().steps``; tests/test_cli_costs.py checks the bound).
-RING_STEPS_PER_MODE, RING_SOFT_STEPS_PER_MODE = 800, 25
-#: Bytes held per recorded ring collision and mode (modal energies in lists, then one array) and the rest.
-RING_BYTES_PER_MODE, RING_BYTES_PER_COLLISION = 32, 400
 #: Updates (4 ns) of one finite-kappa thermal delay sample, per bath mode nu_max.
 THERMAL_SAMPLE_UPDATES_PER_MODE = 1500
 #: Updates (4 ns) of one hard-core thermal sample (the stochastic hard-core mode of the delay solver).
@@ -71,22 +74,6 @@ def add_work_option(parser) -> None:
 def check_run(args, what: str, cost: Cost, advice: str) -> None:
     """Refuse the run (LimitError) if ``cost`` exceeds ``--max-work`` or half the available memory."""
     check_study_cost(what, cost, Limits(max_work=getattr(args, "max_work", None)), advice)
-
-
-def ring_steps(kappa: float, modes: int) -> float:
-    """Bound on the steps of one ring collision with ``modes`` modes per rod at softness ``kappa``."""
-    return float(modes) * (RING_STEPS_PER_MODE + RING_SOFT_STEPS_PER_MODE / kappa)
-
-
-def ring_cost(kappa: float, modes, collisions: int, copies: int = 1) -> Cost:
-    """``copies`` runs of ``collisions`` ring collisions at each mode count in ``modes``."""
-    modes = [int(n) for n in modes]
-    steps = sum(ring_steps(kappa, n) * collisions * copies for n in modes)
-    work = sum(ring_steps(kappa, n) * 2.0 * n * collisions * copies for n in modes)
-    memory = max(float(collisions) * (RING_BYTES_PER_MODE * 2 * n + RING_BYTES_PER_COLLISION) for n in modes)
-    return Cost(steps=steps, work=work, memory=memory,
-                detail=f"at most {ring_steps(kappa, max(modes)):.3g} steps per collision over 2N modes, "
-                       f"{format_bytes(memory)} of records")
 
 
 def methods_cost(gamma: float, kappa: float, methods, repeats: int = 1) -> Cost:

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..analytic import equilibrium_translational_energy
 from ..errors import CheckpointError, InvalidParameterError, require_positive
+from ..limits import Limits, check_study_cost, ring_cost
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
 from ..progress import Progress
@@ -369,6 +370,9 @@ def run_ring(
     RingRun
     """
     g, k, n, m, every = _validate(gamma, kappa, modes, collisions, checkpoint_every)
+    # every collision's record is held in memory until the end: refuse before any work what cannot fit
+    check_study_cost(f"run_ring: {m} collisions at N = {n}", ring_cost(k, [n], m), Limits(max_work=float("inf")),
+                     "use fewer collisions or modes")
     options = {**(solver_options or {}), "modes": n, "static_correction": bool(static_correction)}
     engine = get_solver(solver)
     options = engine.options(options)
