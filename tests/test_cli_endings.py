@@ -105,7 +105,7 @@ def test_the_client_probe_reports_a_closed_client_and_an_empty_cluster():
 def test_ctrl_c_ends_a_running_command_with_status_130(tmp_path):
     """A real SIGINT into a ring run (numba kernels or Python, wherever it lands)."""
     command = [sys.executable, "-m", "wavecontact", "ring", "--gamma", "0.6", "--kappa", "100", "--modes", "400",
-               "--collisions", "1000", "--out", str(tmp_path / "ring")]
+               "--collisions", "500", "--out", str(tmp_path / "ring")]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 240
@@ -148,3 +148,23 @@ def test_the_entry_points_behind_the_commands_refuse_bad_paths_by_name(tmp_path)
             RingRun.load_npz(a_file)
     with pytest.raises(CheckpointError, match="no such file"):
         RingRun.load_npz(tmp_path / "missing.npz")
+
+
+def test_ctrl_c_at_a_terminal_stops_the_worker_processes_too_in_one_line():
+    """A terminal's Ctrl-C reaches the whole process group: the workers stay silent, the run ends at once."""
+    import os
+
+    command = [sys.executable, "-m", "wavecontact", "ensemble", "--gamma", "0.6", "--kappa", "100", "--temperature",
+               "1", "--samples", "100000", "--batch-size", "64", "--seed", "0", "--bath-modes", "100", "--workers", "2"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    try:
+        time.sleep(12.0)
+        os.killpg(process.pid, signal.SIGINT)
+        stopped = time.monotonic()
+        _out, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 130 and err == "wavecontact: interrupted\n", err
+    assert time.monotonic() - stopped < 30

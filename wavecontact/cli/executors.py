@@ -36,6 +36,11 @@ def lost_cluster() -> str | None:
     return _LOST[0] if _LOST else None
 
 
+def _ignore_interrupts() -> None:
+    """Worker processes ignore SIGINT (no traceback from each of them on Ctrl-C)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def connect(scheduler: str):
     """A ``distributed.Client`` of ``scheduler``, or a one-line refusal within :data:`CONNECT_TIMEOUT_S`."""
     try:
@@ -119,7 +124,16 @@ def executor_from(workers: int, scheduler):
     elif workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        # Ctrl-C reaches the whole process group: the workers leave it to this process, which stops them
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_interrupts)
+        try:
             yield pool
+        except BaseException:
+            processes = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:  # running batches are abandoned, not waited for
+                process.terminate()
+            raise
+        pool.shutdown()
     else:
         yield None

@@ -163,7 +163,7 @@ def run(args) -> int:
     from .._jit import prepared_kernel_count
 
     prepared = prepared_kernel_count()
-    result = sim.run(args.collisions, progress=args.progress and sys.stderr.isatty())
+    result = sim.run(args.collisions, progress=args.progress)  # a bar only on a terminal (wavecontact.progress)
     summary = {"rods": sim.gas.rods, **result.summary(), "damping": args.damping, "seed": args.seed,
                # True when this call paid numba's one-time compilation or cache load (slower rate)
                "includes_kernel_preparation": prepared_kernel_count() > prepared}
