@@ -222,7 +222,7 @@ def check_study_cost(what: str, cost: Cost, limits: Limits, advice: str) -> None
 def check_kappa(kappa, name: str = "kappa") -> None:
     """Refuse a finite ``kappa`` outside the supported range [:data:`KAPPA_MIN`, :data:`KAPPA_MAX`]
     (``name``: how the message calls it, e.g. ``--kappa``)."""
-    if math.isnan(kappa) or (math.isfinite(kappa) and not KAPPA_MIN <= kappa <= KAPPA_MAX):
+    if math.isfinite(kappa) and not KAPPA_MIN <= kappa <= KAPPA_MAX:
         raise InvalidParameterError(
             f"{name} must lie in [{KAPPA_MIN:g}, {KAPPA_MAX:g}] or be inf (hard contact), got {kappa:g}: "
             "softer contacts last longer than the solvers' step limits allow; stiffer ones differ from "

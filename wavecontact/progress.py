@@ -8,7 +8,10 @@ __all__ = ["Progress", "shows_bars"]
 
 
 def shows_bars() -> bool:
-    """The one rule for progress bars: only when stderr is a terminal (cursor codes never go into files)."""
+    """The one rule for progress bars: only when stderr is a terminal (cursor codes never go into files),
+    or in a Jupyter kernel (where ``tqdm.auto`` draws a widget, not text)."""
+    if "ipykernel" in sys.modules:
+        return True
     try:
         return bool(sys.stderr.isatty())
     except (AttributeError, ValueError):  # replaced or closed stderr
