@@ -145,11 +145,12 @@ def folder(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     import importlib
 
-    for module, name in WORK:
+    modules = [importlib.import_module(module) for module, _ in WORK]  # all imported before any is patched
+    for (module, name), loaded in zip(WORK, modules):
         def refuse(*args, _name=name, **kwargs):
             raise AssertionError(f"{_name} was called: the refusal came after the work had started")
 
-        monkeypatch.setattr(importlib.import_module(module), name, refuse)
+        monkeypatch.setattr(loaded, name, refuse)
     return tmp_path
 
 

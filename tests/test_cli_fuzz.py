@@ -71,8 +71,9 @@ def test_every_command_refuses_in_one_line_or_reaches_its_work(folder, monkeypat
 
     with monkeypatch.context() as patch:
         patch.chdir(folder)
-        for module, name in WORK:
-            patch.setattr(importlib.import_module(module), name, reached)
+        modules = [importlib.import_module(module) for module, _ in WORK]  # imported before any is patched
+        for (_module, name), loaded in zip(WORK, modules):
+            patch.setattr(loaded, name, reached)
         before = _tree(folder)
         started = time.process_time()
         try:
