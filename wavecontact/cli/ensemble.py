@@ -19,7 +19,7 @@ from .common import (
     report_written,
 )
 from .costs import add_work_option, check_run, thermal_samples_cost
-from .executors import executor_from  # noqa: F401 - the commands with --workers/--scheduler import it from here
+from .executors import executor_from
 from .guard import check_outputs
 
 #: What ``--out DIR`` holds besides the finished batches (batch_*.npz).
