@@ -378,6 +378,7 @@ def test_cli_end_to_end_with_stand_in(tmp_path, capsys, monkeypatch):
     assert "resuming from checkpoint" in capsys.readouterr().err
     longer = [a for a in argv if a != "--no-progress"]
     longer[longer.index("--collisions") + 1] = "120"
+    monkeypatch.setattr("wavecontact.progress.shows_bars", lambda: True)  # as on a terminal: bars only there
     assert cli_main(longer) == 0
     err = capsys.readouterr().err
     assert "after collision 100" in err and "120/120" in err

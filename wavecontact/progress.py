@@ -4,7 +4,18 @@ from __future__ import annotations
 
 import sys
 
-__all__ = ["Progress"]
+__all__ = ["Progress", "shows_bars"]
+
+
+def shows_bars() -> bool:
+    """The one rule for progress bars: only when stderr is a terminal (cursor codes never go into files),
+    or in a Jupyter kernel (where ``tqdm.auto`` draws a widget, not text)."""
+    if "ipykernel" in sys.modules:
+        return True
+    try:
+        return bool(sys.stderr.isatty())
+    except (AttributeError, ValueError):  # replaced or closed stderr
+        return False
 
 
 class Progress:
@@ -19,7 +30,8 @@ class Progress:
     unit : str
         Name of one unit.
     enabled : bool or None
-        Show a tqdm bar on stderr; ``None`` shows it when stderr is a terminal.
+        ``False``: never a bar.  ``True`` or ``None``: a tqdm bar on stderr when
+        stderr is a terminal (:func:`shows_bars`), never in a redirected file or pipe.
     initial : int
         Units already done (a resumed run).
 
@@ -36,10 +48,8 @@ class Progress:
                  initial: int = 0):
         self.total = int(total)
         self.done = int(initial)
-        if enabled is None:
-            enabled = sys.stderr.isatty()
         self._bar = None
-        if enabled:
+        if enabled is not False and shows_bars():
             from tqdm.auto import tqdm
 
             self._bar = tqdm(total=self.total, initial=self.done, desc=description, unit=unit,

@@ -47,17 +47,77 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        return int(args.run(args) or 0)
-    except (WavecontactError, ValueError, OSError) as exc:
-        print(f"wavecontact: error: {exc}", file=sys.stderr)
+def _say(message: str) -> None:
+    print(f"wavecontact: {' '.join(str(message).split())}", file=sys.stderr)
+
+
+def _interrupted_kernel(exc: BaseException) -> bool:
+    """Ctrl-C inside a numba kernel surfaces as ``SystemError: ... returned a result with an exception set``
+    whose cause is the KeyboardInterrupt."""
+    seen = exc
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return isinstance(exc, SystemError) and "returned a result with an exception set" in str(exc)
+
+
+def _stopped() -> int:
+    from .executors import lost_cluster
+
+    reason = lost_cluster()
+    if reason is not None:
+        _say(f"error: {reason}")
         return 2
+    _say("interrupted")
+    return 130
+
+
+def _cancelled(exc: BaseException) -> bool:
+    """A Dask future cancelled or a connection closed: the scheduler or the workers went away."""
+    import asyncio
+    import concurrent.futures
+
+    if isinstance(exc, (concurrent.futures.CancelledError, asyncio.CancelledError)):
+        return True
+    return type(exc).__module__.startswith("distributed")
+
+
+def main(argv=None) -> int:
+    """Run one command; every failure ends with one line on stderr and a non-zero status.
+
+    Exit status 0 success, 2 refused or failed (the line says why), 130 interrupted (Ctrl-C).
+    """
+    from concurrent.futures.process import BrokenProcessPool
+
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        return int(args.run(args) or 0)
     except KeyboardInterrupt:
-        print("wavecontact: interrupted", file=sys.stderr)
-        return 130
+        return _stopped()
+    except MemoryError:
+        _say("error: out of memory; run a smaller case (fewer samples, collisions or modes)")
+        return 2
+    except BrokenProcessPool:
+        _say("error: a worker process died (killed or out of memory); the run was stopped")
+        return 2
+    except (WavecontactError, ValueError, OSError, argparse.ArgumentTypeError) as exc:
+        if _interrupted_kernel(exc):
+            return _stopped()
+        _say(f"error: {exc}")
+        return 2
+    except BaseException as exc:  # SystemExit passes; anything else is a failure to report in one line
+        if isinstance(exc, SystemExit):
+            raise
+        if _interrupted_kernel(exc):
+            return _stopped()
+        if _cancelled(exc):
+            from .executors import lost_cluster
+
+            _say(f"error: {lost_cluster() or 'the Dask scheduler or its workers were lost'} ({type(exc).__name__})")
+            return 2
+        raise
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -7,8 +7,15 @@ import json
 import numpy as np
 
 from ..result import to_jsonable
-from .common import kappa_value, positive_int
-from .ensemble import executor_from
+from .common import FIGURE_SUFFIXES, kappa_value, nonnegative_int, positive_int, report_written
+from .costs import add_work_option, check_run, covariance_cost, thermal_samples_cost
+from .executors import executor_from
+from .guard import check_outputs, refuse_unused
+
+#: The paper's sizes and seeds of each figure (used when --samples / --kappa / --seed are left out).
+DEFAULT_SAMPLES = {4: 400, 8: 2500, 9: 8000}
+DEFAULT_KAPPA = {8: 250.0, 9: 100.0}
+DEFAULT_SEED = {4: 0, 7: 1, 8: 8, 9: 9}
 
 
 def add_parser(subparsers):
@@ -24,13 +31,14 @@ def add_parser(subparsers):
     p.add_argument("--samples", type=positive_int,
                    help="realisations (Fig. 4) or samples per point (Fig. 8, 9) (default: the paper's: Fig. 4: 400, Fig. 8: 2500, Fig. 9: 8000)")
     p.add_argument("--kappa", type=kappa_value, help="softness; 'inf': the hard-core mode (default: the paper's: Fig. 8: 250, Fig. 9: 100)")
-    p.add_argument("--seed", type=int, default=None, help="root seed (default: the figure's fixed seed: Fig. 4: 0, 7: 1, 8: 8, 9: 9)")
+    p.add_argument("--seed", type=nonnegative_int, default=None, help="root seed (default: the figure's fixed seed: Fig. 4: 0, 7: 1, 8: 8, 9: 9)")
     p.add_argument("--bath-modes", type=positive_int, default=250, help="nu_max (default 250)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=positive_int, default=1, help="local worker processes")
     where.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler (default: none, local processes)")
     p.add_argument("--json", metavar="FILE", help="also write the numbers to FILE")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
@@ -39,13 +47,41 @@ def _options(kappa):
     return {}  # the ensemble's defaults (the delay solver's rtol: studies.ensemble.ENSEMBLE_RTOL)
 
 
+def check(args) -> None:
+    """Refuse, before any work, options the figure does not use, bad outputs and too large a run."""
+    from ..studies import bath_figures as figures
+
+    unused = {}
+    if args.figure in (4, 7):
+        unused["--kappa"] = args.kappa
+        unused["--workers"] = None if args.workers == 1 else args.workers
+        unused["--scheduler"] = args.scheduler
+    if args.figure == 7:
+        unused["--samples"] = args.samples
+    refuse_unused(unused, f"by Fig. {args.figure}")
+    check_outputs(files=[("--out", args.out, FIGURE_SUFFIXES), ("--json", args.json, (".json",))])
+    samples = args.samples or DEFAULT_SAMPLES.get(args.figure, 0)
+    if args.figure == 4:
+        cost = covariance_cost(samples, args.bath_modes)
+    elif args.figure == 7:
+        cost = thermal_samples_cost(2, 5.0, args.bath_modes)
+    elif args.figure == 8:
+        kappa = DEFAULT_KAPPA[8] if args.kappa is None else args.kappa
+        cost = thermal_samples_cost(samples * 2 * len(figures.FIG8_TEMPERATURES), kappa, args.bath_modes)
+    else:
+        kappa = DEFAULT_KAPPA[9] if args.kappa is None else args.kappa
+        cost = thermal_samples_cost(samples * len(figures.FIG9_CASES), kappa, args.bath_modes)
+    check_run(args, f"bath-figure {args.figure}", cost, "use fewer --samples or --bath-modes")
+
+
 def run(args) -> int:
     from ..plotting import bath as plots
     from ..studies import bath_figures as figures
 
-    seed = {4: 0, 7: 1, 8: 8, 9: 9}[args.figure] if args.seed is None else args.seed
+    check(args)
+    seed = DEFAULT_SEED[args.figure] if args.seed is None else args.seed
     if args.figure == 4:
-        data = figures.noise_covariance(realisations=args.samples or 400, modes=args.bath_modes, seed=seed)
+        data = figures.noise_covariance(realisations=args.samples or DEFAULT_SAMPLES[4], modes=args.bath_modes, seed=seed)
         plots.save(plots.covariance_figure(data), args.out)
         worst = float(np.max(np.abs(data["sampled"] - data["eq19"]) / np.maximum(data["band"], 1e-300)))
         print(f"C_Q/sigma^2 at tau = 0: sampled {data['sampled'][0]:.4f} +- {data['band'][0] / 2:.4f}, "
@@ -56,9 +92,9 @@ def run(args) -> int:
         for h in data:
             print(f"kappa = {h['kappa']:g}: epsilon = {h['restitution']:.6f}")
     elif args.figure == 8:
-        kappa = 250.0 if args.kappa is None else args.kappa
+        kappa = DEFAULT_KAPPA[8] if args.kappa is None else args.kappa
         with executor_from(args.workers, args.scheduler) as executor:
-            data = figures.spread_against_temperature(kappa=kappa, samples=args.samples or 2500, seed=seed,
+            data = figures.spread_against_temperature(kappa=kappa, samples=args.samples or DEFAULT_SAMPLES[8], seed=seed,
                                                       modes=args.bath_modes, executor=executor,
                                                       progress=args.progress, **_options(kappa))
         plots.save(plots.spread_figure(data), args.out)
@@ -68,9 +104,9 @@ def run(args) -> int:
                 print(f"{g:<8} {t:<9.3g} {data['mean'][a, b]:.4f} ({data['mean_error'][a, b]:.4f})  "
                       f"{data['std'][a, b]:.4f} ({data['std_error'][a, b]:.4f})")
     else:
-        kappa = 100.0 if args.kappa is None else args.kappa
+        kappa = DEFAULT_KAPPA[9] if args.kappa is None else args.kappa
         with executor_from(args.workers, args.scheduler) as executor:
-            results = figures.restitution_law(kappa=kappa, samples=args.samples or 8000, seed=seed,
+            results = figures.restitution_law(kappa=kappa, samples=args.samples or DEFAULT_SAMPLES[9], seed=seed,
                                               modes=args.bath_modes, executor=executor, progress=args.progress,
                                               **_options(kappa))
         plots.save(plots.law_figure(results), args.out)
@@ -78,10 +114,13 @@ def run(args) -> int:
         for s in data:
             print(f"gamma = {s['gamma']}, E_tr/T_B = {1 / s['temperature']:g}: mean eps^2 = {s['mean_eps2']:.4f}, "
                   f"mean eps = {s['mean']:.4f} +- {s['standard_error']:.4f}, std = {s['std']:.4f}")
+    written = [args.out]
     if args.json:
-        with open(args.json, "w") as handle:
-            json.dump(to_jsonable({k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in data.items()})
-                      if isinstance(data, dict) else to_jsonable(
-                          [{k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in d.items()} for d in data]),
-                      handle)
+        from ..io.files import atomic_write
+
+        record = (to_jsonable({k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in data.items()})
+                  if isinstance(data, dict) else to_jsonable(
+                      [{k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in d.items()} for d in data]))
+        written.append(atomic_write(args.json, lambda handle: json.dump(record, handle), binary=False))
+    report_written(written)
     return 0

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from .common import (
     CONTACT_HELP,
+    FIGURE_SUFFIXES,
     contact_law,
+    files_summary,
     gamma_value,
     kappa_text,
     kappa_value,
@@ -16,8 +19,9 @@ from .common import (
     positive_int,
     report_written,
 )
+from .guard import check_outputs
 
-PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+PLOT_SUFFIXES = FIGURE_SUFFIXES
 
 
 
@@ -93,16 +97,9 @@ def _options(args) -> dict:
 
 
 def _check_outputs(args) -> None:
-    from ..io.files import check_output_directory, check_output_file
-
-    if args.plot:
-        check_output_file("--plot", args.plot, PLOT_SUFFIXES)
-    if args.xt_plot:
-        check_output_file("--xt-plot", args.xt_plot, PLOT_SUFFIXES)
-    if args.save:
-        check_output_file("--save", args.save, (".npz",))
-    if args.fields:
-        check_output_directory("--fields", args.fields)
+    check_outputs(files=[("--plot", args.plot, PLOT_SUFFIXES), ("--xt-plot", args.xt_plot, PLOT_SUFFIXES),
+                         ("--save", args.save, (".npz",))],
+                  directories=[("--fields", args.fields, ("fields.pvd",))])
 
 
 def timed_collide(gamma, kappa, solver, contact, options, warmup=True):
@@ -138,7 +135,9 @@ def run(args) -> int:
     if args.fields:
         from ..io.fields import write_fields
 
-        written += write_fields(result, args.fields, units="dimensionless").files
+        fields = write_fields(result, args.fields, units="dimensionless").files
+        written += [path for path in fields if Path(path).suffix == ".pvd"]
+        written.append(files_summary(args.fields, "fields_*.vtu"))
     if args.xt_plot:
         from ..plotting.xt import plot_xt_diagram
 

@@ -7,13 +7,21 @@ import math
 
 
 def kappa_value(text: str) -> float:
-    """``--kappa``: a positive number or ``inf`` (hard-core limit)."""
+    """``--kappa``: a number in the supported range [KAPPA_MIN, KAPPA_MAX] or ``inf`` (hard-core limit);
+    every command refuses the same values, while parsing, before any work (:func:`wavecontact.limits.check_kappa`)."""
+    from ..errors import InvalidParameterError
+    from ..limits import check_kappa
+
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"kappa must be a positive number or 'inf', got {text!r}") from None
     if math.isnan(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"kappa must lie in (0, inf], got {text!r}")
+    try:
+        check_kappa(value)
+    except InvalidParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return value
 
 
@@ -137,13 +145,24 @@ def number_type(accept, requirement: str):
 
 
 def report_written(paths) -> list:
-    """List files written on stderr, one line each; return them as strings (for JSON output)."""
+    """List the files written on stderr, once each, one line each; return them as strings (for JSON output).
+
+    Bulky outputs enter as one :func:`files_summary` line (count and folder), not one line per file.
+    """
     import sys
 
-    names = [str(p) for p in paths]
+    names = list(dict.fromkeys(str(p) for p in paths))
     for name in names:
         print(f"wavecontact: wrote {name}", file=sys.stderr)
     return names
+
+
+def files_summary(folder, pattern: str) -> str:
+    """``"DIR/pattern (N files)"``: one entry for many files of one kind in ``folder``."""
+    from pathlib import Path
+
+    count = sum(1 for _ in Path(folder).glob(pattern))
+    return f"{Path(folder) / pattern} ({count} file{'s' if count != 1 else ''})"
 
 
 def contact_law(kappa: float, contact: str | None) -> str:
@@ -176,3 +195,7 @@ def kappa_text(kappa: float, contact: str) -> str:
 
 #: ``--rtol``, ``--initial-energy`` ...: a finite number > 0.
 positive_float = number_type(lambda v: math.isfinite(v) and v > 0, "a finite positive number")
+
+
+#: Figure formats every command writes (matplotlib would silently add ``.png`` to any other name).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from .common import gamma_value, kappa_value, positive_int, print_outcome
+from .common import FIGURE_SUFFIXES, gamma_value, kappa_value, positive_int, print_outcome
+from .costs import add_work_option, check_run, compare_cost
+from .guard import check_outputs
 
 
 def add_parser(subparsers):
@@ -22,6 +24,7 @@ def add_parser(subparsers):
                    help="no progress bar (it is shown on stderr only when that is a terminal)")
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="time every first call too (numba's kernel preparation then shows in the times)")
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
@@ -29,10 +32,9 @@ def add_parser(subparsers):
 def run(args) -> int:
     from ..studies.compare import compare_solvers
 
-    if args.plot:
-        from ..io.files import check_output_file
-
-        check_output_file("--plot", args.plot, (".png", ".pdf", ".svg"))
+    check_outputs(files=[("--plot", args.plot, FIGURE_SUFFIXES)])
+    check_run(args, f"compare: every solver at {args.repeats} repeat(s)", compare_cost(args.gamma, args.kappa, args.repeats),
+              "use fewer --repeats or a stiffer --kappa")
     table = compare_solvers(args.gamma, args.kappa, repeats=args.repeats, progress=args.progress,
                             warmup=args.warmup)
     written = []

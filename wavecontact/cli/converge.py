@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from .common import (
     CONTACT_HELP,
+    FIGURE_SUFFIXES,
     contact_law,
     gamma_value,
     kappa_value,
@@ -11,6 +12,8 @@ from .common import (
     positive_int,
     print_outcome,
 )
+from .costs import add_work_option, check_run, methods_cost
+from .guard import check_outputs
 
 
 def add_parser(subparsers):
@@ -76,6 +79,7 @@ def add_parser(subparsers):
         action="store_false",
         help="do not run each discretization once untimed first (numba compilation then shows in the first row)",
     )
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
@@ -86,10 +90,11 @@ def run(args) -> int:
     if len(set(args.elements)) < 2:
         raise ValueError("--elements needs at least two different mesh sizes to fit an order")
     contact = contact_law(args.kappa, args.contact)
-    if args.plot:
-        from ..io.files import check_output_file
-
-        check_output_file("--plot", args.plot, (".png", ".pdf", ".svg"))
+    check_outputs(files=[("--plot", args.plot, FIGURE_SUFFIXES)])
+    runs = [("fem", {"elements": n, "order": p, "mass": m}) for p in args.order for m in args.mass for n in args.elements]
+    check_run(args, f"converge: {len(runs)} finite-element solves",
+              methods_cost(args.gamma, args.kappa, runs, 1 if args.warmup is False else 2),
+              "use fewer or smaller --elements, --order or --mass")
     table = convergence_study(
         args.gamma,
         args.kappa,

@@ -4,10 +4,26 @@ from __future__ import annotations
 
 import json
 import math
-from contextlib import contextmanager
+
+from pathlib import Path
 
 from ..errors import InvalidParameterError
-from .common import gamma_value, kappa_value, positive_int
+from .common import (
+    FIGURE_SUFFIXES,
+    gamma_value,
+    kappa_value,
+    nonnegative_int,
+    positive_float,
+    positive_int,
+    files_summary,
+    report_written,
+)
+from .costs import add_work_option, check_run, thermal_samples_cost
+from .executors import executor_from
+from .guard import check_outputs
+
+#: What ``--out DIR`` holds besides the finished batches (batch_*.npz).
+OUT_FILES = ("ensemble.json", "samples.npz", "summary.json")
 
 
 def _temperature(text: str) -> float:
@@ -32,52 +48,27 @@ def add_parser(subparsers):
     p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]; 'inf' = hard core")
     p.add_argument("--temperature", type=str, required=True, metavar="R", help="T_B / E_tr >= 0")
     p.add_argument("--samples", type=positive_int, required=True, help="number of collisions")
-    p.add_argument("--seed", type=int, required=True, help="root seed (>= 0)")
-    p.add_argument("--bath-modes", type=int, default=250, help="modes per rod nu_max (default 250)")
+    p.add_argument("--seed", type=nonnegative_int, required=True, help="root seed (>= 0)")
+    p.add_argument("--bath-modes", type=positive_int, default=250, help="modes per rod nu_max (default 250)")
     p.add_argument("--solver", choices=("delay", "modal", "fem"), default="delay", help="solver of each collision")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=positive_int, default=1, help="local worker processes (default 1)")
     where.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler (default: none, local processes)")
     p.add_argument("--batch-size", type=positive_int, default=256, help="samples per task (default 256)")
-    p.add_argument("--rtol", type=float, help="delay solver tolerance (default 1e-3 in ensembles: see docs/bath.md)")
+    p.add_argument("--rtol", type=positive_float, help="delay solver tolerance (default 1e-3 in ensembles: see docs/bath.md)")
     p.add_argument("--out", metavar="DIR", help="keep every finished batch here; a rerun resumes")
     p.add_argument("--overwrite", action="store_true",
                    help="replace another ensemble found in DIR (its description and batches) instead of refusing")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="draw p(eps^2) and D(eps^2) with confidence bands")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
 
-@contextmanager
-def executor_from(workers: int, scheduler):
-    """A process pool, a Dask client or nothing (one worker), closed afterwards."""
-    if scheduler:
-        try:
-            from distributed import Client
-        except ImportError:  # pragma: no cover
-            raise InvalidParameterError("--scheduler needs dask.distributed installed") from None
-        try:
-            client = Client(scheduler, timeout="3s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise InvalidParameterError(f"cannot reach the Dask scheduler at {scheduler!r}: {reason}") from None
-        try:
-            yield client
-        finally:
-            client.close()
-    elif workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            yield pool
-    else:
-        yield None
-
-
 def run(args) -> int:
-    from ..studies.ensemble import ensemble
+    from ..studies.ensemble import EnsembleSpec, ensemble
 
     temperature = _temperature(args.temperature)
     options = {}
@@ -85,17 +76,28 @@ def run(args) -> int:
         if args.solver != "delay":
             raise InvalidParameterError(f"--rtol applies to --solver delay, not {args.solver}")
         options["rtol"] = args.rtol
+    EnsembleSpec(args.gamma, args.kappa, temperature, args.samples, args.seed, bath_modes=args.bath_modes,
+                 solver=args.solver, options=options, batch_size=args.batch_size)  # refuses before any work
+    check_outputs(files=[("--plot", args.plot, FIGURE_SUFFIXES)], directories=[("--out", args.out, OUT_FILES)])
+    check_run(args, f"ensemble: {args.samples} samples",
+              thermal_samples_cost(args.samples, args.kappa, args.bath_modes, args.solver, args.gamma, options),
+              "use fewer --samples or --bath-modes")
     with executor_from(args.workers, args.scheduler) as executor:
         result = ensemble(args.gamma, args.kappa, temperature, args.samples, args.seed, solver=args.solver,
                           bath_modes=args.bath_modes, executor=executor, batch_size=args.batch_size, out=args.out,
                           progress=args.progress and not args.json, overwrite=args.overwrite, **options)
     summary = result.summary()
+    written = []
     if args.out:
         result.save(args.out)
+        out = Path(args.out)
+        written += [out / name for name in OUT_FILES]
+        written.append(files_summary(out, "batch_*.npz"))
     if args.plot:
         from ..plotting.bath import plot_law
 
-        plot_law(result, args.plot)
+        written.append(plot_law(result, args.plot))
+    summary["files_written"] = report_written(written)
     if args.json:
         print(json.dumps(summary))
     else:

@@ -7,6 +7,8 @@ import math
 from pathlib import Path
 
 from .common import add_ring_options, gamma_value, kappa_value, number_type, positive_int, report_written
+from .costs import add_work_option, check_run, ring_cost
+from .guard import check_outputs
 
 ENTROPY_NAME = "entropy.csv"
 SUMMARY_NAME = "equipartition.json"
@@ -34,6 +36,7 @@ def add_parser(subparsers):
                    help="settled when eta <= THRESHOLD x its equipartition mean")
     add_ring_options(p)
     p.add_argument("--json", action="store_true", help="print the summary as JSON instead of a table")
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
@@ -44,8 +47,12 @@ def run(args) -> int:
     from ..studies.equipartition import equipartition_by_modes
 
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InvalidParameterError(f"--out {args.out!r} exists and is not a directory")
+    if min(args.modes) < 2:
+        raise InvalidParameterError(f"--modes: every N must be at least 2, got {min(args.modes)}")
+    check_outputs(directories=[("--out", args.out, (ENTROPY_NAME, SUMMARY_NAME, FIGURE_NAME))])
+    check_run(args, f"equipartition: {args.realisations} x {args.collisions} collisions at N = "
+              f"{', '.join(map(str, args.modes))}", ring_cost(args.kappa, args.modes, args.collisions, args.realisations),
+              "use fewer --collisions, --realisations or --modes")
     study = equipartition_by_modes(
         args.gamma, args.kappa, modes=args.modes, collisions=args.collisions, realisations=args.realisations,
         threshold=args.threshold, static_correction=args.static_correction, progress=args.progress,

@@ -9,7 +9,8 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
-from .common import nonnegative_int, positive_int
+from .common import nonnegative_int, positive_int, report_written
+from .guard import check_outputs
 
 CHECKPOINT_NAME = "gas_checkpoint.npz"
 FIGURE_NAME = "gas.png"
@@ -73,7 +74,7 @@ def add_parser(subparsers):
     p.add_argument("--damping", type=_positive("damping"), metavar="TAU",
                    help="relaxation time tau_diss of the baths (default: no dissipation)")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="root seed (default 0)")
-    p.add_argument("--lengths", type=_positive("lengths"), nargs=2, metavar=("SHORTEST", "LONGEST"),
+    p.add_argument("--lengths", type=_length, nargs=2, metavar=("SHORTEST", "LONGEST"),
                    default=(0.6, 1.0), help="rod lengths uniform in [SHORTEST, LONGEST] (default 0.6 1.0)")
     p.add_argument("--packing", type=_fraction("packing"), default=0.2,
                    help="total rod length over system length, in (0, 1) (default 0.2)")
@@ -92,6 +93,22 @@ def add_parser(subparsers):
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     p.set_defaults(run=run)
     return p
+
+
+def _length(text: str) -> float:
+    """``--lengths``: a magnitude in the range every physical input takes (:data:`wavecontact.errors.MAGNITUDE_RANGE`)."""
+    from ..errors import MAGNITUDE_RANGE
+
+    value = _positive("lengths")(text)
+    low, high = MAGNITUDE_RANGE
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"lengths must lie in [{low:g}, {high:g}] (any consistent units; times and "
+                                         f"energies computed from them leave the double range outside), got {text!r}")
+    return value
+
+
+#: What ``--out DIR`` holds.
+OUT_FILES = ("gas_history.npz", "gas_summary.json", CHECKPOINT_NAME, FIGURE_NAME)
 
 
 def _rule(args):
@@ -181,9 +198,13 @@ def run(args) -> int:
     from ..gas.simulation import run_gas
     from ..result import to_jsonable
 
+    from ..gas.simulation import MAX_COLLISIONS
+
     out = Path(args.out) if args.out else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise InvalidParameterError(f"--out {args.out!r} exists and is not a directory")
+    if args.collisions > MAX_COLLISIONS:
+        raise InvalidParameterError(f"--collisions must be at most {MAX_COLLISIONS:.0e} per run, got {args.collisions}; "
+                                    "continue a run in pieces with --out DIR and --resume")
+    check_outputs(directories=[("--out", args.out, OUT_FILES)])
     rule = _rule(args)
     shortest, longest = args.lengths
     if longest < shortest:
@@ -221,6 +242,8 @@ def run(args) -> int:
                "includes_kernel_preparation": prepared_kernel_count() > prepared,
                # of the wall time, the seconds numba spent compiling (0 when the kernels came from its cache)
                "kernel_compile_s": compiling[0]}
+    written = [] if out is None else [out / name for name in OUT_FILES if (out / name).is_file()]
+    summary["files_written"] = report_written(written)
     if result.status not in ("completed",):
         print(f"wavecontact gas: {result.message}", file=sys.stderr)
     if args.json:

@@ -2,12 +2,23 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from pathlib import Path
 
-from .common import gamma_value, kappa_value, nonnegative_int, positive_float, positive_int
+from .common import (
+    FIGURE_SUFFIXES,
+    files_summary,
+    gamma_value,
+    kappa_value,
+    nonnegative_int,
+    positive_float,
+    positive_int,
+    report_written,
+)
+from .costs import add_work_option, check_run, thermal_samples_cost
+from .executors import executor_from
+from .guard import check_outputs, refuse_unused
 
 
 def add_parser(subparsers):
@@ -35,7 +46,7 @@ def add_parser(subparsers):
                    help="E_tr(0)/T_B^0 (default 1.0; with --bath conserved at most 2 N_mod + 1)")
     p.add_argument("--bath-modes", type=positive_int, default=250,
                    help="excited modes per rod nu_max in each solved collision (default 250)")
-    p.add_argument("--solver", choices=("delay", "modal", "fem"), default="delay",
+    p.add_argument("--solver", choices=("delay", "modal", "fem"), default=None,
                    help="solver of each collision for --rule solve (default delay)")
     p.add_argument("--burn-in", type=nonnegative_int, default=None,
                    help="steps discarded before the stationary statistics (default: from the relaxation)")
@@ -49,62 +60,58 @@ def add_parser(subparsers):
     p.add_argument("--overwrite", action="store_true",
                    help="replace another Markov run found in DIR instead of refusing")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
 
-def _executor(args):
-    if args.scheduler and args.workers:
-        raise argparse.ArgumentTypeError("give either --workers or --scheduler, not both")
-    if args.scheduler:
-        from distributed import Client
-
-        return Client(args.scheduler)
-    if args.workers:
-        import concurrent.futures
-
-        return concurrent.futures.ProcessPoolExecutor(args.workers)
-    return None
-
-
 def run(args) -> int:
     from ..errors import InvalidParameterError
-    from ..io.files import check_output_directory, check_output_file
-    from ..studies.markov import markov_chains
+    from ..studies.markov import MarkovSpec, markov_chains
 
-    if args.plot:
-        check_output_file("--plot", args.plot, (".png", ".pdf", ".svg"))
-        if not Path(args.plot).resolve().parent.is_dir():
-            raise InvalidParameterError(f"--plot: the directory of {args.plot!r} does not exist")
-    if args.out:
-        check_output_directory("--out", args.out)
     if args.burn_in is not None and args.burn_in > args.steps - 2:
         raise InvalidParameterError(f"--burn-in must be at most steps - 2 = {args.steps - 2}, got {args.burn_in}")
     if args.rule != "table" and args.table:
         raise InvalidParameterError("--table is used only with --rule table")
     if args.steps < 4:
         raise InvalidParameterError(f"--steps must be at least 4 for the statistics, got {args.steps}")
-    executor = _executor(args)
-    try:
+    if args.scheduler and args.workers:
+        raise InvalidParameterError("give either --workers or --scheduler, not both")
+    if args.rule != "solve":
+        refuse_unused({"--solver": args.solver, "--kappa": None if math.isinf(args.kappa) else args.kappa,
+                       "--bath-modes": None if args.bath_modes == 250 else args.bath_modes},
+                      f"with --rule {args.rule} (they set the solved collisions of --rule solve)")
+    solver = args.solver or "delay"
+    MarkovSpec(args.gamma, args.kappa, args.rule, args.chains, args.steps, args.seed, args.bath, args.modes_per_rod,
+               args.initial_energy, args.bath_modes, solver, {}, args.table)  # refuses before any work
+    out = Path(args.out) if args.out else None
+    check_outputs(files=[("--plot", args.plot, FIGURE_SUFFIXES)],
+                  directories=[("--out", args.out, ("markov.npz", "summary.json", "markov.json"))])
+    if args.rule == "solve":
+        check_run(args, f"markov: {args.chains} x {args.steps} solved collisions",
+                  thermal_samples_cost(args.chains * args.steps, args.kappa, args.bath_modes, solver, args.gamma),
+                  "use fewer --chains, --steps or --bath-modes, or --rule table")
+    with executor_from(args.workers, args.scheduler) as executor:
         result = markov_chains(
             args.gamma, kappa=args.kappa, rule=args.rule, chains=args.chains, steps=args.steps, seed=args.seed,
             bath=args.bath, modes_per_rod=args.modes_per_rod, initial_energy=args.initial_energy,
-            bath_modes=args.bath_modes, solver=args.solver, table=args.table, executor=executor,
+            bath_modes=args.bath_modes, solver=solver, table=args.table, executor=executor,
             progress=None if args.progress else False, out=args.out, overwrite=args.overwrite,
         )
-    finally:
-        if executor is not None:
-            (executor.close if hasattr(executor, "close") else executor.shutdown)()
     summary = result.summary(args.burn_in)
-    if args.out:
+    written = []
+    if out is not None:
         from ..io.run_controller import write_summary
 
-        result.save(args.out)
-        write_summary(Path(args.out) / "summary.json", summary)
+        written.append(result.save(out))
+        write_summary(out / "summary.json", summary)
+        written += [out / "summary.json", out / "markov.json", files_summary(out, "chains_*.npz")]
     if args.plot:
         from ..plotting.markov import plot_stationary_distribution
 
         plot_stationary_distribution(result, args.plot, args.burn_in)
+        written.append(args.plot)
+    summary["files_written"] = report_written(written)
     if args.json:
         print(json.dumps(summary))
         return 0

@@ -6,7 +6,9 @@ import shlex
 import sys
 from pathlib import Path
 
-from .common import nonnegative_int
+from .common import nonnegative_int, report_written
+from .executors import executor_from
+from .guard import check_outputs
 
 
 def _figure_number(text: str) -> int:
@@ -65,13 +67,12 @@ def command_line(args) -> str:
 
 
 def run(args) -> int:
-    from ..io.files import check_output_directory, check_output_file
     from ..studies.paper_figures import run_figures, write_page
-    from .ensemble import executor_from
 
-    out = check_output_directory("--out", args.out)
+    out = Path(args.out)
     page = Path(args.page) if args.page else out / "paper_figures.md"
-    check_output_file("--page", page, (".md",))
+    check_outputs(files=[("--page", args.page, (".md",))],
+                  directories=[("--out", args.out, () if args.page else ("paper_figures.md",))])
     out.mkdir(parents=True, exist_ok=True)
     page.parent.mkdir(parents=True, exist_ok=True)
     log = _log if args.progress else None
@@ -92,5 +93,5 @@ def run(args) -> int:
     for r in reports:
         for c in r.claims:
             print(f"| {r.number} | {c.verdict} | {c.measured} |")
-    print(f"wrote {page} and {sum(len(r.images) for r in reports)} figures into {out}")
+    report_written([page, *(image for r in reports for image in r.images)])
     return 0

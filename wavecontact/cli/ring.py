@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 
 from .common import add_ring_options, gamma_value, kappa_value, nonnegative_int, positive_int, report_written
+from .costs import add_work_option, check_run, ring_cost
+from .guard import check_outputs
 
 SUMMARY_NAME = "summary.json"
 SPECTRUM_NAME = "modal_spectrum.csv"
@@ -37,6 +39,7 @@ def add_parser(subparsers):
                    help="collisions discarded before stationary averages (default: chosen from the relaxation)")
     p.add_argument("--max-lag", type=positive_int, default=20, help="largest lag k of C_eps(k)")
     p.add_argument("--json", action="store_true", help="print the summary (summary.json) as one JSON object")
+    add_work_option(p)
     p.set_defaults(run=run)
     return p
 
@@ -57,21 +60,30 @@ def _format(value, spec=".4g") -> str:
     return "n/a" if value is None or (isinstance(value, float) and math.isnan(value)) else format(value, spec)
 
 
+def output_names() -> tuple:
+    """Every file ``ring`` writes into ``--out``."""
+    from ..plotting.ring import FIGURE_NAMES
+    from ..studies.ring import CHECKPOINT_NAME, DATA_CSV_NAME, DATA_NPZ_NAME
+
+    return (CHECKPOINT_NAME, DATA_NPZ_NAME, DATA_CSV_NAME, SUMMARY_NAME, SPECTRUM_NAME, *FIGURE_NAMES.values())
+
+
 def run(args) -> int:
     from ..errors import InvalidParameterError
     from ..io.run_controller import write_summary
     from ..plotting.ring import plot_ring_figures
-    from ..studies.ring import run_ring
+    from ..studies.ring import CHECKPOINT_NAME, run_ring
 
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InvalidParameterError(f"--out {args.out!r} exists and is not a directory")
     if args.collisions < 4:
         raise InvalidParameterError(f"--collisions must be at least 4 for the statistics, got {args.collisions}")
     if args.transient is not None and args.transient > args.collisions - 3:
         raise InvalidParameterError(
             f"--transient must be at most collisions - 3 = {args.collisions - 3}, got {args.transient}"
         )
+    check_outputs(directories=[("--out", args.out, output_names())])
+    check_run(args, f"ring: {args.collisions} collisions at N = {args.modes}", ring_cost(args.kappa, [args.modes], args.collisions),
+              "use fewer --collisions or --modes")
     ring_run = run_ring(
         args.gamma,
         args.kappa,
@@ -97,8 +109,8 @@ def run(args) -> int:
     write_summary(out / SUMMARY_NAME, summary)
     _write_spectrum(out / SPECTRUM_NAME, stats.mean_relative_spectrum)
     figures = plot_ring_figures(ring_run, out, stats)
-    files = report_written([out / "ring.npz", out / "ring.csv", out / SUMMARY_NAME, out / SPECTRUM_NAME,
-                            *figures])
+    files = report_written([out / CHECKPOINT_NAME, out / "ring.npz", out / "ring.csv", out / SUMMARY_NAME,
+                            out / SPECTRUM_NAME, *figures])
     if args.json:
         print(json.dumps({**summary, "files_written": files}))
         return 0

@@ -223,9 +223,10 @@ class StopRequest:
 
     SIGNALS = ("SIGINT", "SIGTERM")
 
-    def __init__(self):
+    def __init__(self, active: bool = True):
         self.signal_name = None
         self._previous = {}
+        self._active = active  # False: nothing to keep, so a signal ends the run at once as usual
 
     @property
     def requested(self) -> bool:
@@ -239,7 +240,7 @@ class StopRequest:
               "to stop at once)", file=sys.stderr, flush=True)
 
     def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
+        if self._active and threading.current_thread() is threading.main_thread():
             for name in self.SIGNALS:
                 number = getattr(signal, name)
                 self._previous[number] = signal.signal(number, self._handle)
@@ -307,7 +308,8 @@ class RunController:
         self._description = description
         self._progress = progress
         self._lock = None if out_dir is None else OutputLock(out_dir, option)
-        self._stop = StopRequest()
+        # a run with nothing to keep (no checkpoint, no output folder) is not worth a second Ctrl-C
+        self._stop = StopRequest(active=save is not None or out_dir is not None)
         self._bar = None
         self._last_save_time = None
         self._started = None

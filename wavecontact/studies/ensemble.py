@@ -565,6 +565,10 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
                                         "(kappa = inf) only; finite kappa takes rtol")
         if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0.0 < tolerance < math.inf:
             raise InvalidParameterError(f"tolerance must be a number in (0, inf), got {tolerance!r}")
+    if out is not None:
+        from ..io.files import check_output_directory
+
+        check_output_directory("out", out)  # a file there is refused by name, not a FileExistsError
     fields = asdict(spec)
     store = None if out is None else _store(out, spec)
     pool = _executor_for(executor)

@@ -149,8 +149,9 @@ class MarkovSpec:
             raise InvalidParameterError(f"rule must be one of {', '.join(RULES)}, got {self.rule!r}")
         if self.bath not in BATHS:
             raise InvalidParameterError(f"bath must be one of {', '.join(BATHS)}, got {self.bath!r}")
-        chains = _integer("chains", self.chains, 1, MAX_STATES)
-        steps = _integer("steps", self.steps, 1, MAX_STATES)
+        # the largest values the product bound below allows (one chain of MAX_STATES - 1 steps; chains of 1 step)
+        chains = _integer("chains", self.chains, 1, MAX_STATES // 2)
+        steps = _integer("steps", self.steps, 1, MAX_STATES - 1)
         if chains * (steps + 1) > MAX_STATES:
             raise InvalidParameterError(
                 f"chains x (steps + 1) must be at most {MAX_STATES}, got {chains} x {steps + 1}; split the run"

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..analytic import equilibrium_translational_energy
 from ..errors import CheckpointError, InvalidParameterError, require_positive
+from ..limits import Limits, check_study_cost, ring_cost
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
 from ..io.run_controller import RunController
@@ -191,16 +192,18 @@ class RingRun:
                     "resumed_from": int(data["resumed_from"]),
                 }
                 metadata = json.loads(str(data["metadata_json"]))
+        except FileNotFoundError:
+            raise CheckpointError(f"{path}: no such file") from None
         except (OSError, ValueError, EOFError, KeyError, TypeError, zipfile.BadZipFile) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise InvalidParameterError(f"{path} is not a ring run written by RingRun.save_npz ({reason})") from None
+            raise CheckpointError(f"{path} is not a ring run written by RingRun.save_npz ({reason})") from None
         try:
             _validate(scalars["gamma"], scalars["kappa"], scalars["modes"], 1, 1)
             check_rows(arrays, scalars["modes"])
             if not isinstance(metadata, dict):
                 raise InvalidParameterError("metadata_json is not a JSON object")
         except InvalidParameterError as exc:
-            raise InvalidParameterError(f"{path} is not a valid ring run: {exc}") from None
+            raise CheckpointError(f"{path} is not a valid ring run: {exc}") from None
         return cls(**scalars, **arrays, metadata=metadata)
 
     def save_csv(self, path) -> Path:
@@ -442,6 +445,9 @@ def run_ring(
     (:class:`~wavecontact.io.run_controller.RunController`); a retry of the same call resumes there.
     """
     g, k, n, m, every = _validate(gamma, kappa, modes, collisions, checkpoint_every)
+    # every collision's record is held in memory until the end: refuse before any work what cannot fit
+    check_study_cost(f"run_ring: {m} collisions at N = {n}", ring_cost(k, [n], m), Limits(max_work=float("inf")),
+                     "use fewer collisions or modes")
     options = {**(solver_options or {}), "modes": n, "static_correction": bool(static_correction)}
     engine = get_solver(solver)
     options = engine.options(options)
