@@ -50,8 +50,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from .._jit import announce_compilation
+
     try:
-        return int(args.run(args) or 0)
+        with announce_compilation():  # a first run on an empty numba cache says why it is silent
+            return int(args.run(args) or 0)
     except (WavecontactError, ValueError, OSError) as exc:
         print(f"wavecontact: error: {exc}", file=sys.stderr)
         return 2
