@@ -61,15 +61,35 @@ COMMANDS = (
     ("map", "map --kappa inf 100 --out map/ --workers 1 --no-progress", "--workers 1"),
 )
 
+# the child: its own listener (not wavecontact._jit.CompileClock) so that it measures any checkout
 _CHILD = """
 import json, sys, time
 started = time.perf_counter()
-from wavecontact._jit import CompileClock
+from numba.core import event
+
+
+class Clock(event.Listener):
+    depth, wall, cpu, count = 0, 0.0, 0.0, 0
+
+    def on_start(self, ev):
+        self.depth += 1
+        if self.depth == 1:
+            self.count += 1
+            self.started = (time.perf_counter(), time.process_time())
+
+    def on_end(self, ev):
+        self.depth -= 1
+        if self.depth == 0:
+            self.wall += time.perf_counter() - self.started[0]
+            self.cpu += time.process_time() - self.started[1]
+
+
+clock = Clock()
+event.register("numba:compile", clock)
 from wavecontact.cli import main
-with CompileClock() as clock:
-    status = main(sys.argv[2:])
-record = {"status": status, "compile_wall_s": clock.wall_s, "compile_cpu_s": clock.cpu_s,
-          "compilations": clock.compilations, "wall_s": time.perf_counter() - started}
+status = main(sys.argv[2:])
+record = {"status": status, "compile_wall_s": clock.wall, "compile_cpu_s": clock.cpu,
+          "compilations": clock.count, "wall_s": time.perf_counter() - started}
 with open(sys.argv[1], "w") as out:
     json.dump(record, out)
 """
@@ -105,8 +125,8 @@ def seconds(value: float) -> str:
     return f"{value:#.3g}".rstrip(".")
 
 
-def measure(names=None) -> list:
-    """Print the table (markdown) of the chosen commands (default: all) and return their records."""
+def measure(names=None, root: Path = ROOT) -> list:
+    """Print the table (markdown) of the chosen commands (default: all) of the package in ``root``."""
     print("| command (`wavecontact ...`) | compile wall (s) | compile CPU (s) | whole run wall (s) | whole run CPU (s) "
           "| load | size changed |")
     print("|---|---|---|---|---|---|---|")
@@ -114,7 +134,7 @@ def measure(names=None) -> list:
     for name, command, size in COMMANDS:
         if names and name not in names:
             continue
-        record = first_run(command)
+        record = first_run(command, root)
         records.append((name, record))
         shown = " ".join(word for word in command.split() if word != "--no-progress")
         print(f"| `{shown}` | {seconds(record['compile_wall_s'])} | {seconds(record['compile_cpu_s'])} | "
@@ -145,10 +165,12 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", choices=[name for name, _c, _s in COMMANDS], metavar="NAME",
                         help="run only these commands (names: " + ", ".join(name for name, _c, _s in COMMANDS) + ")")
+    parser.add_argument("--tree", type=Path, default=ROOT,
+                        help="the checkout whose package is measured (default: this one), e.g. an older commit's")
     parser.add_argument("--update-docs", action="store_true",
                         help="write the table into docs/performance.md (block compile-times)")
     args = parser.parse_args(argv)
-    run_and_write(lambda: measure(args.only), "performance.md", "compile-times", args.update_docs, argv=None)
+    run_and_write(lambda: measure(args.only, args.tree.resolve()), "performance.md", "compile-times", args.update_docs, argv=None)
 
 
 if __name__ == "__main__":

@@ -571,14 +571,15 @@ def integrate_delay_equation(
     # int64 from the start: a literal 0 would be typed as the value 0 until the loop's increments widen
     # it, and numba compiles every kernel called with it for both types
     last = np.int64(0)
-    t_significant = math.inf
-    g_now, gp_now, _gpp = _exponent(
-        0.0, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-        tables, table_slopes, True, comb, direct_copies,
-    )
+    # g and g' at tau = 0 as _exponent gives them: no delayed copy is back yet, so its memory terms are
+    # exactly 0 (written out here rather than a third inlined copy of _exponent, seconds of compilation)
+    q_start, dq_start = noise_value(0.0, freq, cos_amp, sin_amp, periods, tables, table_slopes)
+    g_now = kappa * 0.0 - a0 - 0.0 + q_start
+    gp_now = kappa - 0.0 + dq_start
     d1[0] = math.exp(g_now)
     d2[0] = d1[0] * (gp_now - d1[0])
     h = min(h_max, 1.0 / scale)
+    t_significant = math.inf
     t_active = -math.inf
     error_sum = 0.0
     rejected = 0
