@@ -1,10 +1,10 @@
 """Time this checkout against an older commit, side by side, case by case:
 
-    python benchmarks/against.py REV [--repeats 5] [--only collide-100 ring] [--keep]
+    python benchmarks/against.py REV [--repeats 5] [--only collide-100 ring] [--keep DIR]
 
 REV (any git revision: a commit, a branch, ``HEAD``) is checked out into a temporary directory
-(``git archive``, deleted at the end unless ``--keep``; nothing is registered in the repository).  Every case is a small python
-snippet run in a fresh process against one of the two trees: the package of that tree on
+(``git archive``, deleted at the end unless ``--keep``; nothing is registered in the repository).
+Every case is a small python snippet run in a fresh process against one of the two trees: the package of that tree on
 ``sys.path``, its own numba cache (warm: each case runs once in each tree before the timed repeats,
 so compiling and loading kernels are not timed), the timed statement measured inside the process
 with ``time.process_time`` (CPU of the process, less disturbed by other jobs on a shared machine

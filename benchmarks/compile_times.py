@@ -158,7 +158,8 @@ def compile_section() -> str:
     header = run_header([str(Path(__file__).resolve())])
     with captured_stdout() as tee:
         measure()
-    return f"{SECTION}\n<!-- compile-times:start -->\n{header}\n\n{tee.copy.getvalue().strip()}\n<!-- compile-times:end -->"
+    table = tee.copy.getvalue().strip()
+    return f"{SECTION}\n<!-- compile-times:start -->\n{header}\n\n{table}\n<!-- compile-times:end -->"
 
 
 def main(argv=None):
@@ -170,7 +171,8 @@ def main(argv=None):
     parser.add_argument("--update-docs", action="store_true",
                         help="write the table into docs/performance.md (block compile-times)")
     args = parser.parse_args(argv)
-    run_and_write(lambda: measure(args.only, args.tree.resolve()), "performance.md", "compile-times", args.update_docs, argv=None)
+    run_and_write(lambda: measure(args.only, args.tree.resolve()), "performance.md", "compile-times",
+                  args.update_docs)
 
 
 if __name__ == "__main__":
