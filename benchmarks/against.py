@@ -52,9 +52,6 @@ CASES = {
                       "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='lumped')", 5),
     "fem-P2-consistent": ("from wavecontact import collide",
                           "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='consistent')", 5),
-    "ring-1000": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
-                  "main(['ring', '--gamma', '0.6173', '--kappa', '4000', '--modes', '75', '--collisions', '1000', "
-                  "'--out', out + '/ring'])", 1),
     "ensemble": ("import wavecontact", "wavecontact.ensemble(0.6173, 100.0, 1.0, samples=40, seed=1)", 1),
     "gas": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
             "main(['gas', '--rods', '100', '--collisions', '20000', '--rule', 'vibration', '--damping', '50', "
@@ -63,6 +60,9 @@ CASES = {
     "markov": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
                "main(['markov', '--gamma', '0.6', '--chains', '2', '--steps', '2000', '--seed', '1', '--workers', "
                "'1', '--out', out + '/markov', '--no-progress'])", 1),
+    "ring-1000": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
+                  "main(['ring', '--gamma', '0.6173', '--kappa', '4000', '--modes', '75', '--collisions', '1000', "
+                  "'--out', out + '/ring'])", 1),
 }
 
 # runs in the child: argv = tree, setup, statement, repetitions; prints one JSON line
@@ -103,8 +103,9 @@ def run_case(tree: Path, name: str, timeout: float = 900.0) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def compare(old: Path, new: Path, names, repeats: int) -> list:
-    """Warm-up run per tree and case, then ``repeats`` alternating timed runs; one summary dict per case."""
+def compare(old: Path, new: Path, names, repeats: int, report=None) -> list:
+    """Warm-up run per tree and case, then ``repeats`` alternating timed runs; one summary dict per case
+    (``report(row)``, if given, is called as soon as a case is done)."""
     rows = []
     for name in names:
         first = {"old": run_case(old, name), "new": run_case(new, name)}
@@ -112,6 +113,8 @@ def compare(old: Path, new: Path, names, repeats: int) -> list:
         if unavailable:
             rows.append({"case": name, "unavailable": "old" if first["old"].get("unavailable") else "new",
                          "why": unavailable})
+            if report:
+                report(rows[-1])
             continue
         times = {"old": [], "new": []}
         ratios = []
@@ -126,19 +129,22 @@ def compare(old: Path, new: Path, names, repeats: int) -> list:
         spread = (max(ratios) - min(ratios)) / 2.0
         rows.append({"case": name, "old_s": statistics.median(times["old"]), "new_s": statistics.median(times["new"]),
                      "ratio": ratio, "spread": spread, "slower": ratio - spread > 1.10})
+        if report:
+            report(rows[-1])
     return rows
 
 
-def print_table(rows, rev: str) -> None:
-    print(f"| case | CPU at {rev} | CPU now | ratio now/{rev} (median) | spread | flag |")
-    print("|---|---|---|---|---|---|")
-    for row in rows:
-        if "unavailable" in row:
-            where = f"n/a at {rev}" if row["unavailable"] == "old" else "n/a now"
-            print(f"| {row['case']} | | | | | {where} |")
-            continue
-        print(f"| {row['case']} | {_time(row['old_s'])} | {_time(row['new_s'])} | {row['ratio']:.3f} | "
-              f"{row['spread']:.3f} | {'SLOWER' if row['slower'] else ''} |")
+def table_header(rev: str) -> str:
+    return (f"| case | CPU at {rev} | CPU now | ratio now/{rev} (median) | spread | flag |\n"
+            "|---|---|---|---|---|---|")
+
+
+def table_row(row, rev: str) -> str:
+    if "unavailable" in row:
+        where = f"n/a at {rev}" if row["unavailable"] == "old" else "n/a now"
+        return f"| {row['case']} | | | | | {where} |"
+    return (f"| {row['case']} | {_time(row['old_s'])} | {_time(row['new_s'])} | {row['ratio']:.3f} | "
+            f"{row['spread']:.3f} | {'SLOWER' if row['slower'] else ''} |")
 
 
 def _time(seconds: float) -> str:
@@ -180,11 +186,13 @@ def main(argv=None) -> int:
             old = Path(args.keep).resolve()
         else:
             old = export(args.rev, Path(args.keep).resolve() if args.keep else Path(tmp) / "old")
-        rows = compare(old, ROOT, names, args.repeats)
-    print(f"`python benchmarks/against.py {args.rev} --repeats {args.repeats}`: load average "
-          f"{load[0]:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, {os.cpu_count()} cores; CPU time "
-          "per statement, median over repeats.\n")
-    print_table(rows, args.rev)
+        print(f"`python benchmarks/against.py {args.rev} --repeats {args.repeats}`: load average {load[0]:.1f} at "
+              f"the start, {os.cpu_count()} cores; CPU time per statement, median over repeats.\n")
+        print(table_header(args.rev), flush=True)
+        rows = compare(old, ROOT, names, args.repeats, lambda row: print(table_row(row, args.rev), flush=True))
+    print(f"\nload average {os.getloadavg()[0]:.1f} at the end.")
+    if any("unavailable" in row for row in rows):
+        print("n/a: " + "; ".join(f"{row['case']}: {row['why']}" for row in rows if "unavailable" in row))
     if args.json:
         print(json.dumps(rows))
     return 1 if any(row.get("slower") for row in rows) else 0
