@@ -146,8 +146,11 @@ def measure(names=None, root: Path = ROOT) -> list:
 SECTION = """## Compile time of a first run
 
 numba compiles the kernels a command needs the first time it runs and caches them on disk; later
-runs load them (a few hundred ms).  The first run of each README command on an empty cache
-(`python benchmarks/compile_times.py`; the table is its output, `--update-docs` rewrites it alone):
+runs load them (a few hundred ms on a quiet machine).  The first run of each README command on an
+empty cache (`python benchmarks/compile_times.py`; the table is its output, `--update-docs` rewrites
+it alone, `--tree DIR` measures another checkout, e.g. an older commit, for a before/after).  The
+CPU columns are the ones to compare between runs: on a loaded machine the wall times grow with the
+load (column `load`), the CPU times much less.
 """
 
 
