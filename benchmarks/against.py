@@ -53,16 +53,17 @@ CASES = {
     "fem-P2-consistent": ("from wavecontact import collide",
                           "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='consistent')", 5),
     "ensemble": ("import wavecontact", "wavecontact.ensemble(0.6173, 100.0, 1.0, samples=40, seed=1)", 1),
-    "gas": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
+    "gas": ("import tempfile\nfrom wavecontact.cli import main",
             "main(['gas', '--rods', '100', '--collisions', '20000', '--rule', 'vibration', '--damping', '50', "
-            "'--out', out + '/gas', '--no-progress'])", 1),
+            "'--out', tempfile.mkdtemp() + '/gas', '--no-progress'])", 1),
     "scene": ("from wavecontact import two_rods", "two_rods(0.6, 100.0)", 2000),  # no kernel: the test's case
-    "markov": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
+    "markov": ("import tempfile\nfrom wavecontact.cli import main",
                "main(['markov', '--gamma', '0.6', '--chains', '2', '--steps', '2000', '--seed', '1', '--workers', "
-               "'1', '--out', out + '/markov', '--no-progress'])", 1),
-    "ring-1000": ("import tempfile\nfrom wavecontact.cli import main\nout = tempfile.mkdtemp()",
+               "'1', '--out', tempfile.mkdtemp() + '/markov', '--no-progress'])", 1),
+    # a new --out directory on every run: the ring resumes from a checkpoint it finds there
+    "ring-1000": ("import tempfile\nfrom wavecontact.cli import main",
                   "main(['ring', '--gamma', '0.6173', '--kappa', '4000', '--modes', '75', '--collisions', '1000', "
-                  "'--out', out + '/ring'])", 1),
+                  "'--out', tempfile.mkdtemp() + '/ring'])", 1),
 }
 
 # runs in the child: argv = tree, setup, statement, repetitions; prints one JSON line
