@@ -35,6 +35,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE / "peers"))
 sys.path.insert(0, str(ROOT))  # this checkout's package, not whichever one is installed
 
+from compile_times import compile_section
 from discretization_table import HEADING, discretization_block, runs_from_tables
 
 import wavecontact
@@ -445,7 +446,14 @@ def main(argv=None):
                         help="re-measure only the last section (how the cost grows) and its figure")
     parser.add_argument("--pareto-figures-only", action="store_true",
                         help="redraw the error-against-time figures from figures/performance_data.json, no runs")
+    parser.add_argument("--compile-times-only", action="store_true",
+                        help="re-measure only the compile-time table (benchmarks/compile_times.py --update-docs)")
     args = parser.parse_args(argv)
+    if args.compile_times_only:
+        from compile_times import main as compile_times_main
+
+        compile_times_main(["--update-docs"])
+        return
     repeats = args.repeats or (1 if args.quick else 3)
     out_dir = Path(args.out)
     figure_dir = out_dir / "figures"
@@ -504,6 +512,8 @@ def main(argv=None):
         section_pareto(tables, figure_dir),
         "",
         section_peers(repeats, args.quick),
+        "",
+        compile_section(),
         "",
         section_growth(repeats, args.quick, figure_dir),
         "",

@@ -14,12 +14,17 @@ sources changed (:func:`refresh_kernel_cache`).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
+import sys
+import threading
+import time
 from itertools import chain
 from pathlib import Path
 
-__all__ = ["NUMBA_ENABLED", "kernel", "kernel_digest", "prepared_kernel_count", "refresh_kernel_cache", "row_view"]
+__all__ = ["NUMBA_ENABLED", "CompileClock", "announce_compilation", "kernel", "kernel_digest", "prepared_kernel_count",
+           "refresh_kernel_cache", "row_view"]
 
 _STAMP_NAME = "wavecontact-sources.sha1"
 
@@ -134,6 +139,97 @@ def kernel(function=None, **options):
     if function is not None:
         return wrap(function)
     return wrap
+
+
+if NUMBA_ENABLED:
+    from numba.core.event import Listener as _Listener
+else:  # pragma: no cover
+    _Listener = object
+
+COMPILE_NOTICE = "wavecontact: compiling numba kernels (first run only; cached afterwards)..."
+
+
+class CompileClock(_Listener):
+    """Wall and CPU time numba spends compiling (not loading from its cache) while it is installed.
+
+    Counts each outermost compilation once (the kernels it compiles on the way are inside it).
+    ``on_threshold``, if given, is called once, from a timer thread, as soon as the compilations
+    together have lasted ``threshold`` seconds (while the one that crosses it still runs).
+    Use as a context manager; without numba it measures nothing.
+    """
+
+    def __init__(self, threshold: float = float("inf"), on_threshold=None):
+        self.wall_s = 0.0
+        self.cpu_s = 0.0
+        self.compilations = 0
+        self._threshold = threshold
+        self._on_threshold = on_threshold
+        self._fired = False
+        self._depth = 0
+        self._started = (0.0, 0.0)
+        self._timer = None
+        self._lock = threading.Lock()
+
+    def on_start(self, event):
+        self._depth += 1
+        if self._depth > 1:
+            return
+        self._started = (time.perf_counter(), time.process_time())
+        self.compilations += 1
+        if self._on_threshold is not None and not self._fired:
+            self._timer = threading.Timer(max(self._threshold - self.wall_s, 0.0), self._fire)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def on_end(self, event):
+        self._depth -= 1
+        if self._depth > 0:
+            return
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self.wall_s += time.perf_counter() - self._started[0]
+        self.cpu_s += time.process_time() - self._started[1]
+        if self._on_threshold is not None and self.wall_s >= self._threshold:
+            self._fire()  # crossed while the timer thread had no turn: say it now
+
+    def _fire(self):
+        with self._lock:
+            if self._fired:
+                return
+            self._fired = True
+        self._on_threshold()
+
+    def __enter__(self):
+        if NUMBA_ENABLED:
+            from numba.core import event
+
+            event.register("numba:compile", self)
+        return self
+
+    def __exit__(self, *exc):
+        if NUMBA_ENABLED:
+            from numba.core import event
+
+            event.unregister("numba:compile", self)
+        if self._timer is not None:
+            self._timer.cancel()
+        return False
+
+
+@contextlib.contextmanager
+def announce_compilation(stream=None, after: float = 1.0, message: str = COMPILE_NOTICE):
+    """Say once on ``stream`` (default stderr) when numba has been compiling for ``after`` seconds.
+
+    A first run on an empty cache compiles for seconds before it prints anything; this tells the
+    user why.  Loading kernels from numba's cache is not compiling and is not announced.
+    """
+
+    def say():
+        print(message, file=stream if stream is not None else sys.stderr, flush=True)
+
+    with CompileClock(after, say) as clock:
+        yield clock
 
 
 def _row_view_compiled():

@@ -90,10 +90,13 @@ def main(argv=None) -> int:
     """
     from concurrent.futures.process import BrokenProcessPool
 
+    from .._jit import announce_compilation
+
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
-        return int(args.run(args) or 0)
+        with announce_compilation():  # a first run on an empty numba cache says why it is silent
+            return int(args.run(args) or 0)
     except KeyboardInterrupt:
         return _stopped()
     except MemoryError:

@@ -24,6 +24,13 @@ from .guard import check_outputs
 PLOT_SUFFIXES = FIGURE_SUFFIXES
 
 
+def duration_text(seconds: float) -> str:
+    """``seconds`` in ms below a second, else in s, with 3 significant digits (``'3.11 ms'``, ``'58.6 s'``)."""
+    if seconds < 0.9995:
+        return f"{1e3 * seconds:#.3g}".rstrip(".") + " ms"
+    if seconds < 999.5:
+        return f"{seconds:#.3g}".rstrip(".") + " s"
+    return f"{seconds:.0f} s"
 
 
 def add_parser(subparsers):
@@ -161,9 +168,9 @@ def run(args) -> int:
             f"contact = {contact}, solver = {result.solver}")
     if result.error_estimate is not None:
         line += f", error estimate {result.error_estimate:.1e}"
-    line += f"; solve {1e3 * result.wall_time_s:.3g} ms"
+    line += f"; solve {duration_text(result.wall_time_s)}"
     if preparation is not None:
-        line += f", numba kernel preparation {1e3 * preparation:.3g} ms (once per process)"
+        line += f", numba kernel preparation {duration_text(preparation)} (once per process)"
     elif result.diagnostics.get("includes_kernel_preparation"):
         line += " including numba's kernel preparation (--no-warmup)"
     print(line + ")")

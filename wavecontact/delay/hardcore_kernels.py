@@ -62,7 +62,8 @@ def _grow(array, size):
     if size < array.shape[0]:
         return array
     bigger = np.empty(2 * array.shape[0])
-    bigger[: array.shape[0]] = array
+    for j in range(array.shape[0]):  # not a slice assignment: that compiles numba's shape-check message
+        bigger[j] = array[j]
     return bigger
 
 
@@ -191,7 +192,7 @@ def max_plus_history(delays, weights, tau_free, max_windows, merge, roundoff):
     kw = np.empty(64)
     kt[0] = tau_free
     kw[0] = 0.0
-    n = 1
+    n = np.int64(1)  # not the literal 1: every kernel called with n would compile for both types
     window = delays.min()
     running = 0.0
     last_rise = tau_free

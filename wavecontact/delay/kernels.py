@@ -568,13 +568,16 @@ def integrate_delay_equation(
 
     t[0] = 0.0
     w[0] = 0.0
-    g_now, gp_now, _gpp = _exponent(
-        0.0, kappa, a0, t, w, d1, d2, 0, delays, weights, math.inf, freq, cos_amp, sin_amp, periods, tables,
-        table_slopes, True, comb, direct_copies,
-    )
+    # int64 from the start: a literal 0 would be typed as the value 0 until the loop's increments widen
+    # it, and numba compiles every kernel called with it for both types
+    last = np.int64(0)
+    # g and g' at tau = 0 as _exponent gives them: no delayed copy is back yet, so its memory terms are
+    # exactly 0 (written out here rather than a third inlined copy of _exponent, seconds of compilation)
+    q_start, dq_start = noise_value(0.0, freq, cos_amp, sin_amp, periods, tables, table_slopes)
+    g_now = kappa * 0.0 - a0 - 0.0 + q_start
+    gp_now = kappa - 0.0 + dq_start
     d1[0] = math.exp(g_now)
     d2[0] = d1[0] * (gp_now - d1[0])
-    last = 0
     h = min(h_max, 1.0 / scale)
     t_significant = math.inf
     t_active = -math.inf
@@ -727,13 +730,17 @@ def integrate_delay_equation(
             w_new = np.empty(capacity)
             d1_new = np.empty(capacity)
             d2_new = np.empty(capacity)
-            t_new[: last + 1] = t[: last + 1]
-            w_new[: last + 1] = w[: last + 1]
-            d1_new[: last + 1] = d1[: last + 1]
-            d2_new[: last + 1] = d2[: last + 1]
-            t, w, d1, d2 = t_new, w_new, d1_new, d2_new
             comb_new = np.zeros((comb.shape[0], capacity))
-            comb_new[:, : last + 1] = comb[:, : last + 1]
+            # element by element: a slice assignment would compile numba's shape check and its error
+            # message (string formatting), seconds of compilation for a copy
+            for k in range(last + 1):
+                t_new[k] = t[k]
+                w_new[k] = w[k]
+                d1_new[k] = d1[k]
+                d2_new[k] = d2[k]
+                for row in range(comb.shape[0]):
+                    comb_new[row, k] = comb[row, k]
+            t, w, d1, d2 = t_new, w_new, d1_new, d2_new
             comb = comb_new
         if direct_copies > 0:
             for i in range(delays.shape[0]):

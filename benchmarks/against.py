@@ -1,0 +1,203 @@
+"""Time this checkout against an older commit, side by side, case by case:
+
+    python benchmarks/against.py REV [--repeats 5] [--only collide-100 ring] [--keep DIR]
+
+REV (any git revision: a commit, a branch, ``HEAD``) is checked out into a temporary directory
+(``git archive``, deleted at the end unless ``--keep``; nothing is registered in the repository).
+Every case is a small python snippet run in a fresh process against one of the two trees: the package of that tree on
+``sys.path``, its own numba cache (warm: each case runs once in each tree before the timed repeats,
+so compiling and loading kernels are not timed), the timed statement measured inside the process
+with ``time.process_time`` (CPU of the process, less disturbed by other jobs on a shared machine
+than wall time) and ``time.perf_counter`` (wall).  The repeats alternate the trees (old, new, new,
+old, ...) so a change of the machine's load hits both.
+
+For each case the table gives the median CPU time of each tree, the median over repeats of the
+per-repeat ratio new/old, and its spread (half the range of those ratios).  A case is flagged
+``SLOWER`` when the median ratio minus the spread exceeds 1.10: slower by more than 10 % beyond the
+noise between repeats.  A case the older tree cannot run (a module or option that did not exist
+yet) is listed as ``n/a at REV``.  The exit status is 1 if any case is flagged.
+
+The cases: the README commands' solves (delay at kappa = 100 and inf, FE, modal), the ring of Fig. 1
+at 1000 collisions, one FE run per discretization (P1/P2, lumped/consistent), an ensemble, a gas
+and a Markov chain, at sizes that keep the whole comparison to a few minutes.  Run from the
+repository root of the newer tree.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# name -> (setup, timed statement, repetitions of the statement per process); both run with the
+# tree's package first on sys.path.  Keep them to APIs that older commits also have where possible.
+CASES = {
+    "collide-100": ("from wavecontact import collide", "collide(0.6, 100.0)", 200),
+    "collide-inf": ("from wavecontact import collide", "collide(0.6, float('inf'))", 400),
+    "collide-fem": ("from wavecontact import collide",
+                    "collide(0.6, 100.0, solver='fem', elements=800)", 3),
+    "collide-modal": ("from wavecontact import collide", "collide(0.6, 100.0, solver='modal', modes=100)", 3),
+    "fem-P1-lumped": ("from wavecontact import collide",
+                      "collide(0.6, 20.0, solver='fem', elements=200, order=1, mass='lumped')", 5),
+    "fem-P1-consistent": ("from wavecontact import collide",
+                          "collide(0.6, 20.0, solver='fem', elements=200, order=1, mass='consistent')", 5),
+    "fem-P2-lumped": ("from wavecontact import collide",
+                      "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='lumped')", 5),
+    "fem-P2-consistent": ("from wavecontact import collide",
+                          "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='consistent')", 5),
+    "ensemble": ("import wavecontact", "wavecontact.ensemble(0.6173, 100.0, 1.0, samples=40, seed=1)", 1),
+    "gas": ("import tempfile\nfrom wavecontact.cli import main",
+            "main(['gas', '--rods', '100', '--collisions', '20000', '--rule', 'vibration', '--damping', '50', "
+            "'--out', tempfile.mkdtemp() + '/gas', '--no-progress'])", 1),
+    "scene": ("from wavecontact import two_rods", "two_rods(0.6, 100.0)", 2000),  # no kernel: the test's case
+    "markov": ("import tempfile\nfrom wavecontact.cli import main",
+               "main(['markov', '--gamma', '0.6', '--chains', '2', '--steps', '2000', '--seed', '1', '--workers', "
+               "'1', '--out', tempfile.mkdtemp() + '/markov', '--no-progress'])", 1),
+    # a new --out directory on every run: the ring resumes from a checkpoint it finds there
+    "ring-1000": ("import tempfile\nfrom wavecontact.cli import main",
+                  "main(['ring', '--gamma', '0.6173', '--kappa', '4000', '--modes', '75', '--collisions', '1000', "
+                  "'--out', tempfile.mkdtemp() + '/ring'])", 1),
+}
+
+# runs in the child: argv = tree, setup, statement, repetitions; prints one JSON line
+_CHILD = r"""
+import contextlib, io, json, os, sys, time
+tree, setup, statement, repetitions = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+sys.path.insert(0, tree)
+space = {}
+try:
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        exec(setup, space)
+        code = compile(statement, "<case>", "eval")
+        eval(code, space)  # warm: kernels loaded (or compiled) before timing
+except (ImportError, AttributeError, TypeError, SystemExit, Exception) as exc:  # the tree cannot run it
+    print(json.dumps({"unavailable": f"{type(exc).__name__}: {exc}"[:200]}))
+    sys.exit(0)
+import wavecontact
+assert os.path.realpath(os.path.dirname(wavecontact.__file__)).startswith(os.path.realpath(tree)), wavecontact.__file__
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    wall, cpu = time.perf_counter(), time.process_time()
+    for _ in range(repetitions):
+        eval(code, space)
+    cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+print(json.dumps({"cpu_s": cpu / repetitions, "wall_s": wall / repetitions}))
+"""
+
+
+def run_case(tree: Path, name: str, timeout: float = 900.0) -> dict:
+    """One process: the case ``name`` against the package in ``tree``; its CPU and wall time per statement (s)."""
+    setup, statement, repetitions = CASES[name]
+    env = {key: value for key, value in os.environ.items() if key not in ("PYTHONPATH", "WAVECONTACT_PURE_PYTHON")}
+    env["MPLBACKEND"] = "Agg"
+    with tempfile.TemporaryDirectory(prefix="wavecontact-against-") as work:
+        done = subprocess.run([sys.executable, "-c", _CHILD, str(tree), setup, statement, str(repetitions)],
+                              cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
+    if done.returncode != 0:
+        raise SystemExit(f"case {name} failed in {tree} (exit {done.returncode}):\n{done.stderr[-2000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def compare(old: Path, new: Path, names, repeats: int, report=None) -> list:
+    """Warm-up run per tree and case, then ``repeats`` alternating timed runs; one summary dict per case
+    (``report(row)``, if given, is called as soon as a case is done)."""
+    rows = []
+    for name in names:
+        first = {"old": run_case(old, name), "new": run_case(new, name)}
+        unavailable = first["old"].get("unavailable") or first["new"].get("unavailable")
+        if unavailable:
+            rows.append({"case": name, "unavailable": "old" if first["old"].get("unavailable") else "new",
+                         "why": unavailable})
+            if report:
+                report(rows[-1])
+            continue
+        times = {"old": [], "new": []}
+        ratios = []
+        for repeat in range(repeats):
+            order = ("old", "new") if repeat % 2 == 0 else ("new", "old")
+            got = {}
+            for which in order:
+                got[which] = run_case(old if which == "old" else new, name)["cpu_s"]
+                times[which].append(got[which])
+            ratios.append(got["new"] / got["old"])
+        ratio = statistics.median(ratios)
+        spread = (max(ratios) - min(ratios)) / 2.0
+        rows.append({"case": name, "old_s": statistics.median(times["old"]), "new_s": statistics.median(times["new"]),
+                     "ratio": ratio, "spread": spread, "slower": ratio - spread > 1.10})
+        if report:
+            report(rows[-1])
+    return rows
+
+
+def table_header(rev: str) -> str:
+    return (f"| case | CPU at {rev} | CPU now | ratio now/{rev} (median) | spread | flag |\n"
+            "|---|---|---|---|---|---|")
+
+
+def table_row(row, rev: str) -> str:
+    if "unavailable" in row:
+        where = f"n/a at {rev}" if row["unavailable"] == "old" else "n/a now"
+        return f"| {row['case']} | | | | | {where} |"
+    return (f"| {row['case']} | {_time(row['old_s'])} | {_time(row['new_s'])} | {row['ratio']:.3f} | "
+            f"{row['spread']:.3f} | {'SLOWER' if row['slower'] else ''} |")
+
+
+def _time(seconds: float) -> str:
+    if seconds < 1.0:
+        return f"{1e3 * seconds:#.3g}".rstrip(".") + " ms"
+    return f"{seconds:#.3g}".rstrip(".") + " s"
+
+
+def export(rev: str, where: Path) -> Path:
+    """The tree of ``rev`` written into the new directory ``where`` (``git archive``); its path.
+
+    An export rather than ``git worktree add``: nothing is registered in the repository, so
+    concurrent runs (or an interrupted one) leave no worktree entries behind.
+    """
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev], capture_output=True)
+    if archive.returncode != 0:
+        raise SystemExit(f"against.py: error: git archive {rev}: {archive.stderr.decode().strip()}")
+    where.mkdir(parents=True)
+    subprocess.run(["tar", "-x", "-C", str(where)], input=archive.stdout, check=True)
+    return where
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("rev", help="the older revision (commit, branch, tag, HEAD~3, ...)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs per tree and case (default 5)")
+    parser.add_argument("--only", nargs="+", choices=sorted(CASES), metavar="CASE",
+                        help="run only these cases (" + ", ".join(CASES) + ")")
+    parser.add_argument("--keep", metavar="DIR", help="check REV out into DIR and leave it there (an existing DIR is "
+                        "reused as it is, with its warm numba cache)")
+    parser.add_argument("--json", action="store_true", help="print the rows as JSON after the table")
+    args = parser.parse_args(argv)
+    if args.repeats < 1:
+        parser.error("--repeats must be at least 1")
+    names = args.only or list(CASES)
+    load = os.getloadavg()
+    with tempfile.TemporaryDirectory(prefix="wavecontact-rev-") as tmp:
+        if args.keep and Path(args.keep).is_dir():
+            old = Path(args.keep).resolve()
+        else:
+            old = export(args.rev, Path(args.keep).resolve() if args.keep else Path(tmp) / "old")
+        print(f"`python benchmarks/against.py {args.rev} --repeats {args.repeats}`: load average {load[0]:.1f} at "
+              f"the start, {os.cpu_count()} cores; CPU time per statement, median over repeats.\n")
+        print(table_header(args.rev), flush=True)
+        rows = compare(old, ROOT, names, args.repeats, lambda row: print(table_row(row, args.rev), flush=True))
+    print(f"\nload average {os.getloadavg()[0]:.1f} at the end.")
+    if any("unavailable" in row for row in rows):
+        print("n/a: " + "; ".join(f"{row['case']}: {row['why']}" for row in rows if "unavailable" in row))
+    if args.json:
+        print(json.dumps(rows))
+    return 1 if any(row.get("slower") for row in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
