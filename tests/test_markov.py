@@ -129,6 +129,38 @@ def test_solve_steps_use_numpy_spawned_streams():
             assert eps**2 == result.eps2[c, j]
 
 
+def test_finite_kappa_steps_are_single_collisions_within_their_error_estimate():
+    """At finite kappa the chains of a batch step together through the delay solver's batched path;
+    each step is the collision collide() gives for the chain's ratio and step seed with the chain's
+    options (the ensemble's defaults), bit for bit, and lies within its own error estimate of a
+    tight solve (rtol 1e-10) of the same realisation."""
+    from wavecontact import collide
+    from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS
+
+    result = markov_chains(GAMMA, kappa=100.0, rule="solve", chains=3, steps=2, seed=9, bath_modes=30)
+    assert result.spec.options == ENSEMBLE_DELAY_OPTIONS
+    for c, root in enumerate(np.random.SeedSequence(9).spawn(3)):
+        for j, child in enumerate(root.spawn(2)):
+            ratio = result.temperature[c, j] / result.energy[c, j]
+            common = {"bath_temperature": ratio, "bath_modes": 30, "seed": child, "energy_split": False}
+            loose = collide(GAMMA, 100.0, **common, **ENSEMBLE_DELAY_OPTIONS)
+            assert loose.restitution**2 == result.eps2[c, j]
+            tight = collide(GAMMA, 100.0, **common, rtol=1e-10)
+            assert abs(loose.restitution - tight.restitution) <= loose.error_estimate
+
+
+@pytest.mark.parametrize("kappa", [math.inf, 100.0])
+def test_lockstep_chains_do_not_depend_on_the_batch_size(kappa):
+    """Chains advanced one step together give each chain's numbers whatever the chains beside it."""
+    common = {"kappa": kappa, "rule": "solve", "steps": 3, "seed": 23, "bath_modes": 20, "bath": "conserved",
+              "modes_per_rod": 5, "initial_energy": 4.0}
+    together = markov_chains(GAMMA, chains=4, batch_size=4, **common)
+    for batch_size in (1, 3):
+        apart = markov_chains(GAMMA, chains=4, batch_size=batch_size, **common)
+        for name in ("energy", "temperature", "eps2"):
+            np.testing.assert_array_equal(getattr(apart, name), getattr(together, name))
+
+
 @pytest.mark.parametrize("rule", ["glauber", "solve"])
 def test_chains_identical_whatever_the_executor(rule):
     steps = 4 if rule == "solve" else 300

@@ -119,7 +119,9 @@ class MarkovSpec:
     solver : {'delay', 'modal', 'fem'}
         Solver of each collision (``solve`` rule).
     options : dict
-        Solver options (JSON values), e.g. ``{"hard_core_resolution": 16}``.
+        Solver options (JSON values), e.g. ``{"hard_core_resolution": 16}``.  The delay solver at
+        finite kappa gets the ensemble's defaults ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = 1e-3``, the
+        Lobatto-Kronrod rule, 16 noise table nodes per period) where they are not given.
     table : str or None
         Path of a restitution table (``.npz`` or ``.json``) for the ``table`` rule.
     batch_size : int
@@ -178,6 +180,11 @@ class MarkovSpec:
             raise InvalidParameterError(f"solver must be one of delay, modal, fem, got {self.solver!r}")
         if not isinstance(self.options, dict):
             raise InvalidParameterError("options must be a dict of solver options")
+        if self.rule == "solve" and self.solver == "delay" and math.isfinite(kappa):
+            from .ensemble import ENSEMBLE_DELAY_OPTIONS
+
+            # the ensemble's defaults at finite kappa (each epsilon within a few 1e-5 of rtol = 1e-10)
+            object.__setattr__(self, "options", {**ENSEMBLE_DELAY_OPTIONS, **self.options})
         if self.rule == "table" and self.table is None:
             raise InvalidParameterError("the table rule needs a restitution table file (table=PATH, --table PATH)")
         if self.table is not None:
@@ -236,13 +243,7 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
 
         lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (docs/theory.md)
         vibrations = ThermalBath(float(temperature_ratio), bath_modes).draw(lengths, seed)
-        unknown = set(options) - {"hard_core_resolution"}
-        if unknown:
-            raise InvalidParameterError(
-                f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
-            )
-        resolution = _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
-        return get_solver("delay").hard_core_thermal_restitution(gamma, vibrations, resolution)
+        return get_solver("delay").hard_core_thermal_restitution(gamma, vibrations, _hard_core_resolution(options))
     from ..api import collide
 
     return float(collide(gamma, kappa, solver, bath_temperature=float(temperature_ratio), bath_modes=bath_modes,
@@ -289,6 +290,8 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
                 "exceeds 1e3 about once in 1000 steps)"
             )
         eps2 = table.quantile(spec.gamma, ratio, level)
+    elif spec.solver == "delay":
+        eps2 = _delay_batch(spec, ratio, [step_seed(s, step) for s in seeds]) ** 2
     else:
         eps2 = np.array([
             thermal_restitution(spec.gamma, spec.kappa, float(r), step_seed(s, step), bath_modes=spec.bath_modes,
@@ -296,6 +299,36 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
             for r, s in zip(ratio, seeds)
         ])
     return eps2, eps2 * energy
+
+
+def _delay_batch(spec, ratio, seeds):
+    """epsilon of one step of every chain of a batch, in one call of the delay solver's batched samplers.
+
+    ``kappa = inf``: the hard-core batch of ``ensemble`` with one temperature ratio per seed;
+    each value is what :func:`thermal_restitution` gives for its ratio and seed, bit for bit.
+    Finite ``kappa``: ``thermal_restitutions`` with one bath per seed (the ensemble's path).
+    """
+    from ..bath.model import ThermalBath
+    from ..solvers import get_solver
+
+    solver = get_solver("delay")
+    if math.isinf(spec.kappa):
+        # one (T_1, T_2) pair per chain: a flat array of two ratios would read as one pair for both chains
+        pairs = np.repeat(np.asarray(ratio, dtype=float)[:, None], 2, axis=1)
+        return solver.hard_core_thermal_batch(spec.gamma, pairs, seeds, spec.bath_modes,
+                                              _hard_core_resolution(spec.options))
+    baths = [ThermalBath(float(r), spec.bath_modes) for r in ratio]
+    return solver.thermal_restitutions(spec.gamma, spec.kappa, baths, seeds, spec.options)[0]
+
+
+def _hard_core_resolution(options) -> int:
+    """The hard-core mode's grid points per period (its only option), checked."""
+    unknown = set(options) - {"hard_core_resolution"}
+    if unknown:
+        raise InvalidParameterError(
+            f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
+        )
+    return _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
 
 
 def run_chains(spec_fields: dict, start: int, stop: int) -> tuple:
