@@ -369,3 +369,33 @@ def test_a_folder_with_another_markov_run_is_refused_unless_overwritten(tmp_path
         markov_chains(GAMMA, out=out, **other)
     replaced = markov_chains(GAMMA, out=out, overwrite=True, **other)
     np.testing.assert_array_equal(replaced.energy, markov_chains(GAMMA, **other).energy)
+
+
+def test_summary_standard_error_counts_independent_glauber_states_once():
+    """Glauber's rule draws every state afresh (E' = T_B x): tau = 1, and the standard error is
+    that of independent values, sqrt(var / N); the mean lies within 4 of them of Eq. 30's 1."""
+    result = markov_chains(GAMMA, rule="glauber", chains=6, steps=4000, seed=31)
+    summary = result.summary(burn_in=10)
+    states = result.stationary(10)
+    naive = states.std() / math.sqrt(states.size)
+    assert abs(summary["integrated_autocorrelation_time"] - 1.0) < 0.1
+    assert abs(summary["mean_energy_standard_error"] / naive - 1.0) < 0.05
+    assert abs(summary["mean_energy"] - 1.0) < 4.0 * summary["mean_energy_standard_error"]
+    below = np.mean(states < 1.0)
+    assert abs(summary["fraction_below_bath_temperature_standard_error"]
+               - math.sqrt(below * (1 - below) / states.size)) < 0.05 * summary["fraction_below_bath_temperature_standard_error"]
+
+
+def test_summary_standard_error_of_a_correlated_chain_agrees_with_the_chains_spread():
+    """A solved chain's states are correlated (tau > 3); the autocorrelation-aware error agrees with
+    the spread of 16 chains' means (independent of tau) within the chi-square law of 15 degrees of
+    freedom, while sqrt(var / N) would be more than sqrt(3) times too small."""
+    from scipy import stats
+
+    result = markov_chains(GAMMA, rule="solve", chains=16, steps=1500, seed=32, bath_modes=20,
+                           initial_energy="boltzmann")
+    summary = result.summary(burn_in=10)
+    assert summary["integrated_autocorrelation_time"] > 3.0
+    ratio = (summary["mean_energy_standard_error_between_chains"] / summary["mean_energy_standard_error"]) ** 2
+    low, high = stats.chi2.ppf([1e-4, 1 - 1e-4], 15) / 15
+    assert low < ratio < high

@@ -417,12 +417,20 @@ class MarkovResult:
         return self.energy[:, burn_in + 1:]
 
     def summary(self, burn_in: int | None = None) -> dict:
-        """Stationary mean, fraction below ``T_B^0``, KS test against Eq. 30 (thinned), and the run's parameters.
+        """Stationary mean with its standard error, fraction below ``T_B^0``, KS test against Eq. 30
+        (thinned), and the run's parameters.
 
+        The standard errors account for the chains' autocorrelation: ``sqrt(C(0) tau / N)`` over
+        all ``N`` stationary states, with the integrated autocorrelation time ``tau`` of the
+        chains pooled (Sokal's automatic window, :mod:`wavecontact.studies.autocorrelation`);
+        ``autocorrelation_time_reliable`` says whether each chain is at least 50 ``tau`` long.
+        ``mean_energy_standard_error_between_chains`` is the spread of the chains' means
+        (``None`` for one chain), an independent check of the same error.
         The KS test takes every ``k``-th state of each chain, ``k`` the lag at which
         the energy's autocorrelation has fallen below 0.1, so that its samples are
         close to independent (the p-value assumes independence).
         """
+        from .autocorrelation import integrated_autocorrelation_time
         from .ring_statistics import decorrelation_stride, ks_exponential
 
         burn_in = self.default_burn_in() if burn_in is None else int(burn_in)
@@ -433,11 +441,19 @@ class MarkovResult:
         chain_means = states.mean(axis=1)
         finite = self.eps2[:, burn_in:]
         spread = float(np.std(chain_means, ddof=1) / math.sqrt(chain_means.size)) if chain_means.size > 1 else None
+        energy_time = integrated_autocorrelation_time(states)
+        below_time = integrated_autocorrelation_time((states < 1.0).astype(float))
         spec = self.spec
         return {
             "mean_energy": float(states.mean()),
-            "mean_energy_standard_error": spread,
+            "mean_energy_standard_error": energy_time.standard_error,
+            "mean_energy_standard_error_between_chains": spread,
+            "integrated_autocorrelation_time": energy_time.tau,
+            "autocorrelation_window": energy_time.window,
+            "effective_samples": energy_time.effective_samples,
+            "autocorrelation_time_reliable": energy_time.reliable,
             "fraction_below_bath_temperature": float(np.mean(states < 1.0)),
+            "fraction_below_bath_temperature_standard_error": below_time.standard_error,
             "boltzmann_fraction_below": 1.0 - math.exp(-1.0),
             "ks_statistic": float(ks.statistic),
             "ks_pvalue": float(ks.pvalue),
