@@ -129,6 +129,17 @@ def test_solve_steps_use_numpy_spawned_streams():
             assert eps**2 == result.eps2[c, j]
 
 
+def test_lockstep_steps_are_the_per_collision_path_bit_for_bit():
+    """Every step of a chain advanced in lockstep is thermal_restitution(...)**2 for its ratio and step
+    seed. Chain 1 of seed 2026 reaches at step 330 an epsilon whose square by numpy (x * x) differs in
+    the last bit from Python's pow(x, 2), which the per-collision path used: the chain then diverges."""
+    result = markov_chains(GAMMA, rule="solve", chains=2, steps=331, seed=2026)
+    root = np.random.SeedSequence(2026).spawn(2)[1]
+    for j, child in enumerate(root.spawn(331)):
+        ratio = result.temperature[1, j] / result.energy[1, j]
+        assert thermal_restitution(GAMMA, math.inf, ratio, child) ** 2 == result.eps2[1, j], j
+
+
 def test_finite_kappa_steps_are_single_collisions_within_their_error_estimate():
     """At finite kappa the chains of a batch step together through the delay solver's batched path;
     each step is the collision collide() gives for the chain's ratio and step seed with the chain's

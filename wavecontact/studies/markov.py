@@ -291,7 +291,9 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
             )
         eps2 = table.quantile(spec.gamma, ratio, level)
     elif spec.solver == "delay":
-        eps2 = _delay_batch(spec, ratio, [step_seed(s, step) for s in seeds]) ** 2
+        # Python's float power, as the per-collision path squared: pow(x, 2) and numpy's x * x differ
+        # in the last bit for some x (seed 2026, chain 1, step 330 of docs/markov.md's Fig. 10)
+        eps2 = np.array([eps**2 for eps in _delay_batch(spec, ratio, [step_seed(s, step) for s in seeds]).tolist()])
     else:
         eps2 = np.array([
             thermal_restitution(spec.gamma, spec.kappa, float(r), step_seed(s, step), bath_modes=spec.bath_modes,
