@@ -70,7 +70,7 @@ def test_every_script_written_block_has_a_writer_and_names_its_command():
         assert body, f"{page}: block {name} is empty"
         assert re.search(rf"(?:[\"']|<!-- ){re.escape(name)}[\"':]", scripts), f"{page}: no script names block {name}"
     for name in ("bench-fem", "profile-explicit-step", "interleaved-lanes", "bench-modal", "bench-two-materials", "bench_markov",
-                 "markov-fig10", "markov-balance", "markov-samples", "markov-cooling", "markov-defect", "bench-bath",
+                 "markov-fig10", "markov-balance", "markov-samples", "markov-cooling", "markov-defect", "markov-nu-max", "bench-bath",
                  "fem-cost-model", "bath-studies-boltzmann", "bath-studies-uptake", "bath-studies-grid",
                  "bath-studies-modes", "bath-studies-kappa"):
         page, body = bodies[name]
