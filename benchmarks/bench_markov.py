@@ -9,16 +9,25 @@ processes running two chains of STEPS/2 each (the same number of collisions).
 The solve rule is the delay solver's stochastic hard-core mode (kappa = inf,
 nu_max = 250 bath modes, 8 grid points per period of the fastest mode).  The
 kernels are compiled (or loaded from numba's cache) before timing.
+
+A second table (issue 24 item 5) compares the chains' cost per collision with
+``ensemble``'s cost per sample, in the same run, alternating the two, at
+kappa = inf and kappa = 100 (the ensemble's default options at finite kappa, which
+the chains share): the chains of a batch advance one step together through the
+same batched samplers, so the target is a cost per collision within 2x of the
+ensemble's per sample.  CPU time of this process, median of the repeats.
 """
 
 from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import math
 import os
 import platform
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -30,10 +39,14 @@ from docs_block import run_and_write
 from timing import median_time
 
 from wavecontact.restitution_table import RestitutionTable
+from wavecontact.studies.ensemble import ensemble
 from wavecontact.studies.markov import markov_chains
 
 GAMMA = 0.6
 TARGET_S = 20.0
+LOCKSTEP_TARGET = 2.0  # per collision at most this many times the ensemble's cost per sample
+# (kappa, chains, steps) of the lockstep comparison; the ensemble draws chains x steps samples
+LOCKSTEP_RUNS = ((math.inf, 4, 1000), (math.inf, 64, 60), (100.0, 4, 40), (100.0, 16, 10))
 
 
 def glauber_table(path):
@@ -67,6 +80,7 @@ def measure(args):
             seconds = median_time(lambda rule=rule, extra=extra: markov_chains(
                 GAMMA, rule=rule, steps=steps, seed=1, **extra), args.repeats)
             rows.append((f"{rule}, 1 chain x {steps}", seconds))
+    lockstep = lockstep_rows(args.repeats)
     with concurrent.futures.ProcessPoolExecutor(2) as pool:
         markov_chains(GAMMA, rule="solve", chains=2, steps=5, seed=0, executor=pool, batch_size=1)  # warm workers
         seconds = median_time(lambda: markov_chains(GAMMA, rule="solve", chains=2, steps=steps // 2, seed=1,
@@ -79,6 +93,34 @@ def measure(args):
     for name, seconds in rows:
         target = f"<= {TARGET_S:g} s: {'met' if seconds <= TARGET_S else 'MISSED'}" if name.startswith("solve") else ""
         print(f"| {name} | {seconds:.2f} | {1e3 * seconds / steps:.3f} | {target} |")
+    print(f"\nChains in lockstep against `ensemble` (T_B/E_tr = 1), CPU time, median of {args.repeats} repeats "
+          f"alternating the two:\n")
+    print("| kappa | chains x steps | Markov per collision (ms) | ensemble per sample (ms) | ratio | "
+          f"target <= {LOCKSTEP_TARGET:g}x |")
+    print("|---|---|---|---|---|---|")
+    for kappa, chains, steps_, chain_cost, sample_cost in lockstep:
+        ratio = chain_cost / sample_cost
+        print(f"| {'inf' if math.isinf(kappa) else f'{kappa:g}'} | {chains} x {steps_} | {1e3 * chain_cost:.3f} | "
+              f"{1e3 * sample_cost:.3f} | {ratio:.2f} | {'met' if ratio <= LOCKSTEP_TARGET else 'MISSED'} |")
+
+
+def lockstep_rows(repeats):
+    """``(kappa, chains, steps, CPU s per collision, CPU s per ensemble sample)`` per LOCKSTEP_RUNS row."""
+    rows = []
+    for kappa, chains, steps in LOCKSTEP_RUNS:
+        markov_chains(GAMMA, kappa=kappa, chains=2, steps=2, seed=0)  # compile or load the kernels
+        ensemble(GAMMA, kappa, 1.0, 4, 0)
+        chain_times, sample_times = [], []
+        for _ in range(repeats):  # alternate: both see the same load
+            started = time.process_time()
+            markov_chains(GAMMA, kappa=kappa, chains=chains, steps=steps, seed=1)
+            chain_times.append(time.process_time() - started)
+            started = time.process_time()
+            ensemble(GAMMA, kappa, 1.0, chains * steps, 1)
+            sample_times.append(time.process_time() - started)
+        n = chains * steps
+        rows.append((kappa, chains, steps, float(np.median(chain_times)) / n, float(np.median(sample_times)) / n))
+    return rows
 
 
 if __name__ == "__main__":

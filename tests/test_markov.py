@@ -129,6 +129,49 @@ def test_solve_steps_use_numpy_spawned_streams():
             assert eps**2 == result.eps2[c, j]
 
 
+def test_lockstep_steps_are_the_per_collision_path_bit_for_bit():
+    """Every step of a chain advanced in lockstep is thermal_restitution(...)**2 for its ratio and step
+    seed. Chain 1 of seed 2026 reaches at step 330 an epsilon whose square by numpy (x * x) differs in
+    the last bit from Python's pow(x, 2), which the per-collision path used: the chain then diverges."""
+    result = markov_chains(GAMMA, rule="solve", chains=2, steps=331, seed=2026)
+    root = np.random.SeedSequence(2026).spawn(2)[1]
+    for j, child in enumerate(root.spawn(331)):
+        ratio = result.temperature[1, j] / result.energy[1, j]
+        assert thermal_restitution(GAMMA, math.inf, ratio, child) ** 2 == result.eps2[1, j], j
+
+
+def test_finite_kappa_steps_are_single_collisions_within_their_error_estimate():
+    """At finite kappa the chains of a batch step together through the delay solver's batched path;
+    each step is the collision collide() gives for the chain's ratio and step seed with the chain's
+    options (the ensemble's defaults), bit for bit, and lies within its own error estimate of a
+    tight solve (rtol 1e-10) of the same realisation."""
+    from wavecontact import collide
+    from wavecontact.studies.ensemble import ENSEMBLE_DELAY_OPTIONS
+
+    result = markov_chains(GAMMA, kappa=100.0, rule="solve", chains=3, steps=2, seed=9, bath_modes=30)
+    assert result.spec.options == ENSEMBLE_DELAY_OPTIONS
+    for c, root in enumerate(np.random.SeedSequence(9).spawn(3)):
+        for j, child in enumerate(root.spawn(2)):
+            ratio = result.temperature[c, j] / result.energy[c, j]
+            common = {"bath_temperature": ratio, "bath_modes": 30, "seed": child, "energy_split": False}
+            loose = collide(GAMMA, 100.0, **common, **ENSEMBLE_DELAY_OPTIONS)
+            assert loose.restitution**2 == result.eps2[c, j]
+            tight = collide(GAMMA, 100.0, **common, rtol=1e-10)
+            assert abs(loose.restitution - tight.restitution) <= loose.error_estimate
+
+
+@pytest.mark.parametrize("kappa", [math.inf, 100.0])
+def test_lockstep_chains_do_not_depend_on_the_batch_size(kappa):
+    """Chains advanced one step together give each chain's numbers whatever the chains beside it."""
+    common = {"kappa": kappa, "rule": "solve", "steps": 3, "seed": 23, "bath_modes": 20, "bath": "conserved",
+              "modes_per_rod": 5, "initial_energy": 4.0}
+    together = markov_chains(GAMMA, chains=4, batch_size=4, **common)
+    for batch_size in (1, 3):
+        apart = markov_chains(GAMMA, chains=4, batch_size=batch_size, **common)
+        for name in ("energy", "temperature", "eps2"):
+            np.testing.assert_array_equal(getattr(apart, name), getattr(together, name))
+
+
 @pytest.mark.parametrize("rule", ["glauber", "solve"])
 def test_chains_identical_whatever_the_executor(rule):
     steps = 4 if rule == "solve" else 300
@@ -337,3 +380,47 @@ def test_a_folder_with_another_markov_run_is_refused_unless_overwritten(tmp_path
         markov_chains(GAMMA, out=out, **other)
     replaced = markov_chains(GAMMA, out=out, overwrite=True, **other)
     np.testing.assert_array_equal(replaced.energy, markov_chains(GAMMA, **other).energy)
+
+
+def test_summary_standard_error_counts_independent_glauber_states_once():
+    """Glauber's rule draws every state afresh (E' = T_B x): tau = 1, and the standard error is
+    that of independent values, sqrt(var / N); the mean lies within 4 of them of Eq. 30's 1."""
+    result = markov_chains(GAMMA, rule="glauber", chains=6, steps=4000, seed=31)
+    summary = result.summary(burn_in=10)
+    states = result.stationary(10)
+    naive = states.std() / math.sqrt(states.size)
+    assert abs(summary["integrated_autocorrelation_time"] - 1.0) < 0.1
+    assert abs(summary["mean_energy_standard_error"] / naive - 1.0) < 0.05
+    assert abs(summary["mean_energy"] - 1.0) < 4.0 * summary["mean_energy_standard_error"]
+    below = np.mean(states < 1.0)
+    assert abs(summary["fraction_below_bath_temperature_standard_error"]
+               - math.sqrt(below * (1 - below) / states.size)) < 0.05 * summary["fraction_below_bath_temperature_standard_error"]
+
+
+def test_summary_standard_error_of_a_correlated_chain_agrees_with_the_chains_spread():
+    """A solved chain's states are correlated (tau > 3); the autocorrelation-aware error agrees with
+    the spread of 16 chains' means (independent of tau) within the chi-square law of 15 degrees of
+    freedom, while sqrt(var / N) would be more than sqrt(3) times too small."""
+    from scipy import stats
+
+    result = markov_chains(GAMMA, rule="solve", chains=16, steps=1500, seed=32, bath_modes=20,
+                           initial_energy="boltzmann")
+    summary = result.summary(burn_in=10)
+    assert summary["integrated_autocorrelation_time"] > 3.0
+    ratio = (summary["mean_energy_standard_error_between_chains"] / summary["mean_energy_standard_error"]) ** 2
+    low, high = stats.chi2.ppf([1e-4, 1 - 1e-4], 15) / 15
+    assert low < ratio < high
+
+
+def test_a_truncated_bath_lowers_the_stationary_mean_by_many_standard_errors():
+    """With nu_max = 8 bath modes each collision loses about 0.06 T_B^0 on average from a Boltzmann
+    start (the Eq. 32 defect, docs/markov.md), and the chain's stationary mean sits about
+    0.06 / (1 - rho_1) ~ 0.25 below Eq. 30's 1: with the autocorrelation-aware standard error
+    (about 0.02 here) the chains see it, as they see the smaller deficit at 250 modes in the
+    docs' nu_max study."""
+    result = markov_chains(GAMMA, rule="solve", chains=8, steps=1500, seed=33, bath_modes=8,
+                           initial_energy="boltzmann")
+    summary = result.summary(burn_in=50)
+    assert summary["mean_energy"] < 1.0 - 5.0 * summary["mean_energy_standard_error"]
+    assert summary["fraction_below_bath_temperature"] > 1.0 - math.exp(-1.0) + 3.0 * summary[
+        "fraction_below_bath_temperature_standard_error"]

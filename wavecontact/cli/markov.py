@@ -117,9 +117,14 @@ def run(args) -> int:
         return 0
     print(f"Markov chain, rule {summary['rule']}, bath {summary['bath']}: {summary['chains']} chain(s) x "
           f"{summary['steps']} steps, gamma = {summary['gamma']:g}, burn-in {summary['burn_in']}")
-    print(f"  mean E_tr/T_B^0 (stationary)   {summary['mean_energy']:.4f}   (Boltzmann, Eq. 30: 1)")
-    print(f"  fraction below T_B^0           {summary['fraction_below_bath_temperature']:.4f}   "
+    print(f"  mean E_tr/T_B^0 (stationary)   {summary['mean_energy']:.4f} +- "
+          f"{summary['mean_energy_standard_error']:.4f}   (Boltzmann, Eq. 30: 1)")
+    print(f"  fraction below T_B^0           {summary['fraction_below_bath_temperature']:.4f} +- "
+          f"{summary['fraction_below_bath_temperature_standard_error']:.4f}   "
           f"(Boltzmann: {summary['boltzmann_fraction_below']:.4f})")
+    print(f"  standard errors from the integrated autocorrelation time {summary['integrated_autocorrelation_time']:.2f} "
+          f"steps (window {summary['autocorrelation_window']}, {summary['effective_samples']:.0f} effective states"
+          f"{'' if summary['autocorrelation_time_reliable'] else '; chains shorter than 50 tau: a rough estimate'})")
     print(f"  KS test against exp(-E/T_B^0)  D = {summary['ks_statistic']:.4f}, p = {summary['ks_pvalue']:.3g} "
           f"({summary['ks_samples']} states, every {summary['ks_stride']}th)")
     return 0

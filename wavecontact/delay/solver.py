@@ -281,8 +281,9 @@ class DelaySolver(SolverBase):
         ----------
         gamma, kappa : float
             Length ratio in ``[GAMMA_MIN, 1]`` and a finite softness.
-        bath : wavecontact.bath.ThermalBath
-            Temperature(s) ``T_B / E_tr`` and ``nu_max``.
+        bath : wavecontact.bath.ThermalBath or sequence of ThermalBath
+            Temperature(s) ``T_B / E_tr`` and ``nu_max``; a sequence gives each seed its own
+            bath (equal ``nu_max``; Markov chains, whose ratios differ from chain to chain).
         seeds : sequence of int or numpy.random.SeedSequence
             One realisation per seed (:meth:`ThermalBath.draw`).
         options : mapping or DelayOptions, optional
@@ -295,8 +296,7 @@ class DelaySolver(SolverBase):
             (the sum of the local error estimates, :func:`solve_delay_equation`).
         """
         options = self.options(options)
-        if not isinstance(bath, ThermalBath):
-            raise InvalidParameterError("bath must be a wavecontact.bath.ThermalBath")
+        bath = _per_seed_baths(bath, len(seeds))
         prototype = two_rods(gamma, kappa)  # the rods, contact and parameters of every sample (cold)
         params = _check_scene(prototype)
         self.estimate_cost(prototype, options)
@@ -312,11 +312,13 @@ class DelaySolver(SolverBase):
         # _start's shift of the scaled gap: ln(B alpha^2 mu / Z_s^2)
         shift = math.log(contact.strength * contact.alpha**2 * params.reduced_mass / params.series_impedance**2)
         # chunks of seeds whose noise spectra take at most about 32 MB (2^21 complex numbers)
-        chunk = max(1, min(32, (1 << 21) // (2 * table_points(bath.modes, options.noise_resolution))))
+        modes = bath.modes if isinstance(bath, ThermalBath) else (bath[0].modes if bath else 1)
+        chunk = max(1, min(32, (1 << 21) // (2 * table_points(modes, options.noise_resolution))))
         out = np.empty((2, len(seeds)))
         for start in range(0, len(seeds), chunk):
             part = seeds[start:start + chunk]
-            for j, (gap, tables) in enumerate(_thermal_starts(bath, part, lengths, contact, shift, kappa, periods,
+            baths = bath if isinstance(bath, ThermalBath) else bath[start:start + chunk]
+            for j, (gap, tables) in enumerate(_thermal_starts(baths, part, lengths, contact, shift, kappa, periods,
                                                               options), start):
                 _t, w, _d1, _d2, error, _work, _a0 = _integrate(params.time_ratio, kappa, options.rtol, gap,
                                                                 options.end_time, None, options.max_steps,
@@ -397,13 +399,31 @@ class DelaySolver(SolverBase):
 _PARAMETER_NAMES = tuple(f.name for f in dataclasses.fields(DelayParameters))
 
 
+def _per_seed_baths(bath, count: int):
+    """``bath`` itself (one ThermalBath for every seed) or a list of ``count`` baths of equal ``nu_max``."""
+    if isinstance(bath, ThermalBath):
+        return bath
+    baths = list(bath) if isinstance(bath, (list, tuple)) else None
+    if baths is None or len(baths) != count or not all(isinstance(b, ThermalBath) for b in baths):
+        raise InvalidParameterError("bath must be a wavecontact.bath.ThermalBath or one ThermalBath per seed")
+    if baths and any(b.modes != baths[0].modes for b in baths):
+        raise InvalidParameterError("the baths of one call must have equal nu_max (bath modes)")
+    return baths
+
+
 def _thermal_starts(bath, seeds, lengths, contact, shift, kappa, periods, options) -> list:
     """``(initial_gap, tables)`` of each seed's realisation: what :func:`_start` gives for its thermal scene.
 
     The draws, start gaps and noise spectra of all seeds are formed at once, with the arithmetic of
     the per-scene path (``ThermalBath.draw``, ``start_gap``, ``noise_coefficients``, ``noise_tables``).
+    ``bath``: one ThermalBath, or a list with one per seed (each seed drawn at its own temperature).
     """
-    q, r = bath.draw_amplitudes(lengths, [seed_sequence(seed) for seed in seeds])
+    if isinstance(bath, ThermalBath):
+        q, r = bath.draw_amplitudes(lengths, [seed_sequence(seed) for seed in seeds])
+    else:  # draw_amplitudes per seed: the same arithmetic, row by row
+        rows = [b.draw_amplitudes(lengths, [seed_sequence(seed)]) for b, seed in zip(bath, seeds)]
+        q, r = (np.concatenate([row[k] for row in rows]) for k in (0, 1))
+        bath = bath[0]
     if options.initial_gap is None:
         margin = EXPONENTIAL_MARGIN / contact.alpha  # start_gap's margin for exponential contact
         gaps = [contact.alpha * float(float(reach) + margin) - shift for reach in end_reaches(q, r)]

@@ -119,7 +119,9 @@ class MarkovSpec:
     solver : {'delay', 'modal', 'fem'}
         Solver of each collision (``solve`` rule).
     options : dict
-        Solver options (JSON values), e.g. ``{"hard_core_resolution": 16}``.
+        Solver options (JSON values), e.g. ``{"hard_core_resolution": 16}``.  The delay solver at
+        finite kappa gets the ensemble's defaults ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = 1e-3``, the
+        Lobatto-Kronrod rule, 16 noise table nodes per period) where they are not given.
     table : str or None
         Path of a restitution table (``.npz`` or ``.json``) for the ``table`` rule.
     batch_size : int
@@ -179,6 +181,11 @@ class MarkovSpec:
             raise InvalidParameterError(f"solver must be one of delay, modal, fem, got {self.solver!r}")
         if not isinstance(self.options, dict):
             raise InvalidParameterError("options must be a dict of solver options")
+        if self.rule == "solve" and self.solver == "delay" and math.isfinite(kappa):
+            from .ensemble import ENSEMBLE_DELAY_OPTIONS
+
+            # the ensemble's defaults at finite kappa (each epsilon within a few 1e-5 of rtol = 1e-10)
+            object.__setattr__(self, "options", {**ENSEMBLE_DELAY_OPTIONS, **self.options})
         if self.rule == "table" and self.table is None:
             raise InvalidParameterError("the table rule needs a restitution table file (table=PATH, --table PATH)")
         if self.table is not None:
@@ -237,13 +244,7 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
 
         lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (docs/theory.md)
         vibrations = ThermalBath(float(temperature_ratio), bath_modes).draw(lengths, seed)
-        unknown = set(options) - {"hard_core_resolution"}
-        if unknown:
-            raise InvalidParameterError(
-                f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
-            )
-        resolution = _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
-        return get_solver("delay").hard_core_thermal_restitution(gamma, vibrations, resolution)
+        return get_solver("delay").hard_core_thermal_restitution(gamma, vibrations, _hard_core_resolution(options))
     from ..api import collide
 
     return float(collide(gamma, kappa, solver, bath_temperature=float(temperature_ratio), bath_modes=bath_modes,
@@ -290,6 +291,10 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
                 "exceeds 1e3 about once in 1000 steps)"
             )
         eps2 = table.quantile(spec.gamma, ratio, level)
+    elif spec.solver == "delay":
+        # Python's float power, as the per-collision path squared: pow(x, 2) and numpy's x * x differ
+        # in the last bit for some x (seed 2026, chain 1, step 330 of docs/markov.md's Fig. 10)
+        eps2 = np.array([eps**2 for eps in _delay_batch(spec, ratio, [step_seed(s, step) for s in seeds]).tolist()])
     else:
         eps2 = np.array([
             thermal_restitution(spec.gamma, spec.kappa, float(r), step_seed(s, step), bath_modes=spec.bath_modes,
@@ -297,6 +302,36 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
             for r, s in zip(ratio, seeds)
         ])
     return eps2, eps2 * energy
+
+
+def _delay_batch(spec, ratio, seeds):
+    """epsilon of one step of every chain of a batch, in one call of the delay solver's batched samplers.
+
+    ``kappa = inf``: the hard-core batch of ``ensemble`` with one temperature ratio per seed;
+    each value is what :func:`thermal_restitution` gives for its ratio and seed, bit for bit.
+    Finite ``kappa``: ``thermal_restitutions`` with one bath per seed (the ensemble's path).
+    """
+    from ..bath.model import ThermalBath
+    from ..solvers import get_solver
+
+    solver = get_solver("delay")
+    if math.isinf(spec.kappa):
+        # one (T_1, T_2) pair per chain: a flat array of two ratios would read as one pair for both chains
+        pairs = np.repeat(np.asarray(ratio, dtype=float)[:, None], 2, axis=1)
+        return solver.hard_core_thermal_batch(spec.gamma, pairs, seeds, spec.bath_modes,
+                                              _hard_core_resolution(spec.options))
+    baths = [ThermalBath(float(r), spec.bath_modes) for r in ratio]
+    return solver.thermal_restitutions(spec.gamma, spec.kappa, baths, seeds, spec.options)[0]
+
+
+def _hard_core_resolution(options) -> int:
+    """The hard-core mode's grid points per period (its only option), checked."""
+    unknown = set(options) - {"hard_core_resolution"}
+    if unknown:
+        raise InvalidParameterError(
+            f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
+        )
+    return _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
 
 
 def run_chains(spec_fields: dict, start: int, stop: int) -> tuple:
@@ -385,12 +420,20 @@ class MarkovResult:
         return self.energy[:, burn_in + 1:]
 
     def summary(self, burn_in: int | None = None) -> dict:
-        """Stationary mean, fraction below ``T_B^0``, KS test against Eq. 30 (thinned), and the run's parameters.
+        """Stationary mean with its standard error, fraction below ``T_B^0``, KS test against Eq. 30
+        (thinned), and the run's parameters.
 
+        The standard errors account for the chains' autocorrelation: ``sqrt(C(0) tau / N)`` over
+        all ``N`` stationary states, with the integrated autocorrelation time ``tau`` of the
+        chains pooled (Sokal's automatic window, :mod:`wavecontact.studies.autocorrelation`);
+        ``autocorrelation_time_reliable`` says whether each chain is at least 50 ``tau`` long.
+        ``mean_energy_standard_error_between_chains`` is the spread of the chains' means
+        (``None`` for one chain), an independent check of the same error.
         The KS test takes every ``k``-th state of each chain, ``k`` the lag at which
         the energy's autocorrelation has fallen below 0.1, so that its samples are
         close to independent (the p-value assumes independence).
         """
+        from .autocorrelation import integrated_autocorrelation_time
         from .ring_statistics import decorrelation_stride, ks_exponential
 
         burn_in = self.default_burn_in() if burn_in is None else int(burn_in)
@@ -401,11 +444,19 @@ class MarkovResult:
         chain_means = states.mean(axis=1)
         finite = self.eps2[:, burn_in:]
         spread = float(np.std(chain_means, ddof=1) / math.sqrt(chain_means.size)) if chain_means.size > 1 else None
+        energy_time = integrated_autocorrelation_time(states)
+        below_time = integrated_autocorrelation_time((states < 1.0).astype(float))
         spec = self.spec
         return {
             "mean_energy": float(states.mean()),
-            "mean_energy_standard_error": spread,
+            "mean_energy_standard_error": energy_time.standard_error,
+            "mean_energy_standard_error_between_chains": spread,
+            "integrated_autocorrelation_time": energy_time.tau,
+            "autocorrelation_window": energy_time.window,
+            "effective_samples": energy_time.effective_samples,
+            "autocorrelation_time_reliable": energy_time.reliable,
             "fraction_below_bath_temperature": float(np.mean(states < 1.0)),
+            "fraction_below_bath_temperature_standard_error": below_time.standard_error,
             "boltzmann_fraction_below": 1.0 - math.exp(-1.0),
             "ks_statistic": float(ks.statistic),
             "ks_pvalue": float(ks.pvalue),
