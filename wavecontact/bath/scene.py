@@ -66,10 +66,13 @@ def vibration_fields(vibrations: BathRealisation, rods, contact, gap):
     return float(gap), displacement, velocity
 
 
-def scene_noise(scene, kappa: float, a0: float, points_per_period: int = POINTS_PER_PERIOD) -> NoiseTables:
+def scene_noise(scene, kappa: float, a0: float, points_per_period: int = POINTS_PER_PERIOD,
+                tolerance: float | None = None) -> NoiseTables:
     """The delay solver's noise ``Q(tau)`` (tables per rod) for a two-rod scene with vibrations.
 
-    ``tau = 0`` is the solver's start, ``a0 / kappa`` the nominal contact time.
+    ``tau = 0`` is the solver's start, ``a0 / kappa`` the nominal contact time; ``tolerance`` (a
+    scaled length, None: none) refines the tables until their interpolation error is below it
+    (:func:`wavecontact.bath.noise.noise_tables`).
     """
     vibrations = scene.vibrations
     if vibrations is None:
@@ -77,4 +80,4 @@ def scene_noise(scene, kappa: float, a0: float, points_per_period: int = POINTS_
     gamma = scene.metadata["two_rods"].gamma
     periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
     coefficients = vibrations.noise_coefficients(kappa)  # alpha = kappa in the two-rod units
-    return noise_tables(coefficients, periods, a0 / kappa, 0.0, points_per_period)
+    return noise_tables(coefficients, periods, a0 / kappa, 0.0, points_per_period, tolerance)
