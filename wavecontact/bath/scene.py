@@ -11,7 +11,8 @@ from ..errors import InvalidParameterError
 from .model import BathRealisation
 from .noise import POINTS_PER_PERIOD, NoiseTables, noise_tables
 
-__all__ = ["EXPONENTIAL_MARGIN", "HARD_MARGIN", "end_reach", "end_reaches", "scene_noise", "start_gap", "vibration_fields"]
+__all__ = ["EXPONENTIAL_MARGIN", "HARD_MARGIN", "end_reach", "end_reaches", "end_speed", "scene_noise", "start_gap",
+           "vibration_fields"]
 
 EXPONENTIAL_MARGIN = 40.0  # alpha * (gap - reach): exp(-40) ~ 4e-18, the force at the start is below round-off
 HARD_MARGIN = 0.01  # gap beyond the reach (length units) for contacts without range
@@ -21,6 +22,14 @@ def end_reach(vibrations: BathRealisation) -> float:
     """An upper bound of how far both facing ends together can move towards each other (length)."""
     return float(sum(math.sqrt(2.0) * np.sum(np.hypot(q, r))
                      for q, r in zip(vibrations.displacement, vibrations.velocity_amplitude)))
+
+
+def end_speed(vibrations: BathRealisation) -> float:
+    """An upper bound of how fast both facing ends together can move towards each other through their
+    vibrations alone (length / time): ``sqrt(2) sum_i sum_nu omega_nu |(q, r)_nu|``, the rate of
+    :func:`end_reach`'s sum."""
+    return float(sum(math.sqrt(2.0) * np.sum(vibrations.frequencies(i) * np.hypot(q, r))
+                     for i, (q, r) in enumerate(zip(vibrations.displacement, vibrations.velocity_amplitude))))
 
 
 def end_reaches(q, r) -> np.ndarray:
