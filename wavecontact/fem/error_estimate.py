@@ -74,7 +74,7 @@ ROUNDING_FLOOR = 1e-12
 
 
 def estimate_from_levels(levels, resolution: float, declared: float, characteristic: bool,
-                         scheme_order: float | None = None) -> tuple:
+                         scheme_order: float | None = None, thermal: bool = False) -> tuple:
     """``(estimate, rule)``: the error of the first level's restitution.
 
     Richardson extrapolation ``SAFETY |d0| / (r**p - 1)`` of the finest difference
@@ -118,6 +118,11 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
     scheme_order : float or None
         The order in ``h`` of the contact scheme all the runs use (the massless-end interface: 1,
         below the declared order; None: ``declared``), the base of the too-fast guard.
+    thermal : bool
+        Whether the collision starts with thermal vibrations.  Its runs converge irregularly (several
+        contact episodes, each timed by the vibrations' phases), so a coarser difference of the other
+        sign is no sign of a fast convergence that crossed the limit: the :data:`CROSSING_RATIO`
+        exemption from carrying it down does not apply.
 
     Returns
     -------
@@ -153,7 +158,7 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
             "unresolved contact" if monotone or len(d) < 2 else "not monotone"
     estimate = ESTIMATE_SAFETY * abs(d[0]) / (ratio[0] ** order - 1.0)
     if len(d) > 1:
-        crossing = d[0] * d[1] < 0.0 and abs(d[1]) > CROSSING_RATIO * abs(d[0])
+        crossing = not thermal and d[0] * d[1] < 0.0 and abs(d[1]) > CROSSING_RATIO * abs(d[0])
         if too_fast or (x > RESOLVED_BELOW and not monotone and not crossing):
             carried = ESTIMATE_SAFETY * abs(d[1]) / (ratio[1] ** order - 1.0) / ratio[0] ** order
             estimate, how = max(estimate, carried), how + ", coarser pair carried down"
@@ -165,7 +170,7 @@ def estimate_from_levels(levels, resolution: float, declared: float, characteris
 
 
 def estimate_with_finer(finer, levels, resolution: float, declared: float, characteristic: bool,
-                        scheme_order: float | None = None) -> tuple:
+                        scheme_order: float | None = None, thermal: bool = False) -> tuple:
     """``(estimate, rule)``: the error of ``levels[0]``'s restitution from a run on a finer mesh.
 
     By the triangle inequality ``|e(N)| <= |eps(N) - eps(2N)| + |e(2N)|``: the first term is
@@ -190,7 +195,7 @@ def estimate_with_finer(finer, levels, resolution: float, declared: float, chara
         The discretization's order where the contact is resolved.
     characteristic : bool
         Whether the run uses the characteristic interface with the sub-step gap quadrature.
-    scheme_order : float or None
+    scheme_order, thermal
         As in :func:`estimate_from_levels`.
 
     Returns
@@ -201,6 +206,6 @@ def estimate_with_finer(finer, levels, resolution: float, declared: float, chara
     """
     difference = abs(levels[0][1] - finer[1])
     finer_error, rule = estimate_from_levels([tuple(finer), *levels], resolution, declared, characteristic,
-                                             scheme_order)
+                                             scheme_order, thermal)
     return (difference + finer_error,
             f"|eps(N) - eps({finer[0]})| = {difference:.3g} plus the error of the run at {finer[0]}: {rule}")

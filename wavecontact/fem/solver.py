@@ -216,7 +216,7 @@ class FemSolver(SolverBase):
         finer = [level for level in levels if level[0] > requested]
         coarse = [level for level in levels if level[0] <= requested]
         arguments = (self.contact_resolution(scene, options), self.expected_order(options),
-                     self._characteristic(scene, options), self.scheme_order(options))
+                     self._characteristic(scene, options), self.scheme_order(options), scene.vibrations is not None)
         if finer:
             return _estimate_with_finer(min(finer), coarse, *arguments)
         return _estimate_from_levels(coarse, *arguments)
