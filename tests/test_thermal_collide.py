@@ -139,3 +139,18 @@ def test_thermal_runs_carry_a_crossing_coarser_difference_down():
     cold = estimate_from_levels(levels, 2.0, 2.0, True, 2.0)[0]
     warm = estimate_from_levels(levels, 2.0, 2.0, True, 2.0, thermal=True)[0]
     assert cold < 2.45e-5 <= warm
+
+
+def test_thermal_estimate_with_a_finer_run_keeps_the_coarser_runs_reading():
+    # the cross-solver audit's seed 2323 scene 15 (FE errors 5.33e-5, 2.20e-6, 9.05e-7, 1.30e-6 on 100, 200,
+    # 400 and 800 elements, alpha V h / c = 2.3 with the ends' thermal speed): the run at 800 agrees with 400
+    # by accident and |eps(400) - eps(800)| + E(800) is 0.99 of the error; the coarser runs' own estimate,
+    # which carries the large difference of 100 and 200 elements down, bounds it
+    from wavecontact.fem.error_estimate import estimate_with_finer
+
+    exact = 0.68
+    finer = (800, exact + 1.30e-6)
+    levels = [(400, exact + 9.05e-7), (200, exact + 2.20e-6), (100, exact + 5.33e-5)]
+    cold = estimate_with_finer(finer, levels, 2.3, 2.0, True, 2.0)[0]
+    warm = estimate_with_finer(finer, levels, 2.3, 2.0, True, 2.0, thermal=True)[0]
+    assert cold < 9.05e-7 <= warm
