@@ -149,3 +149,31 @@ def test_batched_tables_are_the_single_tables_bit_for_bit():
         for name in ("values", "slopes", "block_max", "curvature_blocks"):
             assert np.array_equal(getattr(batch[k], name), getattr(one, name))
         assert (batch[k].slope_bound, batch[k].curvature_bound) == (one.slope_bound, one.curvature_bound)
+
+
+@pytest.mark.parametrize("points_per_period", [4, 8, 32])
+def test_interpolation_bound_holds_against_the_fourier_sum(points_per_period):
+    # the tables' stated interpolation error bounds their distance to the Fourier sum evaluated directly,
+    # and is not vacuous (within a factor 100 of the largest distance seen)
+    v = ThermalBath(1.0, modes=40).draw(LENGTHS, 11)
+    coefficients = v.noise_coefficients(100.0)
+    tables = noise_tables(coefficients, PERIODS, contact_time=1.3, points_per_period=points_per_period)
+    t = np.linspace(0.0, 2.0 * PERIODS[1], 20001)
+    table = np.array([sum(table_value(x, tables.periods[i], tables.values[i], tables.slopes[i])[0]
+                          for i in range(2)) for x in t])
+    distance = np.max(np.abs(table - _direct(coefficients, t, 1.3)))
+    assert distance <= tables.interpolation_bound <= 100.0 * distance
+
+
+def test_tolerance_refines_the_tables_until_their_bound_is_below_it():
+    v = ThermalBath(1.0, modes=40).draw(LENGTHS, 11)
+    coefficients = v.noise_coefficients(100.0)
+    coarse = noise_tables(coefficients, PERIODS, contact_time=1.3)
+    wanted = coarse.interpolation_bound / 1000.0
+    fine = noise_tables(coefficients, PERIODS, contact_time=1.3, tolerance=wanted)
+    # cubic Hermite: the bound falls 16 times per doubling, so 1000 times takes three doublings
+    assert fine.values.shape[1] == 8 * coarse.values.shape[1]
+    assert fine.interpolation_bound <= wanted < 16.0 * fine.interpolation_bound
+    # a tolerance the coarse tables meet leaves them as they are, bit for bit
+    same = noise_tables(coefficients, PERIODS, contact_time=1.3, tolerance=coarse.interpolation_bound)
+    assert np.array_equal(same.values, coarse.values) and np.array_equal(same.slopes, coarse.slopes)

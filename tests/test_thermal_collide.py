@@ -85,3 +85,72 @@ def test_collide_refuses_bad_bath_input_in_one_line():
         with pytest.raises(wavecontact.InvalidParameterError, match=message) as info:
             wavecontact.collide(0.6, 10.0, **kwargs)
         assert "\n" not in str(info.value)
+
+
+# Bath scenes of the cross-solver audit (benchmarks/cross_solver_audit.py --scenes 200 --seed 2324 --part 4/4)
+# whose FE estimate at 400 elements was below the FE result's distance to the delay solver (by up to 4.6x):
+# (gamma, kappa, T_B / E_tr, bath modes, seed)
+FE_BATH_MISSES = [
+    (0.9800509256374312, 36.49297957064959, 0.4663542330840856, 10, 375882875),
+    (0.7260602672535181, 394.05630926721625, 2.042670456649323, 40, 1803073150),
+    (0.31426035808541136, 18.873727736992375, 0.1896422786167757, 14, 918216416),
+    (0.6672875103755098, 435.3487047699468, 1.720212351976372, 29, 1942364984),
+    (0.636728074576907, 12.826022832899465, 0.2639744282356104, 31, 1858211656),
+    (0.3599681758300711, 10.868118252030841, 2.806312889838347, 23, 2145039511),
+    (0.6261967461372762, 27.31920977248454, 0.16861748326361434, 39, 920756033),
+    (0.9796829284031208, 57.43451599626175, 0.6363796360193562, 35, 1781140363),
+    (0.6635862796585159, 220.5727101485897, 0.6580976261698293, 37, 71064479),
+]
+
+
+@pytest.mark.parametrize("gamma, kappa, temperature, modes, seed", FE_BATH_MISSES)
+def test_fem_estimate_with_a_bath_bounds_its_distance_to_the_delay_solver(gamma, kappa, temperature, modes, seed):
+    from wavecontact.bath.collide import thermal_scene
+
+    scene = thermal_scene(gamma, kappa, ThermalBath(temperature, modes), seed)
+    reference = solve(scene, "delay", rtol=1e-12, energy_split=False)
+    fem = solve(scene, "fem", elements=400)
+    assert abs(fem.restitution - reference.restitution) <= fem.error_estimate + reference.error_estimate
+    assert "elements=800" in fem.diagnostics["error_estimate_method"]  # the run at 2N (docs/error_estimates.md)
+
+
+def test_fem_with_a_bath_has_an_estimate_where_its_coarser_run_fails():
+    # 200 elements: the run at 100 fails the energy check (the bath's 37 modes, about 5 elements a wavelength),
+    # which left no estimate; the run at 400 gives one, and it bounds the distance to the delay solver
+    from wavecontact.bath.collide import thermal_scene
+
+    scene = thermal_scene(*FE_BATH_MISSES[-1][:2], ThermalBath(*FE_BATH_MISSES[-1][2:4]), FE_BATH_MISSES[-1][4])
+    with pytest.raises(wavecontact.errors.SolverFailure, match="energy"):
+        solve(scene, "fem", elements=100, estimate_error=False)
+    fem = solve(scene, "fem", elements=200)
+    reference = solve(scene, "delay", rtol=1e-12, energy_split=False)
+    assert abs(fem.restitution - reference.restitution) <= fem.error_estimate + reference.error_estimate
+
+
+def test_thermal_runs_carry_a_crossing_coarser_difference_down():
+    # a cold sequence whose coarser difference is of the other sign and 40 times larger is read as a fast
+    # convergence that crossed the limit; with a bath (seed 2325 scene 35 of the audit: errors 2.45e-5,
+    # 2.19e-5, 1.26e-4 on 800, 400, 200 elements) it is carried down, as for any runs that do not converge
+    # monotonically
+    from wavecontact.fem.error_estimate import estimate_from_levels
+
+    exact = 0.5
+    levels = [(800, exact + 2.45e-5), (400, exact + 2.19e-5), (200, exact + 1.26e-4)]
+    cold = estimate_from_levels(levels, 2.0, 2.0, True, 2.0)[0]
+    warm = estimate_from_levels(levels, 2.0, 2.0, True, 2.0, thermal=True)[0]
+    assert cold < 2.45e-5 <= warm
+
+
+def test_thermal_estimate_with_a_finer_run_keeps_the_coarser_runs_reading():
+    # the cross-solver audit's seed 2323 scene 15 (FE errors 5.33e-5, 2.20e-6, 9.05e-7, 1.30e-6 on 100, 200,
+    # 400 and 800 elements, alpha V h / c = 2.3 with the ends' thermal speed): the run at 800 agrees with 400
+    # by accident and |eps(400) - eps(800)| + E(800) is 0.99 of the error; the coarser runs' own estimate,
+    # which carries the large difference of 100 and 200 elements down, bounds it
+    from wavecontact.fem.error_estimate import estimate_with_finer
+
+    exact = 0.68
+    finer = (800, exact + 1.30e-6)
+    levels = [(400, exact + 9.05e-7), (200, exact + 2.20e-6), (100, exact + 5.33e-5)]
+    cold = estimate_with_finer(finer, levels, 2.3, 2.0, True, 2.0)[0]
+    warm = estimate_with_finer(finer, levels, 2.3, 2.0, True, 2.0, thermal=True)[0]
+    assert cold < 9.05e-7 <= warm

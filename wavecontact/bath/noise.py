@@ -18,7 +18,9 @@ import numpy as np
 from ..errors import InvalidParameterError
 from .noise_kernels import table_bounds
 
-__all__ = ["POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19", "covariance_series", "noise_table_batch", "noise_tables", "table_points"]
+__all__ = ["MAX_POINTS_PER_PERIOD", "POINTS_PER_PERIOD", "NoiseTables", "block_maxima", "covariance_eq19",
+           "covariance_series", "interpolation_error", "noise_table_batch", "noise_tables", "refined_points",
+           "table_points"]
 
 NOISE_EXCURSION = 4.0  # largest departure of Q from its secant over a step where the force may start
 POINTS_PER_PERIOD = 32  # table nodes per period of the fastest mode: cubic Hermite error ~ (2 pi / 32)^4 / 384
@@ -26,6 +28,8 @@ BOUND_BLOCK = 64  # table cells per entry of the block maxima (NoiseTables.block
 CURVATURE_BLOCK = 16  # table cells per entry of the curvature bounds (NoiseTables.curvature_blocks)
 CURVATURE_MARGIN = 1.1  # one curvature sample per cell (4 cells per period of the fastest mode at least): 10 %
 # for what falls between the samples
+MAX_POINTS_PER_PERIOD = 1024  # the finest table a tolerance may ask for (the delay option noise_resolution's range)
+HERMITE_ERROR = 1.0 / 384.0  # |f - H f| <= h^4 max|f^(4)| / 384 for the cubic Hermite interpolant of a cell
 
 
 def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
@@ -33,6 +37,46 @@ def table_points(modes: int, points_per_period: int = POINTS_PER_PERIOD) -> int:
     at least ``2 modes + 2`` (FFT exactness) and a power of two."""
     wanted = max(points_per_period * modes, 2 * modes + 2, 16)
     return 1 << (wanted - 1).bit_length()
+
+
+def interpolation_error(spans, n: int) -> float:
+    """An upper bound of ``|Q_table - Q|`` anywhere: the cubic Hermite interpolation error of the tables.
+
+    Row ``i`` is ``sum_nu a cos(omega_nu t) + b sin(omega_nu t)`` with ``omega_nu = 2 pi nu / P_i``,
+    tabulated at ``n`` nodes a period (``h = P_i / n``) with exact values and slopes, so its
+    interpolant is off by at most ``h^4 max|Q_i^(4)| / 384 <= sum_nu |(a, b)_nu| (2 pi nu / n)^4 / 384``
+    (the period cancels); the rows' bounds add.
+
+    Parameters
+    ----------
+    spans : sequence of ndarray
+        Per row, ``hypot(a, b)`` of its harmonics ``nu = 1, 2, ...`` (scaled lengths, ``1 / alpha``).
+    n : int
+        Table nodes a period.
+
+    Returns
+    -------
+    float
+        The bound, in units of ``1 / alpha`` (those of the delay equation's exponent).
+    """
+    total = 0.0
+    for span in spans:
+        nu = np.arange(1, len(span) + 1)
+        total += float(np.sum(np.asarray(span, dtype=float) * (2.0 * math.pi * nu / n) ** 4)) * HERMITE_ERROR
+    return total
+
+
+def refined_points(spans, modes: int, points_per_period: int, tolerance: float | None) -> int:
+    """Table length for ``points_per_period`` (:func:`table_points`), doubled while the interpolation
+    error (:func:`interpolation_error` of the rows ``spans``) is above ``tolerance`` (scaled length;
+    None: never), up to :data:`MAX_POINTS_PER_PERIOD` nodes a period of the fastest mode."""
+    n = table_points(modes, points_per_period)
+    if tolerance is None:
+        return n
+    largest = table_points(modes, max(points_per_period, MAX_POINTS_PER_PERIOD))
+    while n < largest and interpolation_error(spans, n) > tolerance:
+        n *= 2
+    return n
 
 
 @dataclass(frozen=True)
@@ -46,6 +90,8 @@ class NoiseTables:
     (:func:`wavecontact.delay.kernels.noise_upper_bound`).  ``curvature_blocks[i, k]``
     bounds ``|Q_i''|`` on the cells ``k C .. (k + 1) C - 1`` (``C = CURVATURE_BLOCK``, with
     ``CURVATURE_MARGIN``), and ``curvature_bound`` is the sum of the rows' largest bounds.
+    ``interpolation_bound`` bounds ``|Q_table - Q|`` anywhere (:func:`interpolation_error`; 0 where
+    not computed).
     """
 
     periods: np.ndarray
@@ -55,6 +101,7 @@ class NoiseTables:
     curvature_bound: float = 0.0
     block_max: np.ndarray = None
     curvature_blocks: np.ndarray = None
+    interpolation_bound: float = 0.0
 
     def __post_init__(self):
         if self.block_max is None or self.curvature_blocks is None:
@@ -123,7 +170,7 @@ def _harmonic_series(a, b, period, shift, n, slopes=True):
 
 
 def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0,
-                 points_per_period: int = POINTS_PER_PERIOD) -> NoiseTables:
+                 points_per_period: int = POINTS_PER_PERIOD, tolerance: float | None = None) -> NoiseTables:
     """Tabulate each rod's noise term on one period.
 
     Parameters
@@ -139,9 +186,13 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
         Time of the first table node.
     points_per_period : int
         Nodes per period of the fastest mode.
+    tolerance : float or None
+        Largest interpolation error of ``Q`` wanted (scaled length): the table is refined by
+        doubling until :func:`interpolation_error` is below it (:func:`refined_points`); None: not.
     """
     modes = max(a.size for _omega, a, _b in coefficients)
-    n = table_points(modes, points_per_period)
+    spans = [np.hypot(np.asarray(a, float), np.asarray(b, float)) for _omega, a, b in coefficients]
+    n = refined_points(spans, modes, points_per_period, tolerance)
     shift = origin - contact_time
     # one inverse FFT for all rows: per rod the values and the slopes
     spectra = np.zeros((2 * len(coefficients), n // 2 + 1), dtype=complex)
@@ -157,11 +208,11 @@ def noise_tables(coefficients, periods, contact_time: float, origin: float = 0.0
         spectra[2 * i, 1:a.size + 1] = values
         spectra[2 * i + 1, 1:a.size + 1] = values * (2j * math.pi * nu / period)
         bound += float(np.sum(omega * np.hypot(a, b)))
-    return _tables(spectra, n, np.asarray(periods, dtype=float), bound)
+    return _tables(spectra, n, np.asarray(periods, dtype=float), bound, interpolation_error(spans, n))
 
 
 def noise_table_batch(a, b, periods, contact_times, origin: float = 0.0,
-                      points_per_period: int = POINTS_PER_PERIOD) -> list:
+                      points_per_period: int = POINTS_PER_PERIOD, tolerance: float | None = None) -> list:
     """:func:`noise_tables` of many realisations, bit for bit, with the spectra formed for all at once.
 
     Parameters
@@ -173,16 +224,30 @@ def noise_table_batch(a, b, periods, contact_times, origin: float = 0.0,
         Each rod's period.
     contact_times : ndarray (S,)
         Each realisation's nominal contact time ``t_c``.
-    origin, points_per_period
+    origin, points_per_period, tolerance
         As for :func:`noise_tables`.
 
     Returns
     -------
     list of NoiseTables
     """
+    count, _rods, modes = a.shape
+    spans = np.hypot(a, b)
+    sizes = [refined_points(list(spans[k]), modes, points_per_period, tolerance) for k in range(count)]
+    contact_times = np.asarray(contact_times, dtype=float)
+    out = [None] * count
+    for n in sorted(set(sizes)):  # the realisations whose tables have n nodes, formed together
+        group = [k for k in range(count) if sizes[k] == n]
+        tables = _table_group(a[group], b[group], spans[group], periods, contact_times[group], origin, n)
+        for k, table in zip(group, tables):
+            out[k] = table
+    return out
+
+
+def _table_group(a, b, spans, periods, contact_times, origin, n) -> list:
+    """:func:`noise_table_batch` of realisations whose tables all have ``n`` nodes a period."""
     count, rods, modes = a.shape
-    n = table_points(modes, points_per_period)
-    shift = origin - np.asarray(contact_times, dtype=float)
+    shift = origin - contact_times
     nu = np.arange(1, modes + 1)
     spectra = np.zeros((count, 2 * rods, n // 2 + 1), dtype=complex)
     weighted = np.empty((count, rods, modes))
@@ -199,16 +264,17 @@ def noise_table_batch(a, b, periods, contact_times, origin: float = 0.0,
         bound = 0.0
         for i in range(rods):
             bound += float(np.sum(weighted[k, i]))
-        out.append(_tables(spectra[k], n, periods, bound))
+        out.append(_tables(spectra[k], n, periods, bound, interpolation_error(list(spans[k]), n)))
     return out
 
 
-def _tables(spectra, n, periods, bound) -> NoiseTables:
+def _tables(spectra, n, periods, bound, interpolation_bound=0.0) -> NoiseTables:
     """The tables of one realisation from its spectra (rows: each rod's values and slopes)."""
     rows = np.fft.irfft(spectra, n, axis=1)
     values, slopes = rows[0::2].copy(), rows[1::2].copy()
     block_max, curvature = _bounds(periods, values, slopes)
-    return NoiseTables(periods, values, slopes, bound, float(np.sum(np.max(curvature, axis=1))), block_max, curvature)
+    return NoiseTables(periods, values, slopes, bound, float(np.sum(np.max(curvature, axis=1))), block_max, curvature,
+                       interpolation_bound)
 
 
 def covariance_eq19(tau, gamma: float, kappa: float, temperatures) -> np.ndarray:

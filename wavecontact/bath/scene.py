@@ -11,7 +11,8 @@ from ..errors import InvalidParameterError
 from .model import BathRealisation
 from .noise import POINTS_PER_PERIOD, NoiseTables, noise_tables
 
-__all__ = ["EXPONENTIAL_MARGIN", "HARD_MARGIN", "end_reach", "end_reaches", "scene_noise", "start_gap", "vibration_fields"]
+__all__ = ["EXPONENTIAL_MARGIN", "HARD_MARGIN", "end_reach", "end_reaches", "end_speed", "scene_noise", "start_gap",
+           "vibration_fields"]
 
 EXPONENTIAL_MARGIN = 40.0  # alpha * (gap - reach): exp(-40) ~ 4e-18, the force at the start is below round-off
 HARD_MARGIN = 0.01  # gap beyond the reach (length units) for contacts without range
@@ -21,6 +22,14 @@ def end_reach(vibrations: BathRealisation) -> float:
     """An upper bound of how far both facing ends together can move towards each other (length)."""
     return float(sum(math.sqrt(2.0) * np.sum(np.hypot(q, r))
                      for q, r in zip(vibrations.displacement, vibrations.velocity_amplitude)))
+
+
+def end_speed(vibrations: BathRealisation) -> float:
+    """An upper bound of how fast both facing ends together can move towards each other through their
+    vibrations alone (length / time): ``sqrt(2) sum_i sum_nu omega_nu |(q, r)_nu|``, the rate of
+    :func:`end_reach`'s sum."""
+    return float(sum(math.sqrt(2.0) * np.sum(vibrations.frequencies(i) * np.hypot(q, r))
+                     for i, (q, r) in enumerate(zip(vibrations.displacement, vibrations.velocity_amplitude))))
 
 
 def end_reaches(q, r) -> np.ndarray:
@@ -66,10 +75,13 @@ def vibration_fields(vibrations: BathRealisation, rods, contact, gap):
     return float(gap), displacement, velocity
 
 
-def scene_noise(scene, kappa: float, a0: float, points_per_period: int = POINTS_PER_PERIOD) -> NoiseTables:
+def scene_noise(scene, kappa: float, a0: float, points_per_period: int = POINTS_PER_PERIOD,
+                tolerance: float | None = None) -> NoiseTables:
     """The delay solver's noise ``Q(tau)`` (tables per rod) for a two-rod scene with vibrations.
 
-    ``tau = 0`` is the solver's start, ``a0 / kappa`` the nominal contact time.
+    ``tau = 0`` is the solver's start, ``a0 / kappa`` the nominal contact time; ``tolerance`` (a
+    scaled length, None: none) refines the tables until their interpolation error is below it
+    (:func:`wavecontact.bath.noise.noise_tables`).
     """
     vibrations = scene.vibrations
     if vibrations is None:
@@ -77,4 +89,4 @@ def scene_noise(scene, kappa: float, a0: float, points_per_period: int = POINTS_
     gamma = scene.metadata["two_rods"].gamma
     periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
     coefficients = vibrations.noise_coefficients(kappa)  # alpha = kappa in the two-rod units
-    return noise_tables(coefficients, periods, a0 / kappa, 0.0, points_per_period)
+    return noise_tables(coefficients, periods, a0 / kappa, 0.0, points_per_period, tolerance)

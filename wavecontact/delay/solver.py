@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..bath.model import ThermalBath, seed_sequence
-from ..bath.noise import NOISE_EXCURSION, NoiseTables, noise_table_batch, table_points
+from ..bath.noise import MAX_POINTS_PER_PERIOD, NOISE_EXCURSION, NoiseTables, noise_table_batch, table_points
 from ..bath.scene import EXPONENTIAL_MARGIN, end_reaches, scene_noise
 from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
@@ -92,8 +92,9 @@ class DelayOptions(SolverOptions):
         "the step's ends (6 evaluations of the exponent a step instead of 8; ensembles)", kind="choice",
         choices=tuple(kernels.QUADRATURE_RULES))
     noise_resolution: int = option(
-        32, "table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite)",
-        kind="int", low=4, high=1024)
+        32, "least table nodes per period of the fastest bath mode for a scene with vibrations (cubic Hermite); "
+        "doubled while the tables' interpolation error bound exceeds rtol (up to 1024), and that bound is part "
+        "of the error estimate", kind="int", low=4, high=MAX_POINTS_PER_PERIOD)
     hard_core_resolution: int = option(
         8, "kappa = inf with vibrations: grid points per period of the short rod's fastest bath mode; the result "
         "comes from twice that, its error estimate from the changes over half and the given resolution",
@@ -174,6 +175,9 @@ def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_rat
             f"delay solver (gamma={gamma:g}, impedance_ratio={impedance_ratio:g}, kappa={kappa:g}): "
             f"{outcome.message}; {advice}", outcome)
     work = {"steps": int(t.size - 1), "rejected_steps": int(rejected), "evaluations": int(evaluations)}
+    if tables.interpolation_bound > 0.0:
+        # the tables' interpolation error of Q (a bound on the exponent's error, so on W's to first order)
+        error = float(error) + tables.interpolation_bound / kappa
     return t, w, d1, d2, float(error), work, a0
 
 
@@ -311,9 +315,11 @@ class DelaySolver(SolverBase):
         periods = (1.0 + gamma, 1.0 + 1.0 / gamma)
         # _start's shift of the scaled gap: ln(B alpha^2 mu / Z_s^2)
         shift = math.log(contact.strength * contact.alpha**2 * params.reduced_mass / params.series_impedance**2)
-        # chunks of seeds whose noise spectra take at most about 32 MB (2^21 complex numbers)
+        # chunks of seeds whose noise spectra take at most about 32 MB (2^21 complex numbers), at the finest
+        # table that the tolerance may ask for
         modes = bath.modes if isinstance(bath, ThermalBath) else (bath[0].modes if bath else 1)
-        chunk = max(1, min(32, (1 << 21) // (2 * table_points(modes, options.noise_resolution))))
+        finest = table_points(modes, max(options.noise_resolution, MAX_POINTS_PER_PERIOD))
+        chunk = max(1, min(32, (1 << 21) // (2 * finest)))
         out = np.empty((2, len(seeds)))
         for start in range(0, len(seeds), chunk):
             part = seeds[start:start + chunk]
@@ -434,7 +440,8 @@ def _thermal_starts(bath, seeds, lengths, contact, shift, kappa, periods, option
     a = np.stack([factors[i] * q[:, i] for i in range(2)], axis=1)
     b = np.stack([factors[i] * r[:, i] for i in range(2)], axis=1)
     contact_times = np.array([float(gap) / kappa for gap in gaps])
-    return list(zip(gaps, noise_table_batch(a, b, periods, contact_times, 0.0, options.noise_resolution)))
+    return list(zip(gaps, noise_table_batch(a, b, periods, contact_times, 0.0, options.noise_resolution,
+                                            noise_tolerance(options.rtol, kappa))))
 
 
 def _start(scene: Scene, params: DelayParameters, options: DelayOptions) -> tuple:
@@ -451,8 +458,20 @@ def _start(scene: Scene, params: DelayParameters, options: DelayOptions) -> tupl
         if initial_gap is None:
             raise UnsupportedSceneError("a scene with vibrations needs its start gap "
                                         "(two_rods(..., vibrations=) sets it)")
-        tables = scene_noise(scene, params.kappa, float(initial_gap), options.noise_resolution)
+        tables = scene_noise(scene, params.kappa, float(initial_gap), options.noise_resolution,
+                             noise_tolerance(options.rtol, params.kappa))
     return initial_gap, tables
+
+
+def noise_tolerance(rtol: float, kappa: float) -> float:
+    """The interpolation error of the noise tables allowed at tolerance ``rtol`` (a scaled length).
+
+    An error ``dQ`` of the exponent ``g`` moves ``W = log(1 + integral e^g)`` by at most ``max|dQ|``
+    on its own (the memory terms carry it on), and epsilon by that over ``kappa``: the tables are
+    refined until their bound (:func:`wavecontact.bath.noise.interpolation_error`) is ``kappa rtol``,
+    and the bound over ``kappa`` joins the error estimate (:func:`_integrate`).
+    """
+    return float(rtol) * float(kappa)
 
 
 def _as_dict(params: DelayParameters) -> dict:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bath.scene import end_speed
 from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure
 from ..limits import Cost
@@ -122,13 +123,14 @@ class FemSolver(SolverBase):
         :data:`FINER_BELOW` elements one more run at ``2N`` (same scheme) joins the levels."""
         held = self.estimate_options(options, fields.get("extra", {}))
         estimate, method, levels = super()._error_estimate(scene, held, fields)
-        if not levels or held.nodes is not None or held.elements >= FINER_BELOW:
+        if not levels or not self._finer_run(scene, held):
             return estimate, method, levels
         finer = held.replace(elements=2 * held.elements, record_fields=False)
         try:
             value = float(self._collide(scene, finer)["restitution"])
         except SolverFailure as failure:
-            why = f"the run at {finer.elements} elements, needed below {FINER_BELOW}, failed: {failure}"
+            needed = "with a thermal bath" if scene.vibrations is not None else f"below {FINER_BELOW}"
+            why = f"the run at {finer.elements} elements, needed {needed}, failed: {failure}"
             return math.nan, f"none ({why})", levels
         levels = [*levels, (finer.elements, value)]
         estimate, rule = self.estimate_from_levels(scene, held, levels)
@@ -144,12 +146,19 @@ class FemSolver(SolverBase):
         return self.error_levels
 
     def error_estimate_runs(self, scene: Scene, options: FemOptions) -> list:
-        """The coarser runs, and below :data:`FINER_BELOW` elements the run at ``2N`` (four times the
-        requested run's work)."""
+        """The coarser runs, and below :data:`FINER_BELOW` elements or with a thermal bath the run at
+        ``2N`` (four times the requested run's work)."""
         runs = super().error_estimate_runs(scene, options)
-        if runs and options.nodes is None and options.elements < FINER_BELOW:
+        if runs and self._finer_run(scene, options):
             runs.append(options.replace(elements=2 * options.elements, record_fields=False))
         return runs
+
+    @staticmethod
+    def _finer_run(scene: Scene, options: FemOptions) -> bool:
+        """Whether the estimate also runs ``2N`` elements: below :data:`FINER_BELOW` elements, and with a
+        thermal bath, whose collisions converge irregularly on the coarser meshes (several contact episodes at
+        the ends' thermal speeds, the bath's fastest modes a few elements long: docs/error_estimates.md)."""
+        return options.nodes is None and (options.elements < FINER_BELOW or scene.vibrations is not None)
 
     @staticmethod
     def estimate_options(options: FemOptions, extra: dict) -> FemOptions:
@@ -167,15 +176,20 @@ class FemSolver(SolverBase):
             return None
         return options.replace(elements=options.elements // 2, record_fields=False)
 
-    def contact_resolution(self, scene: Scene, options: FemOptions) -> float:
+    def contact_resolution(self, scene: Scene, options: FemOptions, thermal: bool = True) -> float:
         """``alpha V h / c`` on the shorter rod at ``options.elements`` (inf for hard and penalty contact,
-        for user meshes and for scenes other than two rods)."""
+        for user meshes and for scenes other than two rods); with a thermal bath ``V`` is the fastest
+        approach of the ends, the rods' plus their vibrations' (:func:`wavecontact.bath.scene.end_speed`), unless
+        not ``thermal``."""
         contact = scene.contact
         if not (isinstance(contact, Exponential) and len(scene.rods) == 2 and options.nodes is None):
             return math.inf
         shorter = min(scene.rods, key=lambda rod: rod.length)
         travel = shorter.length / options.elements / shorter.wave_speed
-        return contact.alpha * abs(scene.velocities[0] - scene.velocities[1]) * travel
+        speed = abs(scene.velocities[0] - scene.velocities[1])
+        if thermal and scene.vibrations is not None:
+            speed += end_speed(scene.vibrations)
+        return contact.alpha * speed * travel
 
     def _characteristic(self, scene: Scene, options: FemOptions) -> bool:
         """Whether the run uses the characteristic interface with the sub-step gap quadrature."""
@@ -202,7 +216,7 @@ class FemSolver(SolverBase):
         finer = [level for level in levels if level[0] > requested]
         coarse = [level for level in levels if level[0] <= requested]
         arguments = (self.contact_resolution(scene, options), self.expected_order(options),
-                     self._characteristic(scene, options), self.scheme_order(options))
+                     self._characteristic(scene, options), self.scheme_order(options), scene.vibrations is not None)
         if finer:
             return _estimate_with_finer(min(finer), coarse, *arguments)
         return _estimate_from_levels(coarse, *arguments)
@@ -210,7 +224,7 @@ class FemSolver(SolverBase):
     def rough_estimate(self, scene: Scene, options: FemOptions) -> str:
         """Advice where the estimate is an order of magnitude: P1 lumped on the characteristic lattice with
         ``alpha V dt > PLATEAU_ABOVE`` and both far-end echoes within one step (gamma near 1)."""
-        x = self.contact_resolution(scene, options)
+        x = self.contact_resolution(scene, options, thermal=False)  # the plateau was measured on cold collisions
         if self._characteristic(scene, options) and PLATEAU_ABOVE < x < math.inf:
             travel = [rod.length / rod.wave_speed for rod in scene.rods]
             if 2.0 * abs(travel[0] - travel[1]) < min(travel) / options.elements:
