@@ -256,13 +256,17 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             matrix[i, i] += 1.0 + y
         _solve_small(matrix, rhs, delta)
         change = 0.0
+        capped = False
         for i in range(s):
             step = min(delta[i], 2.0)  # a convex exponential: never overshoot upwards
+            capped = capped or delta[i] > 2.0
             v[i] += step
             change = max(change, abs(step) * forces[i])
         if not math.isfinite(change):
             return False
-        if change <= 1e-13 * (force_scale + biggest):
+        # a capped step is no Newton step: far in the toe the force is tiny and so is its change, while
+        # log F is still far from the root (the node would report a force e-folds too small)
+        if change <= 1e-13 * (force_scale + biggest) and not capped:
             for i in range(s):
                 forces[i] = math.exp(v[i])
             return True
