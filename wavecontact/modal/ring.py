@@ -237,6 +237,7 @@ class _CollocationPair:
         self.X = np.empty(2)
         self.U = np.empty(2)
         self.mass = system.mass[self.order].copy()
+        self.reduced_mass = self.mass[0] * self.mass[1] / (self.mass[0] + self.mass[1])
         self.half = np.array([system.half[a], system.half[b] - system.pair_offset[pair]])
         self.compliance = float(system.pair_compliance[pair])
         self.tables = collocation.CollocationTables(system.omega, coupling, 1.0 / self.mass[0] + 1.0 / self.mass[1],
@@ -252,10 +253,14 @@ class _CollocationPair:
         self.X[:] = system.X[self.order]
         self.U[:] = system.U[self.order]
         self.counters[:] = 0
+        # this collision's own force scale (the wave-theory plateau at its approach speed): the ring's
+        # collisions slow down by an order of magnitude as the translation thermalises, and a tolerance
+        # relative to the first collision's force would leave the slow ones under-resolved
+        force_scale = max(self.reduced_mass * abs(self.U[1] - self.U[0]), 1e-9 * system.force_scale)
         status = collocation.run_collision(
             system.q, system.v, system.omega, self.coupling, self.X, self.U, self.mass, self.half,
             self.compliance, system.law_code, system.alpha, system.strength, system.stiffness,
-            system.contact_range, system.force_scale, tolerance, exponent_step, *self.tables.arrays(),
+            system.contact_range, force_scale, tolerance, exponent_step, *self.tables.arrays(),
             self.ends, self.free, self.free, self.records, system.clock, self.counters, self.history, 1 << 62,
         )
         system.check_status(status)
