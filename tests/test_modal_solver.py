@@ -1,5 +1,6 @@
 """The modal solver against the delay equation, the FE solver, wave theory and itself."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -283,6 +284,18 @@ def test_collocation_matches_scipy_on_the_same_modal_equations(kappa):
     assert abs(result.restitution - exact) < 1e-9
     assert result.diagnostics["energy_drift"] < 1e-8
     assert result.diagnostics["momentum_drift"] < 1e-14
+
+
+def test_collocation_starts_far_outside_the_force_range():
+    """Started with alpha * gap = 800 (the force underflows at the first nodes), the collocation must
+    still resolve the contact. Its log-force Newton used to take a step capped at 2 e-folds for
+    convergence (the toe's forces, and so their change, are tiny), accepted forces hundreds of e-folds
+    too small, and the run fell back to the splitting (step underflow) or, on a ring, passed through."""
+    exact, _ = _peer().restitution(0.6, 4000.0, 20, 1e-11)
+    scene = dataclasses.replace(two_rods(0.6, 4000.0), gaps=(0.2,))
+    result = wc.solve(scene, "modal", modes=20, correction="static", history=False, estimate_error=False)
+    assert result.work["step_method"] == "collocation" and "fallback" not in result.work
+    assert abs(result.restitution - exact) < 1e-9
 
 
 def test_collocation_error_falls_at_high_order_with_the_steps():
