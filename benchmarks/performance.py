@@ -427,6 +427,53 @@ def section_growth(repeats, quick, figure_dir):
     return "\n".join(out)
 
 
+RING_BLOCK = "ring-performance"
+
+
+def section_ring(collisions, realisations, command):
+    """The paper's Fig. 1 command (``wavecontact ring --gamma 0.6173 --kappa 4000 --modes 75``): CPU seconds of the
+    run plus its statistics and figures, per integrator (``benchmarks/profile_ring.py`` measures and splits them)."""
+    import profile_ring
+
+    for method in profile_ring.METHODS:  # compile or load the kernels before timing
+        profile_ring.run_ring(profile_ring.GAMMA, profile_ring.KAPPA, profile_ring.MODES, 3, progress=False,
+                              solver_options={"step_method": method})
+    counts = {"collocation": realisations, "splitting": 1}
+    whole = "whole command (run + statistics + figures)"
+    rows = []
+    for method in ("collocation", "splitting"):
+        runs = [profile_ring.profile_run(method, r, collisions) for r in range(counts[method])]
+        seconds = [run["phases"][whole] for run in runs]
+        contact = [1e3 * run["phases"]["contact integration"] / collisions for run in runs]
+        label = "exponential collocation (default)" if method == "collocation" else "kick-rotate-kick splitting (before)"
+        rows.append(f"| {label} | {collisions} | {len(runs)} | {np.median(seconds):.1f} | "
+                    f"{min(seconds):.1f}-{max(seconds):.1f} | {np.median(contact):.2f} |")
+    load = os.getloadavg()
+    return "\n".join([
+        (f"`{command}` at {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}, load average {load[0]:.1f} "
+        f"(1 min) on {os.cpu_count()} cores at the end. CPU seconds of this process (`time.process_time`; other "
+        "jobs stretch the wall time, not these) for `wavecontact ring --gamma 0.6173 --kappa 4000 --modes 75 "
+        f"--collisions {collisions} --out DIR` done in-process (the run with its checkpoints and data files, "
+        "the statistics, the three figures; warm numba cache); realisations differ in the ring circumference "
+        "(+0 %, +1.5 %, ...). Where the time goes: docs/ring.md, `python benchmarks/profile_ring.py`."),
+        "",
+        "| ring integrator | collisions | realisations | CPU s, median | range | contact ms per collision |",
+        "|---|---:|---:|---:|---:|---:|",
+        *rows,
+    ])
+
+
+def update_ring_block(report: Path, body: str) -> None:
+    """Replace the ring block of ``report`` (between its markers) by ``body``."""
+    text = report.read_text()
+    start, end = f"<!-- {RING_BLOCK}:start -->", f"<!-- {RING_BLOCK}:end -->"
+    if text.count(start) != 1 or text.count(end) != 1:
+        raise SystemExit(f"{report} needs exactly one pair of markers {start} ... {end}")
+    head, rest = text.split(start, 1)
+    _, tail = rest.split(end, 1)
+    report.write_text(f"{head}{start}\n{body}\n{end}{tail}")
+
+
 def update_readme(table_text):
     readme = ROOT / "README.md"
     text = readme.read_text()
@@ -444,6 +491,11 @@ def main(argv=None):
     parser.add_argument("--out", default=str(ROOT / "docs"), help="directory of performance.md (default docs/)")
     parser.add_argument("--growth-only", action="store_true",
                         help="re-measure only the last section (how the cost grows) and its figure")
+    parser.add_argument("--ring-only", action="store_true",
+                        help="re-measure only the ring run of Fig. 1 (its block in performance.md)")
+    parser.add_argument("--ring-collisions", type=int, default=4500, help="collisions of the ring run (default 4500)")
+    parser.add_argument("--ring-realisations", type=int, default=5,
+                        help="realisations of the ring run with the default integrator (default 5)")
     parser.add_argument("--pareto-figures-only", action="store_true",
                         help="redraw the error-against-time figures from figures/performance_data.json, no runs")
     parser.add_argument("--compile-times-only", action="store_true",
@@ -474,6 +526,13 @@ def main(argv=None):
             "## How the cost grows\n", f"## How the cost grows\n\n{note}\n", 1)
         report.write_text(head + growth + "\n")
         print(f"wrote {report} (last section) and {figure_dir / 'cost_growth.png'}", file=sys.stderr)
+        return
+    if args.ring_only:
+        report = out_dir / "performance.md"
+        ring_command = f"python benchmarks/performance.py --ring-only --ring-collisions {args.ring_collisions} " \
+                       f"--ring-realisations {args.ring_realisations}"
+        update_ring_block(report, section_ring(args.ring_collisions, args.ring_realisations, ring_command))
+        print(f"wrote {report} (block {RING_BLOCK})", file=sys.stderr)
         return
     if args.pareto_figures_only:
         for name in draw_pareto_figures(tables_from_json(figure_dir / "performance_data.json"), figure_dir):
@@ -514,6 +573,12 @@ def main(argv=None):
         section_peers(repeats, args.quick),
         "",
         compile_section(),
+        "",
+        "## The ring run of Fig. 1",
+        "",
+        f"<!-- {RING_BLOCK}:start -->",
+        section_ring(args.ring_collisions, args.ring_realisations, command),
+        f"<!-- {RING_BLOCK}:end -->",
         "",
         section_growth(repeats, args.quick, figure_dir),
         "",

@@ -39,7 +39,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 MARKER = re.compile(r"<!-- generated:(?P<name>[\w.-]+):start -->\n(?P<body>.*?)<!-- generated:(?P=name):end -->",
                     re.DOTALL)
-# times: "12.3 ms", "1.2e+03 ms", "(23.4 s)"; masked before comparing
+# times: "12.3 ms", "1.2e+03 ms", "(23.4 s)"; masked with their unit before comparing (a time printed in
+# s or ms, whichever reads best, changes its unit from one run to the next)
 TIME = re.compile(r"\d[\d.]*(e[+-]?\d+)? (ms|s)\b")
 # the wall-time column of `wavecontact converge`: elements, restitution, error, order, TIME, steps
 CONVERGE_ROW = re.compile(r"^(\s+\d+\s+\S+\s+\S+\s+\S+\s+)\S+(\s+\d+)$", re.MULTILINE)
@@ -85,7 +86,7 @@ def _masked_cells(line: str, start: int, end: int):
 def mask_times(text: str) -> str:
     """The text with every wall time replaced by ``#`` (what may differ between two runs)."""
     text = mask_time_columns(text)
-    return COMPARE_ROW.sub(r"\1#\2", CONVERGE_ROW.sub(r"\1#\2", TIME.sub("# \\2", text)))
+    return COMPARE_ROW.sub(r"\1#\2", CONVERGE_ROW.sub(r"\1#\2", TIME.sub("# t", text)))
 
 
 def mask(block: Block, text: str) -> str:

@@ -16,8 +16,8 @@ from wavecontact.scene import two_rods_on_a_ring
 GAMMA = 0.6173
 
 
-def _ring(gamma, kappa, modes, circumference=None):
-    return RingSimulation(two_rods_on_a_ring(gamma, kappa, circumference), modes)
+def _ring(gamma, kappa, modes, circumference=None, **options):
+    return RingSimulation(two_rods_on_a_ring(gamma, kappa, circumference), modes, **options)
 
 
 @pytest.fixture(scope="module")
@@ -96,8 +96,11 @@ def test_hard_contact_ring_runs():
     records = [ring.next_collision() for _ in range(20)]
     for record in records:
         assert abs(record.total_energy - ring.total_energy) < 1e-5 * ring.total_energy
-    line = wavecontact.collide(GAMMA, math.inf, solver="modal", modes=20, step_method="splitting")
+    line = wavecontact.collide(GAMMA, math.inf, solver="modal", modes=20, correction="static")
     assert records[0].restitution == pytest.approx(line.restitution, abs=1e-9)
+    split_ring = _ring(GAMMA, math.inf, 20, step_method="splitting")
+    split_line = wavecontact.collide(GAMMA, math.inf, solver="modal", modes=20, step_method="splitting")
+    assert split_ring.next_collision().restitution == pytest.approx(split_line.restitution, abs=1e-9)
     errors = [abs(wavecontact.collide(GAMMA, math.inf, solver="modal", modes=m, step_method="splitting").restitution
                   - GAMMA) for m in (10, 40)]
     assert errors[1] < errors[0]
@@ -214,3 +217,29 @@ def test_warm_far_pair_collision_agrees_with_the_fe_solver():
         assert record.pair == 1
         errors.append(abs(record.restitution - fe))
     assert errors[1] < 1e-5 and errors[1] < errors[0] / 10, errors
+
+
+def test_collocation_collisions_agree_with_a_fine_splitting():
+    """The ring's default integrator (exponential collocation) against the other integrator of the same
+    equations (the kick-rotate-kick splitting, second order in its step) from the same warm states: the
+    splitting converges to the collocation's result as its step shrinks."""
+    ring = _ring(GAMMA, 1000, 20)
+    states = []
+    for index in range(24):
+        if index % 8 == 7:
+            states.append(ring.get_state())
+        ring.next_collision()
+    for state in states:
+        results = {}
+        for name, options in (("collocation", {}), ("split", {"step_method": "splitting", "step_accuracy": 0.0125}),
+                              ("split/8", {"step_method": "splitting", "step_accuracy": 0.0125 / 8})):
+            other = _ring(GAMMA, 1000, 20, **options)
+            other.set_state(state)
+            results[name] = other.next_collision()
+        coarse = abs(results["split"].restitution - results["collocation"].restitution)
+        fine = abs(results["split/8"].restitution - results["collocation"].restitution)
+        assert results["collocation"].pair == results["split/8"].pair
+        assert fine < 3e-8
+        assert fine < coarse / 10 or coarse < 3e-9  # second order: 64x smaller for a step 8x smaller
+        np.testing.assert_allclose(results["collocation"].modal_energies, results["split/8"].modal_energies,
+                                   atol=1e-8 * ring.total_energy)

@@ -1,5 +1,6 @@
 """The modal solver against the delay equation, the FE solver, wave theory and itself."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -285,6 +286,18 @@ def test_collocation_matches_scipy_on_the_same_modal_equations(kappa):
     assert result.diagnostics["momentum_drift"] < 1e-14
 
 
+def test_collocation_starts_far_outside_the_force_range():
+    """Started with alpha * gap = 800 (the force underflows at the first nodes), the collocation must
+    still resolve the contact. Its log-force Newton used to take a step capped at 2 e-folds for
+    convergence (the toe's forces, and so their change, are tiny), accepted forces hundreds of e-folds
+    too small, and the run fell back to the splitting (step underflow) or, on a ring, passed through."""
+    exact, _ = _peer().restitution(0.6, 4000.0, 20, 1e-11)
+    scene = dataclasses.replace(two_rods(0.6, 4000.0), gaps=(0.2,))
+    result = wc.solve(scene, "modal", modes=20, correction="static", history=False, estimate_error=False)
+    assert result.work["step_method"] == "collocation" and "fallback" not in result.work
+    assert abs(result.restitution - exact) < 1e-9
+
+
 def test_collocation_error_falls_at_high_order_with_the_steps():
     """Radau collocation with s = 4 stages: error against the step count falls faster than steps^-4."""
     exact, _ = _peer().restitution(0.6, 4000.0, 20, 1e-11)
@@ -330,6 +343,17 @@ def test_stiff_static_collocation_converges_where_it_used_to_stall():
     assert abs(result.restitution - reference) < 1e-2  # truncation error of 20 modes
     assert abs(result.restitution - reference) <= result.error_estimate
     assert result.diagnostics["energy_drift"] < 1e-3
+
+
+def test_collocation_no_longer_stalls_with_few_modes_on_a_stiff_contact():
+    """With 20 modes at kappa = 1e4 the collocation's Newton solve used to stall (it took a step capped
+    at 2 e-folds for convergence deep in the force's toe, see the test above) and the solver fell back
+    to the splitting; it now resolves the collision itself, to DOP853's result on the same equations."""
+    exact, _ = _peer().restitution(0.6, 1e4, 20, 1e-11)
+    result = wc.collide(0.6, 1e4, solver="modal", modes=20, correction="static")
+    assert result.work["step_method"] == "collocation" and "fallback" not in result.work
+    assert abs(result.restitution - exact) < 1e-9
+    assert result.diagnostics["energy_drift"] < 1e-8
 
 
 # Two materials (issue 14): rods of different density, modulus and section. Transit-time ratios are

@@ -428,7 +428,9 @@ class ModalSolver(SolverBase):
         options = self.options(options)
         return RingSimulation(scene, modes=options.modes, static_correction=options.static_correction,
                               step_accuracy=options.step_accuracy, step_reach=options.step_reach,
-                              step_order=options.step_order, mode_source=options.mode_source)
+                              step_order=options.step_order, mode_source=options.mode_source,
+                              step_method=options.step_method, collocation_stages=options.collocation_stages,
+                              collocation_tolerance=options.collocation_tolerance)
 
 
 def _collide(scene: Scene, *, modes, static_correction, correction, mode_source, fe_elements, fe_order,
