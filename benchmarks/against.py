@@ -54,16 +54,16 @@ CASES = {
                           "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='consistent')", 5),
     "ensemble": ("import wavecontact", "wavecontact.ensemble(0.6173, 100.0, 1.0, samples=40, seed=1)", 1),
     "gas": ("import tempfile\nfrom wavecontact.cli import main",
-            "main(['gas', '--rods', '100', '--collisions', '20000', '--rule', 'vibration', '--damping', '50', "
-            "'--out', tempfile.mkdtemp() + '/gas', '--no-progress'])", 1),
+            ("main(['gas', '--rods', '100', '--collisions', '20000', '--rule', 'vibration', '--damping', '50', "
+            "'--out', tempfile.mkdtemp() + '/gas', '--no-progress'])"), 1),
     "scene": ("from wavecontact import two_rods", "two_rods(0.6, 100.0)", 2000),  # no kernel: the test's case
     "markov": ("import tempfile\nfrom wavecontact.cli import main",
-               "main(['markov', '--gamma', '0.6', '--chains', '2', '--steps', '2000', '--seed', '1', '--workers', "
-               "'1', '--out', tempfile.mkdtemp() + '/markov', '--no-progress'])", 1),
+               ("main(['markov', '--gamma', '0.6', '--chains', '2', '--steps', '2000', '--seed', '1', '--workers', "
+               "'1', '--out', tempfile.mkdtemp() + '/markov', '--no-progress'])"), 1),
     # a new --out directory on every run: the ring resumes from a checkpoint it finds there
     "ring-1000": ("import tempfile\nfrom wavecontact.cli import main",
-                  "main(['ring', '--gamma', '0.6173', '--kappa', '4000', '--modes', '75', '--collisions', '1000', "
-                  "'--out', tempfile.mkdtemp() + '/ring'])", 1),
+                  ("main(['ring', '--gamma', '0.6173', '--kappa', '4000', '--modes', '75', '--collisions', '1000', "
+                  "'--out', tempfile.mkdtemp() + '/ring'])"), 1),
 }
 
 # runs in the child: argv = tree, setup, statement, repetitions; prints one JSON line
@@ -97,7 +97,7 @@ def run_case(tree: Path, name: str, timeout: float = 900.0) -> dict:
     env = {key: value for key, value in os.environ.items() if key not in ("PYTHONPATH", "WAVECONTACT_PURE_PYTHON")}
     env["MPLBACKEND"] = "Agg"
     with tempfile.TemporaryDirectory(prefix="wavecontact-against-") as work:
-        done = subprocess.run([sys.executable, "-c", _CHILD, str(tree), setup, statement, str(repetitions)],
+        done = subprocess.run([sys.executable, "-c", _CHILD, str(tree), setup, statement, str(repetitions)], check=False,
                               cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
     if done.returncode != 0:
         raise SystemExit(f"case {name} failed in {tree} (exit {done.returncode}):\n{done.stderr[-2000:]}")
@@ -160,7 +160,7 @@ def export(rev: str, where: Path) -> Path:
     An export rather than ``git worktree add``: nothing is registered in the repository, so
     concurrent runs (or an interrupted one) leave no worktree entries behind.
     """
-    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev], capture_output=True)
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev], capture_output=True, check=False)
     if archive.returncode != 0:
         raise SystemExit(f"against.py: error: git archive {rev}: {archive.stderr.decode().strip()}")
     where.mkdir(parents=True)

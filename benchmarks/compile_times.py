@@ -32,7 +32,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from docs_block import run_and_write  # noqa: E402
+from docs_block import run_and_write
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -47,15 +47,15 @@ COMMANDS = (
     ("compare", "compare --gamma 0.6 --kappa 100 --plot pareto.png --repeats 1 --no-progress", "--repeats 1"),
     ("ring", "ring --gamma 0.6173 --kappa 4000 --modes 75 --collisions 40 --out ring/ --no-progress",
      "--collisions 40 (README 4500)"),
-    ("equipartition", "equipartition --gamma 0.6173 --kappa 4000 --modes 10 20 --collisions 20 --realisations 1 "
-     "--out eq/ --no-progress", "--modes 10 20 --collisions 20 --realisations 1"),
+    ("equipartition", ("equipartition --gamma 0.6173 --kappa 4000 --modes 10 20 --collisions 20 --realisations 1 "
+     "--out eq/ --no-progress"), "--modes 10 20 --collisions 20 --realisations 1"),
     ("markov", "markov --gamma 0.6 --chains 2 --steps 200 --seed 1 --workers 1 --json --no-progress",
      "--chains 2 --steps 200 --workers 1"),
-    ("ensemble", "ensemble --gamma 0.6173 --kappa 100 --temperature 1 --samples 8 --seed 1 --workers 1 --json "
-     "--no-progress", "--samples 8 --workers 1"),
+    ("ensemble", ("ensemble --gamma 0.6173 --kappa 100 --temperature 1 --samples 8 --seed 1 --workers 1 --json "
+     "--no-progress"), "--samples 8 --workers 1"),
     ("bath-figure", "bath-figure 8 --samples 8 --workers 1 --out fig8.png --no-progress", "--samples 8 --workers 1"),
-    ("restitution-table", "restitution-table --gamma 0.2173 0.6173 --temperature 0 0.5 1 --samples 8 --seed 1 "
-     "--workers 1 --out t.csv --no-progress", "--samples 8 --workers 1"),
+    ("restitution-table", ("restitution-table --gamma 0.2173 0.6173 --temperature 0 0.5 1 --samples 8 --seed 1 "
+     "--workers 1 --out t.csv --no-progress"), "--samples 8 --workers 1"),
     ("gas", "gas --rods 50 --collisions 2000 --rule vibration --damping 50 --out gas/ --no-progress",
      "--rods 50 --collisions 2000"),
     ("map", "map --kappa inf 100 --out map/ --workers 1 --no-progress", "--workers 1"),
@@ -107,7 +107,7 @@ def first_run(command: str, root: Path = ROOT, timeout: float = 1800.0) -> dict:
         load = os.getloadavg()[0]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         started = time.perf_counter()
-        done = subprocess.run([sys.executable, "-c", _CHILD, str(report), *command.split()], cwd=work, env=env,
+        done = subprocess.run([sys.executable, "-c", _CHILD, str(report), *command.split()], cwd=work, env=env, check=False,
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, timeout=timeout)
         wall = time.perf_counter() - started
         after = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -113,7 +113,7 @@ def test_ctrl_c_ends_a_running_command_with_status_130(tmp_path):
             time.sleep(0.2)
         time.sleep(3.0)  # inside the collisions
         process.send_signal(signal.SIGINT)
-        out, err = process.communicate(timeout=120)
+        _out, err = process.communicate(timeout=120)
     finally:
         if process.poll() is None:
             process.kill()
@@ -124,9 +124,8 @@ def test_ctrl_c_ends_a_running_command_with_status_130(tmp_path):
 
 def test_a_scheduler_at_a_closed_port_is_given_up_within_the_connect_timeout():
     started = time.monotonic()
-    with pytest.raises(Exception) as caught:
-        with executors.executor_from(0, "tcp://127.0.0.1:9"):
-            pass
+    with pytest.raises(Exception) as caught, executors.executor_from(0, "tcp://127.0.0.1:9"):
+        pass
     assert "cannot reach" in str(caught.value) and "--scheduler" in str(caught.value)
     assert time.monotonic() - started < executors.CONNECT_TIMEOUT_S + 10
     assert not [t for t in threading.enumerate() if t.name == "wavecontact-dask-watchdog"]

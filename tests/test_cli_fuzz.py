@@ -12,10 +12,9 @@ import time
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_cli_bad_inputs import WORK
 
 from wavecontact.cli import COMMANDS, main
-
-from test_cli_bad_inputs import WORK
 
 
 class Reached(Exception):

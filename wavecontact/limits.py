@@ -61,9 +61,11 @@ MEMORY_SHARE = 0.5
 
 
 #: Steps per collision of the ring integrator are at most ``N (RING_STEPS_PER_MODE + RING_SOFT_STEPS_PER_MODE / kappa)``
-#: (measured: up to 746 N for stiff contacts and 2212 N at kappa = 0.01, gamma 0.2-1, N = 8-1000, the
-#: counter ``next_collision().steps``; tests/test_cli_costs.py checks the bound).
-RING_STEPS_PER_MODE, RING_SOFT_STEPS_PER_MODE = 800, 25
+#: (measured with the counter ``next_collision().steps``, gamma 0.2-1: the kick-rotate-kick splitting takes up to
+#: 746 N for stiff contacts and 2212 N at kappa = 0.01 (N = 8-1000); the exponential collocation, the ring's default
+#: integrator, up to 175 N at kappa >= 1, 670 N at kappa = 0.1 and 6299 N at kappa = 0.01 (N = 8 and 40);
+#: tests/test_cli_costs.py checks the bound).
+RING_STEPS_PER_MODE, RING_SOFT_STEPS_PER_MODE = 800, 70
 #: Bytes held per recorded ring collision and mode (modal energies in lists, then one array) and the rest.
 RING_BYTES_PER_MODE, RING_BYTES_PER_COLLISION = 32, 400
 

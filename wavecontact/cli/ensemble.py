@@ -4,18 +4,17 @@ from __future__ import annotations
 
 import json
 import math
-
 from pathlib import Path
 
 from ..errors import InvalidParameterError
 from .common import (
     FIGURE_SUFFIXES,
+    files_summary,
     gamma_value,
     kappa_value,
     nonnegative_int,
     positive_float,
     positive_int,
-    files_summary,
     report_written,
 )
 from .costs import add_work_option, check_run, thermal_samples_cost

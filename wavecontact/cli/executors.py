@@ -133,7 +133,7 @@ def executor_from(workers: int, scheduler):
             watchdog.stop()
             try:
                 client.close(timeout=CONNECT_TIMEOUT_S)
-            except Exception:  # noqa: BLE001 - a lost cluster cannot be closed cleanly
+            except Exception:  # noqa: BLE001, S110 - a lost cluster cannot be closed cleanly
                 pass
     elif workers > 1:
         from concurrent.futures import ProcessPoolExecutor

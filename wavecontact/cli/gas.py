@@ -195,10 +195,8 @@ def _compile_timer():
 def run(args) -> int:
     from ..errors import InvalidParameterError
     from ..gas import GasSimulation, UniformLengths, random_gas
-    from ..gas.simulation import run_gas
+    from ..gas.simulation import MAX_COLLISIONS, run_gas
     from ..result import to_jsonable
-
-    from ..gas.simulation import MAX_COLLISIONS
 
     out = Path(args.out) if args.out else None
     if args.collisions > MAX_COLLISIONS:

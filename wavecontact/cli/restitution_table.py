@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 from ..errors import InvalidParameterError
@@ -39,7 +40,7 @@ def add_parser(subparsers):
 
 
 def _ascending(option: str, values, low: float, high: float, text: str) -> None:
-    if not all(math.isfinite(v) and low <= v <= high for v in values) or any(b <= a for a, b in zip(values, values[1:])):
+    if not all(math.isfinite(v) and low <= v <= high for v in values) or any(b <= a for a, b in itertools.pairwise(values)):
         raise InvalidParameterError(f"{option} must be strictly ascending values {text}, got {' '.join(map(str, values))}")
 
 

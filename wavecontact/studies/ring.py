@@ -31,10 +31,10 @@ import numpy as np
 
 from ..analytic import equilibrium_translational_energy
 from ..errors import CheckpointError, InvalidParameterError, require_positive
-from ..limits import Limits, check_study_cost, ring_cost
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
 from ..io.run_controller import RunController
+from ..limits import Limits, check_study_cost, ring_cost
 from ..result import to_jsonable
 from ..scene import two_rods_on_a_ring
 from ..solvers import get_solver
