@@ -369,11 +369,23 @@ def test_plot_draws_exact_runs_on_the_round_off_floor(tmp_path):
     assert "exact on 1 mesh" in ax_n.get_legend().get_texts()[0].get_text()
 
 
-def test_progress_bar_goes_to_stderr_only_when_asked(capsys):
+def test_progress_bar_goes_to_stderr_only_when_asked_and_only_on_a_terminal(capsys, monkeypatch):
+    """A bar when asked and stderr is a terminal; never into a pipe or file (wavecontact.progress's one rule)."""
+    import io
+    import sys
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
     kwargs = {"orders": (1,), "masses": ("lumped",), "elements": (10, 20, 40)}
-    convergence_study(0.6, 20, collide=StandIn(), progress=True, **kwargs)
-    captured = capsys.readouterr()
-    assert captured.out == "" and "/3 " in captured.err and "P1 lumped" in captured.err
-    convergence_study(0.6, 20, collide=StandIn(), progress=None, **kwargs)  # stderr is no tty here
+    terminal = Terminal()
+    with monkeypatch.context() as patch:
+        patch.setattr(sys, "stderr", terminal)
+        convergence_study(0.6, 20, collide=StandIn(), progress=True, **kwargs)
+    assert "/3 " in terminal.getvalue() and "P1 lumped" in terminal.getvalue()
+    assert capsys.readouterr().out == ""
+    convergence_study(0.6, 20, collide=StandIn(), progress=True, **kwargs)  # stderr is no tty here
+    convergence_study(0.6, 20, collide=StandIn(), progress=None, **kwargs)
     convergence_study(0.6, 20, collide=StandIn(), progress=False, **kwargs)
     assert capsys.readouterr().err == ""
