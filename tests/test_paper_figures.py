@@ -58,7 +58,12 @@ def test_relaxation_verdict_by_the_median_interval_against_about_60():
     assert pf.verdict_relaxation([30, 40, 45, 62, 80])[0] == pf.BORDERLINE  # holds 60, median 45
     verdict, reason = pf.verdict_relaxation([61, 75, 80, 90, 100])
     assert verdict == pf.DIFFERS and "slower" in reason
-    assert pf.verdict_relaxation([30, None, 45, 62, 80])[0] == pf.NOT_REPRODUCED
+    # a run that never relaxes counts as the slowest; most never relaxing is not reproduced
+    assert pf.verdict_relaxation([58, None, 45, 62, 80])[0] == pf.REPRODUCED
+    assert pf.verdict_relaxation([None, None, None, 62, 80])[0] == pf.NOT_REPRODUCED
+    # 15 realisations: the interval is [4th smallest, 4th largest]
+    assert pf.median_confidence_interval(range(1, 16))[:2] == (4.0, 12.0)
+    assert pf.verdict_relaxation([20, 25, 30, 35, 40, 41, 42, 43, 44, 45, 50, 59, 61, 62, 90])[0] == pf.DIFFERS
     # no factor-of-2 leniency: 34 collisions on every realisation is not "about 60"
     assert pf.verdict_relaxation([34] * 5)[0] == pf.DIFFERS
 
@@ -170,6 +175,7 @@ def test_criteria_are_declared_from_the_thresholds_the_verdicts_use():
     for sizes in pf.SIZES.values():  # every stochastic or chaotic claim pools at least 5 realisations
         assert min(sizes["ring_realisations"], sizes["settling_realisations"], sizes["fig7_realisations"],
                    sizes["markov_chains"]) >= 5
+        assert sizes["relaxation_realisations"] >= sizes["ring_realisations"]
         assert "{" not in pf.criterion_for("markov_ks", sizes).realisations
 
 
