@@ -206,7 +206,8 @@ CRITERIA = {
         'Sec. III: "even for k=1 correlations are very small"; Fig. 3: "successive collision events are only '
         'weakly correlated"',
         f'"very small", no number: read as |C(1)/C(0)| <= {WEAK_CORRELATION:g} (at most 1 % of the variance)',
-        "C(1)/C(0) of the stationary restitutions, mean over the realisations, SE from their spread",
+        "C(1)/C(0) of the stationary restitutions, mean over the realisations, SE from their spread (n - 1 "
+        "degrees of freedom: with 5 realisations the SE is itself uncertain by about 35 %)",
         _RING,
         f"|mean| <= {Z_AGREE:g} SE (not resolved from 0): reproduced; resolved from 0 but |mean| <= "
         f"{WEAK_CORRELATION:g}: borderline (weak, but measurably nonzero); |mean| > {WEAK_CORRELATION:g}: differs"),
@@ -266,7 +267,8 @@ CRITERIA = {
         'Sec. VII: "the distribution approximates a Boltzmann statistics rather well" (Fig. 10; mean T_B^0, '
         "Eq. 30)",
         f'"rather well": read as the mean within {MARKOV_RATHER_WELL:.0%} of T_B^0',
-        "stationary mean of E_tr/T_B^0, mean of the chains' means, SE from the spread of the chain means",
+        "stationary mean of E_tr/T_B^0, mean of the chains' means, SE from the spread of the chain means (n - 1 "
+        "degrees of freedom: with 5 chains the SE is itself uncertain by about 35 %)",
         "{markov_chains} independent chains x {markov_steps} steps (the paper: 10,000 steps) from the root seed's "
         "stream (10,)",
         f"|z| <= {Z_AGREE:g}: reproduced; resolved (|z| > {Z_AGREE:g}) but within {MARKOV_RATHER_WELL:.0%}: "
