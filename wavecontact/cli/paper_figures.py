@@ -37,6 +37,8 @@ def add_parser(subparsers):
     p.add_argument("--only", type=_figure_number, nargs="+", metavar="N", help="only these figures, 1-10 (default: all ten)")
     p.add_argument("--page", metavar="FILE", help="write the Markdown page here (default DIR/paper_figures.md)")
     p.add_argument("--workers", type=nonnegative_int, default=1, help="worker processes for the ensembles (default 1)")
+    p.add_argument("--seed", type=nonnegative_int, default=0, metavar="ROOT",
+                   help="root seed from which every realisation is derived (default 0; printed on the page)")
     p.add_argument("--no-progress", dest="progress", action="store_false", help="no progress lines on stderr")
     p.set_defaults(run=run)
     return p
@@ -63,6 +65,8 @@ def command_line(args) -> str:
         words += ["--page", str(args.page)]
     if args.workers != 1:
         words += ["--workers", str(args.workers)]
+    if args.seed != 0:
+        words += ["--seed", str(args.seed)]
     return " ".join(shlex.quote(w) for w in words)
 
 
@@ -80,12 +84,13 @@ def run(args) -> int:
         def log(message):
             _log(f"{message} [{QUICK_CAVEAT}]")
     with executor_from(args.workers, None) as executor:
-        reports = run_figures(out, quick=args.quick, only=args.only, executor=executor, log=log)
+        reports = run_figures(out, quick=args.quick, only=args.only, executor=executor, log=log,
+                              root_seed=args.seed, caveat=QUICK_CAVEAT if args.quick else None)
     machine = (f"Run with {args.workers} worker process(es) on a 2-core machine shared with other jobs; "
                "wall times are indicative only.")
     if args.quick:
         machine += f" {QUICK_NOTE}"
-    write_page(reports, page, command_line(args), machine)
+    write_page(reports, page, command_line(args), machine, root_seed=args.seed)
     if args.quick:
         print(f"{QUICK_NOTE}\n")
     print("| Fig. | verdict | measured |")
