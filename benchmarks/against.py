@@ -91,6 +91,18 @@ print(json.dumps({"cpu_s": cpu / repetitions, "wall_s": wall / repetitions}))
 """
 
 
+
+#: A case is flagged when its median ratio new/old minus the spread exceeds this.
+SLOWER_THAN = 1.10
+
+
+def judge(ratios) -> tuple:
+    """``(median ratio, spread, slower)`` of per-repeat ratios new/old; the spread is half their range and a
+    case is slower when the median minus the spread exceeds :data:`SLOWER_THAN`."""
+    ratio = statistics.median(ratios)
+    spread = (max(ratios) - min(ratios)) / 2.0
+    return ratio, spread, ratio - spread > SLOWER_THAN
+
 def run_case(tree: Path, name: str, timeout: float = 900.0) -> dict:
     """One process: the case ``name`` against the package in ``tree``; its CPU and wall time per statement (s)."""
     setup, statement, repetitions = CASES[name]
@@ -126,10 +138,9 @@ def compare(old: Path, new: Path, names, repeats: int, report=None) -> list:
                 got[which] = run_case(old if which == "old" else new, name)["cpu_s"]
                 times[which].append(got[which])
             ratios.append(got["new"] / got["old"])
-        ratio = statistics.median(ratios)
-        spread = (max(ratios) - min(ratios)) / 2.0
+        ratio, spread, slower = judge(ratios)
         rows.append({"case": name, "old_s": statistics.median(times["old"]), "new_s": statistics.median(times["new"]),
-                     "ratio": ratio, "spread": spread, "slower": ratio - spread > 1.10})
+                     "ratio": ratio, "spread": spread, "slower": slower})
         if report:
             report(rows[-1])
     return rows
