@@ -121,9 +121,9 @@ def estimates(run: dict, n: int) -> tuple:
         present = math.nan
     previous = math.nan
     if len(coarse) > 1:
-        cold = solver.contact_resolution(scene, options, thermal=False)
+        cold = solver._contact_resolution(scene, options, thermal=False)
         previous = estimate_from_levels(coarse, cold, solver.expected_order(options),
-                                        solver._characteristic(scene, options), solver.scheme_order(options))[0]
+                                        solver._characteristic(scene, options), solver._scheme_order(options))[0]
     return present, previous
 
 

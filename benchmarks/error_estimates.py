@@ -134,7 +134,7 @@ def reapply(row: dict) -> dict:
     if row["status"] != "ok":
         return row
     scene = two_rods(row["gamma"], row["kappa"])
-    options = FEM.estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
+    options = FEM._estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
     levels = [tuple(level) for level in row["levels"]]
     estimate, rule = FEM.estimate_from_levels(scene, options, levels)
     return {**row, "estimate": excess_bound(estimate, row["restitution"], cold=True), "rule": rule,
@@ -173,9 +173,9 @@ def add_finer(row: dict) -> tuple:
     if row["status"] != "ok" or elements >= FINER_BELOW or any(n > elements for n, _ in row["levels"]):
         return row, math.nan
     scene = two_rods(row["gamma"], row["kappa"])
-    options = FEM.estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
-    value = float(FEM._collide(scene, options.replace(elements=2 * elements, record_fields=False))["restitution"])
-    again = float(FEM._collide(scene, options.replace(record_fields=False))["restitution"])
+    options = FEM._estimate_options(FEM.options(row["options"]), {"contact_scheme": row.get("scheme")})
+    value = float(FEM._collide(scene, options.replace(elements=2 * elements, record_fields=False)).restitution)
+    again = float(FEM._collide(scene, options.replace(record_fields=False)).restitution)
     return ({**row, "levels": [*row["levels"], [2 * elements, value]], "finer_added": True},
             abs(again - row["restitution"]))
 

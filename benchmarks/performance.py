@@ -159,12 +159,19 @@ def draw_pareto_figures(tables, figure_dir) -> list:
 
 def tables_from_json(path) -> dict:
     """The comparison tables saved in performance_data.json, keyed by (gamma, kappa)."""
-    from wavecontact.studies.compare import ComparisonRow, ComparisonTable
+    from wavecontact.studies.compare import ComparisonRow, ComparisonTable, method_labels
 
+    # rows saved before they carried their series and point label: from the method of that label
+    known = {(m.solver, m.describe()): m for family in methods_for(False) + [[Method("delay", {}, "hard-core recursion")]]
+             for m in family}
     tables = {}
     for record in json.loads(Path(path).read_text()).values():
         kappa = math.inf if record["kappa"] == "inf" else float(record["kappa"])
         rows = [ComparisonRow(**row) for row in record["rows"]]
+        for row in rows:
+            method = known.get((row.solver, row.resolution))
+            if not row.family and method is not None:
+                row.family, row.point = method_labels(method)
         tables[(record["gamma"], kappa)] = ComparisonTable(record["gamma"], kappa, record["reference"],
                                                            record["reference_source"], rows)
     return tables

@@ -193,18 +193,18 @@ def test_solver_reports_the_rule_applied_to_its_levels(kappa, elements, scheme):
     result = fem_solver.SOLVER.solve(scene, options)
     assert result.extra["contact_scheme"] == scheme
     levels = result.diagnostics["error_estimate_levels"]
-    held = fem_solver.SOLVER.estimate_options(options, result.extra)
-    x = fem_solver.SOLVER.contact_resolution(scene, held)
+    held = fem_solver.SOLVER._estimate_options(options, result.extra)
+    x = fem_solver.SOLVER._contact_resolution(scene, held)
     if elements >= fem_solver.FINER_BELOW:
         assert [n for n, _ in levels] == [elements, elements // 2, elements // 4]
-        expected, _ = error_estimate.estimate_from_levels(levels, x, 2.0, False, fem_solver.SOLVER.scheme_order(held))
+        expected, _ = error_estimate.estimate_from_levels(levels, x, 2.0, False, fem_solver.SOLVER._scheme_order(held))
     else:
         assert [n for n, _ in levels] == [elements, elements // 2, 2 * elements]  # no N/4: the rule needs none
         finer = fem_solver.SOLVER.solve(scene, held.replace(elements=2 * elements), estimate_error=False)
         assert levels[-1][1] == finer.restitution
         expected, _ = error_estimate.estimate_with_finer(levels[-1], levels[:-1], x, 2.0, False,
-                                                         fem_solver.SOLVER.scheme_order(held))
-    assert fem_solver.SOLVER.scheme_order(held) == (1.0 if scheme == "interface" else 2.0)
+                                                         fem_solver.SOLVER._scheme_order(held))
+    assert fem_solver.SOLVER._scheme_order(held) == (1.0 if scheme == "interface" else 2.0)
     assert result.error_estimate == expected
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 
 from .contact import ContactLaw
@@ -110,16 +109,8 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
         scene = _cold_scene(float(gamma), float(kappa), contact) if isinstance(contact, str) else \
             two_rods(gamma, kappa, contact=contact)
         return solve(scene, solver, **options)
-    from .bath.collide import thermal_scene, vibration_energy_gain
+    from .bath.collide import thermal_scene
     from .bath.model import ThermalBath
 
-    bath = ThermalBath(bath_temperature, bath_modes)
-    scene = thermal_scene(gamma, kappa, bath, seed, contact=contact)
-    result = solve(scene, solver, **options)
-    extra = dict(result.extra)
-    gain = vibration_energy_gain(result, scene)
-    if gain is not None:
-        extra["vibration_energy_gain"] = gain
-    extra["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
-                     "seed": seed if isinstance(seed, int) else repr(seed)}
-    return dataclasses.replace(result, extra=extra)
+    scene = thermal_scene(gamma, kappa, ThermalBath(bath_temperature, bath_modes), seed, contact=contact)
+    return solve(scene, solver, **options)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..solvers import get_solver, solver_names
 from .common import (
     CONTACT_HELP,
     FIGURE_SUFFIXES,
@@ -18,6 +19,8 @@ from .common import (
     positive_float,
     positive_int,
     report_written,
+    solver_option,
+    solvers_with_option,
 )
 from .guard import check_outputs
 
@@ -45,7 +48,7 @@ def add_parser(subparsers):
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
     p.add_argument("--kappa", type=kappa_value, required=True,
                    help="softness alpha V l / c in (0, inf]; 'inf' is the hard-core limit")
-    p.add_argument("--solver", choices=("delay", "fem", "modal"), default="delay", help="which solver")
+    p.add_argument("--solver", choices=solver_names(), default="delay", help="which solver")
     p.add_argument("--contact", choices=("exponential", "penalty", "hard"), help=CONTACT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="FILE",
@@ -58,38 +61,44 @@ def add_parser(subparsers):
     p.add_argument("--max-work", type=positive_float, help="limit on the estimated work in updates (default 2e11)")
     p.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
                    "(default: half the available memory)")
-    delay = p.add_argument_group("delay solver")
-    delay.add_argument("--rtol", type=positive_float, help=option_text("delay", "rtol"))
-    delay.add_argument("--max-steps", type=positive_int, metavar="N", help=option_text("delay", "max_steps"))
-    fem = p.add_argument_group("finite-element solver")
-    fem.add_argument("--elements", type=positive_int, metavar="N", help=option_text("fem", "elements"))
-    fem.add_argument("--order", type=int, choices=option_choices("fem", "order"), help=option_text("fem", "order"))
-    fem.add_argument("--mass", choices=option_choices("fem", "mass"), help=option_text("fem", "mass"))
-    fem.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress for ParaView into DIR (fields.pvd and one "
-                     "VTU file per sample; units and parameters in each file's field data)")
-    fem.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
-    modal = p.add_argument_group("modal solver")
-    modal.add_argument("--modes", type=positive_int, metavar="N", help=option_text("modal", "modes"))
-    modal.add_argument(
-        "--no-static-correction", dest="static_correction", action="store_false", default=None,
-        help="plain truncation: no correction for the omitted modes (the modal solver's static_correction=False; "
-        "not for hard contact). Default: corrected",
-    )
+    _add_solver_flags(p)
     p.set_defaults(run=run)
     return p
 
 
-_SOLVER_FLAGS = {
-    "delay": ("rtol", "max_steps"),
-    "fem": ("elements", "order", "mass"),
-    "modal": ("modes", "static_correction"),
-}
+def _add_solver_flags(p) -> None:
+    """One group of flags per registered solver: the options it exposes (``cli_flags``), built from their
+    declarations (type, allowed values, help); the field outputs go with the solver that records fields."""
+    fields_added = False
+    for name in solver_names():
+        solver = get_solver(name)
+        group = p.add_argument_group(solver.title)
+        for option, help_text in solver.cli_flags.items():
+            default, spec = solver_option(name, option)
+            flag = "--" + option.replace("_", "-")
+            text = help_text or option_text(name, option)
+            if spec["kind"] == "bool":  # a switch that turns a default-on option off
+                group.add_argument("--no-" + flag[2:], dest=option, action="store_false", default=None, help=text)
+            elif spec["kind"] == "choice":
+                kind = int if all(isinstance(c, int) for c in spec["choices"]) else None
+                group.add_argument(flag, **({"type": kind} if kind else {}), choices=option_choices(name, option),
+                                   help=text)
+            elif spec["kind"] == "int":
+                group.add_argument(flag, type=positive_int, metavar="N", help=text)
+            else:
+                group.add_argument(flag, type=positive_float, help=text)
+        if not fields_added and "record_fields" in solver.Options.__dataclass_fields__:
+            fields_added = True
+            group.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress for ParaView "
+                               "into DIR (fields.pvd and one VTU file per sample; units and parameters in each "
+                               "file's field data)")
+            group.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
 
 
 def _options(args) -> dict:
     options = {}
-    for solver, names in _SOLVER_FLAGS.items():
-        for name in names:
+    for solver in solver_names():
+        for name in get_solver(solver).cli_flags:
             value = getattr(args, name)
             if value is None:
                 continue
@@ -97,8 +106,9 @@ def _options(args) -> dict:
                 raise ValueError(f"--{name.replace('_', '-')} applies to --solver {solver}, not {args.solver}")
             options[name] = value
     if args.fields or args.xt_plot:
-        if args.solver != "fem":
-            raise ValueError("--fields and --xt-plot need --solver fem")
+        recording = solvers_with_option("record_fields")
+        if args.solver not in recording:
+            raise ValueError(f"--fields and --xt-plot need --solver {' or '.join(recording)}")
         options["record_fields"] = True
     return options
 
@@ -135,8 +145,9 @@ def run(args) -> int:
     options = {**_options(args), "tolerance": args.tolerance, "max_work": args.max_work,
                "max_memory": args.max_memory}
     _check_outputs(args)
-    if contact == "penalty" and args.solver != "fem":
-        raise ValueError("--contact penalty needs --solver fem")
+    if contact not in get_solver(args.solver).contact_names:
+        accepting = [name for name in solver_names() if contact in get_solver(name).contact_names]
+        raise ValueError(f"--contact {contact} needs --solver {' or '.join(accepting)}")
     result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
     written = []
     if args.fields:

@@ -97,6 +97,13 @@ def solver_option(solver: str, name: str) -> tuple:
     raise KeyError(f"solver {solver!r} has no option {name!r}")
 
 
+def solvers_with_option(name: str) -> tuple:
+    """The registered solvers that declare the option ``name``, in registry order."""
+    from ..solvers import get_solver, solver_names
+
+    return tuple(s for s in solver_names() if name in get_solver(s).Options.__dataclass_fields__)
+
+
 def option_text(solver: str, name: str) -> str:
     """Help of a solver option as the solver declares it: meaning, allowed values, default."""
     from ..solvers.base import option_help

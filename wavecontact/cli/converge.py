@@ -85,13 +85,14 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
-    from ..studies.convergence import convergence_study
+    from ..studies.convergence import SOLVER, convergence_study
 
     if len(set(args.elements)) < 2:
         raise ValueError("--elements needs at least two different mesh sizes to fit an order")
     contact = contact_law(args.kappa, args.contact)
     check_outputs(files=[("--plot", args.plot, FIGURE_SUFFIXES)])
-    runs = [("fem", {"elements": n, "order": p, "mass": m}) for p in args.order for m in args.mass for n in args.elements]
+    runs = [(SOLVER, {"elements": n, "order": p, "mass": m}) for p in args.order for m in args.mass
+            for n in args.elements]
     check_run(args, f"converge: {len(runs)} finite-element solves",
               methods_cost(args.gamma, args.kappa, runs, 1 if args.warmup is False else 2),
               "use fewer or smaller --elements, --order or --mass")

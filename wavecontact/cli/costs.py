@@ -107,15 +107,17 @@ def compare_cost(gamma: float, kappa: float, repeats: int) -> Cost:
 def thermal_samples_cost(samples: int, kappa: float, bath_modes: int, solver: str = "delay",
                          gamma: float = 0.6, options: dict | None = None) -> Cost:
     """``samples`` thermal collisions at ``(gamma, kappa)`` with ``bath_modes`` modes per rod."""
+    from ..solvers import get_solver
+    from ..solvers.base import HARD_CORE_THERMAL, THERMAL_BATCH
+
     samples = int(samples)
-    if solver == "delay":
+    engine = get_solver(solver)
+    if engine.offers(HARD_CORE_THERMAL if math.isinf(kappa) else THERMAL_BATCH):  # the batched samplers
         each = HARD_CORE_SAMPLE_UPDATES if math.isinf(kappa) else THERMAL_SAMPLE_UPDATES_PER_MODE * bath_modes
         detail = f"{samples} samples x {each:.2g} updates each"
     else:
         from ..scene import two_rods
-        from ..solvers import get_solver
 
-        engine = get_solver(solver)
         cost = engine.total_cost(two_rods(gamma, kappa), engine.options(dict(options or {})), True)
         each = (0.0 if cost is None else cost.work) + THERMAL_SAMPLE_UPDATES_PER_MODE * bath_modes
         detail = f"{samples} samples x {each:.2g} updates each ({solver} solver's estimate and the bath)"

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from ..errors import InvalidParameterError
+from ..solvers import solver_names
 from .common import (
     FIGURE_SUFFIXES,
     files_summary,
@@ -16,6 +17,7 @@ from .common import (
     positive_float,
     positive_int,
     report_written,
+    solvers_with_option,
 )
 from .costs import add_work_option, check_run, thermal_samples_cost
 from .executors import executor_from
@@ -49,7 +51,7 @@ def add_parser(subparsers):
     p.add_argument("--samples", type=positive_int, required=True, help="number of collisions")
     p.add_argument("--seed", type=nonnegative_int, required=True, help="root seed (>= 0)")
     p.add_argument("--bath-modes", type=positive_int, default=250, help="modes per rod nu_max (default 250)")
-    p.add_argument("--solver", choices=("delay", "modal", "fem"), default="delay", help="solver of each collision")
+    p.add_argument("--solver", choices=solver_names(), default="delay", help="solver of each collision")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=positive_int, default=1, help="local worker processes (default 1)")
     where.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler (default: none, local processes)")
@@ -72,8 +74,9 @@ def run(args) -> int:
     temperature = _temperature(args.temperature)
     options = {}
     if args.rtol is not None:
-        if args.solver != "delay":
-            raise InvalidParameterError(f"--rtol applies to --solver delay, not {args.solver}")
+        taking = solvers_with_option("rtol")
+        if args.solver not in taking:
+            raise InvalidParameterError(f"--rtol applies to --solver {' or '.join(taking)}, not {args.solver}")
         options["rtol"] = args.rtol
     EnsembleSpec(args.gamma, args.kappa, temperature, args.samples, args.seed, bath_modes=args.bath_modes,
                  solver=args.solver, options=options, batch_size=args.batch_size)  # refuses before any work

@@ -6,6 +6,7 @@ import json
 import math
 from pathlib import Path
 
+from ..solvers import solver_names
 from .common import (
     FIGURE_SUFFIXES,
     files_summary,
@@ -46,7 +47,7 @@ def add_parser(subparsers):
                    help="E_tr(0)/T_B^0 (default 1.0; with --bath conserved at most 2 N_mod + 1)")
     p.add_argument("--bath-modes", type=positive_int, default=250,
                    help="excited modes per rod nu_max in each solved collision (default 250)")
-    p.add_argument("--solver", choices=("delay", "modal", "fem"), default=None,
+    p.add_argument("--solver", choices=solver_names(), default=None,
                    help="solver of each collision for --rule solve (default delay)")
     p.add_argument("--burn-in", type=nonnegative_int, default=None,
                    help="steps discarded before the stationary statistics (default: from the relaxation)")

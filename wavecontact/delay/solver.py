@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -31,7 +32,8 @@ from ..errors import InvalidParameterError, LimitError, SolverFailure, Unsupport
 from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene, two_rods
-from ..solvers.base import SolverBase, SolverOptions, option
+from ..solvers.base import (HARD_CORE_THERMAL, MATERIAL_RATIOS, THERMAL_BATCH, CollisionFields, SolverBase,
+                            SolverOptions, option)
 from . import kernels
 from .energy_split import NODES, WEIGHTS, vibration_energy_gain
 from .hardcore import contact_intervals, hard_core_history
@@ -39,7 +41,7 @@ from .noise import COLD, FourierNoise
 from .parameters import DelayParameters, delay_parameters, echoes_from_ratios
 from .stochastic_hardcore import hard_core_noise
 
-__all__ = ["ORDER", "SOLVER", "DelayOptions", "DelaySolver", "solve_delay_equation"]
+__all__ = ["BATCH_OPTIONS", "ORDER", "SOLVER", "DelayOptions", "DelaySolver", "solve_delay_equation"]
 
 ORDER = 6  # Gauss-Kronrod (3, 7) on the smooth remainder, quintic Hermite history
 
@@ -63,6 +65,15 @@ _OUTCOMES = {
 
 
 _NO_TABLES = NoiseTables.empty()  # read only by the kernels
+
+# The options of a batch of many finite-kappa thermal samples (ensembles, Markov chains) where the caller
+# gives none.  The step control is pessimistic (its rtol bounds a sum of local error estimates): at rtol
+# 1e-3 the samples of the Fig. 8 set differ from rtol 1e-10 by at most a few 1e-5 and their mean by about
+# 1e-6, far below the ~6e-3 standard error of a 2500-sample mean (docs/bath.md, "The thermal delay solve";
+# benchmarks/ensemble_accuracy.py).  The end nodes of the Lobatto rule are the step's ends (6 evaluations
+# of the exponent a step instead of 8, at the same measured accuracy), and noise tables with 16 nodes per
+# period of the fastest mode move the samples by about 1e-6 (32: 6e-8).
+BATCH_OPTIONS = {"rtol": 1e-3, "quadrature": "lobatto-kronrod", "noise_resolution": 16}
 
 
 def _noise(value):
@@ -190,6 +201,24 @@ class DelaySolver(SolverBase):
     Options = DelayOptions
     resolution = "rtol"
     refines = -1
+    title = "delay solver"
+    cli_flags = MappingProxyType({"rtol": None, "max_steps": None})
+    capabilities = frozenset({THERMAL_BATCH, HARD_CORE_THERMAL, MATERIAL_RATIOS})
+    batch_defaults = MappingProxyType(BATCH_OPTIONS)
+    order_case = MappingProxyType({"resolutions": (1e-4, 1e-6, 1e-8), "options": {}})
+    agreement_case = ({}, 1e-9)
+
+    def comparison_methods(self, kappa: float) -> list:
+        """Three tolerances, ``rtol`` 1e-5, 1e-8 and 1e-11."""
+        del kappa
+        return [({"rtol": r}, f"rtol={r:.0e}", "steps") for r in (1e-5, 1e-8, 1e-11)]
+
+    def vibration_energy_gain(self, fields: CollisionFields, scene: Scene):
+        """The per-rod split of :mod:`wavecontact.delay.energy_split`, computed during the solve; None in the
+        stochastic hard-core mode (its grid gives only the total) and with ``energy_split=False``."""
+        del scene
+        gain = fields.extra.get("vibration_energy_gain")
+        return None if gain is None else np.asarray(gain, dtype=float)
 
     # -- fast paths for large sweeps: the same equations without Scene and CollisionResult objects ----------
     def check_ratios(self, impedance_ratio: float, time_ratio: float) -> None:
@@ -361,7 +390,7 @@ class DelaySolver(SolverBase):
                     f"lower end_time or pass max_steps={math.ceil(steps * 1.1)}")
         return None
 
-    def _collide(self, scene: Scene, options: DelayOptions) -> dict:
+    def _collide(self, scene: Scene, options: DelayOptions) -> CollisionFields:
         params = _check_scene(scene)
         kappa = params.kappa
         vibrations = scene.vibrations
@@ -390,16 +419,16 @@ class DelaySolver(SolverBase):
         if vibrations is not None:
             extra["vibration_energy_before"] = vibrations.vibration_energy()
             extra["bath_modes"] = vibrations.modes
-        return {
-            "restitution": w[-1] / kappa - 1.0,
-            "time": t * unit,
-            "relative_velocity": params.approach_speed * (w / kappa - 1.0),
+        return CollisionFields(
+            restitution=w[-1] / kappa - 1.0,
+            time=t * unit,
+            relative_velocity=params.approach_speed * (w / kappa - 1.0),
             # mu dv_rel/dt = Z_s V W' / kappa
-            "contact_force": params.force_unit * d1 / kappa,
-            "error_estimate": error,
-            "work": work,
-            "extra": extra,
-        }
+            contact_force=params.force_unit * d1 / kappa,
+            error_estimate=error,
+            work=work,
+            extra=extra,
+        )
 
 
 _PARAMETER_NAMES = tuple(f.name for f in dataclasses.fields(DelayParameters))
@@ -480,7 +509,7 @@ def _as_dict(params: DelayParameters) -> dict:
     return {**values, "impedance_ratio": params.impedance_ratio, "time_ratio": params.time_ratio}
 
 
-def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> dict:
+def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> CollisionFields:
     """The hard-core limit with the scene's vibrations (max-plus recursion on a grid).
 
     The answer comes from the grid at 2 x resolution; the grid converges at
@@ -501,21 +530,21 @@ def _collide_hard_stochastic(scene, params: DelayParameters, resolution) -> dict
                             for r in (max(resolution // 2, 2), resolution, 2 * resolution)]
     t, w = hard_core_noise(gamma, vibrations, tau_free, 2 * resolution)
     slopes = np.diff(w) / np.diff(t)
-    return {
-        "restitution": restitution,
-        "time": t,
-        "relative_velocity": w - 1.0,
+    return CollisionFields(
+        restitution=restitution,
+        time=t,
+        relative_velocity=w - 1.0,
         # the force is constant between grid points: force[i] is its value on (time[i-1], time[i]]
-        "contact_force": params.force_unit * np.concatenate([[0.0], slopes]),
-        "force_sampling": "interval",
-        "error_estimate": max(abs(coarser[1] - restitution), abs(coarser[0] - coarser[1])),
-        "work": {"steps": int(t.size)},
-        "extra": {"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
-                  "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])},
-    }
+        contact_force=params.force_unit * np.concatenate([[0.0], slopes]),
+        force_sampling="interval",
+        error_estimate=max(abs(coarser[1] - restitution), abs(coarser[0] - coarser[1])),
+        work={"steps": int(t.size)},
+        extra={"hard_core": True, "free_flight_time": tau_free, "bath_modes": vibrations.modes,
+               "vibration_energy_before": vibrations.vibration_energy(), "grid_step": float(t[1] - t[0])},
+    )
 
 
-def _collide_hard(params: DelayParameters) -> dict:
+def _collide_hard(params: DelayParameters) -> CollisionFields:
     delays, weights = params.round_trip_times, params.echo_weights
     knots_t, knots_w = hard_core_history(delays, weights)
     restitution = float(knots_w[-1] - 1.0)
@@ -527,17 +556,17 @@ def _collide_hard(params: DelayParameters) -> dict:
     # the force is constant between knots: force[i] is its value on (time[i-1], time[i]], units Z_s V
     force = np.concatenate([[0.0, 0.0], slopes, [0.0]])
     unit = params.time_unit
-    return {
-        "restitution": restitution,
-        "time": knots_t * unit,
-        "relative_velocity": params.approach_speed * (knots_w - 1.0),
-        "contact_force": params.force_unit * force,
-        "force_sampling": "interval",
-        "error_estimate": 1e-14,
-        "work": {"steps": int(knots_t.size)},
-        "extra": {"hard_core": True, "contacts": [(a * unit, b * unit) for a, b in contacts],
-                  "delay_parameters": _as_dict(params)},
-    }
+    return CollisionFields(
+        restitution=restitution,
+        time=knots_t * unit,
+        relative_velocity=params.approach_speed * (knots_w - 1.0),
+        contact_force=params.force_unit * force,
+        force_sampling="interval",
+        error_estimate=1e-14,
+        work={"steps": int(knots_t.size)},
+        extra={"hard_core": True, "contacts": [(a * unit, b * unit) for a, b in contacts],
+               "delay_parameters": _as_dict(params)},
+    )
 
 
 SOLVER = DelaySolver()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure
 from ..limits import Cost
 from ..scene import Scene
-from ..solvers.base import SolverBase, SolverOptions, option
+from ..solvers.base import CollisionFields, SolverBase, SolverOptions, option
 from . import kernels
 from .error_estimate import ESTIMATE_SAFETY
 from .error_estimate import estimate_from_levels as _estimate_from_levels
@@ -105,6 +106,11 @@ class FemSolver(SolverBase):
     Options = FemOptions
     resolution = "elements"
     refines = 1
+    title = "finite-element solver"
+    cli_flags = MappingProxyType({"elements": None, "order": None, "mass": None})
+    contact_names = ("exponential", "penalty", "hard")
+    order_case = MappingProxyType({"resolutions": (24, 48, 96, 192), "options": {"order": 1, "mass": "consistent"}})
+    agreement_case = ({"elements": 400}, 1e-5)
     error_safety = ESTIMATE_SAFETY
     error_levels = 2
 
@@ -112,22 +118,39 @@ class FemSolver(SolverBase):
         """Order of epsilon in ``h`` where the contact is resolved (:data:`EXPECTED_ORDER`)."""
         return float(EXPECTED_ORDER[(options.order, options.mass)])
 
-    def _collide(self, scene: Scene, options: FemOptions) -> dict:
+    def _collide(self, scene: Scene, options: FemOptions) -> CollisionFields:
         return _collide(scene, options.as_dict())
 
-    def _error_estimate(self, scene: Scene, options: FemOptions, fields: dict) -> tuple:
+    def comparison_methods(self, kappa: float) -> list:
+        """P1 and P2, lumped and consistent mass, at 100 and 400 elements."""
+        del kappa
+        return [({"elements": elements, "order": order, "mass": mass}, f"P{order} {mass}, {elements} elements",
+                 "element_steps")
+                for order, mass in ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent"))
+                for elements in (100, 400)]
+
+    def comparison_family(self, options: FemOptions) -> str:
+        """``fem: P<order> <mass>``."""
+        return f"{self.name}: P{options.order} {options.mass}"
+
+    def vibration_energy_gain(self, fields: CollisionFields, scene: Scene):
+        """The rods' internal energy after the collision minus the realisation's (continuous) energy."""
+        after = np.asarray(fields.extra["rod_energy_after"], dtype=float)
+        return after - np.array([float(e.sum()) for e in scene.vibrations.modal_energies()])
+
+    def _error_estimate(self, scene: Scene, options: FemOptions, fields: CollisionFields) -> tuple:
         """Richardson with the coarser runs held to the contact scheme of the requested run: with
         scheme='auto' a coarser mesh may no longer resolve the contact and switch from the force
         scheme (second order) to the massless-end interface (first order, errors near 1e-3), and the
         difference of two schemes says nothing about the finer run's error.  Below
         :data:`FINER_BELOW` elements one more run at ``2N`` (same scheme) joins the levels."""
-        held = self.estimate_options(options, fields.get("extra", {}))
+        held = self._estimate_options(options, fields.extra)
         estimate, method, levels = super()._error_estimate(scene, held, fields)
         if not levels or not self._finer_run(scene, held):
             return estimate, method, levels
         finer = held.replace(elements=2 * held.elements, record_fields=False)
         try:
-            value = float(self._collide(scene, finer)["restitution"])
+            value = float(self._collide(scene, finer).restitution)
         except SolverFailure as failure:
             needed = "with a thermal bath" if scene.vibrations is not None else f"below {FINER_BELOW}"
             why = f"the run at {finer.elements} elements, needed {needed}, failed: {failure}"
@@ -161,7 +184,7 @@ class FemSolver(SolverBase):
         return options.nodes is None and (options.elements < FINER_BELOW or scene.vibrations is not None)
 
     @staticmethod
-    def estimate_options(options: FemOptions, extra: dict) -> FemOptions:
+    def _estimate_options(options: FemOptions, extra: dict) -> FemOptions:
         """The options of the coarser runs: the requested ones with ``scheme='auto'`` replaced by the
         contact scheme the requested run used (``extra['contact_scheme']``) where that is the force
         scheme or the massless-end interface."""
@@ -176,7 +199,7 @@ class FemSolver(SolverBase):
             return None
         return options.replace(elements=options.elements // 2, record_fields=False)
 
-    def contact_resolution(self, scene: Scene, options: FemOptions, thermal: bool = True) -> float:
+    def _contact_resolution(self, scene: Scene, options: FemOptions, thermal: bool = True) -> float:
         """``alpha V h / c`` on the shorter rod at ``options.elements`` (inf for hard and penalty contact,
         for user meshes and for scenes other than two rods); with a thermal bath ``V`` is the fastest
         approach of the ends, the rods' plus their vibrations' (:func:`wavecontact.bath.scene.end_speed`), unless
@@ -197,9 +220,9 @@ class FemSolver(SolverBase):
                 and options.courant in (None, 1.0) and options.dt is None and options.gap_quadrature == "substeps"
                 and isinstance(scene.contact, Exponential))
 
-    def scheme_order(self, options: FemOptions) -> float:
+    def _scheme_order(self, options: FemOptions) -> float:
         """Order in ``h`` of the runs the estimate compares: :data:`INTERFACE_ORDER` where they are held to
-        the massless-end interface (``scheme='interface'``, as :meth:`estimate_options` holds them where the
+        the massless-end interface (``scheme='interface'``, as :meth:`_estimate_options` holds them where the
         requested run used it), else :meth:`expected_order` (the force scheme and the characteristic
         lattice where the contact is resolved)."""
         return INTERFACE_ORDER if options.scheme == "interface" else self.expected_order(options)
@@ -215,8 +238,8 @@ class FemSolver(SolverBase):
         requested = levels[0][0]
         finer = [level for level in levels if level[0] > requested]
         coarse = [level for level in levels if level[0] <= requested]
-        arguments = (self.contact_resolution(scene, options), self.expected_order(options),
-                     self._characteristic(scene, options), self.scheme_order(options), scene.vibrations is not None)
+        arguments = (self._contact_resolution(scene, options), self.expected_order(options),
+                     self._characteristic(scene, options), self._scheme_order(options), scene.vibrations is not None)
         if finer:
             return _estimate_with_finer(min(finer), coarse, *arguments)
         return _estimate_from_levels(coarse, *arguments)
@@ -224,7 +247,7 @@ class FemSolver(SolverBase):
     def rough_estimate(self, scene: Scene, options: FemOptions) -> str:
         """Advice where the estimate is an order of magnitude: P1 lumped on the characteristic lattice with
         ``alpha V dt > PLATEAU_ABOVE`` and both far-end echoes within one step (gamma near 1)."""
-        x = self.contact_resolution(scene, options, thermal=False)  # the plateau was measured on cold collisions
+        x = self._contact_resolution(scene, options, thermal=False)  # the plateau was measured on cold collisions
         if self._characteristic(scene, options) and PLATEAU_ABOVE < x < math.inf:
             travel = [rod.length / rod.wave_speed for rod in scene.rods]
             if 2.0 * abs(travel[0] - travel[1]) < min(travel) / options.elements:
@@ -267,12 +290,12 @@ class FemSolver(SolverBase):
                     detail=f"{nodes:.3g} nodes, at least {steps:.3g} steps of dt = {dt:.3g}")
 
 
-def _collide(scene: Scene, options: dict) -> dict:
+def _collide(scene: Scene, options: dict) -> CollisionFields:
     """One collision of two rods with the finite-element solver (options: :class:`FemOptions`).
 
     Returns
     -------
-    dict
+    CollisionFields
         The fields of the result (see :class:`wavecontact.solvers.base.SolverBase`).
     """
     setup = build_setup(
@@ -329,22 +352,22 @@ def _collide(scene: Scene, options: dict) -> dict:
     }
     if "fields" in out:
         extra["fields"] = out["fields"]
-    return {
-        "restitution": restitution,
-        "time": time,
-        "relative_velocity": relative_velocity,
-        "contact_force": force,
-        "force_sampling": "interval",  # force[i] is the mean over the step ending at time[i]
-        "energy_drift": energy_drift,
-        "momentum_drift": momentum_drift,
-        "work": {
+    return CollisionFields(
+        restitution=restitution,
+        time=time,
+        relative_velocity=relative_velocity,
+        contact_force=force,
+        force_sampling="interval",  # force[i] is the mean over the step ending at time[i]
+        energy_drift=energy_drift,
+        momentum_drift=momentum_drift,
+        work={
             "steps": out["steps"],
             "element_steps": out["steps"] * sum(elements),
             "elements": elements,
             "dt": setup.dt,
         },
-        "extra": {**extra, "max_energy_drift": float(max_drift)},
-    }
+        extra={**extra, "max_energy_drift": float(max_drift)},
+    )
 
 
 _SCHEME_NAMES = {kernels.SCHEME_CHARACTERISTIC: "characteristic", kernels.SCHEME_INTERFACE: "interface",

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -28,7 +29,7 @@ from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene
-from ..solvers.base import SolverBase, SolverOptions, option
+from ..solvers.base import RING, CollisionFields, SolverBase, SolverOptions, option
 from . import collocation, end_response, kernels
 from .modes import rod_modes
 from .system import ModalSystem, StepControl
@@ -308,6 +309,10 @@ def _run_splitting(system, buffer, chunks):
                                                   "free_flights": int(system.counters[1])}
 
 
+_CORRECTION_NAMES = {"end-response": "end-response correction", "static": "static correction",
+                     "none": "plain truncation"}
+
+
 class ModalSolver(SolverBase):
     """The rods' free-free modes with exact free flight (Eq. 7, 14), corrected for the omitted modes."""
 
@@ -315,6 +320,14 @@ class ModalSolver(SolverBase):
     Options = ModalOptions
     resolution = "modes"
     refines = 1
+    title = "modal solver"
+    cli_flags = MappingProxyType({"modes": None, "static_correction": (
+        "plain truncation: no correction for the omitted modes (the modal solver's static_correction=False; "
+        "not for hard contact). Default: corrected")})
+    capabilities = frozenset({RING})
+    # the static correction: the end-response default has no order in N (exact for cold rods; expected_order None)
+    order_case = MappingProxyType({"resolutions": (10, 20, 40), "options": {"correction": "static"}})
+    agreement_case = ({"modes": 100}, 1e-6)
     error_safety = 1.5
     error_levels = 2
 
@@ -325,16 +338,36 @@ class ModalSolver(SolverBase):
                                          options.step_method)
         return {"none": 1.0, "static": 3.0}.get(correction)
 
-    def _collide(self, scene: Scene, options: ModalOptions) -> dict:
+    def _collide(self, scene: Scene, options: ModalOptions) -> CollisionFields:
         return _collide(scene, **options.as_dict())
 
-    def _error_estimate(self, scene: Scene, options: ModalOptions, fields: dict) -> tuple:
+    def comparison_methods(self, kappa: float) -> list:
+        """Each correction for the omitted modes at 25 and 100 modes."""
+        del kappa
+        return [({"modes": modes, "correction": correction, "static_correction": correction != "none"},
+                 f"{modes} modes, {name}", "steps")
+                for correction, name in _CORRECTION_NAMES.items() for modes in (25, 100)]
+
+    def comparison_family(self, options: ModalOptions) -> str:
+        """``modal: <correction>``: end-response, static, or plain truncation."""
+        correction = _resolve_correction(options.correction, options.static_correction, options.mode_source,
+                                         options.step_method)
+        return f"{self.name}: {_CORRECTION_NAMES[correction]}"
+
+    def vibration_energy_gain(self, fields: CollisionFields, scene: Scene):
+        """The modal energies after the collision minus the realisation's energy in the modes kept."""
+        after = np.asarray(fields.extra["vibration_energy"], dtype=float)
+        kept = int(fields.work["modes"])
+        before = np.array([float(e[:kept].sum()) for e in scene.vibrations.modal_energies()])
+        return after - before
+
+    def _error_estimate(self, scene: Scene, options: ModalOptions, fields: CollisionFields) -> tuple:
         """Richardson in the modes; with the end-response correction, whose result does not depend on
         the modes for rods that start at rest, the change when the collocation tolerance is divided by
         ten (the integrator's error, what is left)."""
         correction = _resolve_correction(options.correction, options.static_correction, options.mode_source,
                                          options.step_method)
-        work = fields.get("work", {})
+        work = fields.work
         if correction == "end-response" and "fallback" in work:
             # the collocation failed and the run is the splitting's with the static correction, which the
             # collocation tolerance does not enter: estimate it as such a run (Richardson in the modes)
@@ -355,15 +388,15 @@ class ModalSolver(SolverBase):
             run = _collide(scene, **finer.as_dict(), exponent_step=exponent_step)
         except SolverFailure as failure:
             return math.nan, f"none (the run at a tenth of the collocation tolerance failed: {failure})", []
-        change = abs(float(run["restitution"]) - float(fields["restitution"]))
+        change = abs(float(run.restitution) - float(fields.restitution))
         finer_text = f"{tolerance / 10:g}" + (f" and exponent step {exponent_step:g}" if warm else "")
-        if "fallback" in run["work"]:
-            finer_text += f" (which fell back to the splitting: {run['work']['fallback']})"
+        if "fallback" in run.work:
+            finer_text += f" (which fell back to the splitting: {run.work['fallback']})"
         return (max(self.error_safety * change, END_RESPONSE_FLOOR),
                 (f"collocation tolerance {tolerance:g} against {finer_text}: change {change:.3g}, "
                 f"safety {self.error_safety:g}"), [])
 
-    def _richardson(self, scene: Scene, options: ModalOptions, fields: dict) -> tuple:
+    def _richardson(self, scene: Scene, options: ModalOptions, fields: CollisionFields) -> tuple:
         """Richardson in the modes, unless a coarser run would drop modes the bath excites."""
         coarsest = options.modes // 2 ** self.coarser_levels(options)
         if _excited_modes(scene) > coarsest:
@@ -435,7 +468,7 @@ class ModalSolver(SolverBase):
 
 def _collide(scene: Scene, *, modes, static_correction, correction, mode_source, fe_elements, fe_order,
              step_accuracy, step_reach, step_order, step_method, collocation_stages, collocation_tolerance,
-             history, exponent_step=_EXPONENT_STEP) -> dict:
+             history, exponent_step=_EXPONENT_STEP) -> CollisionFields:
     """One collision of two rods on a line with the modal expansion.
 
     ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
@@ -490,16 +523,16 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
     times, velocity, force = records[:, 0], records[:, 1], records[:, 2]
     energies = system.modal_energies()
     reduced_mass = 1.0 / (1.0 / system.mass[0] + 1.0 / system.mass[1])
-    return {
-        "restitution": abs(w_after) / abs(w_before),
-        "time": times,
-        "relative_velocity": velocity,
-        "contact_force": force if history else None,
-        "energy_drift": abs(energy_after - energy_before) / energy_before,
-        "momentum_drift": abs(system.momentum() - momentum_before) / (reduced_mass * abs(w_before)),
-        "work": {"modes": int(system.rod_modes[0].count), "mode_source": mode_source, "step_method": step_method,
-                 **({} if system.rod_modes[0].count == modes else {"modes_requested": int(modes)}), **work},
-        "extra": {
+    return CollisionFields(
+        restitution=abs(w_after) / abs(w_before),
+        time=times,
+        relative_velocity=velocity,
+        contact_force=force if history else None,
+        energy_drift=abs(energy_after - energy_before) / energy_before,
+        momentum_drift=abs(system.momentum() - momentum_before) / (reduced_mass * abs(w_before)),
+        work={"modes": int(system.rod_modes[0].count), "mode_source": mode_source, "step_method": step_method,
+              **({} if system.rod_modes[0].count == modes else {"modes_requested": int(modes)}), **work},
+        extra={
             "modal_energies": np.array(energies) if energies[0].size == energies[1].size else energies,
             "vibration_energy": [float(np.sum(e)) for e in energies],
             "translational_energy_before": e_tr_before,
@@ -510,7 +543,7 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
             **({} if omitted_energy is None else {"omitted_mode_energy": omitted_energy}),
             "initial_gap": float(gap),
         },
-    }
+    )
 
 
 SOLVER = ModalSolver()

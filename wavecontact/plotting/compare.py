@@ -7,28 +7,25 @@ from pathlib import Path
 
 __all__ = ["comparison_figure", "method_family", "plot_comparison"]
 
-MARKERS = {"delay": "o", "fem": "s", "modal": "^"}
+MARKERS = "os^Dv<>ph*"  # one per registered solver, in registry order
 
 
 def method_family(row) -> str:
-    """The series a comparison row belongs to: one per solver and discretization."""
-    if row.solver == "fem":
-        return "fem: " + row.resolution.split(",")[0]
-    if row.solver == "modal":
-        return "modal: " + row.resolution.split(", ")[-1]
-    return row.solver
+    """The series a comparison row belongs to: one per solver and discretization (its solver's
+    ``comparison_family``, recorded with the row)."""
+    return row.family or row.solver
 
 
 def resolution_label(row) -> str:
     """The short resolution written next to a point: elements, modes or the tolerance."""
-    text = row.resolution
-    if row.solver == "fem" and ", " in text:
-        return text.split(", ")[1].split()[0]  # "P1 lumped, 100 elements" -> "100"
-    if row.solver == "modal":
-        return text.split()[0]  # "25 modes, static correction" -> "25"
-    if "=" in text:
-        return text.split("=", 1)[1]  # "rtol=1e-05" -> "1e-05"
-    return text
+    return row.point or row.resolution
+
+
+def _marker(solver: str) -> str:
+    from ..solvers import solver_names
+
+    names = solver_names()
+    return MARKERS[names.index(solver) % len(MARKERS)] if solver in names else "x"
 
 
 def comparison_figure(table, ax=None, legend: bool = True):
@@ -57,7 +54,7 @@ def comparison_figure(table, ax=None, legend: bool = True):
     floor = 1e-16
     for family, rows in series.items():
         (line,) = ax.loglog([r.wall_time_s for r in rows], [max(r.error, floor) for r in rows],
-                            marker=MARKERS.get(rows[0].solver, "x"), ms=4, label=family)
+                            marker=_marker(rows[0].solver), ms=4, label=family)
         for row in rows:
             ax.annotate(resolution_label(row), (row.wall_time_s, max(row.error, floor)), xytext=(3, 2),
                         textcoords="offset points", fontsize=5.5, color=line.get_color())

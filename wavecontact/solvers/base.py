@@ -17,12 +17,22 @@ A solver is an object satisfying :class:`Solver`:
     options (``None`` where no single order applies), what the contract tests
     measure against;
 ``solve(scene, options)``
-    one collision, returned as a complete :class:`~wavecontact.result.CollisionResult`.
+    one collision, returned as a complete :class:`~wavecontact.result.CollisionResult`;
+``capabilities``
+    what else it offers (:data:`CAPABILITIES`: batches of thermal samples, the
+    hard-core thermal mode, sweeps of material ratios, ring runs), as data that
+    studies query through the registry (:func:`wavecontact.solvers.solvers_with`)
+    instead of naming solvers; each capability's methods are declared here,
+    on :class:`SolverBase`, and refused by a solver that does not offer it;
+``vibration_energy_gain(result, scene)``
+    the per-rod energy split of a thermal collision, by the solver's own bookkeeping.
 
 :class:`SolverBase` implements ``solve`` once for all solvers: it times the
 solver's own ``_collide``, recovers the paper's ``gamma`` and ``kappa`` from
 the scene, measures the contact window from the force history by one rule,
-and builds the result in one go.  Solvers that can run many collisions of a
+and builds the result in one go from the :class:`CollisionFields` that
+``_collide`` returns (with a thermal scene the per-rod energy split and the
+bath's parameters included: the result is complete when ``solve`` returns).  Solvers that can run many collisions of a
 ring scene also offer ``simulate(scene, options)`` (see
 :class:`RepeatedCollisions`).
 """
@@ -34,6 +44,7 @@ import itertools
 import math
 import time
 from collections.abc import Callable, Mapping
+from types import MappingProxyType
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
@@ -45,6 +56,13 @@ from ..result import CONTACT_FORCE_FRACTION, CollisionResult, Outcome, contact_w
 from ..scene import Scene, two_rod_parameters
 
 __all__ = [
+    "CAPABILITIES",
+    "Capability",
+    "CollisionFields",
+    "HARD_CORE_THERMAL",
+    "MATERIAL_RATIOS",
+    "RING",
+    "THERMAL_BATCH",
     "RepeatedCollisions",
     "Solver",
     "SolverBase",
@@ -201,6 +219,81 @@ def option_help(options_class) -> list:
     return rows
 
 
+# --------------------------------------------------------------------------- what _collide returns
+@dataclasses.dataclass(frozen=True)
+class CollisionFields:
+    """What a solver's ``_collide`` returns: the raw numbers of one collision, before
+    :meth:`SolverBase.solve` adds the error estimate, the contact window and the timing.
+
+    Attributes
+    ----------
+    restitution : float
+        epsilon (dimensionless).
+    time, relative_velocity : array_like
+        The history: time and ``v2 - v1`` at each sample (scene units).
+    contact_force : array_like or None
+        The force at each sample (scene units), None if not recorded.
+    force_sampling : {'point', 'interval'}
+        ``'point'``: the force at ``time[i]``; ``'interval'``: its value (or mean) on
+        ``(time[i-1], time[i]]`` (:func:`wavecontact.result.contact_window`).
+    error_estimate : float
+        The solver's own estimate of the restitution's error; NaN: Richardson decides.
+    energy_drift, momentum_drift : float
+        Relative drifts (NaN where not tracked).
+    work : dict
+        Effort counters (``steps`` at least).
+    extra : dict
+        Solver-specific results (see each solver's docs).
+    """
+
+    restitution: float
+    time: Any
+    relative_velocity: Any
+    contact_force: Any = None
+    force_sampling: str = "point"
+    error_estimate: float = math.nan
+    energy_drift: float = math.nan
+    momentum_drift: float = math.nan
+    work: dict = dataclasses.field(default_factory=dict)
+    extra: dict = dataclasses.field(default_factory=dict)
+
+
+# --------------------------------------------------------------------------- capabilities
+@dataclasses.dataclass(frozen=True)
+class Capability:
+    """Something a solver may offer beyond ``solve``: its name and the :class:`SolverBase` methods it brings."""
+
+    name: str
+    methods: tuple
+    description: str
+
+
+#: Many finite-kappa thermal collisions of the paper's rods at once (an ensemble's or a Markov step's batch).
+THERMAL_BATCH = "thermal batch"
+#: The stochastic hard-core limit (kappa = inf with vibrations): samples, batches, grid size, per-rod split.
+HARD_CORE_THERMAL = "hard-core thermal"
+#: epsilon of a cold two-material collision from the ratios Z_2 / Z_1 and T_1 / T_2 alone (material maps).
+MATERIAL_RATIOS = "material ratios"
+#: Many collisions on a ring (``simulate``).
+RING = "ring"
+
+CAPABILITIES = {c.name: c for c in (
+    Capability(THERMAL_BATCH, ("thermal_restitution", "thermal_restitutions"),
+               "epsilon of many finite-kappa thermal samples without result objects"),
+    Capability(HARD_CORE_THERMAL, ("hard_core_thermal_restitution", "hard_core_thermal_batch",
+                                   "hard_core_grid_points", "hard_core_thermal_split"),
+               "the stochastic hard-core limit: samples, batches, grid size and the per-rod split"),
+    Capability(MATERIAL_RATIOS, ("check_ratios", "restitution_of_ratios"),
+               "epsilon of cold two-material collisions from the impedance and round-trip ratios"),
+    Capability(RING, ("simulate",), "many collisions of a ring scene"),
+)}
+
+
+def _not_offered(solver, capability: str):
+    return UnsupportedSceneError(f"solver {solver.name!r} does not offer {capability!r}; solvers that do: "
+                                 f"wavecontact.solvers.solvers_with({capability!r})")
+
+
 # --------------------------------------------------------------------------- solvers
 @runtime_checkable
 class Solver(Protocol):
@@ -306,13 +399,27 @@ _OPTIONS_CACHE_SIZE = 256
 class SolverBase:
     """Shared implementation of :class:`Solver`; a solver supplies ``_collide``.
 
-    ``_collide(scene, options)`` returns a dict with the keys
-    ``restitution``, ``time``, ``relative_velocity``, ``contact_force``
-    (or None), ``error_estimate`` (NaN if none), ``energy_drift``,
-    ``momentum_drift`` (relative; NaN if not tracked), ``work`` and ``extra``.
+    ``_collide(scene, options)`` returns a :class:`CollisionFields`.  A solver
+    lists what it offers beyond ``solve`` in :attr:`capabilities` and overrides
+    that capability's methods (:data:`CAPABILITIES`); the others refuse.
     """
 
     name: str = "abstract"
+    #: what the solver is called in help texts (``"delay solver"``)
+    title: str = "solver"
+    #: the options ``wavecontact collide`` exposes as flags, each with its help text (None: the option's own)
+    cli_flags: Mapping = MappingProxyType({})
+    #: the contact laws the solver takes by name (``contact=`` of :func:`wavecontact.two_rods`)
+    contact_names: tuple = ("exponential", "hard")
+    #: names of the :data:`CAPABILITIES` the solver offers
+    capabilities: frozenset = frozenset()
+    #: options a batch of many thermal samples runs with where the caller gives none (ensembles, Markov)
+    batch_defaults: Mapping = MappingProxyType({})
+    #: the contract tests' order case: resolutions (coarse to fine) and options held fixed
+    #: (``docs``: tests/test_solver_contract.py), and the resolution and tolerance at which the
+    #: solver must agree with MODEL.md's epsilon(0.6, 20)
+    order_case: Mapping = MappingProxyType({"resolutions": (), "options": {}})
+    agreement_case: tuple = ({}, 0.0)
     Options: type = SolverOptions
     resolution: str = ""
     refines: int = 1
@@ -393,23 +500,23 @@ class SolverBase:
         declared one: an unresolved contact converges more slowly)."""
         return self.expected_order(options)
 
-    def _error_estimate(self, scene: Scene, options, fields: dict) -> tuple:
+    def _error_estimate(self, scene: Scene, options, fields: CollisionFields) -> tuple:
         """``(estimate, method, levels)`` of the solve's error: the solver's own, or Richardson.
 
         ``levels`` lists ``(resolution, restitution)`` of the requested run and of each coarser
         run the estimate used (empty for the solver's own estimate).
         """
-        own = float(fields.get("error_estimate", math.nan))
+        own = float(fields.error_estimate)
         if not math.isnan(own):
             return own, "the solver's own estimate", []
-        levels, coarse_options = [(getattr(options, self.resolution, None), float(fields["restitution"]))], options
+        levels, coarse_options = [(getattr(options, self.resolution, None), float(fields.restitution))], options
         failure_text = ""
         for _ in range(self.coarser_levels(options)):
             coarse_options = self.coarser_options(coarse_options)
             if coarse_options is None:
                 break
             try:
-                value = float(self._collide(scene, coarse_options)["restitution"])
+                value = float(self._collide(scene, coarse_options).restitution)
             except SolverFailure as failure:
                 failure_text = str(failure)
                 break
@@ -489,12 +596,12 @@ class SolverBase:
                     estimate, method, levels = self._error_estimate(scene, options, fields)
                 else:
                     estimate, method, levels = math.nan, "not requested", []
-        restitution = float(fields["restitution"])
+        restitution = float(fields.restitution)
         rough = self.rough_estimate(scene, options) if levels else ""
         cold = scene.is_cold and getattr(scene, "vibrations", None) is None and getattr(options, "noise", None) is None
         estimate = excess_bound(estimate, restitution, cold)
-        time_, force = np.asarray(fields["time"], dtype=float), fields.get("contact_force")
-        start, duration = contact_window(time_, force, fields.get("force_sampling", "point"))
+        time_, force = np.asarray(fields.time, dtype=float), fields.contact_force
+        start, duration = contact_window(time_, force, fields.force_sampling)
         result = CollisionResult(
             restitution=restitution,
             solver=self.name,
@@ -504,22 +611,22 @@ class SolverBase:
             error_estimate=float(estimate),
             wall_time_s=watch.seconds,
             time=time_,
-            relative_velocity=np.asarray(fields["relative_velocity"], dtype=float),
+            relative_velocity=np.asarray(fields.relative_velocity, dtype=float),
             contact_force=None if force is None else np.asarray(force, dtype=float),
             contact_start=start,
             contact_duration=duration,
             options=options.as_dict(),
-            work=dict(fields.get("work", {})),
+            work=dict(fields.work),
             diagnostics={
-                "energy_drift": float(fields.get("energy_drift", math.nan)),
-                "momentum_drift": float(fields.get("momentum_drift", math.nan)),
+                "energy_drift": float(fields.energy_drift),
+                "momentum_drift": float(fields.momentum_drift),
                 "includes_kernel_preparation": prepared_kernel_count() > prepared,
                 "error_estimate_method": method,
                 "error_estimate_seconds": estimating.seconds,
                 "error_estimate_levels": levels,
                 "error_estimate_rough": rough,
             },
-            extra=dict(fields.get("extra", {})),
+            extra=self._complete_extra(scene, fields),
         )
         if tolerance is not None and not estimate <= tolerance:
             advice = self._advice(options, estimate, tolerance)
@@ -532,6 +639,87 @@ class SolverBase:
                 f"to meet tolerance={tolerance:g}: {rough}", result=result, advice=rough)
         return result
 
+    def _complete_extra(self, scene: Scene, fields: CollisionFields) -> dict:
+        """``fields.extra`` with, for a scene carrying vibrations drawn from a bath
+        (:func:`wavecontact.bath.collide.thermal_scene`), the per-rod split
+        ``vibration_energy_gain`` (where the solver gives one) and the bath's parameters ``bath``."""
+        extra = dict(fields.extra)
+        bath = scene.metadata.get("bath") if scene.vibrations is not None else None
+        if bath is None:
+            return extra
+        gain = self.vibration_energy_gain(fields, scene)
+        if gain is not None:
+            extra["vibration_energy_gain"] = gain
+        extra["bath"] = dict(bath)
+        return extra
+
+    def vibration_energy_gain(self, fields: CollisionFields, scene: Scene):
+        """Energy each rod's vibrations gained in the collision of ``scene`` (units with ``E_tr = 1/4``),
+        an array of two, from the solver's own bookkeeping; None where the solver gives no split."""
+        del fields, scene
+        return None
+
+    # ------------------------------------------------------------ comparisons (wavecontact compare)
+    def comparison_methods(self, kappa: float) -> list:
+        """A few resolutions of each discretization, cheap to expensive, for the comparison of every
+        solver on one collision: ``(options, label, work_unit)`` each (``work_unit``: the counter of
+        ``result.work`` that measures the effort)."""
+        del kappa
+        return [({}, "defaults", "steps")]
+
+    def comparison_family(self, options) -> str:
+        """The series of a comparison figure that a run with ``options`` belongs to: one per
+        solver and discretization."""
+        del options
+        return self.name
+
+    # ------------------------------------------------------------ capabilities (see CAPABILITIES)
+    def offers(self, capability: str) -> bool:
+        """Whether the solver offers ``capability`` (a key of :data:`CAPABILITIES`)."""
+        if capability not in CAPABILITIES:
+            raise InvalidParameterError(f"capability must be one of {', '.join(map(repr, CAPABILITIES))}, "
+                                        f"got {capability!r}")
+        return capability in self.capabilities
+
+    def thermal_restitution(self, scene: Scene, options=None) -> float:
+        """epsilon of a finite-kappa thermal scene as :meth:`solve` gives it, without the result object
+        (:data:`THERMAL_BATCH`)."""
+        raise _not_offered(self, THERMAL_BATCH)
+
+    def thermal_restitutions(self, gamma: float, kappa: float, bath, seeds, options=None) -> tuple:
+        """``(epsilon, error_estimate)`` arrays of many finite-kappa thermal collisions of the paper's rods,
+        one per seed (:data:`THERMAL_BATCH`)."""
+        raise _not_offered(self, THERMAL_BATCH)
+
+    def hard_core_thermal_restitution(self, gamma: float, vibrations, resolution: int = 8,
+                                      tau_free: float = 0.0) -> float:
+        """epsilon of one hard-core collision of the paper's rods carrying ``vibrations``
+        (:data:`HARD_CORE_THERMAL`)."""
+        raise _not_offered(self, HARD_CORE_THERMAL)
+
+    def hard_core_thermal_batch(self, gamma: float, temperature, seeds, modes: int = 250, resolution: int = 8):
+        """epsilon of many hard-core thermal collisions, one per seed (:data:`HARD_CORE_THERMAL`)."""
+        raise _not_offered(self, HARD_CORE_THERMAL)
+
+    def hard_core_grid_points(self, gamma: float, modes: int = 250, resolution: int = 8) -> int:
+        """Grid points per short round trip of the hard-core grid at ``resolution`` (:data:`HARD_CORE_THERMAL`)."""
+        raise _not_offered(self, HARD_CORE_THERMAL)
+
+    def hard_core_thermal_split(self, gamma: float, temperature_ratio, seed, *, bath_modes: int = 250,
+                                resolution: int = 8, temperatures=None) -> tuple:
+        """``(epsilon^2, gain_1, gain_2)`` of one hard-core thermal collision (:data:`HARD_CORE_THERMAL`)."""
+        raise _not_offered(self, HARD_CORE_THERMAL)
+
+    def check_ratios(self, impedance_ratio: float, time_ratio: float) -> None:
+        """Refuse ratios the solver cannot take (:data:`MATERIAL_RATIOS`)."""
+        raise _not_offered(self, MATERIAL_RATIOS)
+
+    def restitution_of_ratios(self, impedance_ratio: float, time_ratio: float, kappa: float,
+                              rtol: float = 1e-8) -> float:
+        """epsilon of a cold two-material collision from ``Z_2 / Z_1``, ``T_1 / T_2`` and ``kappa``
+        (:data:`MATERIAL_RATIOS`)."""
+        raise _not_offered(self, MATERIAL_RATIOS)
+
     def rough_estimate(self, scene: Scene, options) -> str:
         """Why the error estimate of this run is only an order of magnitude, not a bound ("" if it is
         one): ``tolerance=`` then refuses the result, with this text as advice."""
@@ -539,10 +727,11 @@ class SolverBase:
         return ""
 
     def simulate(self, scene: Scene, options=None) -> Any:
+        """A running simulation of many collisions of a ring scene (:data:`RING`; a :class:`RepeatedCollisions`)."""
         raise UnsupportedSceneError(f"solver {self.name!r} runs single collisions only; use solver='modal' "
                                     "for many collisions on a ring")
 
-    def _collide(self, scene: Scene, options) -> dict:  # pragma: no cover - abstract
+    def _collide(self, scene: Scene, options) -> CollisionFields:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def __repr__(self):

@@ -19,8 +19,10 @@ import numpy as np
 from ..api import collide
 from ..errors import WavecontactError
 from ..progress import Progress
+from ..solvers import get_solver, solver_names
 
-__all__ = ["ComparisonRow", "ComparisonTable", "Method", "compare_solvers", "default_methods", "reference_restitution"]
+__all__ = ["ComparisonRow", "ComparisonTable", "Method", "compare_solvers", "default_methods", "method_labels",
+           "reference_restitution"]
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,8 @@ class ComparisonRow:
     work_unit: str
     work: float | None
     status: str  # "ok" or the solver's error message
+    family: str = ""  # the series of a figure: one per solver and discretization (solver.comparison_family)
+    point: str = ""  # the resolution written next to the point: elements, modes or the tolerance
 
     @property
     def ok(self) -> bool:
@@ -100,22 +104,21 @@ class ComparisonTable:
 
 
 def default_methods(kappa: float) -> list:
-    """A few resolutions of every solver and discretization, cheap to expensive."""
-    methods = [Method("delay", {"rtol": r}, f"rtol={r:.0e}") for r in (1e-5, 1e-8, 1e-11)]
-    for order, mass in ((1, "lumped"), (1, "consistent"), (2, "lumped"), (2, "consistent")):
-        for elements in (100, 400):
-            methods.append(
-                Method("fem", {"elements": elements, "order": order, "mass": mass},
-                       f"P{order} {mass}, {elements} elements", "element_steps")
-            )
-    names = {"end-response": "end-response correction", "static": "static correction", "none": "plain truncation"}
-    for correction, name in names.items():
-        for modes in (25, 100):
-            methods.append(
-                Method("modal", {"modes": modes, "correction": correction, "static_correction": correction != "none"},
-                       f"{modes} modes, {name}", "steps")
-            )
-    return methods
+    """A few resolutions of every registered solver and discretization, cheap to expensive
+    (each solver's ``comparison_methods``)."""
+    return [Method(name, options, label, work_unit) for name in solver_names()
+            for options, label, work_unit in get_solver(name).comparison_methods(kappa)]
+
+
+def method_labels(method: Method) -> tuple:
+    """``(family, point)`` of a method: its solver's series and the value of its resolution option."""
+    solver = get_solver(method.solver)
+    try:
+        family = solver.comparison_family(solver.options(method.options))
+    except WavecontactError:
+        family = method.solver
+    value = method.options.get(solver.resolution)
+    return family, method.describe() if value is None else format(value, "g")
 
 
 def reference_restitution(gamma: float, kappa: float) -> tuple:
@@ -157,6 +160,7 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
     rows = []
     for method in methods:
         bar.advance()
+        family, point = method_labels(method)
         times, untimed = [], 0
         try:
             while len(times) < int(repeats):
@@ -171,7 +175,7 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
                     times.append(elapsed)
         except WavecontactError as exc:
             rows.append(ComparisonRow(method.solver, method.describe(), None, None, None,
-                                      method.work_unit, None, str(exc)))
+                                      method.work_unit, None, str(exc), *method_labels(method)))
             continue
         work = result.work.get(method.work_unit)
         rows.append(
@@ -184,6 +188,8 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
                 work_unit=method.work_unit,
                 work=None if work is None else float(work),
                 status="ok",
+                family=family,
+                point=point,
             )
         )
     bar.close()

@@ -42,6 +42,7 @@ __all__ = [
     "reference_restitution",
 ]
 
+SOLVER = "fem"  # the study: mesh convergence of the finite elements
 MASSES = ("lumped", "consistent")
 CONTACTS = ("exponential", "penalty", "hard")
 DEFAULT_ELEMENTS = (25, 50, 100, 200)
@@ -380,7 +381,7 @@ def convergence_study(
 def _warm_up(collide, gamma, kappa, contact, order, mass, elements, options) -> None:
     try:
         collide(
-            gamma, kappa, solver="fem", contact=contact, elements=elements, order=order, mass=mass, **options
+            gamma, kappa, solver=SOLVER, contact=contact, elements=elements, order=order, mass=mass, **options
         )
     except SolverFailure:
         pass  # the timed run meets it again and records it
@@ -391,7 +392,7 @@ def _one_run(
 ) -> ConvergenceRow:
     try:
         result = collide(
-            gamma, kappa, solver="fem", contact=contact, elements=elements, order=order, mass=mass, **options
+            gamma, kappa, solver=SOLVER, contact=contact, elements=elements, order=order, mass=mass, **options
         )
     except SolverFailure as exc:
         return ConvergenceRow(order, mass, elements, None, None, None, None, None, failure=str(exc))

@@ -25,26 +25,30 @@ from ..errors import AccuracyError, InvalidParameterError, WavecontactError
 from ..io.files import atomic_write
 from ..io.run_controller import BatchStore, RunController, write_summary
 from ..scene import validate_gamma_kappa
+from ..solvers import get_solver
+from ..solvers.base import HARD_CORE_THERMAL, THERMAL_BATCH
 
 __all__ = ["ENSEMBLE_DELAY_OPTIONS", "ENSEMBLE_RTOL", "GRID_BIAS_SAMPLES", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec",
-           "GridBias", "ensemble", "grid_bias", "grid_bias_indices", "run_batch", "sample_collision",
-           "sample_restitution", "sample_seed"]
+           "GridBias", "ensemble", "grid_bias", "grid_bias_indices", "run_batch", "sample_collision", "sample_seed"]
 
 MAX_SAMPLES = 10_000_000
 GRID_BIAS_SAMPLES = 64  # least number of hard-core samples rerun on the finer grid to state the grid bias
-# The delay solver's default rtol in an ensemble at finite kappa.  The step control is pessimistic
-# (its rtol bounds a sum of local error estimates): at rtol 1e-3 the samples of the Fig. 8 set differ
-# from rtol 1e-10 by at most a few 1e-5 and their mean by about 1e-6, far below the ~6e-3 standard
-# error of a 2500-sample mean (docs/bath.md, "The thermal delay solve"; benchmarks/ensemble_accuracy.py).
-ENSEMBLE_RTOL = 1e-3
-# The delay solver's defaults in an ensemble at finite kappa: the end nodes of the Lobatto rule are the
-# step's ends (6 evaluations of the exponent a step instead of 8, at the same measured accuracy), and noise
-# tables with 16 nodes per period of the fastest mode move the samples by about 1e-6 (32: 6e-8).
-ENSEMBLE_DELAY_OPTIONS = {"rtol": ENSEMBLE_RTOL, "quadrature": "lobatto-kronrod", "noise_resolution": 16}
 _BATCH_SCHEMA = "wavecontact.ensemble_batch"
 _SCHEMA = "wavecontact.ensemble"
 _VERSION = 2  # 2: batches keep each sample's error estimate
-_SOLVERS = ("delay", "modal", "fem")
+
+
+def __getattr__(name):
+    # ENSEMBLE_DELAY_OPTIONS, ENSEMBLE_RTOL: the batch defaults of the solver that samples thermal
+    # batches (``batch_defaults``: rtol 1e-3, the Lobatto-Kronrod rule, 16 noise table nodes per period),
+    # read from the registry when first asked for
+    if name in ("ENSEMBLE_DELAY_OPTIONS", "ENSEMBLE_RTOL"):
+        from ..solvers import solver_for
+        from ..solvers.base import THERMAL_BATCH
+
+        defaults = dict(solver_for(THERMAL_BATCH).batch_defaults)
+        return defaults if name == "ENSEMBLE_DELAY_OPTIONS" else defaults["rtol"]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def sample_seed(seed: int, index: int) -> np.random.SeedSequence:
@@ -68,12 +72,12 @@ class EnsembleSpec:
         Non-negative; sample ``j`` uses :func:`sample_seed` ``(seed, j)``.
     bath_modes : int
         ``nu_max``, in [1, 100000].
-    solver : {'delay', 'modal', 'fem'}
-        Solver of each collision.
+    solver : str
+        Solver of each collision (a name of :func:`wavecontact.solvers.solver_names`).
     options : dict
-        Solver options (JSON values only).  The delay solver at finite kappa gets
-        ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = ENSEMBLE_RTOL``, the Lobatto-Kronrod rule, 16 noise
-        table nodes per period of the fastest mode) where they are not given.
+        Solver options (JSON values only).  At finite kappa the solver's ``batch_defaults`` fill in
+        what is not given (the delay solver's ``ENSEMBLE_DELAY_OPTIONS``: ``rtol = ENSEMBLE_RTOL``,
+        the Lobatto-Kronrod rule, 16 noise table nodes per period of the fastest mode).
     batch_size : int
         Samples per task, in [1, 100000].
     energy_split : bool
@@ -106,18 +110,17 @@ class EnsembleSpec:
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise InvalidParameterError(f"seed must be a non-negative integer, got {self.seed!r}")
         object.__setattr__(self, "seed", int(self.seed))
-        if self.solver not in _SOLVERS:
-            raise InvalidParameterError(f"solver must be one of {', '.join(_SOLVERS)}, got {self.solver!r}")
+        solver = get_solver(self.solver)  # refuses an unknown name, listing the registered ones
         if self.energy_split and math.isinf(kappa):
             raise InvalidParameterError(
                 "energy_split needs a finite kappa (the hard-core grid gives only the total); kappa >= 50 is "
                 "in the kappa-independent regime")
-        if self.solver == "delay" and math.isinf(kappa) and set(self.options) - {"hard_core_resolution"}:
+        if _hard_core(self) and set(self.options) - {"hard_core_resolution"}:
             raise InvalidParameterError(
                 "the hard-core mode (kappa = inf) takes only the option hard_core_resolution, not "
                 f"{', '.join(sorted(set(self.options) - {'hard_core_resolution'}))}")
-        if self.solver == "delay" and math.isfinite(kappa):
-            object.__setattr__(self, "options", {**ENSEMBLE_DELAY_OPTIONS, **self.options})
+        if math.isfinite(kappa):
+            object.__setattr__(self, "options", {**solver.batch_defaults, **self.options})
         try:
             json.dumps(self.options)
         except TypeError:
@@ -149,34 +152,34 @@ def sample_collision(spec: EnsembleSpec, index: int) -> tuple:
 
 
 def _solved_collision(spec: EnsembleSpec, index: int) -> tuple:
-    """:func:`sample_collision` through ``solve`` (the energy split, the modal and FE solvers)."""
+    """:func:`sample_collision` through ``solve`` (the energy split, solvers without thermal batches)."""
     from ..api import solve
-    from ..bath.collide import thermal_scene, vibration_energy_gain
+    from ..bath.collide import thermal_scene
 
     scene = thermal_scene(spec.gamma, spec.kappa, spec.bath, sample_seed(spec.seed, index))
     options = dict(spec.options)
-    if spec.solver == "delay":
-        options.setdefault("energy_split", spec.energy_split)
+    if "energy_split" in get_solver(spec.solver).Options.__dataclass_fields__:
+        options.setdefault("energy_split", spec.energy_split)  # a solver that computes the split on request
     result = solve(scene, spec.solver, **options)
     gain = (0.0, 0.0)
     if spec.energy_split:
-        gain = tuple(float(x) for x in vibration_energy_gain(result, scene))
+        gain = tuple(float(x) for x in result.extra["vibration_energy_gain"])
     error = result.error_estimate
     return float(result.restitution), gain, math.nan if error is None else float(error)
 
 
 def _hard_core(spec: EnsembleSpec) -> bool:
-    return spec.solver == "delay" and math.isinf(spec.kappa)
+    """The stochastic hard-core mode: kappa = inf with a solver that offers it."""
+    return math.isinf(spec.kappa) and get_solver(spec.solver).offers(HARD_CORE_THERMAL)
 
 
 def _hard_core_batch(spec: EnsembleSpec, start: int, stop: int) -> np.ndarray:
     """epsilon of samples ``start`` to ``stop - 1`` in the stochastic hard-core mode (one batched call)."""
     from ..bath.streams import SpawnedSeeds
-    from ..solvers import get_solver
 
     resolution = _resolution(spec)
     seeds = SpawnedSeeds(spec.seed, start, stop)  # sample_seed(spec.seed, j) for j in start..stop-1
-    return get_solver("delay").hard_core_thermal_batch(spec.gamma, spec.temperature, seeds, spec.bath_modes,
+    return get_solver(spec.solver).hard_core_thermal_batch(spec.gamma, spec.temperature, seeds, spec.bath_modes,
                                                        resolution)
 
 
@@ -243,9 +246,7 @@ def grid_bias(spec: EnsembleSpec, restitution: np.ndarray) -> GridBias:
     differences gives its standard error.  Cost: 64 to 127 samples at about 1.7 times a
     sample's cost (docs/bath.md section 3).
     """
-    from ..solvers import get_solver
-
-    solver = get_solver("delay")
+    solver = get_solver(spec.solver)
     resolution = _resolution(spec)
     modes = spec.bath_modes
 
@@ -264,26 +265,20 @@ def grid_bias(spec: EnsembleSpec, restitution: np.ndarray) -> GridBias:
                     float(factor), checked)
 
 
-def sample_restitution(spec: EnsembleSpec, index: int) -> float:
-    """epsilon of sample ``index`` of ``spec`` (one collision)."""
-    return sample_collision(spec, index)[0]
-
-
 def run_batch(spec_fields: dict, start: int, stop: int) -> tuple:
     """Samples ``start`` to ``stop - 1`` (a task: plain arguments, plain results).
 
     Returns ``(start, epsilon (n,), gains (n, 2), error estimates (n,))``.
     """
-    from ..solvers import get_solver
-
     spec = EnsembleSpec(**spec_fields)
     n = stop - start
+    solver = get_solver(spec.solver)
     if _hard_core(spec):
         return start, _hard_core_batch(spec, start, stop), np.zeros((n, 2)), np.full(n, math.nan)
-    if spec.solver == "delay" and not spec.energy_split:
+    if solver.offers(THERMAL_BATCH) and not spec.energy_split:
         # what solve() returns, without the scene and result objects around each sample
         seeds = [sample_seed(spec.seed, j) for j in range(start, stop)]
-        values, errors = get_solver("delay").thermal_restitutions(spec.gamma, spec.kappa, spec.bath, seeds,
+        values, errors = solver.thermal_restitutions(spec.gamma, spec.kappa, spec.bath, seeds,
                                                                   spec.options)
         return start, values, np.zeros((n, 2)), errors
     rows = [_solved_collision(spec, j) for j in range(start, stop)]
@@ -517,15 +512,15 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
     ----------
     gamma, kappa : float
         Length ratio in (0, 1] and softness in (0, inf] (``inf``: the
-        stochastic hard-core mode of the delay solver).
+        stochastic hard-core mode of a solver that offers it).
     bath_temperature : float or pair
         ``T_B / E_tr`` >= 0 (per rod if a pair).
     samples : int
         Number of collisions, in [1, 10^7].
     seed : int
         Non-negative; fixes every sample (see module docstring).
-    solver : {'delay', 'modal', 'fem'}
-        Solver of each collision.
+    solver : str
+        Solver of each collision (a name of :func:`wavecontact.solvers.solver_names`).
     bath_modes : int
         ``nu_max`` (default 250).
     executor : concurrent.futures.Executor, dask.distributed.Client or None

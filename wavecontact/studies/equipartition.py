@@ -34,7 +34,8 @@ from ..analytic import equilibrium_spectral_entropy, equilibrium_spectral_entrop
 from ..errors import InvalidParameterError, require_positive
 from ..progress import Progress
 from ..scene import two_rods_on_a_ring
-from ..solvers import get_solver
+from ..solvers import solver_for
+from ..solvers.base import RING
 from .ring_statistics import spectral_entropy
 
 __all__ = ["EquipartitionStudy", "equipartition_by_modes", "settling_collision"]
@@ -172,7 +173,7 @@ def equipartition_by_modes(
         raise InvalidParameterError(f"threshold must exceed 1 (a multiple of the equilibrium mean), got {threshold!r}")
     study = EquipartitionStudy(float(gamma), float(kappa), threshold)
     started = time.perf_counter()
-    engine = get_solver("modal")
+    engine = solver_for(RING)
     base = two_rods_on_a_ring(gamma, kappa).ring_circumference
     with Progress(len(mode_counts) * realisations * collisions, "equipartition", unit="collision",
                   enabled=progress) as bar:

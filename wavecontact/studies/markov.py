@@ -49,6 +49,8 @@ import numpy as np
 
 from ..errors import InvalidParameterError, SolverFailure, WavecontactError
 from ..scene import validate_gamma_kappa
+from ..solvers import get_solver
+from ..solvers.base import HARD_CORE_THERMAL, THERMAL_BATCH
 
 __all__ = [
     "MAX_STATES",
@@ -116,12 +118,12 @@ class MarkovSpec:
         and ``steps=1`` gives independent transitions ``E -> E'`` for detailed balance.
     bath_modes : int
         ``nu_max``: excited modes per rod in each solved collision (``solve`` rule), in [1, 100000].
-    solver : {'delay', 'modal', 'fem'}
-        Solver of each collision (``solve`` rule).
+    solver : str
+        Solver of each collision (``solve`` rule; a name of :func:`wavecontact.solvers.solver_names`).
     options : dict
-        Solver options (JSON values), e.g. ``{"hard_core_resolution": 16}``.  The delay solver at
-        finite kappa gets the ensemble's defaults ``ENSEMBLE_DELAY_OPTIONS`` (``rtol = 1e-3``, the
-        Lobatto-Kronrod rule, 16 noise table nodes per period) where they are not given.
+        Solver options (JSON values), e.g. ``{"hard_core_resolution": 16}``.  At finite kappa the
+        solver's ``batch_defaults`` fill in what is not given, as in an ensemble (the delay solver's
+        ``ENSEMBLE_DELAY_OPTIONS``: ``rtol = 1e-3``, the Lobatto-Kronrod rule, 16 noise table nodes per period).
     table : str or None
         Path of a restitution table (``.npz`` or ``.json``) for the ``table`` rule.
     batch_size : int
@@ -177,15 +179,13 @@ class MarkovSpec:
             if not (math.isfinite(energy) and 0.0 < energy <= top):
                 raise InvalidParameterError(f"initial_energy E_tr(0)/T_B^0 must lie in (0, {top:g}], got {energy!r}")
             object.__setattr__(self, "initial_energy", energy)
-        if self.solver not in ("delay", "modal", "fem"):
-            raise InvalidParameterError(f"solver must be one of delay, modal, fem, got {self.solver!r}")
+        solver = get_solver(self.solver)  # refuses an unknown name, listing the registered ones
         if not isinstance(self.options, dict):
             raise InvalidParameterError("options must be a dict of solver options")
-        if self.rule == "solve" and self.solver == "delay" and math.isfinite(kappa):
-            from .ensemble import ENSEMBLE_DELAY_OPTIONS
-
-            # the ensemble's defaults at finite kappa (each epsilon within a few 1e-5 of rtol = 1e-10)
-            object.__setattr__(self, "options", {**ENSEMBLE_DELAY_OPTIONS, **self.options})
+        if self.rule == "solve" and math.isfinite(kappa):
+            # the ensemble's defaults at finite kappa (the delay solver's: each epsilon within a few 1e-5
+            # of rtol = 1e-10)
+            object.__setattr__(self, "options", {**solver.batch_defaults, **self.options})
         if self.rule == "table" and self.table is None:
             raise InvalidParameterError("the table rule needs a restitution table file (table=PATH, --table PATH)")
         if self.table is not None:
@@ -215,8 +215,8 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
     Parameters
     ----------
     gamma, kappa : float
-        The paper's numbers (``kappa = inf`` with the delay solver: the stochastic
-        hard-core mode, Eq. 26 on a grid).
+        The paper's numbers (``kappa = inf`` with a solver that offers it, the delay
+        solver: the stochastic hard-core mode, Eq. 26 on a grid).
     temperature_ratio : float
         ``T_B / E_tr`` >= 0, finite.
     seed : numpy.random.SeedSequence or int
@@ -224,7 +224,7 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
     bath_modes : int
         ``nu_max``.
     solver : str
-        Any solver; collisions other than the hard-core delay mode go through
+        Any solver; collisions other than the stochastic hard-core mode go through
         :func:`wavecontact.collide`.
     options : dict or None
         Solver options; the hard-core delay mode takes only ``hard_core_resolution``
@@ -238,13 +238,12 @@ def thermal_restitution(gamma, kappa, temperature_ratio, seed, *, bath_modes=250
     options = dict(options or {})
     if not math.isfinite(temperature_ratio) or temperature_ratio < 0.0:
         raise SolverFailure(f"bath temperature ratio T_B/E_tr must be finite and >= 0, got {temperature_ratio!r}")
-    if solver == "delay" and math.isinf(kappa):
+    if math.isinf(kappa) and get_solver(solver).offers(HARD_CORE_THERMAL):
         from ..bath.model import ThermalBath
-        from ..solvers import get_solver
 
         lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # l = 1 (docs/theory.md)
         vibrations = ThermalBath(float(temperature_ratio), bath_modes).draw(lengths, seed)
-        return get_solver("delay").hard_core_thermal_restitution(gamma, vibrations, _hard_core_resolution(options))
+        return get_solver(solver).hard_core_thermal_restitution(gamma, vibrations, _hard_core_resolution(options))
     from ..api import collide
 
     return float(collide(gamma, kappa, solver, bath_temperature=float(temperature_ratio), bath_modes=bath_modes,
@@ -291,10 +290,10 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
                 "exceeds 1e3 about once in 1000 steps)"
             )
         eps2 = table.quantile(spec.gamma, ratio, level)
-    elif spec.solver == "delay":
+    elif _batched(spec):
         # Python's float power, as the per-collision path squared: pow(x, 2) and numpy's x * x differ
         # in the last bit for some x (seed 2026, chain 1, step 330 of docs/markov.md's Fig. 10)
-        eps2 = np.array([eps**2 for eps in _delay_batch(spec, ratio, [step_seed(s, step) for s in seeds]).tolist()])
+        eps2 = np.array([eps**2 for eps in _batch(spec, ratio, [step_seed(s, step) for s in seeds]).tolist()])
     else:
         eps2 = np.array([
             thermal_restitution(spec.gamma, spec.kappa, float(r), step_seed(s, step), bath_modes=spec.bath_modes,
@@ -304,17 +303,22 @@ def _draw_eps2(spec, table, energy, temperature, level, seeds, step):
     return eps2, eps2 * energy
 
 
-def _delay_batch(spec, ratio, seeds):
-    """epsilon of one step of every chain of a batch, in one call of the delay solver's batched samplers.
+def _batched(spec) -> bool:
+    """Whether the solver samples a step of every chain at once: it offers the stochastic hard-core
+    mode (``kappa = inf``) or thermal batches (finite ``kappa``)."""
+    return get_solver(spec.solver).offers(HARD_CORE_THERMAL if math.isinf(spec.kappa) else THERMAL_BATCH)
+
+
+def _batch(spec, ratio, seeds):
+    """epsilon of one step of every chain of a batch, in one call of the solver's batched samplers.
 
     ``kappa = inf``: the hard-core batch of ``ensemble`` with one temperature ratio per seed;
     each value is what :func:`thermal_restitution` gives for its ratio and seed, bit for bit.
     Finite ``kappa``: ``thermal_restitutions`` with one bath per seed (the ensemble's path).
     """
     from ..bath.model import ThermalBath
-    from ..solvers import get_solver
 
-    solver = get_solver("delay")
+    solver = get_solver(spec.solver)
     if math.isinf(spec.kappa):
         # one (T_1, T_2) pair per chain: a flat array of two ratios would read as one pair for both chains
         pairs = np.repeat(np.asarray(ratio, dtype=float)[:, None], 2, axis=1)

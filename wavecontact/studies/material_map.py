@@ -29,7 +29,8 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..progress import Progress
-from ..solvers import get_solver
+from ..solvers import solver_for
+from ..solvers.base import MATERIAL_RATIOS
 
 __all__ = ["MAX_POINTS", "MaterialMap", "material_map", "special_line_restitution"]
 
@@ -49,11 +50,11 @@ def special_line_restitution(impedance_ratio, time_ratio):
 
 
 def _hard_point(point):
-    return get_solver("delay").restitution_of_ratios(point[0], point[1], math.inf)
+    return solver_for(MATERIAL_RATIOS).restitution_of_ratios(point[0], point[1], math.inf)
 
 
 def _soft_point(point, kappa, rtol):
-    return get_solver("delay").restitution_of_ratios(point[0], point[1], kappa, rtol)
+    return solver_for(MATERIAL_RATIOS).restitution_of_ratios(point[0], point[1], kappa, rtol)
 
 
 @dataclass
@@ -152,9 +153,9 @@ def _ratios(name, values):
         raise InvalidParameterError(f"{name} must be a non-empty 1-D sequence")
     for value in values:  # refuses values outside [1e-6, 1e6], naming the ratio
         if name == "impedance_ratios":
-            get_solver("delay").check_ratios(value, 1.0)
+            solver_for(MATERIAL_RATIOS).check_ratios(value, 1.0)
         else:
-            get_solver("delay").check_ratios(1.0, value)
+            solver_for(MATERIAL_RATIOS).check_ratios(1.0, value)
     return values
 
 
