@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InvalidParameterError
+from .io.files import to_jsonable  # re-exported: results and studies write JSON through it
 
 __all__ = [
     "CONTACT_FORCE_FRACTION",
@@ -344,30 +345,6 @@ def _join_arrays(value, prefix: str, arrays: dict):
         return {k: _join_arrays(v, f"{prefix}{k}/", arrays) for k, v in value.items()}
     if isinstance(value, list):
         return [_join_arrays(v, f"{prefix}{i}/", arrays) for i, v in enumerate(value)]
-    return value
-
-
-def to_jsonable(value):
-    """Make floats, numpy scalars and infinities JSON-safe (``inf`` -> ``"inf"``, NaN -> ``"nan"``)."""
-    if isinstance(value, dict):
-        return {k: to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [to_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return to_jsonable(value.tolist())
-    if isinstance(value, (np.bool_,)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, enum.Enum):
-        return value.value
-    if isinstance(value, (float, np.floating)):
-        number = float(value)
-        if math.isinf(number):
-            return "inf" if number > 0 else "-inf"
-        if math.isnan(number):
-            return "nan"
-        return number
     return value
 
 

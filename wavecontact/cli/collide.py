@@ -74,7 +74,7 @@ def _add_solver_flags(p) -> None:
         solver = get_solver(name)
         group = p.add_argument_group(solver.title)
         for option, help_text in solver.cli_flags.items():
-            default, spec = solver_option(name, option)
+            spec = solver_option(name, option)[1]
             flag = "--" + option.replace("_", "-")
             text = help_text or option_text(name, option)
             if spec["kind"] == "bool":  # a switch that turns a default-on option off

@@ -32,8 +32,15 @@ from ..errors import InvalidParameterError, LimitError, SolverFailure, Unsupport
 from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene, two_rods
-from ..solvers.base import (HARD_CORE_THERMAL, MATERIAL_RATIOS, THERMAL_BATCH, CollisionFields, SolverBase,
-                            SolverOptions, option)
+from ..solvers.base import (
+    HARD_CORE_THERMAL,
+    MATERIAL_RATIOS,
+    THERMAL_BATCH,
+    CollisionFields,
+    SolverBase,
+    SolverOptions,
+    option,
+)
 from . import kernels
 from .energy_split import NODES, WEIGHTS, vibration_energy_gain
 from .hardcore import contact_intervals, hard_core_history

@@ -40,7 +40,7 @@ _META = "__checkpoint__"
 
 
 def _package_version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 

@@ -8,14 +8,19 @@ would give it (``0o666`` less the umask), not the ``0o600`` of a temporary file.
 
 from __future__ import annotations
 
+import enum
+import math
 import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InvalidParameterError
 
-__all__ = ["FIGURE_SUFFIXES", "atomic_write", "check_figure_path", "check_output_directory", "check_output_file"]
+__all__ = ["FIGURE_SUFFIXES", "atomic_write", "check_figure_path", "check_output_directory", "check_output_file",
+           "to_jsonable"]
 
 #: Figure formats the plotting functions write (matplotlib would silently add ``.png`` to any other name).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -120,3 +125,27 @@ def _existing_ancestor(path: Path) -> Path:
     while not path.exists() and path != path.parent:
         path = path.parent
     return path
+
+
+def to_jsonable(value):
+    """Make floats, numpy scalars and infinities JSON-safe (``inf`` -> ``"inf"``, NaN -> ``"nan"``)."""
+    if isinstance(value, dict):
+        return {k: to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, (np.bool_,)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, enum.Enum):
+        return value.value
+    if isinstance(value, (float, np.floating)):
+        number = float(value)
+        if math.isinf(number):
+            return "inf" if number > 0 else "-inf"
+        if math.isnan(number):
+            return "nan"
+        return number
+    return value

@@ -44,7 +44,7 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError
 from ..progress import Progress
-from .files import atomic_write
+from .files import atomic_write, to_jsonable
 
 __all__ = ["LOCK_NAME", "BatchStore", "OutputLock", "RunController", "StopRequest", "claim_folder", "write_summary"]
 
@@ -201,9 +201,7 @@ def claim_folder(directory, checkpoint_names, *, resume: bool, overwrite: bool, 
 
 
 def write_summary(path, summary: dict) -> Path:
-    """Write a run's summary as JSON, atomically, infinities as ``"inf"`` (:func:`~wavecontact.result.to_jsonable`)."""
-    from ..result import to_jsonable
-
+    """Write a run's summary as JSON, atomically, infinities as ``"inf"`` (:func:`~wavecontact.io.files.to_jsonable`)."""
     text = json.dumps(to_jsonable(summary), indent=2) + "\n"
     return atomic_write(path, lambda handle: handle.write(text), binary=False)
 

@@ -57,12 +57,12 @@ from ..scene import Scene, two_rod_parameters
 
 __all__ = [
     "CAPABILITIES",
-    "Capability",
-    "CollisionFields",
     "HARD_CORE_THERMAL",
     "MATERIAL_RATIOS",
     "RING",
     "THERMAL_BATCH",
+    "Capability",
+    "CollisionFields",
     "RepeatedCollisions",
     "Solver",
     "SolverBase",
@@ -657,7 +657,6 @@ class SolverBase:
         """Energy each rod's vibrations gained in the collision of ``scene`` (units with ``E_tr = 1/4``),
         an array of two, from the solver's own bookkeeping; None where the solver gives no split."""
         del fields, scene
-        return None
 
     # ------------------------------------------------------------ comparisons (wavecontact compare)
     def comparison_methods(self, kappa: float) -> list:

@@ -28,7 +28,7 @@ from ..scene import validate_gamma_kappa
 from ..solvers import get_solver
 from ..solvers.base import HARD_CORE_THERMAL, THERMAL_BATCH
 
-__all__ = ["ENSEMBLE_DELAY_OPTIONS", "ENSEMBLE_RTOL", "GRID_BIAS_SAMPLES", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec",
+__all__ = ["GRID_BIAS_SAMPLES", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec",
            "GridBias", "ensemble", "grid_bias", "grid_bias_indices", "run_batch", "sample_collision", "sample_seed"]
 
 MAX_SAMPLES = 10_000_000
