@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from .errors import InvalidParameterError, require_positive
+from .errors import require_integer, require_positive
 from .scene import validate_gamma_kappa
 
 __all__ = [
@@ -150,8 +150,7 @@ def hard_core_modal_energies(gamma: float, modes: int) -> np.ndarray:
     Returns an array ``(2, modes)``; row 0 (short rod) is zero, row 1 sums
     to ``1 - gamma^2`` as ``modes -> inf``.
     """
-    if int(modes) != modes or modes < 1:
-        raise ValueError(f"modes must be a positive integer, got {modes!r}")
+    modes = require_integer("modes", modes, 1, allowed="a positive integer")
     g1, g2 = round_trip_times(gamma)
     nu = np.arange(1, int(modes) + 1, dtype=float)
     out = np.empty((2, nu.size))
@@ -305,6 +304,4 @@ def equilibrium_spectral_entropy_finite(modes: int) -> float:
 
 
 def _require_modes(modes) -> int:
-    if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or modes < 1:
-        raise InvalidParameterError(f"modes must be an integer >= 1, got {modes!r}")
-    return int(modes)
+    return require_integer("modes", modes, 1)

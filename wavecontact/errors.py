@@ -7,6 +7,7 @@ user can fix the call without reading the source.
 from __future__ import annotations
 
 import math
+import numbers
 
 __all__ = [
     "AccuracyError",
@@ -17,6 +18,7 @@ __all__ = [
     "UnsupportedSceneError",
     "WavecontactError",
     "require_finite",
+    "require_integer",
     "require_positive",
 ]
 
@@ -107,4 +109,29 @@ def require_magnitude(name: str, value, *, signed: bool = False) -> float:
     if abs(number) > high or (number != 0.0 and abs(number) < low):
         allowed = f"0 or a magnitude in [{low:g}, {high:g}]" if signed else f"[{low:g}, {high:g}]"
         raise InvalidParameterError(f"{name} must lie in {allowed} (any consistent units), got {number!r}")
+    return number
+
+
+def require_integer(name: str, value, low: int | None = None, high: int | None = None, *,
+                    allowed: str | None = None) -> int:
+    """Return ``value`` as an int if it is a whole number in ``[low, high]`` (either bound may be None).
+
+    The one integer check of the package: ints, NumPy integers and floats with an integral value
+    (``3.0``, as a JSON file or a command line may give it) pass; bools, other types, non-integral,
+    NaN and infinite values are refused with :class:`InvalidParameterError` naming ``name`` and the
+    range (``allowed``: that phrase instead of the one built from the bounds, e.g. ``"a non-negative
+    integer or a numpy SeedSequence"``).
+    """
+    number = None
+    whole = isinstance(value, numbers.Integral) or (
+        isinstance(value, numbers.Real) and math.isfinite(value) and float(value).is_integer())
+    if whole and not isinstance(value, bool):
+        number = int(value)
+    if number is None or (low is not None and number < low) or (high is not None and number > high):
+        if allowed is None:
+            if low is not None and high is not None:
+                allowed = f"an integer in [{low}, {high}]"
+            else:
+                allowed = "an integer" if low is None else f"an integer >= {low}"
+        raise InvalidParameterError(f"{name} must be {allowed}, got {value!r}")
     return number

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidParameterError
+from .errors import InvalidParameterError, require_integer
 from .io.files import atomic_write
 
 __all__ = ["SCHEMA_NAME", "SCHEMA_VERSION", "RestitutionTable", "load"]
@@ -170,9 +170,7 @@ class RestitutionTable:
         object.__setattr__(self, "kappa", kappa)
         for name, low in (("bath_modes", 1), ("samples_per_point", 0), ("seed", 0)):
             number = getattr(self, name)
-            if isinstance(number, bool) or int(number) != number or number < low:
-                raise InvalidParameterError(f"restitution table {name} must be an integer >= {low}, got {number!r}")
-            object.__setattr__(self, name, int(number))
+            object.__setattr__(self, name, require_integer(f"restitution table {name}", number, low))
         object.__setattr__(self, "solver", str(self.solver))
 
     # ------------------------------------------------------------------ lookup

@@ -112,8 +112,6 @@ class CollisionResult:
         ``epsilon = |v_rel after| / |v_rel before|`` of the centres of mass.
     solver : str
         Name of the solver that produced the result.
-    outcome : Outcome
-        Always ``Outcome.SEPARATED`` for a returned result.
     gamma, kappa : float
         The paper's numbers of the scene (``kappa = inf``: hard); NaN when the
         scene is not two rods of one material on a line.
@@ -148,6 +146,11 @@ class CollisionResult:
         estimate is only an order of magnitude, which ``tolerance=`` then refuses; "" where it is a bound).
     extra : dict
         Solver-specific data (energies per rod, fields, modal energies ...).
+
+    A result exists only for a collision that ended with the rods apart: every other ending
+    (a step or time limit, a non-finite state ...) raises :class:`~wavecontact.errors.SolverFailure`,
+    whose ``outcome`` names it.  :attr:`outcome` is therefore not a field but the constant
+    ``Outcome.SEPARATED``, kept for the JSON and ``.npz`` records that name it.
     """
 
     restitution: float
@@ -155,7 +158,6 @@ class CollisionResult:
     wall_time_s: float
     time: np.ndarray
     relative_velocity: np.ndarray
-    outcome: Outcome = Outcome.SEPARATED
     gamma: float = math.nan
     kappa: float = math.nan
     contact_force: np.ndarray | None = None
@@ -170,6 +172,12 @@ class CollisionResult:
     def __post_init__(self):
         if not math.isfinite(self.restitution):
             raise InvalidParameterError(f"restitution must be finite, got {self.restitution!r}")
+
+    @property
+    def outcome(self) -> Outcome:
+        """``Outcome.SEPARATED``: the only ending that returns a result (the others raise
+        :class:`~wavecontact.errors.SolverFailure` with their outcome)."""
+        return Outcome.SEPARATED
 
     def __repr__(self) -> str:
         error = "" if math.isnan(self.error_estimate) else f" ± {self.error_estimate:.1e}"
@@ -256,7 +264,8 @@ class CollisionResult:
         for name in ("restitution", "wall_time_s", "gamma", "kappa", "contact_start", "contact_duration",
                      "error_estimate"):
             kwargs[name] = float(kwargs[name])
-        kwargs["outcome"] = Outcome(values["outcome"])
+        if Outcome(values["outcome"]) is not Outcome.SEPARATED:  # no build writes another
+            raise InvalidParameterError(f"{path} records the outcome {values['outcome']!r}, not a result")
         kwargs["options"] = values["options"]
         for name in ("work", "diagnostics", "extra"):
             kwargs[name] = _join_arrays(values[name], f"{name}/", arrays)

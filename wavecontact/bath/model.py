@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 
 __all__ = ["MAX_BATH_MODES", "BathRealisation", "ThermalBath", "seed_sequence"]
 
@@ -41,9 +41,8 @@ def seed_sequence(seed) -> np.random.SeedSequence:
     """``seed`` (a non-negative int or a SeedSequence) as a SeedSequence."""
     if isinstance(seed, np.random.SeedSequence):
         return seed
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InvalidParameterError(f"seed must be a non-negative integer or a numpy SeedSequence, got {seed!r}")
-    return np.random.SeedSequence(int(seed))
+    return np.random.SeedSequence(require_integer("seed", seed, 0,
+                                                  allowed="a non-negative integer or a numpy SeedSequence"))
 
 
 @dataclass(frozen=True)
@@ -78,9 +77,7 @@ class ThermalBath:
             checked.append(number)
         object.__setattr__(self, "temperature", tuple(checked))
         modes = self.modes
-        if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or not 1 <= modes <= MAX_BATH_MODES:
-            raise InvalidParameterError(f"bath modes (nu_max) must be an integer in [1, {MAX_BATH_MODES}], got {modes!r}")
-        object.__setattr__(self, "modes", int(modes))
+        object.__setattr__(self, "modes", require_integer("bath modes (nu_max)", modes, 1, MAX_BATH_MODES))
 
     @property
     def is_cold(self) -> bool:

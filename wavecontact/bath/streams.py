@@ -28,7 +28,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._jit import kernel
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 
 __all__ = ["SpawnedSeeds", "seed_states", "spawned_states", "standard_normals"]
 
@@ -155,8 +155,7 @@ class SpawnedSeeds(Sequence):
     """
 
     def __init__(self, seed: int, start: int, stop: int):
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise InvalidParameterError(f"seed must be a non-negative integer, got {seed!r}")
+        seed = require_integer("seed", seed, 0, allowed="a non-negative integer")
         if not 0 <= int(start) <= int(stop):
             raise InvalidParameterError(f"sample range must satisfy 0 <= start <= stop, got {start}..{stop}")
         self.seed, self.start, self.stop = int(seed), int(start), int(stop)

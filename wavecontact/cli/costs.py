@@ -7,7 +7,7 @@ it holds, and refuses (:func:`wavecontact.limits.check_study_cost`) above
 the available memory, saying which option makes the run smaller.
 
 The work of one solve is the solver's own estimate
-(:meth:`~wavecontact.solvers.base.Solver.total_cost`) where it gives one (FE
+(:meth:`~wavecontact.solvers.base.SolverBase.total_cost`) where it gives one (FE
 and modal solvers).  Where none exists, the bounds below are stated from
 counts measured on this package (the commands that measured them are named):
 

@@ -53,7 +53,7 @@ import threading
 import numpy as np
 
 from .._jit import kernel
-from ..errors import InvalidParameterError, SolverFailure
+from ..errors import InvalidParameterError, SolverFailure, require_integer
 from .stochastic_hardcore import parabola_peak
 
 __all__ = ["DEFAULT_POINTS_PER_PERIOD", "HardCoreGrid", "cached_grid", "hard_core_restitution", "hard_core_restitutions",
@@ -415,12 +415,8 @@ class HardCoreGrid:
 
         if not (isinstance(gamma, (int, float, np.floating)) and 0.0 < float(gamma) <= 1.0):
             raise InvalidParameterError(f"gamma must be in (0, 1], got {gamma!r}")
-        if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or not 1 <= modes <= MAX_BATH_MODES:
-            raise InvalidParameterError(f"bath modes (nu_max) must be an integer in [1, {MAX_BATH_MODES}], got {modes!r}")
-        if isinstance(points_per_period, bool) or not isinstance(points_per_period, (int, np.integer)) \
-                or not 2 <= points_per_period <= 8192:
-            raise InvalidParameterError(
-                f"hard_core_resolution (points per period) must be an integer in [2, 8192], got {points_per_period!r}")
+        modes = require_integer("bath modes (nu_max)", modes, 1, MAX_BATH_MODES)
+        points_per_period = require_integer("hard_core_resolution (points per period)", points_per_period, 2, 8192)
         self.gamma = float(gamma)
         self.modes = int(modes)
         self.lengths = (0.5 * (1.0 + self.gamma), 0.5 * (1.0 + self.gamma) / self.gamma)

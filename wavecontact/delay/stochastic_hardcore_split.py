@@ -29,11 +29,9 @@ compare it with the delay solver's split at large finite ``kappa``.
 
 from __future__ import annotations
 
-import numpy as np
-
 from .._jit import kernel
 from ..bath.model import ThermalBath
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 from .kernels import table_value
 from .stochastic_hardcore import run_grid
 
@@ -90,8 +88,7 @@ def hard_core_collision(gamma, temperature_ratio, seed, *, bath_modes=250, resol
         raise InvalidParameterError(f"gamma must lie in (0, 1], got {gamma!r}")
     pair = (temperature_ratio, temperature_ratio) if temperatures is None else tuple(temperatures)
     bath = ThermalBath(tuple(float(t) for t in pair), bath_modes)
-    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 4096:
-        raise InvalidParameterError(f"resolution must be an integer in [2, 4096], got {resolution!r}")
+    resolution = require_integer("resolution", resolution, 2, 4096)
     lengths = (0.5 * (1.0 + gamma), 0.5 * (1.0 + gamma) / gamma)  # mu = 1/2, V = 1: E_tr = 1/4
     vibrations = None if bath.is_cold else bath.draw(lengths, seed)
     grid = run_grid(gamma, vibrations, bath.modes, 0.0, int(resolution), 256, MAX_GRID_POINTS,

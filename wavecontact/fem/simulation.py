@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..contact import Exponential, Hard, Penalty
-from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, require_integer
 from ..result import Outcome
 from ..scene import Scene
 from . import kernels, lattice
@@ -96,8 +96,7 @@ def _law_parameters(scene: Scene, rods, hard_scheme: str):
 
 
 def _check_elements(elements) -> int:
-    if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)):
-        raise InvalidParameterError(f"elements must be an integer >= 1, got {elements!r}")
+    elements = require_integer("elements", elements, allowed="an integer >= 1")
     if not 1 <= elements <= 10**6:
         raise InvalidParameterError(f"elements must lie in [1, 1e6], got {elements}")
     return int(elements)

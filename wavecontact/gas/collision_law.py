@@ -48,7 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 from ..io.files import atomic_write
 
 __all__ = ["DEFAULT_LAW_FILE", "DEFAULT_SOFT_LAW_FILE", "LAW_ARRAYS", "LOG_X_MIN", "REGENERATE", "REGENERATE_SOFT",
@@ -168,9 +168,7 @@ class CollisionLaw:
             raise InvalidParameterError("collision law eps2_quantiles must be >= 0 and non-decreasing")
         for name in ("bath_modes", "samples_per_point", "seed", "resolution"):
             value = getattr(self, name)
-            if isinstance(value, bool) or int(value) != value or value < 0:
-                raise InvalidParameterError(f"collision law {name} must be an integer >= 0, got {value!r}")
-            object.__setattr__(self, name, int(value))
+            object.__setattr__(self, name, require_integer(f"collision law {name}", value, 0))
         seeds = tuple(self.kappa_seeds)
         if seeds and (len(seeds) != self.kappa.size or not all(_is_count(v) or v == 0 for v in seeds)):
             raise InvalidParameterError(f"collision law kappa_seeds must hold {self.kappa.size} integers >= 0 "
@@ -468,8 +466,7 @@ def row_resolutions(log_xs, resolution, cap=None):
     log_xs = np.asarray(log_xs, float)
     if cap is None:
         return tuple(int(resolution) for _ in log_xs)
-    if isinstance(cap, bool) or int(cap) != cap or cap < resolution:
-        raise InvalidParameterError(f"resolution cap must be an integer >= resolution ({resolution}), got {cap!r}")
+    require_integer("resolution cap", cap, resolution, allowed=f"an integer >= resolution ({resolution})")
     return tuple(int(min(int(cap), math.ceil(resolution * 10.0 ** (-lx / 2) - 1e-9))) for lx in log_xs)
 
 
@@ -525,8 +522,7 @@ def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), sh
     if np.any(np.isfinite(kappas)) and total > MAX_SOFT_KAPPA_SAMPLES:
         raise InvalidParameterError(f"a finite-kappa law may hold at most {MAX_SOFT_KAPPA_SAMPLES} collisions "
                                     "in all (each is a delay solve of 10 ms to 1 s)")
-    if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 2 <= levels <= int(samples):
-        raise InvalidParameterError(f"levels must be an integer in [2, samples], got {levels!r}")
+    levels = require_integer("levels", levels, 2, int(samples), allowed="an integer in [2, samples]")
     probability = np.linspace(0.0, 1.0, int(levels))
     shape = (kappas.size, gammas.size, log_xs.size, shares.size, probability.size)
     quantiles, gains = np.empty(shape), np.empty(shape)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidParameterError, require_positive
+from ..errors import InvalidParameterError, require_integer, require_positive
 
 __all__ = ["DEFAULT_LENGTHS", "EqualLengths", "RodGas", "UniformLengths", "random_gas"]
 
@@ -162,9 +162,7 @@ def random_gas(rods, *, seed, lengths=DEFAULT_LENGTHS, packing_fraction=0.1, tem
         Initial temperature of every bath (>= 0).
     boundary : {"ring", "walls"}
     """
-    if isinstance(rods, bool) or int(rods) != rods or not 2 <= rods <= MAX_RODS:
-        raise InvalidParameterError(f"rods must be an integer in [2, {MAX_RODS}], got {rods!r}")
-    rods = int(rods)
+    rods = require_integer("rods", rods, 2, MAX_RODS)
     fraction = float(packing_fraction)
     if not 0.0 < fraction < 1.0:
         raise InvalidParameterError(f"packing_fraction must lie in (0, 1), got {packing_fraction!r}")

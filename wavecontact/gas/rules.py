@@ -38,7 +38,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import InvalidParameterError, require_finite
+from ..errors import InvalidParameterError, require_finite, require_integer
 from ..restitution_table import RestitutionTable
 from . import kernels
 from .collision_law import CollisionLaw, soft_corrections
@@ -206,8 +206,7 @@ class VibrationSolve:
     def __post_init__(self):
         if not callable(self.draw):
             raise InvalidParameterError("VibrationSolve draw must be callable")
-        if isinstance(self.bath_modes, bool) or int(self.bath_modes) != self.bath_modes or self.bath_modes < 1:
-            raise InvalidParameterError(f"bath_modes must be an integer >= 1, got {self.bath_modes!r}")
+        require_integer("bath_modes", self.bath_modes, 1)
 
     code = kernels.RULE_EXTERNAL
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import CheckpointError, InvalidParameterError, require_positive
+from ..errors import CheckpointError, InvalidParameterError, require_integer, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.run_controller import RunController
 from ..restitution_table import RestitutionTable
@@ -177,11 +177,6 @@ class GasResult:
         return directory
 
 
-def _count(name, value, low, high):
-    if isinstance(value, bool) or int(value) != value or not low <= value <= high:
-        raise InvalidParameterError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
-    return int(value)
-
 
 class GasSimulation:
     """An event-driven rod gas with a collision rule; run it in pieces, checkpoint, resume.
@@ -256,11 +251,11 @@ class GasSimulation:
                 raise InvalidParameterError("contact_stiffness needs VibrationLaw(default_law(), default_soft_law()): "
                                             "the rule has no soft (finite-kappa) law")
             self.contact_stiffness = alpha
-        self.record_every = _count("record_every", record_every, 1, MAX_COLLISIONS)
-        self.frame_every = _count("frame_every", frame_every, 1, MAX_COLLISIONS)
-        self.max_frames = _count("max_frames", max_frames, 0, 100_000)
-        self.frame_rods = _count("frame_rods", frame_rods, 1, 100_000)
-        window = _count("collapse_window", collapse_window, 2, 2**20)
+        self.record_every = require_integer("record_every", record_every, 1, MAX_COLLISIONS)
+        self.frame_every = require_integer("frame_every", frame_every, 1, MAX_COLLISIONS)
+        self.max_frames = require_integer("max_frames", max_frames, 0, 100_000)
+        self.frame_rods = require_integer("frame_rods", frame_rods, 1, 100_000)
+        window = require_integer("collapse_window", collapse_window, 2, 2**20)
         if window & (window - 1):
             raise InvalidParameterError(f"collapse_window must be a power of two, got {window}")
         self.collapse_factor = require_positive("collapse_factor", collapse_factor)
@@ -463,7 +458,7 @@ class GasSimulation:
             (:class:`~wavecontact.io.run_controller.RunController`: progress, checkpoints, interrupts);
             None: a progress bar only.
         """
-        collisions = _count("collisions", collisions, 1, MAX_COLLISIONS)
+        collisions = require_integer("collisions", collisions, 1, MAX_COLLISIONS)
         if math.isnan(float(max_time)) or float(max_time) < 0:
             raise InvalidParameterError(f"max_time must be >= 0, got {max_time!r}")
         if collisions // self.record_every > MAX_RECORDS:
@@ -840,7 +835,7 @@ def run_gas(new_simulation, collisions: int, out_dir=None, *, resume: bool = Fal
 
     from ..io.run_controller import OutputLock, claim_folder
 
-    collisions = _count("collisions", collisions, 1, MAX_COLLISIONS)
+    collisions = require_integer("collisions", collisions, 1, MAX_COLLISIONS)
     if out_dir is None:
         if resume:
             raise InvalidParameterError("--resume needs --out DIR")

@@ -42,7 +42,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 from ..progress import Progress
 from .files import atomic_write, to_jsonable
 
@@ -290,8 +290,8 @@ class RunController:
                  every: int | None = None, seconds: float | None = None, initial: int = 0,
                  progress: bool | None = False, log: Callable[[str], None] | None = None,
                  describe_resume: Callable[[int], str] | None = None, option: str = "--out"):
-        if every is not None and (isinstance(every, bool) or int(every) != every or every < 1):
-            raise InvalidParameterError(f"checkpoint cadence must be an integer >= 1, got {every!r}")
+        if every is not None:
+            require_integer("checkpoint cadence", every, 1)
         if seconds is not None and not float(seconds) > 0:
             raise InvalidParameterError(f"checkpoint interval must be > 0 seconds, got {seconds!r}")
         self.total = int(total)

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 from ..scene import Rod
 
 __all__ = ["RodModes", "analytic_modes", "fe_modes", "rod_modes", "uniform_residual_compliance"]
@@ -83,9 +83,7 @@ class RodModes:
 
 
 def _check_count(modes) -> int:
-    if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or modes < 1:
-        raise InvalidParameterError(f"modes must be an integer >= 1 (modes per rod), got {modes!r}")
-    return int(modes)
+    return require_integer("modes", modes, 1, allowed="an integer >= 1 (modes per rod)")
 
 
 def uniform_residual_compliance(rod: Rod, modes: int) -> np.ndarray:
@@ -150,8 +148,7 @@ def fe_matrices(rod: Rod, elements: int, order: int = 1):
     from skfem import Basis, ElementLineP1, ElementLineP2, MeshLine, asm
     from skfem.models.poisson import laplace, mass
 
-    if isinstance(elements, bool) or not isinstance(elements, (int, np.integer)) or elements < 1:
-        raise InvalidParameterError(f"elements must be an integer >= 1, got {elements!r}")
+    elements = require_integer("elements", elements, 1)
     element = {1: ElementLineP1, 2: ElementLineP2}.get(order)
     if element is None:
         raise InvalidParameterError(f"order must be 1 or 2 for FE modes, got {order!r}")

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
+from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, require_integer
 from ..result import CollisionRecord, Outcome
 from ..scene import Scene
 from . import collocation, end_response, kernels
@@ -81,8 +81,7 @@ class RingSimulation:
                                         "(wavecontact.scene.two_rods_on_a_ring); use solve() for a line")
         if not scene.is_cold:
             raise UnsupportedSceneError("a ring simulation starts from cold rods (no initial fields)")
-        if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or modes < 1:
-            raise InvalidParameterError(f"modes must be an integer >= 1, got {modes!r}")
+        require_integer("modes", modes, 1)
         self.scene = scene
         self.modes = int(modes)
         self.static_correction = bool(static_correction)

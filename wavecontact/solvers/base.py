@@ -52,7 +52,7 @@ import numpy as np
 from .._jit import prepared_kernel_count
 from ..errors import AccuracyError, InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost, Limits, check_cost, check_kappa
-from ..result import CONTACT_FORCE_FRACTION, CollisionResult, Outcome, contact_window
+from ..result import CONTACT_FORCE_FRACTION, CollisionResult, contact_window
 from ..scene import Scene, two_rod_parameters
 
 __all__ = [
@@ -605,7 +605,6 @@ class SolverBase:
         result = CollisionResult(
             restitution=restitution,
             solver=self.name,
-            outcome=Outcome.SEPARATED,
             gamma=gamma,
             kappa=kappa,
             error_estimate=float(estimate),

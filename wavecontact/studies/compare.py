@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..api import collide
-from ..errors import WavecontactError
+from ..errors import WavecontactError, require_integer
 from ..progress import Progress
 from ..solvers import get_solver, solver_names
 
@@ -151,8 +151,7 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
     -------
     ComparisonTable
     """
-    if int(repeats) != repeats or repeats < 1:
-        raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    repeats = require_integer("repeats", repeats, 1, allowed="a positive integer")
     reference, source = reference_restitution(gamma, kappa)
     methods = default_methods(kappa) if methods is None else list(methods)
     bar = Progress(len(methods), "compare", unit="method", enabled=progress)

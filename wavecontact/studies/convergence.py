@@ -29,7 +29,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidParameterError, SolverFailure
+from ..errors import InvalidParameterError, SolverFailure, require_integer
 from ..progress import Progress
 from ..result import to_jsonable
 
@@ -442,9 +442,7 @@ def _fit(order: int, mass: str, rows: list) -> DiscretizationFit:
 def _positive_ints(name: str, values) -> list:
     out = []
     for v in values:
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-            raise InvalidParameterError(f"{name} must hold positive integers, got {v!r}")
-        out.append(int(v))
+        out.append(require_integer(name, v, 1, allowed="positive integers"))
     if not out:
         raise InvalidParameterError(f"{name} must not be empty")
     return _unique(out)

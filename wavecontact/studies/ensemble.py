@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..bath.model import ThermalBath
-from ..errors import AccuracyError, InvalidParameterError, WavecontactError
+from ..errors import AccuracyError, InvalidParameterError, WavecontactError, require_integer
 from ..io.files import atomic_write
 from ..io.run_controller import BatchStore, RunController, write_summary
 from ..scene import validate_gamma_kappa
@@ -103,13 +103,8 @@ class EnsembleSpec:
         bath = ThermalBath(self.temperature, self.bath_modes)  # validates temperature and modes
         object.__setattr__(self, "temperature", bath.temperature)
         for name, low, high in (("samples", 1, MAX_SAMPLES), ("batch_size", 1, 100_000)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-                raise InvalidParameterError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
-            object.__setattr__(self, name, int(value))
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise InvalidParameterError(f"seed must be a non-negative integer, got {self.seed!r}")
-        object.__setattr__(self, "seed", int(self.seed))
+            object.__setattr__(self, name, require_integer(name, getattr(self, name), low, high))
+        object.__setattr__(self, "seed", require_integer("seed", self.seed, 0, allowed="a non-negative integer"))
         solver = get_solver(self.solver)  # refuses an unknown name, listing the registered ones
         if self.energy_split and math.isinf(kappa):
             raise InvalidParameterError(

@@ -3,7 +3,7 @@
 Two rods on a ring start with a cold bath; after every collision the
 normalised spectral entropy ``eta`` (Eq. 10) of the modal energies is
 recorded.  ``eta`` starts at 1 (empty bath) and falls towards its
-equipartition mean (Eq. 11; :func:`~wavecontact.studies.ring.equilibrium_spectral_entropy_finite`
+equipartition mean (Eq. 11; :func:`~wavecontact.analytic.equilibrium_spectral_entropy_finite`
 for the exact finite-``N`` value).  The *settling collision* of one
 realisation is the first collision after which ``eta`` lies below
 ``threshold`` times that mean.
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analytic import equilibrium_spectral_entropy, equilibrium_spectral_entropy_finite
-from ..errors import InvalidParameterError, require_positive
+from ..errors import InvalidParameterError, require_integer, require_positive
 from ..progress import Progress
 from ..scene import two_rods_on_a_ring
 from ..solvers import solver_for
@@ -166,8 +166,8 @@ def equipartition_by_modes(
     import time
 
     mode_counts = _mode_counts(modes)
-    collisions = _count("collisions", collisions)
-    realisations = _count("realisations", realisations)
+    collisions = require_integer("collisions", collisions, 1)
+    realisations = require_integer("realisations", realisations, 1)
     threshold = require_positive("threshold", threshold)
     if threshold <= 1.0:
         raise InvalidParameterError(f"threshold must exceed 1 (a multiple of the equilibrium mean), got {threshold!r}")
@@ -202,17 +202,8 @@ def _mode_counts(modes) -> tuple:
         raise InvalidParameterError(f"modes must be a non-empty list of integers >= 2, got {modes!r}")
     counts = []
     for value in values:
-        if not (np.issubdtype(type(value), np.integer) or (isinstance(value, float) and value.is_integer())):
-            raise InvalidParameterError(f"modes must be integers >= 2, got {value!r}")
-        if int(value) < 2:
-            raise InvalidParameterError(f"modes must be integers >= 2, got {int(value)}")
-        counts.append(int(value))
+        counts.append(require_integer("modes", value, 2, allowed="integers >= 2"))
     if len(set(counts)) != len(counts):
         raise InvalidParameterError(f"modes must not repeat, got {counts}")
     return tuple(sorted(counts))
 
-
-def _count(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InvalidParameterError(f"{name} must be an integer >= 1, got {value!r}")
-    return int(value)

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import require_integer
 from ..gas import GasSimulation, random_gas
 from ..gas.model import DEFAULT_LENGTHS
 
@@ -79,10 +79,8 @@ def gas_ensemble(realisations, *, rods, collisions, rule, seed, lengths=DEFAULT_
         A ``concurrent.futures.Executor`` or a ``dask.distributed.Client``;
         None runs serially here.
     """
-    if isinstance(realisations, bool) or int(realisations) != realisations or not 1 <= realisations <= MAX_REALISATIONS:
-        raise InvalidParameterError(f"realisations must be an integer in [1, {MAX_REALISATIONS}], got {realisations!r}")
-    if isinstance(seed, bool) or int(seed) != seed or seed < 0:
-        raise InvalidParameterError(f"seed must be an integer >= 0, got {seed!r}")
+    require_integer("realisations", realisations, 1, MAX_REALISATIONS)
+    require_integer("seed", seed, 0)
     spec = {
         "rods": rods, "collisions": collisions, "rule": rule, "lengths": lengths,
         "packing_fraction": packing_fraction, "temperature": temperature, "bath_temperature": bath_temperature,

@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidParameterError, SolverFailure, WavecontactError
+from ..errors import InvalidParameterError, SolverFailure, WavecontactError, require_integer
 from ..scene import validate_gamma_kappa
 from ..solvers import get_solver
 from ..solvers.base import HARD_CORE_THERMAL, THERMAL_BATCH
@@ -82,11 +82,6 @@ def step_seed(chain: np.random.SeedSequence, step: int) -> np.random.SeedSequenc
     """The bath of collision ``step`` of a chain: ``chain.spawn(step + 1)[step]``, without spawn state."""
     return np.random.SeedSequence(chain.entropy, spawn_key=tuple(chain.spawn_key) + (int(step),))
 
-
-def _integer(name, value, low, high):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-        raise InvalidParameterError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -154,18 +149,18 @@ class MarkovSpec:
         if self.bath not in BATHS:
             raise InvalidParameterError(f"bath must be one of {', '.join(BATHS)}, got {self.bath!r}")
         # the largest values the product bound below allows (one chain of MAX_STATES - 1 steps; chains of 1 step)
-        chains = _integer("chains", self.chains, 1, MAX_STATES // 2)
-        steps = _integer("steps", self.steps, 1, MAX_STATES - 1)
+        chains = require_integer("chains", self.chains, 1, MAX_STATES // 2)
+        steps = require_integer("steps", self.steps, 1, MAX_STATES - 1)
         if chains * (steps + 1) > MAX_STATES:
             raise InvalidParameterError(
                 f"chains x (steps + 1) must be at most {MAX_STATES}, got {chains} x {steps + 1}; split the run"
             )
         object.__setattr__(self, "chains", chains)
         object.__setattr__(self, "steps", steps)
-        object.__setattr__(self, "seed", _integer("seed", self.seed, 0, 2**63 - 1))
-        object.__setattr__(self, "modes_per_rod", _integer("modes_per_rod (N_mod)", self.modes_per_rod, 1, 10**6))
-        object.__setattr__(self, "bath_modes", _integer("bath_modes (nu_max)", self.bath_modes, 1, 100_000))
-        object.__setattr__(self, "batch_size", _integer("batch_size", self.batch_size, 1, 100_000))
+        object.__setattr__(self, "seed", require_integer("seed", self.seed, 0, 2**63 - 1))
+        object.__setattr__(self, "modes_per_rod", require_integer("modes_per_rod (N_mod)", self.modes_per_rod, 1, 10**6))
+        object.__setattr__(self, "bath_modes", require_integer("bath_modes (nu_max)", self.bath_modes, 1, 100_000))
+        object.__setattr__(self, "batch_size", require_integer("batch_size", self.batch_size, 1, 100_000))
         top = 2 * self.modes_per_rod + 1 if self.bath == "conserved" else 1e12
         if self.initial_energy == "boltzmann":
             if self.bath != "fixed":
@@ -335,7 +330,7 @@ def _hard_core_resolution(options) -> int:
         raise InvalidParameterError(
             f"the hard-core delay mode takes only the option hard_core_resolution, not {', '.join(sorted(unknown))}"
         )
-    return _integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
+    return require_integer("hard_core_resolution", options.get("hard_core_resolution", 8), 2, 4096)
 
 
 def run_chains(spec_fields: dict, start: int, stop: int) -> tuple:
@@ -670,7 +665,7 @@ def symmetry_test(before, after, bins: int = 6) -> SymmetryTest:
 
     from .ring_statistics import ks_exponential
 
-    bins = _integer("bins", bins, 2, 50)
+    bins = require_integer("bins", bins, 2, 50)
     e0, e1 = np.asarray(before, dtype=float), np.asarray(after, dtype=float)
     if e0.shape != e1.shape or e0.ndim != 1 or e0.size < 2:
         raise InvalidParameterError("before and after must be one-dimensional arrays of equal size >= 2")

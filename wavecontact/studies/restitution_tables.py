@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, require_integer
 from ..restitution_table import RestitutionTable
 from .ensemble import ensemble
 
@@ -62,8 +62,7 @@ def restitution_table(gammas, temperatures, samples, seed, *, kappa=100.0, bath_
     temperatures = np.asarray(temperatures, dtype=float)
     if not math.isfinite(float(kappa)):
         raise InvalidParameterError("restitution tables need a finite kappa (the hard-core grid gives no per-rod split)")
-    if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 2 <= levels <= 100_001:
-        raise InvalidParameterError(f"levels must be an integer in [2, 100001], got {levels!r}")
+    levels = require_integer("levels", levels, 2, 100_001)
     if gammas.ndim != 1 or temperatures.ndim != 1 or gammas.size * temperatures.size * int(samples) > MAX_TABLE_SAMPLES:
         raise InvalidParameterError(f"a table may hold at most {MAX_TABLE_SAMPLES} collisions in all")
     probability = np.linspace(0.0, 1.0, int(levels))

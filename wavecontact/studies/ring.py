@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analytic import equilibrium_translational_energy
-from ..errors import CheckpointError, InvalidParameterError, require_positive
+from ..errors import CheckpointError, InvalidParameterError, require_integer, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
 from ..io.run_controller import RunController
@@ -293,11 +293,9 @@ def _validate(gamma, kappa, modes, collisions, checkpoint_every):
     if not 0.0 < g <= 1.0:
         raise InvalidParameterError(f"gamma must lie in (0, 1], got {g!r}")
     k = require_positive("kappa", kappa, allow_inf=True)
-    if isinstance(modes, bool) or not isinstance(modes, (int, np.integer)) or modes < 1:
-        raise InvalidParameterError(f"modes must be an integer >= 1, got {modes!r}")
+    require_integer("modes", modes, 1)
     for name, value in (("collisions", collisions), ("checkpoint_every", checkpoint_every)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise InvalidParameterError(f"{name} must be an integer >= 1, got {value!r}")
+        require_integer(name, value, 1)
     return g, k, int(modes), int(collisions), int(checkpoint_every)
 
 

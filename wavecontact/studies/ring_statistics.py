@@ -23,7 +23,7 @@ from ..analytic import (
     equilibrium_spectral_entropy_finite,
     equilibrium_translational_energy,
 )
-from ..errors import InvalidParameterError, require_positive
+from ..errors import InvalidParameterError, require_integer, require_positive
 
 __all__ = [
     "RingStatistics",
@@ -112,9 +112,7 @@ def ring_statistics(run, transient: int | None = None, max_lag: int = 20, window
     relax = relaxation_collisions(run.translational_energy, e_eq, window=min(window, m))
     if transient is None:
         transient = default_transient(m, relax)
-    if int(transient) != transient or not 0 <= transient <= m - 3:
-        raise InvalidParameterError(f"transient must be an integer in [0, {m - 3}], got {transient!r}")
-    transient = int(transient)
+    transient = require_integer("transient", transient, 0, m - 3)
     stationary_energy = run.translational_energy[transient:]
     stride = decorrelation_stride(stationary_energy)
     ks = ks_exponential(stationary_energy[::stride], e_eq)
@@ -255,10 +253,8 @@ def restitution_correlation(restitution, max_lag: int = 20, start: int = 0) -> n
         raise InvalidParameterError(f"restitution must be one-dimensional, got shape {eps.shape}")
     if not np.all(np.isfinite(eps)):
         raise InvalidParameterError("restitution must be finite")
-    if int(max_lag) != max_lag or max_lag < 0:
-        raise InvalidParameterError(f"max_lag must be an integer >= 0, got {max_lag!r}")
-    if int(start) != start or start < 0:
-        raise InvalidParameterError(f"start must be an integer >= 0, got {start!r}")
+    require_integer("max_lag", max_lag, 0)
+    require_integer("start", start, 0)
     window = eps[int(start):]
     if window.size < int(max_lag) + 2:
         raise InvalidParameterError(
@@ -275,9 +271,7 @@ def settling_index(series, level: float, tolerance: float, window: int) -> int |
     Returns ``None`` if that never happens (the series has not settled).
     """
     values = np.asarray(series, dtype=float)
-    if int(window) != window or window < 1:
-        raise InvalidParameterError(f"window must be an integer >= 1, got {window!r}")
-    window = int(window)
+    window = require_integer("window", window, 1)
     if values.size < window:
         return None
     cumulative = np.concatenate(([0.0], np.cumsum(values)))
