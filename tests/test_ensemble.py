@@ -95,6 +95,18 @@ def test_energy_split_needs_finite_kappa():
         EnsembleSpec(0.6, math.inf, 1.0, 3, 0, energy_split=True)
 
 
+def test_energy_split_needs_a_solver_that_offers_it():
+    # the registry decides (capabilities), not a list of names: a registered solver without the split
+    from wavecontact.solvers import registered
+
+    with registered("toy", "toy_solver"):
+        with pytest.raises(InvalidParameterError, match="splits the energy per rod: delay, fem, modal"):
+            EnsembleSpec(0.6, 100.0, 1.0, 3, 0, solver="toy", energy_split=True)
+        assert EnsembleSpec(0.6, 100.0, 1.0, 3, 0, solver="toy").options == {}  # no batch defaults of its own
+    with pytest.raises(InvalidParameterError, match="solver must be one of delay, fem, modal"):
+        EnsembleSpec(0.6, 100.0, 1.0, 3, 0, solver="toy")
+
+
 def test_ensemble_means_agree_across_solvers():
     # independent seeds per solver: |mean_a - mean_b| within 4 combined standard errors
     common = dict(gamma=0.6, kappa=20.0, bath_temperature=0.5, bath_modes=10)  # noqa: C408

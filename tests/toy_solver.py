@@ -4,18 +4,17 @@ It exists to show that a new solver is its module plus one registry line: the co
 register it (``wavecontact.solvers.registered("toy", "toy_solver")``) and run every contract case
 on it, the order case included, with nothing else changed.  Its method is that of
 ``delay_reference.py`` (method of steps, delayed values from the dense output of earlier windows),
-independent of the package's delay kernels; it takes two rods of one or two materials with
+independent of the package's delay kernels (it uses that module's windows); it takes two rods of one or two materials with
 exponential contact, cold.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from delay_reference import radau_windows
 
 from wavecontact.contact import Exponential
 from wavecontact.delay.parameters import delay_parameters
@@ -52,34 +51,13 @@ class ToySolver(SolverBase):
         if not isinstance(scene.contact, Exponential) or not scene.is_cold:
             raise UnsupportedSceneError("the toy solver takes cold rods with exponential contact")
         params = delay_parameters(scene)
-        delays, weights, kappa = params.round_trip_times, params.echo_weights, params.kappa
-        pieces = []
-
-        def history(s):
-            if s <= 0.0:
-                return 0.0
-            for start, stop, sol in pieces:
-                if start <= s <= stop:
-                    return sol.sol(s)[0]
-            raise AssertionError(s)
-
-        def rate(s, w):
-            memory = sum(b * history(s - n * g) for g, b in zip(delays, weights) for n in range(1, int(s // g) + 1))
-            return math.exp(min(kappa * s - A0 - w - memory, 700.0))
-
-        t, w, end, steps = 0.0, 0.0, A0 / kappa + 3.0 * sum(delays), 0
-        times, values = [], []
-        while t < end:
-            stop = min(t + 0.999 * min(delays), end)
-            sol = solve_ivp(lambda s, y: [rate(s, y[0])], (t, stop), [w], method="Radau", rtol=options.rtol,
-                            atol=1e-12, dense_output=True)
-            pieces.append((t, stop, sol))
-            grid = np.linspace(t, stop, options.samples if options.history else 2)
-            times.append(grid)
-            values.append(sol.sol(grid)[0])
-            t, w, steps = stop, sol.y[0, -1], steps + sol.t.size - 1
-        tau, big_w = np.concatenate(times), np.concatenate(values)
+        kappa = params.kappa
+        windows, rate = radau_windows(params.round_trip_times, params.echo_weights, kappa, A0, options.rtol)
+        samples = options.samples if options.history else 2
+        tau = np.concatenate([np.linspace(start, stop, samples) for start, stop, _ in windows])
+        big_w = np.concatenate([sol.sol(np.linspace(start, stop, samples))[0] for start, stop, sol in windows])
         force = np.array([rate(s, x) for s, x in zip(tau, big_w)])
+        w, steps = windows[-1][2].y[0, -1], sum(sol.t.size - 1 for _, _, sol in windows)
         return CollisionFields(restitution=w / kappa - 1.0, time=tau * params.time_unit,
                                relative_velocity=params.approach_speed * (big_w / kappa - 1.0),
                                contact_force=params.force_unit * force / kappa, work={"steps": steps})

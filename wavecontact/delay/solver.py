@@ -33,6 +33,7 @@ from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene, two_rods
 from ..solvers.base import (
+    ENERGY_SPLIT,
     HARD_CORE_THERMAL,
     MATERIAL_RATIOS,
     THERMAL_BATCH,
@@ -210,7 +211,7 @@ class DelaySolver(SolverBase):
     refines = -1
     title = "delay solver"
     cli_flags = MappingProxyType({"rtol": None, "max_steps": None})
-    capabilities = frozenset({THERMAL_BATCH, HARD_CORE_THERMAL, MATERIAL_RATIOS})
+    capabilities = frozenset({THERMAL_BATCH, HARD_CORE_THERMAL, MATERIAL_RATIOS, ENERGY_SPLIT})
     batch_defaults = MappingProxyType(BATCH_OPTIONS)
     order_case = MappingProxyType({"resolutions": (1e-4, 1e-6, 1e-8), "options": {}})
     agreement_case = ({}, 1e-9)

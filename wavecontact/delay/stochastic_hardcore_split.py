@@ -1,6 +1,7 @@
 """One hard-core thermal collision with each rod's share of the energy (the gas's solve rule).
 
-Reached from studies through the registry: ``get_solver("delay").hard_core_thermal_split``.
+Reached from studies through the registry: ``solver_for(HARD_CORE_THERMAL).hard_core_thermal_split``
+(the capability the delay solver declares, :mod:`wavecontact.solvers.base`).
 
 The stochastic hard-core limit (``kappa -> inf``) of the paper's two rods is
 the max-plus recursion of :mod:`wavecontact.delay.stochastic_hardcore`; this

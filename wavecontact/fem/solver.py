@@ -22,7 +22,7 @@ from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure
 from ..limits import Cost
 from ..scene import Scene
-from ..solvers.base import CollisionFields, SolverBase, SolverOptions, option
+from ..solvers.base import ENERGY_SPLIT, CollisionFields, SolverBase, SolverOptions, option
 from . import kernels
 from .error_estimate import ESTIMATE_SAFETY
 from .error_estimate import estimate_from_levels as _estimate_from_levels
@@ -109,6 +109,7 @@ class FemSolver(SolverBase):
     title = "finite-element solver"
     cli_flags = MappingProxyType({"elements": None, "order": None, "mass": None})
     contact_names = ("exponential", "penalty", "hard")
+    capabilities = frozenset({ENERGY_SPLIT})
     order_case = MappingProxyType({"resolutions": (24, 48, 96, 192), "options": {"order": 1, "mass": "consistent"}})
     agreement_case = ({"elements": 400}, 1e-5)
     error_safety = ESTIMATE_SAFETY

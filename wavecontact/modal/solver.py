@@ -29,7 +29,7 @@ from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
 from ..scene import Scene
-from ..solvers.base import RING, CollisionFields, SolverBase, SolverOptions, option
+from ..solvers.base import ENERGY_SPLIT, RING, CollisionFields, SolverBase, SolverOptions, option
 from . import collocation, end_response, kernels
 from .modes import rod_modes
 from .system import ModalSystem, StepControl
@@ -324,7 +324,7 @@ class ModalSolver(SolverBase):
     cli_flags = MappingProxyType({"modes": None, "static_correction": (
         "plain truncation: no correction for the omitted modes (the modal solver's static_correction=False; "
         "not for hard contact). Default: corrected")})
-    capabilities = frozenset({RING})
+    capabilities = frozenset({RING, ENERGY_SPLIT})
     # the static correction: the end-response default has no order in N (exact for cold rods; expected_order None)
     order_case = MappingProxyType({"resolutions": (10, 20, 40), "options": {"correction": "static"}})
     agreement_case = ({"modes": 100}, 1e-6)

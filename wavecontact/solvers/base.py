@@ -24,8 +24,9 @@ A solver is an object satisfying :class:`Solver`:
     studies query through the registry (:func:`wavecontact.solvers.solvers_with`)
     instead of naming solvers; each capability's methods are declared here,
     on :class:`SolverBase`, and refused by a solver that does not offer it;
-``vibration_energy_gain(result, scene)``
-    the per-rod energy split of a thermal collision, by the solver's own bookkeeping.
+``vibration_energy_gain(fields, scene)``
+    the per-rod energy split of a thermal collision, by the solver's own bookkeeping
+    (the ``energy split`` capability).
 
 :class:`SolverBase` implements ``solve`` once for all solvers: it times the
 solver's own ``_collide``, recovers the paper's ``gamma`` and ``kappa`` from
@@ -57,6 +58,7 @@ from ..scene import Scene, two_rod_parameters
 
 __all__ = [
     "CAPABILITIES",
+    "ENERGY_SPLIT",
     "HARD_CORE_THERMAL",
     "MATERIAL_RATIOS",
     "RING",
@@ -276,6 +278,8 @@ HARD_CORE_THERMAL = "hard-core thermal"
 MATERIAL_RATIOS = "material ratios"
 #: Many collisions on a ring (``simulate``).
 RING = "ring"
+#: The per-rod split of the energy a thermal collision gives the rods' vibrations.
+ENERGY_SPLIT = "energy split"
 
 CAPABILITIES = {c.name: c for c in (
     Capability(THERMAL_BATCH, ("thermal_restitution", "thermal_restitutions"),
@@ -286,6 +290,8 @@ CAPABILITIES = {c.name: c for c in (
     Capability(MATERIAL_RATIOS, ("check_ratios", "restitution_of_ratios"),
                "epsilon of cold two-material collisions from the impedance and round-trip ratios"),
     Capability(RING, ("simulate",), "many collisions of a ring scene"),
+    Capability(ENERGY_SPLIT, ("vibration_energy_gain",),
+               "each rod's vibrational energy gain in a thermal collision (extra['vibration_energy_gain'])"),
 )}
 
 
@@ -646,7 +652,7 @@ class SolverBase:
         bath = scene.metadata.get("bath") if scene.vibrations is not None else None
         if bath is None:
             return extra
-        gain = self.vibration_energy_gain(fields, scene)
+        gain = self.vibration_energy_gain(fields, scene) if self.offers(ENERGY_SPLIT) else None
         if gain is not None:
             extra["vibration_energy_gain"] = gain
         extra["bath"] = dict(bath)
@@ -654,8 +660,9 @@ class SolverBase:
 
     def vibration_energy_gain(self, fields: CollisionFields, scene: Scene):
         """Energy each rod's vibrations gained in the collision of ``scene`` (units with ``E_tr = 1/4``),
-        an array of two, from the solver's own bookkeeping; None where the solver gives no split."""
-        del fields, scene
+        an array of two, from the solver's own bookkeeping (:data:`ENERGY_SPLIT`; None for a run
+        that gives no split)."""
+        raise _not_offered(self, ENERGY_SPLIT)
 
     # ------------------------------------------------------------ comparisons (wavecontact compare)
     def comparison_methods(self, kappa: float) -> list:

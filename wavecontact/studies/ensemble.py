@@ -25,8 +25,8 @@ from ..errors import AccuracyError, InvalidParameterError, WavecontactError, req
 from ..io.files import atomic_write
 from ..io.run_controller import BatchStore, RunController, write_summary
 from ..scene import validate_gamma_kappa
-from ..solvers import get_solver
-from ..solvers.base import HARD_CORE_THERMAL, THERMAL_BATCH
+from ..solvers import get_solver, solvers_with
+from ..solvers.base import ENERGY_SPLIT, HARD_CORE_THERMAL, THERMAL_BATCH
 
 __all__ = ["GRID_BIAS_SAMPLES", "MAX_SAMPLES", "EnsembleResult", "EnsembleSpec",
            "GridBias", "ensemble", "grid_bias", "grid_bias_indices", "run_batch", "sample_collision", "sample_seed"]
@@ -106,6 +106,9 @@ class EnsembleSpec:
             object.__setattr__(self, name, require_integer(name, getattr(self, name), low, high))
         object.__setattr__(self, "seed", require_integer("seed", self.seed, 0, allowed="a non-negative integer"))
         solver = get_solver(self.solver)  # refuses an unknown name, listing the registered ones
+        if self.energy_split and not solver.offers(ENERGY_SPLIT):
+            raise InvalidParameterError(f"energy_split needs a solver that splits the energy per rod: "
+                                        f"{', '.join(solvers_with(ENERGY_SPLIT))}, not {self.solver!r}")
         if self.energy_split and math.isinf(kappa):
             raise InvalidParameterError(
                 "energy_split needs a finite kappa (the hard-core grid gives only the total); kappa >= 50 is "
