@@ -76,7 +76,7 @@ def test_settling_collision_counts_from_one():
 @pytest.mark.parametrize(
     "kwargs, field",
     [({"modes": (1,)}, "modes"), ({"modes": (5, 5)}, "modes"), ({"modes": ()}, "modes"),
-     ({"modes": (4.5,)}, "modes"), ({"collisions": 0}, "collisions"), ({"realisations": 2.0}, "realisations"),
+     ({"modes": (4.5,)}, "modes"), ({"collisions": 0}, "collisions"), ({"realisations": 2.5}, "realisations"),
      ({"threshold": 1.0}, "threshold"), ({"threshold": math.nan}, "threshold")],
 )
 def test_bad_parameters_are_refused(kwargs, field):
