@@ -422,8 +422,8 @@ class SolverBase:
     #: options a batch of many thermal samples runs with where the caller gives none (ensembles, Markov)
     batch_defaults: Mapping = MappingProxyType({})
     #: the contract tests' order case: resolutions (coarse to fine) and options held fixed
-    #: (``docs``: tests/test_solver_contract.py), and the resolution and tolerance at which the
-    #: solver must agree with MODEL.md's epsilon(0.6, 20)
+    #: (tests/test_solver_contract.py), and the resolution and tolerance at which the
+    #: solver must agree with the contract tests' reference epsilon(0.6, 20)
     order_case: Mapping = MappingProxyType({"resolutions": (), "options": {}})
     agreement_case: tuple = ({}, 0.0)
     Options: type = SolverOptions
