@@ -40,7 +40,7 @@ def test_gas_page_quotes_the_generated_follow_up_counts():
     counts = {}
     for line in results.splitlines():
         cells = [c.strip() for c in line.strip("|").split("|")]
-        if len(cells) == 8 and re.fullmatch(r"\d+/\d+", cells[2]):
+        if len(cells) == 9 and re.fullmatch(r"\d+/\d+", cells[2]):
             counts.setdefault(cells[0], {})[cells[1]] = cells[2]
     law = counts["law (two temperatures), 250 modes"]
     assert law["none"] == "0/8" and f"Without damping {law['none']} runs collapse" in prose
@@ -48,6 +48,11 @@ def test_gas_page_quotes_the_generated_follow_up_counts():
     assert f"With damping {', '.join(damped[:-1])} and {damped[-1]} runs collapse" in prose
     single = [counts["one-temperature law (s = 1/2 slice)"][t] for t in ("1", "10", "100", "1000")]
     assert f"collapses in {', '.join(single[:-1])} and {single[-1]} runs" in prose
+    soft = next(rows for name, rows in counts.items() if name.startswith("law with soft contacts"))
+    assert set(soft.values()) == {"0/8"} and "(0/8 each)" in prose
+    reached = [int(v.replace(",", "")) for line in results.splitlines() if line.startswith("| law with soft")
+               for v in re.findall(r"(\d[\d,]*)-(\d[\d,]*) collisions", line)[0]]
+    assert f"after {min(reached):,} to {max(reached):,} collisions" in prose
 
 
 @pytest.mark.slow  # ~10 s: the paper's first claim in its own set-up
