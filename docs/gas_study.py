@@ -1,6 +1,6 @@
 """Regenerates docs/gas_results.md, docs/gas_vibration_results.md and the figures docs/figures/gas_*.png.
 
-Run from the repository root: ``python docs/gas_study.py [fixed|vibration|collapse|all]`` (default all; a few
+Run from the repository root: ``python docs/gas_study.py [fixed|vibration|collapse|follow_up|all]`` (default all; a few
 minutes on two shared cores).  ``fixed`` writes sections 1-3 to docs/gas_results.md, ``vibration``
 sections 4-8 to docs/gas_vibration_results.md, ``collapse`` sections C1-C3 (the collapse detector) to
 docs/gas_collapse_results.md.
@@ -21,11 +21,14 @@ Sections:
 7. bath damping: the late-time decay exponent of the translational energy;
 8. a space-time picture of a damped vibration gas;
 C1. the collapse detector on fixed-restitution cells either side of McNamara and Young's threshold;
-C2. what happens after a collapse; C3. the damped gas with the one-temperature law.
+C2. what happens after a collapse; C3. the damped gas with the one-temperature law;
+F1-F2 (``follow_up``, docs/gas_follow_up_results.md): the damped gas in the set-up of the 1998 follow-up paper
+(rods of two lengths in turn, gamma = 4/5), with controlled variations on the same realisations.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import sys
 import time
@@ -36,6 +39,7 @@ from scipy.optimize import curve_fit
 
 from wavecontact.errors import SolverFailure
 from wavecontact.gas import (
+    AlternatingLengths,
     EqualLengths,
     FixedRestitution,
     GasSimulation,
@@ -603,16 +607,227 @@ def damped_one_temperature():
     say()
 
 
+FOLLOW_UP_ROOT = 1998  # realisation i of the follow-up study: SeedSequence(FOLLOW_UP_ROOT).spawn(FOLLOW_UP_RUNS)[i]
+FOLLOW_UP_RUNS = 8
+FOLLOW_UP_RODS = 200
+FOLLOW_UP_COLLISIONS = 4_000_000
+FOLLOW_UP_TAUS = (1.0, 10.0, 100.0, 1000.0)
+FOLLOW_UP_FIT_FLOOR = 1e-20  # the slope is fitted over the last decade of time before E_tr falls below this
+FOLLOW_UP_EARLY = 200_000  # 1,000 collisions per rod: how many runs collapse this early
+FOLLOW_UP_LENGTHS = AlternatingLengths(0.8, 1.0)  # gamma = 4/5 at every collision, as in the 1998 paper
+
+
+def _follow_up_simulation(seed, rule, damping, **options):
+    """Realisation ``seed`` of the 1998 paper's set-up (the same split of the stream as ``gas_ensemble``).
+
+    The two children are built from the sequence's key rather than by ``seed.spawn(2)``, which would give new
+    children on every call: each variant and tau_diss must get the same realisation."""
+    initial, dynamics = (np.random.SeedSequence(seed.entropy, spawn_key=seed.spawn_key + (j,)) for j in (0, 1))
+    gas = random_gas(FOLLOW_UP_RODS, seed=initial, lengths=FOLLOW_UP_LENGTHS, packing_fraction=0.2)
+    return GasSimulation(gas, rule, damping=damping, seed=dynamics, record_every=FOLLOW_UP_COLLISIONS // 400,
+                         max_frames=0, energy_floor=0.0, **options)
+
+
+def _cluster_state(sim, collapse):
+    """The pairs of a detected cluster: log10 of x = E_tr / (E_tr + T_pair) and the short rod's share s."""
+    n = sim.gas.rods
+    first, last = collapse["first_rod"], collapse["last_rod"]
+    rods = [(first + k) % n for k in range((last - first) % n + 1)]
+    log_x, shares = [], []
+    for a, b in itertools.pairwise(rods):
+        mu = sim.mass[a] * sim.mass[b] / (sim.mass[a] + sim.mass[b])
+        energy = 0.5 * mu * (sim.v[a] - sim.v[b]) ** 2
+        short = a if sim.mass[a] < sim.mass[b] else b
+        pair = 0.5 * (sim.temperature[a] + sim.temperature[b])
+        log_x.append(math.log10(energy / (energy + pair)) if energy + pair > 0 else 0.0)
+        shares.append(sim.temperature[short] / (2 * pair) if pair > 0 else 0.5)
+    return np.array(log_x), np.array(shares)
+
+
+def _law_with_modes(law, modes):
+    """The same law with another bath heat capacity (``modes`` per bath in the energy bookkeeping only)."""
+    from dataclasses import replace
+    return replace(law, bath_modes=modes)
+
+
+FOLLOW_UP_VARIANTS = (  # name, rule, simulation options
+    ("law (two temperatures), 250 modes", lambda: VibrationLaw(LAW), {}),
+    ("one-temperature law (s = 1/2 slice)", lambda: VibrationLaw(LAW.equal_temperature_slice()), {}),
+    ("law, bath heat capacity of 25 modes", lambda: VibrationLaw(_law_with_modes(LAW, 25)), {}),
+    (f"law with soft contacts, alpha = {STIFFNESS:g}", lambda: VibrationLaw(LAW, SOFT),
+     {"contact_stiffness": STIFFNESS}),
+)
+
+
+def follow_up_law():
+    say("## F0. The law at gamma = 4/5: mean eps^2 and mean ln eps^2 against x")
+    say()
+    say("From the shipped hard-core law's quantiles at gamma = 0.8 (a row of its grid: no interpolation in gamma), "
+        "for the short rod's share s = 0, 1/2, 1. A pair whose E_tr is multiplied by eps^2 at every collision "
+        "shrinks geometrically when the mean of ln eps^2 is negative, however large the mean of eps^2: that sign "
+        "decides whether kicks can stop a cluster from collapsing. Each cell: mean eps^2 / mean ln eps^2 "
+        "(the quantile function integrated over its levels, linear between them).")
+    say()
+    g = list(LAW.gamma).index(0.8)
+    say("| s | " + " | ".join(f"log10 x = {v:g}" for v in LAW.log_x) + " |")
+    say("|---|" + "---|" * LAW.log_x.size)
+    for si, share in enumerate(LAW.short_share):
+        if share not in (0.0, 0.5, 1.0):
+            continue
+        cells = []
+        for xi in range(LAW.log_x.size):
+            q = LAW.eps2_quantiles[0, g, xi, si]
+            cells.append(f"{trapezoid_levels(q):.3g} / {trapezoid_levels(np.log(np.maximum(q, 1e-300))):+.2f}")
+        say(f"| {share:g} | " + " | ".join(cells) + " |")
+    say()
+
+
+def trapezoid_levels(values):
+    """Mean of a quantity given at the law's levels (trapezoid over the probability levels)."""
+    p = LAW.probability
+    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(p)))
+
+
+def follow_up():
+    follow_up_law()
+    say("## F1. The damped gas in the set-up of the 1998 follow-up paper")
+    say()
+    say(f"Aspelmeier, Giese and Zippelius, PRE 57, 857 (1998): rods of two lengths in turn, so that every collision has "
+        f"gamma = 4/5; one bath temperature per rod; collisions drawn as a Markov process from the two-rod "
+        f"calculation; damping of the vibrations with one time tau_diss. Here: N = {FOLLOW_UP_RODS} rods of lengths "
+        f"0.8 and 1 in turn on a ring (packing 0.2; in one dimension the packing only rescales the free length, i.e. "
+        f"the time unit), Maxwellian velocities, cold baths at the start, at most {FOLLOW_UP_COLLISIONS:,} "
+        f"collisions per run ({FOLLOW_UP_COLLISIONS // FOLLOW_UP_RODS:,} per rod), {FOLLOW_UP_RUNS} realisations: "
+        f"realisation i from SeedSequence({FOLLOW_UP_ROOT}).spawn({FOLLOW_UP_RUNS})[i] (the same realisations for "
+        "every tau_diss and every variant below). No energy floor: a run ends when it collapses, freezes numerically (its relative motion lost in the rounding) or reaches the collision limit. Collapse: the package's detector (a cluster of >= 3 rods with gaps "
+        "below 1e-6 of the mean free spacing whose collisions accelerate until 16 fall within 4 ulps of the clock).")
+    say()
+    say(f"Criterion, fixed before the runs: the paper's 'inelastic collapse is avoided also with damping' is "
+        f"*reproduced* at a tau_diss if 0 of the {FOLLOW_UP_RUNS} runs collapse within {FOLLOW_UP_COLLISIONS:,} "
+        f"collisions, *not reproduced* if any does. Its 't^-2 at long times' is *reproduced* if the mean slope of "
+        "log E_tr against log t over the last decade of time of the runs that did not collapse (before E_tr "
+        f"fell below {FOLLOW_UP_FIT_FLOOR:g} of its start, for a run that cooled that far) lies within 3 "
+        "standard errors of -2 (at least 3 such runs).")
+    say()
+    say(f"| variant | tau_diss | collapsed / runs | collapsed within the first {FOLLOW_UP_EARLY:,} collisions | "
+        "runs ended (status; collisions reached) | collisions at the collapses (median, range) | slope of E_tr(t), "
+        "last decade (mean +- sem, runs) | E_tr end / start (not collapsed, median) | verdict: collapse avoided; "
+        "t^-2 |")
+    say("|---|---|---|---|---|---|---|---|---|")
+    plt = _pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.3), constrained_layout=True)
+    seeds = np.random.SeedSequence(FOLLOW_UP_ROOT).spawn(FOLLOW_UP_RUNS)
+    collapsed_runs = {}
+    counts = {}
+    softer = []
+    for variant, (name, make_rule, options) in enumerate(FOLLOW_UP_VARIANTS):
+        for index, tau in enumerate((math.inf,) + FOLLOW_UP_TAUS if variant == 0 else FOLLOW_UP_TAUS):
+            collapses, slopes, left_over, statuses, reached = [], [], [], [], []
+            for k, seed in enumerate(seeds):
+                sim = _follow_up_simulation(seed, make_rule(), None if math.isinf(tau) else tau, **options)
+                result = sim.run(FOLLOW_UP_COLLISIONS)
+                statuses.append(result.status)
+                reached.append(result.collisions)
+                if options:
+                    softer.append(result.softer_than_law / result.collisions)
+                t, energy = result.history["time"], result.history["kinetic_energy"]
+                if variant == 0 and not math.isinf(tau):
+                    left.loglog(t[t > 0], energy[t > 0], "-", color=f"C{index - 1}", lw=0.8,
+                                label=rf"$\tau_\mathrm{{diss}}$ = {tau:g}" if k == 0 else None)
+                    if result.collapsed:
+                        left.plot(t[-1], energy[-1], "kx", ms=6)
+                if result.collapsed:
+                    collapses.append(result.collisions)
+                    if variant == 0:
+                        collapsed_runs[(tau, k)] = (result.collapse, result.final_energy, *_cluster_state(sim, result.collapse))
+                    continue
+                warm = (t > 0) & (energy > FOLLOW_UP_FIT_FLOOR * energy[0])  # a frozen gas ends at E = 0
+                late = warm & (t > t[warm][-1] / 10)
+                slopes.append(np.polyfit(np.log(t[late]), np.log(energy[late]), 1)[0])
+                left_over.append(energy[-1] / energy[0])
+            counts[(variant, tau)] = len(collapses)
+            where = (f"{np.median(collapses):,.0f} ({min(collapses):,}-{max(collapses):,})" if collapses else "-")
+            sem = np.std(slopes, ddof=1) / math.sqrt(len(slopes)) if len(slopes) >= 2 else math.nan
+            slope = f"{np.mean(slopes):.2f} +- {sem:.2f}, {len(slopes)}" if len(slopes) >= 2 else "-"
+            if math.isinf(tau):
+                verdict = ("reproduced" if not collapses else "not reproduced") + " (no damping: the paper's first claim)"
+            else:
+                decay = ("not judged (fewer than 3 runs)" if len(slopes) < 3 else
+                         "reproduced" if abs(np.mean(slopes) + 2.0) <= 3 * sem else "not reproduced")
+                verdict = f"{'reproduced' if not collapses else 'not reproduced'}; {decay}"
+            early = sum(c <= FOLLOW_UP_EARLY for c in collapses)
+            ended = ", ".join(f"{statuses.count(k)} {k}" for k in dict.fromkeys(statuses))
+            say(f"| {name} | {'none' if math.isinf(tau) else f'{tau:g}'} | {len(collapses)}/{FOLLOW_UP_RUNS} | "
+                f"{early}/{FOLLOW_UP_RUNS} | {ended}; {min(reached):,}-{max(reached):,} collisions | {where} | "
+                f"{slope} | {np.median(left_over) if left_over else float('nan'):.3g} | {verdict} |")
+    say(f"Soft contacts: each collision at its own kappa = alpha V l (docs/gas.md); {min(softer):.0%} to "
+        f"{max(softer):.0%} of a run's draws fall below the soft law's softest row (kappa = 5) and take its "
+        "correction, which dissipates more than their softer contacts would (eps -> 1 as kappa -> 0).")
+    say()
+    t_guide = np.geomspace(1e2, 1e5, 10)
+    left.loglog(t_guide, 3e3 * t_guide**-2.0, "k--", lw=1.0, label=r"$\propto t^{-2}$")
+    left.set_xlabel("time")
+    left.set_ylabel("translational energy (centre-of-mass frame)")
+    left.set_title(r"$\gamma$ = 4/5 in turn, law with damping (x: collapse detected)", fontsize=9)
+    left.legend(fontsize=8)
+    width = 0.2
+    for variant, (name, _make, _options) in enumerate(FOLLOW_UP_VARIANTS):
+        right.bar(np.arange(len(FOLLOW_UP_TAUS)) + (variant - 1.5) * width,
+                  [counts[(variant, tau)] for tau in FOLLOW_UP_TAUS], width, label=name)
+    right.set_xticks(range(len(FOLLOW_UP_TAUS)), [rf"$\tau_\mathrm{{diss}}$ = {tau:g}" for tau in FOLLOW_UP_TAUS])
+    right.set_ylim(0, FOLLOW_UP_RUNS)
+    right.set_ylabel(f"runs collapsed (of {FOLLOW_UP_RUNS})")
+    right.legend(fontsize=8)
+    _save(fig, FIGURES / "gas_follow_up.png", 130)
+    follow_up_clusters(collapsed_runs, seeds)
+
+
+def follow_up_clusters(collapsed_runs, seeds):
+    say("## F2. The collapses of F1 (law, 250 modes): the cluster's pairs at the detection, and the runs continued")
+    say()
+    say("Each collapsed run of the first variant of F1: log10 x = log10(E_tr / (E_tr + T_pair)) of the cluster's "
+        "neighbour pairs at the detection (median and range; the law's rows reach -4, its kicks grow below about "
+        "-1 when both baths are warm), the pairs whose short-rod share s lies below 0.1 or above 0.9 (noise on one "
+        "rod only: the law then gives about the cold eps^2 = gamma^2 = 0.64 at every x), and the same realisation "
+        f"run again with continue_after_collapse to {FOLLOW_UP_COLLISIONS:,} collisions: the collisions after the "
+        "detection that fall at the collapse's time (within 4 ulps of the clock; the fixed-restitution collapses of "
+        "gas_collapse_results.md section C2 show 4 to 24), its status, the time it reached over the time of the "
+        "collapse, and the translational energy then over the energy at the collapse.")
+    say()
+    say("| tau_diss | realisation | collapse at collision | cluster rods | log10 x of its pairs (median, range) | "
+        "pairs with s < 0.1 or > 0.9 | continued: collisions at the collapse's time | continued: status, "
+        "collisions | t end / t collapse | E end / E collapse |")
+    say("|---|---|---|---|---|---|---|---|---|---|")
+    for (tau, k), (collapse, energy_then, log_x, shares) in sorted(collapsed_runs.items()):
+        sim = _follow_up_simulation(seeds[k], VibrationLaw(LAW), tau, continue_after_collapse=True)
+        sim.run(collapse["collision"])  # the same run up to the detection (the detector notes it and goes on)
+        stuck = 0
+        while stuck < 100_000:  # collisions after the detection that fall at the collapse's time (4 ulps)
+            sim.run(1)
+            if sim.time > collapse["time"] * (1 + 2.0**-50):
+                break
+            stuck += 1
+        going = sim.run(FOLLOW_UP_COLLISIONS - sim.collisions)
+        one_rod = int(np.sum((shares < 0.1) | (shares > 0.9)))
+        say(f"| {tau:g} | {k} | {collapse['collision']:,} | {collapse['cluster_rods']} | {np.median(log_x):.1f} "
+            f"({log_x.min():.1f} to {log_x.max():.1f}) | {one_rod} of {log_x.size} | {stuck:,} | {going.status}, "
+            f"{going.collisions:,} | {going.simulated_time / collapse['time']:.3g} | "
+            f"{going.final_energy / energy_then:.3g} |")
+    say()
+
+
 def main(argv):
     which = argv[0] if argv else "all"
-    if which not in ("fixed", "vibration", "collapse", "all"):
-        print("usage: python docs/gas_study.py [fixed|vibration|collapse|all]", file=sys.stderr)
+    if which not in ("fixed", "vibration", "collapse", "follow_up", "all"):
+        print("usage: python docs/gas_study.py [fixed|vibration|collapse|follow_up|all]", file=sys.stderr)
         return 2
     parts = {"fixed": ("gas_results.md", "Rod gas", (three_rods, n_rods, haff)),
              "vibration": ("gas_vibration_results.md", "Rod gas, vibration rule",
                            (law, limit_exploration, soft_law, solve_vs_law, vibration_vs_fixed, damping, picture)),
              "collapse": ("gas_collapse_results.md", "Rod gas, the collapse detector",
-                          (collapse_cells, after_collapse, damped_one_temperature))}
+                          (collapse_cells, after_collapse, damped_one_temperature)),
+             "follow_up": ("gas_follow_up_results.md", "Rod gas, the damped gas against the 1998 follow-up paper",
+                           (follow_up,))}
     for name, (page, title, sections) in parts.items():
         if which not in (name, "all"):
             continue

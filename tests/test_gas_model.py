@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wavecontact.errors import InvalidParameterError
-from wavecontact.gas import EqualLengths, RodGas, UniformLengths, random_gas
+from wavecontact.gas import AlternatingLengths, EqualLengths, RodGas, UniformLengths, random_gas
 
 
 @pytest.mark.parametrize("boundary", ["ring", "walls"])
@@ -24,6 +24,21 @@ def test_same_seed_same_gas_and_equal_lengths():
     b = random_gas(50, seed=np.random.SeedSequence(9), lengths=EqualLengths(0.5))
     np.testing.assert_array_equal(a.positions, b.positions)
     np.testing.assert_array_equal(a.lengths, 0.5)
+
+
+def test_alternating_lengths_give_every_neighbour_pair_on_an_even_ring_one_ratio():
+    gas = random_gas(10, seed=4, lengths=AlternatingLengths(0.8, 1.0), packing_fraction=0.2)
+    np.testing.assert_array_equal(gas.lengths, [0.8, 1.0] * 5)
+    neighbours = np.roll(gas.lengths, -1)  # the ring: rod 0 follows rod N-1
+    ratio = np.minimum(gas.lengths, neighbours) / np.maximum(gas.lengths, neighbours)
+    np.testing.assert_array_equal(ratio, 0.8)
+    assert AlternatingLengths(0.8, 1.0).smallest_ratio == 0.8
+    # no random numbers drawn for the lengths: the same stream gives the same gaps as equal lengths do
+    equal = random_gas(10, seed=4, lengths=EqualLengths(0.9), packing_fraction=0.2)
+    np.testing.assert_allclose(np.diff(gas.positions) - 0.5 * (gas.lengths[:-1] + gas.lengths[1:]),
+                               (np.diff(equal.positions) - 0.9) * (gas.free_length / equal.free_length), rtol=1e-9)
+    with pytest.raises(InvalidParameterError, match="long rod length"):
+        AlternatingLengths(1.0, 1.0)
 
 
 @pytest.mark.parametrize(

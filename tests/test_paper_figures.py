@@ -172,11 +172,13 @@ def test_criteria_are_declared_from_the_thresholds_the_verdicts_use():
     assert f"{pf.WEAK_CORRELATION:g}" in pf.CRITERIA["correlation"].rule
     assert "Fisher" in pf.CRITERIA["boltzmann"].rule and "Fisher" in pf.CRITERIA["markov_ks"].rule
     assert '"rather well"' in pf.CRITERIA["markov_mean"].precision
+    assert "250" in pf.CRITERIA["markov_deficit"].paper and "autocorrelation" in pf.CRITERIA["markov_deficit"].statistic
     for sizes in pf.SIZES.values():  # every stochastic or chaotic claim pools at least 5 realisations
         assert min(sizes["ring_realisations"], sizes["settling_realisations"], sizes["fig7_realisations"],
                    sizes["markov_chains"]) >= 5
         assert sizes["relaxation_realisations"] >= sizes["ring_realisations"]
         assert "{" not in pf.criterion_for("markov_ks", sizes).realisations
+        assert sizes["deficit_runs"] >= 5 and "{" not in pf.criterion_for("markov_deficit", sizes).realisations
 
 
 def test_derived_seeds_are_the_root_seeds_spawned_streams():

@@ -14,13 +14,14 @@
 
 from .collision_law import CollisionLaw, default_law, default_soft_law, load_law
 from .hardcore_collision import hard_core_collision
-from .model import EqualLengths, RodGas, UniformLengths, random_gas
+from .model import AlternatingLengths, EqualLengths, RodGas, UniformLengths, random_gas
 from .rod_table import DEFAULT_TABLE_FILE, collision_draw, contact_draw, hard_core_draw, rod_table
 from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable
 from .simulation import GasResult, GasSimulation
 
 __all__ = [
     "DEFAULT_TABLE_FILE",
+    "AlternatingLengths",
     "CollisionLaw",
     "EqualLengths",
     "FixedRestitution",

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, require_integer, require_positive
 
-__all__ = ["DEFAULT_LENGTHS", "EqualLengths", "RodGas", "UniformLengths", "random_gas"]
+__all__ = ["DEFAULT_LENGTHS", "AlternatingLengths", "EqualLengths", "RodGas", "UniformLengths", "random_gas"]
 
 MAX_RODS = 10_000_000
 
@@ -58,6 +58,32 @@ class EqualLengths:
     @property
     def smallest_ratio(self) -> float:
         return 1.0
+
+
+@dataclass(frozen=True)
+class AlternatingLengths:
+    """Rods of two lengths in turn, ``short, long, short, ...``: every neighbour pair has ``gamma = short / long``.
+
+    The set-up of Aspelmeier, Giese and Zippelius's gas (PRE 57, 857 (1998)): one length ratio for every
+    collision (theirs 4/5).  On a ring use an even number of rods, or the pair across the ring's seam is two
+    short rods (``gamma = 1``).  Draws no random numbers.
+    """
+
+    short: float = 0.8
+    long: float = 1.0
+
+    def __post_init__(self):
+        low = require_positive("short rod length", self.short)
+        high = require_positive("long rod length", self.long)
+        if not low < high:
+            raise InvalidParameterError(f"long rod length must exceed the short one ({low:g}), got {high:g}")
+
+    def draw(self, rng, size):
+        return np.where(np.arange(size) % 2 == 0, float(self.short), float(self.long))
+
+    @property
+    def smallest_ratio(self) -> float:
+        return self.short / self.long
 
 
 @dataclass(frozen=True)
