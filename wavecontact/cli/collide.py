@@ -45,7 +45,9 @@ def add_parser(subparsers):
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
     p.add_argument("--kappa", type=kappa_value, required=True,
                    help="softness alpha V l / c in (0, inf]; 'inf' is the hard-core limit")
-    p.add_argument("--solver", choices=("delay", "fem", "modal"), default="delay", help="which solver")
+    p.add_argument("--solver", choices=("auto", "delay", "fem", "modal"), default="auto",
+                   help="which solver; auto (default): the method and resolution predicted cheapest to meet "
+                   "--tolerance (default 1e-6), refined until it does (docs/performance.md)")
     p.add_argument("--contact", choices=("exponential", "penalty", "hard"), help=CONTACT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="FILE",
@@ -54,7 +56,8 @@ def add_parser(subparsers):
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="solve once only; the time printed then includes numba's kernel preparation")
     p.add_argument("--tolerance", type=positive_float,
-                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check)")
+                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check; "
+                   "with --solver auto the target of the choice, default 1e-6)")
     p.add_argument("--max-work", type=positive_float, help="limit on the estimated work in updates (default 2e11)")
     p.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
                    "(default: half the available memory)")
@@ -135,7 +138,7 @@ def run(args) -> int:
     options = {**_options(args), "tolerance": args.tolerance, "max_work": args.max_work,
                "max_memory": args.max_memory}
     _check_outputs(args)
-    if contact == "penalty" and args.solver != "fem":
+    if contact == "penalty" and args.solver not in ("fem", "auto"):
         raise ValueError("--contact penalty needs --solver fem")
     result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
     written = []
@@ -169,6 +172,8 @@ def run(args) -> int:
     if result.error_estimate is not None:
         line += f", error estimate {result.error_estimate:.1e}"
     line += f"; solve {duration_text(result.wall_time_s)}"
+    if "auto" in result.diagnostics:
+        line += f"; auto chose {result.diagnostics['auto']['method']}"
     if preparation is not None:
         line += f", numba kernel preparation {duration_text(preparation)} (once per process)"
     elif result.diagnostics.get("includes_kernel_preparation"):
