@@ -46,8 +46,9 @@ def add_parser(subparsers):
     p.add_argument("--kappa", type=kappa_value, required=True,
                    help="softness alpha V l / c in (0, inf]; 'inf' is the hard-core limit")
     p.add_argument("--solver", choices=("auto", "delay", "fem", "modal"), default="auto",
-                   help="which solver; auto (default): the method and resolution predicted cheapest to meet "
-                   "--tolerance (default 1e-6), refined until it does (docs/performance.md)")
+                   help="which solver; auto (default; the solver of the solver options given, if any): the method "
+                   "and resolution predicted cheapest to meet --tolerance (default 1e-6), refined until it does "
+                   "(docs/performance.md)")
     p.add_argument("--contact", choices=("exponential", "penalty", "hard"), help=CONTACT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="FILE",
@@ -89,7 +90,19 @@ _SOLVER_FLAGS = {
 }
 
 
+def _implied_solver(args) -> str:
+    """``--solver`` as given; without it (auto) the one solver whose options are given, if any
+    (``--elements 200`` means the FE solver, as ``--rtol`` meant the delay solver before auto)."""
+    if args.solver != "auto":
+        return args.solver
+    named = {solver for solver, names in _SOLVER_FLAGS.items() if any(getattr(args, n) is not None for n in names)}
+    if args.fields or args.xt_plot:
+        named.add("fem")
+    return named.pop() if len(named) == 1 else "auto"
+
+
 def _options(args) -> dict:
+    args.solver = _implied_solver(args)
     options = {}
     for solver, names in _SOLVER_FLAGS.items():
         for name in names:
@@ -133,6 +146,12 @@ def timed_collide(gamma, kappa, solver, contact, options, warmup=True):
     return result, max(first - result.wall_time_s, 0.0)
 
 
+def _solver_text(result) -> str:
+    """``delay``, or for the auto choice ``auto (delay: rtol=1e-07)``."""
+    auto = result.diagnostics.get("auto")
+    return result.solver if auto is None else f"auto ({auto['method']})"
+
+
 def run(args) -> int:
     contact = contact_law(args.kappa, args.contact)
     options = {**_options(args), "tolerance": args.tolerance, "max_work": args.max_work,
@@ -168,12 +187,10 @@ def run(args) -> int:
         print(json.dumps(record))
         return 0
     line = (f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa_text(args.kappa, contact)}, "
-            f"contact = {contact}, solver = {result.solver}")
+            f"contact = {contact}, solver = {_solver_text(result)}")
     if result.error_estimate is not None:
         line += f", error estimate {result.error_estimate:.1e}"
     line += f"; solve {duration_text(result.wall_time_s)}"
-    if "auto" in result.diagnostics:
-        line += f"; auto chose {result.diagnostics['auto']['method']}"
     if preparation is not None:
         line += f", numba kernel preparation {duration_text(preparation)} (once per process)"
     elif result.diagnostics.get("includes_kernel_preparation"):

@@ -31,7 +31,8 @@ import time
 from ..errors import AccuracyError, InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Limits, check_cost
 from ..scene import Scene
-from . import SOLVER_NAMES, get_solver
+from . import SOLVER_NAMES
+from . import get_solver as _registry
 from .base import _tolerance, reusing_runs
 from .cost_model import Prediction, load_model, scene_class, scene_features
 
@@ -41,6 +42,17 @@ __all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "solve_auto"]
 DEFAULT_TOLERANCE = 1e-6
 #: Runs (first choice and refinements, all solvers) before the call is refused.
 MAX_ATTEMPTS = 5
+
+
+_SOLVERS: dict = {}
+
+
+def get_solver(name: str):
+    """The registry's solver, remembered (a choice asks for it several times; a fast solve takes 60 us)."""
+    solver = _SOLVERS.get(name)
+    if solver is None:
+        solver = _SOLVERS[name] = _registry(name)
+    return solver
 
 
 @dataclasses.dataclass
@@ -295,7 +307,7 @@ def _accepted(result, choice: Choice, first: Prediction, attempts, misses, cpu, 
     final = attempts[-1]["method"]
     reason = choice.reason if len(attempts) == 1 else (
         f"{first.text()} {choice.reason}; refined to {final} after {len(attempts) - 1} more run(s)")
-    diagnostics = dict(result.diagnostics)
+    diagnostics = result.diagnostics  # the solve's own fresh dict: extended in place, not copied
     diagnostics["auto"] = {
         "method": final,
         "reason": reason,
@@ -307,4 +319,4 @@ def _accepted(result, choice: Choice, first: Prediction, attempts, misses, cpu, 
         "attempts": attempts,
         "misses": misses,
     }
-    return dataclasses.replace(result, wall_time_s=wall, diagnostics=diagnostics)
+    return result if len(attempts) == 1 else dataclasses.replace(result, wall_time_s=wall)

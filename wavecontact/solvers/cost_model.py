@@ -141,6 +141,9 @@ def fit_points(points: list) -> dict:
     return fits
 
 
+_RESOLUTION_NAMES: dict = {}  # solver name -> the option that sets its resolution, read once from the registry
+
+
 @dataclass(frozen=True)
 class Prediction:
     """The model's prediction for one solver at one resolution (error estimate and CPU seconds,
@@ -154,9 +157,11 @@ class Prediction:
     @property
     def option(self) -> dict:
         """The solver option that sets the resolution."""
-        from . import get_solver
+        name = _RESOLUTION_NAMES.get(self.solver)
+        if name is None:
+            from . import get_solver
 
-        name = get_solver(self.solver).resolution
+            name = _RESOLUTION_NAMES[self.solver] = get_solver(self.solver).resolution
         return {name: int(self.resolution) if name in ("elements", "modes") else float(self.resolution)}
 
     def text(self) -> str:
@@ -191,7 +196,7 @@ class CostModel:
     def candidates(self, kind: str, solver: str, features: dict) -> list:
         """Predictions along the solver's ladder, coarsest first (remembered per scene: sweeps of one
         scene class ask again and again)."""
-        key = (kind, solver, *sorted(features.items()))
+        key = (kind, solver, *features.values())  # scene_features gives its keys in one order
         cached = self._candidates.get(key)
         if cached is None:
             ladder = self.ladders.get(solver, [])
