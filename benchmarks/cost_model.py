@@ -7,7 +7,7 @@ them), and records the error estimate and the CPU time (``time.process_time``, m
 the numba kernels).  Writes ``wavecontact/data/cost_model.json``: the ladders, the points and the
 fits (:func:`wavecontact.solvers.cost_model.fit_points`).
 
-``--check`` writes nothing: it verifies that the stored file has the current format, the ladders
+``--refit`` recomputes the fits from the stored points (no runs).  ``--check`` writes nothing: it verifies that the stored file has the current format, the ladders
 and calibration scenes of this script, and fits that are what its points give (exit 1 otherwise).
 
 Runs whose estimated work is over :data:`MAX_WORK` are skipped (bounded: about 3 min on a quiet
@@ -184,7 +184,15 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per point (median; default 3)")
     parser.add_argument("--output", type=Path, default=DATA_PATH, help="where to write the model")
     parser.add_argument("--check", action="store_true", help="verify the stored model instead of writing one")
+    parser.add_argument("--refit", action="store_true",
+                        help="recompute the fits from the stored points (no runs), after a change of the fit")
     args = parser.parse_args(argv)
+    if args.refit:
+        stored = json.loads(args.output.read_text(encoding="utf-8"))
+        data = {**document(stored["points"]), "load_average_at_start": stored.get("load_average_at_start")}
+        args.output.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+        print(f"refitted {args.output} from its {len(stored['points'])} points")
+        return 0
     if args.check:
         problems = check(args.output)
         for problem in problems:

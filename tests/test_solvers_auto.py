@@ -14,7 +14,7 @@ from wavecontact.bath.model import ThermalBath
 from wavecontact.cli import main
 from wavecontact.errors import AccuracyError, InvalidParameterError, LimitError
 from wavecontact.solvers import get_solver
-from wavecontact.solvers.auto import DEFAULT_TOLERANCE, solve_auto
+from wavecontact.solvers.auto import DEFAULT_TOLERANCE, solve_auto, solve_refined
 from wavecontact.solvers.base import reusing_runs
 from wavecontact.solvers.cost_model import CostModel
 
@@ -139,3 +139,26 @@ def test_cli_collide_defaults_to_auto(capsys):
 def test_explicit_solver_is_not_auto():
     result = wavecontact.collide(0.6, 100.0)  # collide keeps the delay solver as its default
     assert result.solver == "delay" and "auto" not in result.diagnostics
+
+
+def test_cli_solver_options_name_the_solver_without_solver(capsys):
+    # --solver not given: the solver whose options are given (as --rtol meant the delay solver before auto)
+    assert main(["collide", "--gamma", "0.6", "--kappa", "20", "--modes", "16", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["solver"] == "modal" and "auto" not in record["diagnostics"]
+    assert main(["collide", "--gamma", "0.6", "--kappa", "20", "--contact", "penalty", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["diagnostics"]["auto"]["scene_class"] == "penalty" and record["solver"] in ("fem", "modal")
+
+
+@pytest.mark.parametrize("solver, options", [("fem", {"elements": 25, "mass": "lumped"}), ("delay", {"rtol": 1e-3})])
+def test_a_named_solver_is_refined_instead_of_refused(solver, options):
+    # the same call with tolerance= alone raises AccuracyError: the first run's estimate is above 1e-8
+    with pytest.raises(AccuracyError):
+        solve(two_rods(0.6, 20.0), solver, tolerance=1e-8, **options)
+    result = solve_refined(two_rods(0.6, 20.0), solver, tolerance=1e-8, **options)
+    auto = result.diagnostics["auto"]
+    assert result.solver == solver and len(auto["attempts"]) >= 2 and result.error_estimate <= 1e-8
+    kept = {name: value for name, value in options.items() if name != get_solver(solver).resolution}
+    assert all(result.options[name] == value for name, value in kept.items())  # the other options kept
+    assert abs(result.restitution - MODEL_MD[(0.6, 20.0)][0]) <= 1e-8 + 1e-10

@@ -36,7 +36,7 @@ from . import get_solver as _registry
 from .base import _tolerance, reusing_runs
 from .cost_model import Prediction, load_model, scene_class, scene_features
 
-__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "solve_auto"]
+__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "solve_auto", "solve_refined"]
 
 #: Tolerance on the restitution's error estimate when ``solve`` is given none (absolute).
 DEFAULT_TOLERANCE = 1e-6
@@ -239,10 +239,43 @@ def solve_auto(scene: Scene, *, tolerance=None, max_work=None, max_memory=None, 
     tolerance = _tolerance(DEFAULT_TOLERANCE if tolerance is None else tolerance)
     limits = Limits(max_work=max_work, max_memory=max_memory)
     choice = choose(scene, tolerance, limits, model)
+    first: Prediction = choice.ranked[0]
+    return _run_until_met(scene, tolerance, limits, choice, (get_solver(first.solver), first.option, first), {})
+
+
+def solve_refined(scene: Scene, solver: str, *, tolerance, max_work=None, max_memory=None, **options):
+    """One collision with the named ``solver`` and ``options``, refined until its error estimate meets
+    ``tolerance`` (the refinement of :func:`solve_auto`, without the choice: ``converge``-style use).
+
+    The first run is the one ``solve(scene, solver, **options)`` makes; where its estimate exceeds
+    ``tolerance`` the solver's resolution option is raised (or its ``rtol`` lowered) as predicted from the
+    observed order, the other options kept, each run checked against the limits before it runs.
+
+    Raises
+    ------
+    AccuracyError
+        When the refinement is over the limits (with the work it needs) or the solver cannot refine.
+    """
+    if not isinstance(scene, Scene):
+        raise InvalidParameterError(f"scene must be a wavecontact.Scene, got {type(scene).__name__}")
+    tolerance = _tolerance(tolerance)
+    if tolerance is None:
+        raise InvalidParameterError("solve_refined needs a tolerance")
+    named = get_solver(solver)
+    limits = Limits(max_work=max_work, max_memory=max_memory)
+    resolution = {named.resolution: getattr(named.options(options), named.resolution)}
+    fixed = {name: value for name, value in options.items() if name != named.resolution}
+    choice = Choice(ranked=[], reason=f"named by the caller, refined to meet tolerance={tolerance:g}",
+                    scene_class=scene_class(scene), usable=None)
+    return _run_until_met(scene, tolerance, limits, choice, (named, resolution, None), fixed)
+
+
+def _run_until_met(scene, tolerance, limits, choice, pending, fixed: dict):
+    """Run ``pending`` = (solver, resolution option, prediction or None), refine or hand over until the
+    estimate meets ``tolerance`` (module docstring); ``fixed``: the other options of every run."""
     attempts, misses, spent_cpu, spent_wall = [], [], 0.0, 0.0
     queue = list(choice.ranked)
-    first: Prediction = queue[0]
-    pending: tuple = (get_solver(first.solver), first.option, first)
+    first = pending[2]
     tried: set = set()
     last = None
     with reusing_runs():
@@ -251,7 +284,7 @@ def solve_auto(scene: Scene, *, tolerance=None, max_work=None, max_memory=None, 
             tried.add(solver.name)
             pending = None
             try:
-                result, cpu = _cpu_run(solver, scene, option, limits)
+                result, cpu = _cpu_run(solver, scene, {**fixed, **option}, limits)
             except (SolverFailure, LimitError) as failure:
                 attempts.append({"method": _text(solver, option), "failed": str(failure)})
                 misses.append(f"{_text(solver, option)} failed: {failure}")
@@ -272,17 +305,17 @@ def solve_auto(scene: Scene, *, tolerance=None, max_work=None, max_memory=None, 
                                   f"{prediction.cpu_s * 1e3:.3g} ms")
             if _meets(result, tolerance):
                 return _accepted(result, choice, first, attempts, misses, spent_cpu, spent_wall, tolerance)
-            refined = refined_resolution(solver, solver.options(option), result, tolerance)
+            refined = refined_resolution(solver, solver.options({**fixed, **option}), result, tolerance)
             if refined is not None:
                 try:
-                    _check_limits(solver, scene, refined, limits)
+                    _check_limits(solver, scene, {**fixed, **refined}, limits)
                 except LimitError as error:
                     raise AccuracyError(
                         f"auto: {_text(solver, option)} gave error estimate {result.error_estimate:.2g} > "
                         f"tolerance={tolerance:g}; {_text(solver, refined)} is predicted to meet it but is over "
                         f"the limits: {error}", result=result, advice=str(error)) from None
                 pending = (solver, refined, None)
-            else:
+            elif choice.usable is not None:
                 pending = _next(queue, tried, choice.usable)
     estimate = math.nan if last is None else last.error_estimate
     raise AccuracyError(f"auto: no method met tolerance={tolerance:g} within {len(attempts)} runs "
@@ -303,18 +336,18 @@ def _text(solver, option: dict) -> str:
     return f"{solver.name}: {name}={value:g}"
 
 
-def _accepted(result, choice: Choice, first: Prediction, attempts, misses, cpu, wall, tolerance):
+def _accepted(result, choice: Choice, first, attempts, misses, cpu, wall, tolerance):
     final = attempts[-1]["method"]
     reason = choice.reason if len(attempts) == 1 else (
-        f"{first.text()} {choice.reason}; refined to {final} after {len(attempts) - 1} more run(s)")
+        f"{attempts[0]['method']} {choice.reason}; refined to {final} after {len(attempts) - 1} more run(s)")
     diagnostics = result.diagnostics  # the solve's own fresh dict: extended in place, not copied
     diagnostics["auto"] = {
         "method": final,
         "reason": reason,
         "tolerance": tolerance,
         "scene_class": choice.scene_class,
-        "predicted_cpu_s": first.cpu_s,
-        "predicted_error": first.error,
+        "predicted_cpu_s": None if first is None else first.cpu_s,
+        "predicted_error": None if first is None else first.error,
         "actual_cpu_s": cpu,
         "attempts": attempts,
         "misses": misses,
