@@ -21,7 +21,7 @@ def _cold_scene(gamma: float, kappa: float, contact: str) -> Scene:
     return two_rods(gamma, kappa, contact=contact)
 
 
-def solve(scene: Scene, solver: str = "fem", *, tolerance=None, max_work=None, max_memory=None,
+def solve(scene: Scene, solver: str = "auto", *, tolerance=None, max_work=None, max_memory=None,
           estimate_error: bool = True, **options) -> CollisionResult:
     """Run one collision of ``scene`` with the named solver.
 
@@ -29,12 +29,16 @@ def solve(scene: Scene, solver: str = "fem", *, tolerance=None, max_work=None, m
     ----------
     scene : Scene
         What to simulate.
-    solver : {'delay', 'fem', 'modal'}
-        How to simulate it.
+    solver : {'auto', 'delay', 'fem', 'modal'}
+        How to simulate it.  ``'auto'`` (the default): the method and resolution
+        predicted cheapest to meet ``tolerance``, refined until they do
+        (:func:`wavecontact.solvers.auto.solve_auto`; docs/performance.md, section
+        "Choosing the method"); it takes no solver options and always estimates the error.
     tolerance : float or None
         Largest acceptable ``error_estimate`` of the restitution; a result
         above it raises :class:`~wavecontact.errors.AccuracyError`, whose
-        message says which resolution should reach it.
+        message says which resolution should reach it.  With ``solver='auto'``
+        None means :data:`wavecontact.solvers.auto.DEFAULT_TOLERANCE` (1e-6).
     max_work, max_memory : float or None
         Limits on the estimated work (updates, default 2e11) and memory
         (bytes, default half the available memory), checked before the solve
@@ -55,6 +59,10 @@ def solve(scene: Scene, solver: str = "fem", *, tolerance=None, max_work=None, m
         ``diagnostics["includes_kernel_preparation"]`` True when numba compiled or
         loaded kernels during it (a first call: that time is not the solver's cost).
     """
+    if solver == "auto":
+        from .solvers.auto import solve_auto
+
+        return solve_auto(scene, tolerance=tolerance, max_work=max_work, max_memory=max_memory, **options)
     return get_solver(solver).solve(scene, options, tolerance=tolerance, max_work=max_work,
                                     max_memory=max_memory, estimate_error=estimate_error)
 
@@ -70,8 +78,8 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     kappa : float
         ``alpha V l / c`` in [1e-2, 1e7] or ``inf`` (the hard-core limit);
         :data:`wavecontact.limits.KAPPA_MIN`, :data:`~wavecontact.limits.KAPPA_MAX`.
-    solver : {'delay', 'fem', 'modal'}
-        Which solver to use.
+    solver : {'delay', 'fem', 'modal', 'auto'}
+        Which solver to use (``'auto'``: see :func:`solve`).
     contact : {'exponential', 'penalty', 'hard'} or ContactLaw
         Contact law between the facing ends (``kappa = inf`` forces ``hard``).
     bath_temperature : float, pair of float or None

@@ -48,7 +48,10 @@ def add_parser(subparsers):
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
     p.add_argument("--kappa", type=kappa_value, required=True,
                    help="softness alpha V l / c in (0, inf]; 'inf' is the hard-core limit")
-    p.add_argument("--solver", choices=solver_names(), default="delay", help="which solver")
+    p.add_argument("--solver", choices=("auto",) + tuple(solver_names()), default="auto",
+                   help="which solver; auto (default; the solver of the solver options given, if any): the method "
+                   "and resolution predicted cheapest to meet --tolerance (default 1e-6), refined until it does "
+                   "(docs/performance.md)")
     p.add_argument("--contact", choices=("exponential", "penalty", "hard"), help=CONTACT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="FILE",
@@ -57,7 +60,8 @@ def add_parser(subparsers):
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="solve once only; the time printed then includes numba's kernel preparation")
     p.add_argument("--tolerance", type=positive_float,
-                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check)")
+                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check; "
+                   "with --solver auto the target of the choice, default 1e-6)")
     p.add_argument("--max-work", type=positive_float, help="limit on the estimated work in updates (default 2e11)")
     p.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
                    "(default: half the available memory)")
@@ -95,7 +99,21 @@ def _add_solver_flags(p) -> None:
             group.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress in both rods")
 
 
+def _implied_solver(args) -> str:
+    """``--solver`` as given; without it (auto) the one solver whose options are given, if any
+    (``--elements 200`` means the FE solver, as ``--rtol`` meant the delay solver before auto)."""
+    if args.solver != "auto":
+        return args.solver
+    named = {solver for solver in solver_names()
+             if any(getattr(args, n) is not None for n in get_solver(solver).cli_flags)}
+    if args.fields or args.xt_plot:
+        named.update(solver for solver in solver_names()
+                     if "record_fields" in get_solver(solver).Options.__dataclass_fields__)
+    return named.pop() if len(named) == 1 else "auto"
+
+
 def _options(args) -> dict:
+    args.solver = _implied_solver(args)
     options = {}
     for solver in solver_names():
         for name in get_solver(solver).cli_flags:
@@ -140,12 +158,18 @@ def timed_collide(gamma, kappa, solver, contact, options, warmup=True):
     return result, max(first - result.wall_time_s, 0.0)
 
 
+def _solver_text(result) -> str:
+    """``delay``, or for the auto choice ``auto (delay: rtol=1e-07)``."""
+    auto = result.diagnostics.get("auto")
+    return result.solver if auto is None else f"auto ({auto['method']})"
+
+
 def run(args) -> int:
     contact = contact_law(args.kappa, args.contact)
     options = {**_options(args), "tolerance": args.tolerance, "max_work": args.max_work,
                "max_memory": args.max_memory}
     _check_outputs(args)
-    if contact not in get_solver(args.solver).contact_names:
+    if args.solver != "auto" and contact not in get_solver(args.solver).contact_names:
         accepting = [name for name in solver_names() if contact in get_solver(name).contact_names]
         raise ValueError(f"--contact {contact} needs --solver {' or '.join(accepting)}")
     result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
@@ -176,7 +200,7 @@ def run(args) -> int:
         print(json.dumps(record))
         return 0
     line = (f"epsilon = {result.restitution:.12g}  (gamma = {args.gamma:g}, kappa = {kappa_text(args.kappa, contact)}, "
-            f"contact = {contact}, solver = {result.solver}")
+            f"contact = {contact}, solver = {_solver_text(result)}")
     if result.error_estimate is not None:
         line += f", error estimate {result.error_estimate:.1e}"
     line += f"; solve {duration_text(result.wall_time_s)}"

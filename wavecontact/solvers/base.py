@@ -40,6 +40,7 @@ ring scene also offer ``simulate(scene, options)`` (see
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import math
@@ -72,6 +73,7 @@ __all__ = [
     "Stopwatch",
     "option",
     "option_help",
+    "reusing_runs",
 ]
 
 
@@ -398,6 +400,38 @@ def _tolerance(value):
     return number
 
 
+_REUSED_RUNS: list = []  # while reusing_runs() is active: one dict {(solver, scene id, options): restitution}
+
+
+@contextlib.contextmanager
+def reusing_runs():
+    """Inside, a Richardson level whose run was made before (same solver, scene object and options, the
+    recording options aside) reuses that run's restitution instead of running again: a refinement to
+    twice the resolution then makes one new run, not three.  Outside, nothing is remembered."""
+    _REUSED_RUNS.append({})
+    try:
+        yield
+    finally:
+        _REUSED_RUNS.pop()
+
+
+def _run_key(name: str, scene: Scene, options):
+    quiet = {field: False for field in ("history", "record_fields") if hasattr(options, field)}
+    try:
+        key = (name, id(scene), options.replace(**quiet) if quiet else options)
+        hash(key)
+    except TypeError:
+        return None
+    return key
+
+
+def _remember_run(name: str, scene: Scene, options, fields: dict) -> None:
+    if _REUSED_RUNS:
+        key = _run_key(name, scene, options)
+        if key is not None:
+            _REUSED_RUNS[-1][key] = (scene, float(fields.restitution))  # the scene kept: its id stays its own
+
+
 _OPTIONS_CACHE: dict = {}
 _OPTIONS_CACHE_SIZE = 256
 
@@ -522,7 +556,7 @@ class SolverBase:
             if coarse_options is None:
                 break
             try:
-                value = float(self._collide(scene, coarse_options).restitution)
+                value = self._coarse_restitution(scene, coarse_options)
             except SolverFailure as failure:
                 failure_text = str(failure)
                 break
@@ -535,6 +569,17 @@ class SolverBase:
             return estimate, f"none ({rule})", levels
         runs = "; ".join(f"{self.resolution}={n} gave {value:.12g}" for n, value in levels[1:])
         return estimate, f"Richardson: {runs}; {rule}", levels
+
+    def _coarse_restitution(self, scene: Scene, options) -> float:
+        """The restitution of a run at ``options`` (a Richardson level): remembered inside
+        :func:`reusing_runs`, else run."""
+        key = _run_key(self.name, scene, options) if _REUSED_RUNS else None
+        if key is not None and key in _REUSED_RUNS[-1]:
+            return _REUSED_RUNS[-1][key][1]
+        fields = self._collide(scene, options)
+        if key is not None:
+            _REUSED_RUNS[-1][key] = (scene, float(fields.restitution))
+        return float(fields.restitution)
 
     def estimate_from_levels(self, scene: Scene, options, levels: list) -> tuple:
         """``(estimate, rule)`` from ``levels``: ``(resolution, restitution)`` of the requested run
@@ -597,6 +642,7 @@ class SolverBase:
         prepared = prepared_kernel_count()
         with Stopwatch() as watch:
             fields = self._collide(scene, options)
+            _remember_run(self.name, scene, options, fields)
             with Stopwatch() as estimating:
                 if estimate_error or tolerance is not None:
                     estimate, method, levels = self._error_estimate(scene, options, fields)

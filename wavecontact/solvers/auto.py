@@ -1,0 +1,355 @@
+"""``solver="auto"``: the method and resolution predicted cheapest to meet a tolerance, then refined.
+
+:func:`solve_auto` is what :func:`wavecontact.solve` runs when no solver is named:
+
+1. **Choice.**  Every registered solver that takes the scene is a candidate at each resolution of
+   its ladder; the cost model (:mod:`.cost_model`, data written by ``python
+   benchmarks/cost_model.py``) predicts each candidate's error estimate and CPU time.  The
+   cheapest candidate predicted to meet ``tolerance`` within the work and memory limits runs.
+   Where every candidate predicted to meet it is over the limits, the call is refused before any
+   work, with the cost it would need (:class:`~wavecontact.errors.LimitError`).
+2. **Refinement.**  When the run's error estimate exceeds ``tolerance``, the resolution that should
+   meet it is predicted from the order observed in the run's own Richardson levels (the
+   solver's declared order where those do not show one), rounded up to a power-of-two multiple so
+   that the earlier runs serve as the new run's coarser levels
+   (:func:`~wavecontact.solvers.base.reusing_runs`), and checked against the limits before it runs.
+   A solver that cannot refine (out of its range, no levels) hands over to the next candidate.
+   Only when no refinement fits the limits is the call refused
+   (:class:`~wavecontact.errors.AccuracyError`, with the estimate reached and the work needed).
+3. **Honesty.**  ``result.diagnostics["auto"]`` says what was chosen and why, the predicted and the
+   actual cost (CPU seconds, every attempt included), every attempt, and every miss of the model
+   (an estimate above its prediction, a cost over twice its prediction) so that the benchmark can be
+   re-calibrated.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+from ..errors import AccuracyError, InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
+from ..limits import Limits, check_cost
+from ..scene import Scene
+from . import SOLVER_NAMES
+from . import get_solver as _registry
+from .base import _tolerance, reusing_runs
+from .cost_model import Prediction, load_model, scene_class, scene_features
+
+__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "solve_auto", "solve_refined"]
+
+#: Tolerance on the restitution's error estimate when ``solve`` is given none (absolute).
+DEFAULT_TOLERANCE = 1e-6
+#: Runs (first choice and refinements, all solvers) before the call is refused.
+MAX_ATTEMPTS = 5
+
+
+_SOLVERS: dict = {}
+
+
+def get_solver(name: str):
+    """The registry's solver, remembered (a choice asks for it several times; a fast solve takes 60 us)."""
+    solver = _SOLVERS.get(name)
+    if solver is None:
+        solver = _SOLVERS[name] = _registry(name)
+    return solver
+
+
+@dataclasses.dataclass
+class Choice:
+    """The ranked candidates for one scene and tolerance, and why the first one leads."""
+
+    ranked: list
+    reason: str
+    scene_class: str
+    usable: object = None
+
+
+def _check_limits(solver, scene: Scene, resolution: dict, limits: Limits):
+    """The solver's own cost estimate of a run with its error estimate, refused over ``limits``."""
+    options = solver.options(resolution)
+    cost = solver.total_cost(scene, options, True)
+    check_cost(solver.name, cost, limits)
+    return cost
+
+
+def _accepts(solver, scene: Scene) -> bool:
+    """Whether ``solver`` takes ``scene`` (its cost estimate refuses what it cannot run)."""
+    if scene.is_ring:
+        return False
+    try:
+        solver.total_cost(scene, solver.options(), True)
+    except (UnsupportedSceneError, LimitError, InvalidParameterError):
+        return False
+    return True
+
+
+class _Usable:
+    """Checks of candidates against the scene and the limits, each made once and only when needed
+    (the checks cost more than a fast solve: a choice checks the candidates it reaches, not all)."""
+
+    def __init__(self, scene: Scene, limits: Limits):
+        self.scene, self.limits, self.accepted, self.refusals = scene, limits, {}, {}
+
+    def __call__(self, prediction: Prediction) -> bool:
+        name = prediction.solver
+        if name not in self.accepted:
+            self.accepted[name] = _accepts(get_solver(name), self.scene)
+        if not self.accepted[name]:
+            return False
+        try:
+            _check_limits(get_solver(name), self.scene, prediction.option, self.limits)
+        except LimitError as error:
+            self.refusals[prediction] = str(error)
+            return False
+        except InvalidParameterError:
+            return False
+        return True
+
+
+def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice:
+    """Rank every (solver, resolution) predicted to meet ``tolerance``, cheapest first, then the others by
+    predicted error; the first usable one (the solver takes the scene, within the limits) leads.
+
+    Raises
+    ------
+    LimitError
+        Before any work, when every candidate predicted to meet the tolerance is over the limits
+        (the message names the cheapest one and its work).
+    UnsupportedSceneError
+        When no solver takes the scene.
+    """
+    model = model or load_model()
+    kind = scene_class(scene)
+    proxy = kind if kind in model.fits else "cold"
+    try:
+        features = scene_features(scene)
+    except UnsupportedSceneError:
+        features = {"kappa": 1.0, "time_ratio": 1.0, "vibration_energy": 0.0}
+    predictions = [p for name in SOLVER_NAMES for p in model.candidates(proxy, name, features)]
+    meeting = sorted((p for p in predictions if p.error <= tolerance), key=lambda p: p.cpu_s)
+    others = sorted((p for p in predictions if p.error > tolerance), key=lambda p: (p.error, p.cpu_s))
+    usable = _Usable(scene, limits)
+    first = next((p for p in meeting if usable(p)), None)
+    if first is not None:
+        reason = (f"predicted cheapest to meet tolerance={tolerance:g}: error estimate {first.error:.2g}, "
+                  f"{first.cpu_s * 1e3:.3g} ms CPU")
+    elif usable.refusals:
+        cheapest = min(usable.refusals, key=lambda p: p.cpu_s)
+        raise LimitError(f"tolerance={tolerance:g}: the cheapest method predicted to meet it, "
+                         f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+    else:
+        first = next((p for p in others if usable(p)), None)
+        if first is None:
+            raise UnsupportedSceneError(f"no solver of {', '.join(SOLVER_NAMES)} takes this scene within the limits")
+        reason = (f"no candidate is predicted to meet tolerance={tolerance:g}: the smallest predicted error "
+                  f"estimate, {first.error:.2g}, runs first and is refined")
+    if proxy != kind:
+        reason += f" (scene class {kind!r} has no calibration: the model of two cold rods stands in)"
+    # a refinement that cannot proceed hands over to the next usable candidate of another solver
+    return Choice(ranked=[first, *(p for p in meeting + others if p is not first)], reason=reason,
+                  scene_class=kind, usable=usable)
+
+
+def _observed_order(solver, options, result) -> float:
+    """Order of the error in the resolution, from the run's three finest Richardson levels where they
+    show one (between 0.5 and 6), else the solver's declared order (1 where it declares none)."""
+    levels = sorted(result.diagnostics.get("error_estimate_levels") or [], key=lambda level: -level[0])
+    if len(levels) >= 3:
+        (n0, v0), (n1, v1), (_n2, v2) = levels[:3]
+        d0, d1 = abs(v0 - v1), abs(v1 - v2)
+        if d0 > 0.0 and d1 > 0.0 and n0 > n1:
+            order = math.log(d1 / d0) / math.log(n0 / n1)
+            if 0.5 <= order <= 6.0:
+                return order
+    return solver.expected_order(options) or 1.0
+
+
+def refined_resolution(solver, options, result, tolerance: float):
+    """The resolution predicted to bring ``result``'s error estimate to ``tolerance``, or None.
+
+    Elements and modes: the run's resolution times ``(estimate / tolerance)^(1/order)``, rounded up to
+    a power-of-two multiple (the earlier runs then are the coarser levels of the next estimate); a
+    resolution whose estimate is its own (the delay solver's ``rtol``): ``rtol`` divided by the
+    factor the estimate is off, and by 2.  None where the solver cannot refine (no Richardson levels,
+    no estimate, the option's range exhausted).
+    """
+    estimate = result.error_estimate
+    name = solver.resolution
+    spec = next(f.metadata["option"] for f in dataclasses.fields(solver.Options) if f.name == name)
+    level = getattr(options, name)
+    if not math.isfinite(estimate) or level is None:
+        return None
+    if solver.refines < 0:
+        wanted = level * tolerance / estimate / 2.0
+        if wanted >= level:
+            wanted = level / 10.0
+        if spec["low"] is not None and wanted < spec["low"]:
+            return None
+        return {name: wanted}
+    if not result.diagnostics.get("error_estimate_levels"):
+        return None
+    order = _observed_order(solver, options, result)
+    factor = max((estimate / tolerance) ** (1.0 / order), 1.0)
+    wanted = int(level * 2 ** max(math.ceil(math.log2(factor)), 1))
+    if spec["high"] is not None and wanted > spec["high"]:
+        return None
+    return {name: wanted}
+
+
+def _cpu_run(solver, scene, option: dict, limits: Limits):
+    start = time.process_time()
+    result = solver.solve(scene, option, tolerance=None, max_work=limits.max_work, max_memory=limits.max_memory,
+                          estimate_error=True)
+    return result, time.process_time() - start
+
+
+def _meets(result, tolerance: float) -> bool:
+    return result.error_estimate <= tolerance and not result.diagnostics.get("error_estimate_rough")
+
+
+def solve_auto(scene: Scene, *, tolerance=None, max_work=None, max_memory=None, model=None, **options):
+    """One collision of ``scene`` by the method predicted cheapest to meet ``tolerance`` (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    tolerance : float or None
+        Largest acceptable error estimate of the restitution (absolute); None:
+        :data:`DEFAULT_TOLERANCE`.
+    max_work, max_memory : float or None
+        Limits of every run (:class:`wavecontact.limits.Limits`).
+    model : CostModel, optional
+        Default: the stored one (:func:`~wavecontact.solvers.cost_model.load_model`).
+    **options
+        Refused: the resolution and the method are what ``auto`` chooses; name a solver to set options.
+
+    Returns
+    -------
+    CollisionResult
+        The accepted run; ``wall_time_s`` covers every attempt; ``diagnostics["auto"]`` holds
+        ``method``, ``reason``, ``tolerance``, ``predicted_cpu_s``, ``actual_cpu_s``, ``attempts`` and
+        ``misses``.
+    """
+    if not isinstance(scene, Scene):
+        raise InvalidParameterError(f"scene must be a wavecontact.Scene, got {type(scene).__name__}")
+    if options:
+        raise InvalidParameterError(f"solver='auto' takes no solver options (got {', '.join(sorted(options))}); "
+                                    "name a solver to set them")
+    tolerance = _tolerance(DEFAULT_TOLERANCE if tolerance is None else tolerance)
+    limits = Limits(max_work=max_work, max_memory=max_memory)
+    choice = choose(scene, tolerance, limits, model)
+    first: Prediction = choice.ranked[0]
+    return _run_until_met(scene, tolerance, limits, choice, (get_solver(first.solver), first.option, first), {})
+
+
+def solve_refined(scene: Scene, solver: str, *, tolerance, max_work=None, max_memory=None, **options):
+    """One collision with the named ``solver`` and ``options``, refined until its error estimate meets
+    ``tolerance`` (the refinement of :func:`solve_auto`, without the choice: ``converge``-style use).
+
+    The first run is the one ``solve(scene, solver, **options)`` makes; where its estimate exceeds
+    ``tolerance`` the solver's resolution option is raised (or its ``rtol`` lowered) as predicted from the
+    observed order, the other options kept, each run checked against the limits before it runs.
+
+    Raises
+    ------
+    AccuracyError
+        When the refinement is over the limits (with the work it needs) or the solver cannot refine.
+    """
+    if not isinstance(scene, Scene):
+        raise InvalidParameterError(f"scene must be a wavecontact.Scene, got {type(scene).__name__}")
+    tolerance = _tolerance(tolerance)
+    if tolerance is None:
+        raise InvalidParameterError("solve_refined needs a tolerance")
+    named = get_solver(solver)
+    limits = Limits(max_work=max_work, max_memory=max_memory)
+    resolution = {named.resolution: getattr(named.options(options), named.resolution)}
+    fixed = {name: value for name, value in options.items() if name != named.resolution}
+    choice = Choice(ranked=[], reason=f"named by the caller, refined to meet tolerance={tolerance:g}",
+                    scene_class=scene_class(scene), usable=None)
+    return _run_until_met(scene, tolerance, limits, choice, (named, resolution, None), fixed)
+
+
+def _run_until_met(scene, tolerance, limits, choice, pending, fixed: dict):
+    """Run ``pending`` = (solver, resolution option, prediction or None), refine or hand over until the
+    estimate meets ``tolerance`` (module docstring); ``fixed``: the other options of every run."""
+    attempts, misses, spent_cpu, spent_wall = [], [], 0.0, 0.0
+    queue = list(choice.ranked)
+    first = pending[2]
+    tried: set = set()
+    last = None
+    with reusing_runs():
+        while pending is not None and len(attempts) < MAX_ATTEMPTS:
+            solver, option, prediction = pending
+            tried.add(solver.name)
+            pending = None
+            try:
+                result, cpu = _cpu_run(solver, scene, {**fixed, **option}, limits)
+            except (SolverFailure, LimitError) as failure:
+                attempts.append({"method": _text(solver, option), "failed": str(failure)})
+                misses.append(f"{_text(solver, option)} failed: {failure}")
+                pending = _next(queue, tried, choice.usable)
+                continue
+            spent_cpu += cpu
+            spent_wall += result.wall_time_s
+            last = result
+            attempts.append({"method": _text(solver, option), "error_estimate": result.error_estimate,
+                             "cpu_s": cpu, "predicted_error": None if prediction is None else prediction.error,
+                             "predicted_cpu_s": None if prediction is None else prediction.cpu_s})
+            if prediction is not None:
+                if not _meets(result, tolerance) and prediction.error <= tolerance:
+                    misses.append(f"{_text(solver, option)}: error estimate {result.error_estimate:.2g} above the "
+                                  f"predicted {prediction.error:.2g} (tolerance {tolerance:g})")
+                if cpu > 2.0 * prediction.cpu_s and not result.diagnostics.get("includes_kernel_preparation"):
+                    misses.append(f"{_text(solver, option)}: {cpu * 1e3:.3g} ms CPU, over twice the predicted "
+                                  f"{prediction.cpu_s * 1e3:.3g} ms")
+            if _meets(result, tolerance):
+                return _accepted(result, choice, first, attempts, misses, spent_cpu, spent_wall, tolerance)
+            refined = refined_resolution(solver, solver.options({**fixed, **option}), result, tolerance)
+            if refined is not None:
+                try:
+                    _check_limits(solver, scene, {**fixed, **refined}, limits)
+                except LimitError as error:
+                    raise AccuracyError(
+                        f"auto: {_text(solver, option)} gave error estimate {result.error_estimate:.2g} > "
+                        f"tolerance={tolerance:g}; {_text(solver, refined)} is predicted to meet it but is over "
+                        f"the limits: {error}", result=result, advice=str(error)) from None
+                pending = (solver, refined, None)
+            elif choice.usable is not None:
+                pending = _next(queue, tried, choice.usable)
+    estimate = math.nan if last is None else last.error_estimate
+    raise AccuracyError(f"auto: no method met tolerance={tolerance:g} within {len(attempts)} runs "
+                        f"(last error estimate {estimate:.2g}; tried "
+                        f"{', '.join(a['method'] for a in attempts)}); raise max_work or the tolerance",
+                        result=last, advice="raise max_work or the tolerance")
+
+
+def _next(queue: list, tried: set, usable):
+    for prediction in queue:
+        if prediction.solver not in tried and usable(prediction):
+            return get_solver(prediction.solver), prediction.option, prediction
+    return None
+
+
+def _text(solver, option: dict) -> str:
+    (name, value), = option.items()
+    return f"{solver.name}: {name}={value:g}"
+
+
+def _accepted(result, choice: Choice, first, attempts, misses, cpu, wall, tolerance):
+    final = attempts[-1]["method"]
+    reason = choice.reason if len(attempts) == 1 else (
+        f"{attempts[0]['method']} {choice.reason}; refined to {final} after {len(attempts) - 1} more run(s)")
+    diagnostics = result.diagnostics  # the solve's own fresh dict: extended in place, not copied
+    diagnostics["auto"] = {
+        "method": final,
+        "reason": reason,
+        "tolerance": tolerance,
+        "scene_class": choice.scene_class,
+        "predicted_cpu_s": None if first is None else first.cpu_s,
+        "predicted_error": None if first is None else first.error,
+        "actual_cpu_s": cpu,
+        "attempts": attempts,
+        "misses": misses,
+    }
+    return result if len(attempts) == 1 else dataclasses.replace(result, wall_time_s=wall)
