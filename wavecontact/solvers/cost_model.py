@@ -87,10 +87,10 @@ def scene_features(scene: Scene) -> dict:
     time_ratio = trips[0] / trips[1]
     if "two_rods" in scene.metadata:
         kappa = float(scene.metadata["two_rods"].kappa)
-    elif isinstance(scene.contact, Exponential):
-        from ..delay.parameters import delay_parameters
-
-        kappa = float(delay_parameters(scene).kappa)
+    elif isinstance(scene.contact, Exponential):  # alpha V mu / Z_s, as the delay equation defines it
+        (rod_1, rod_2), speed = scene.rods, abs(scene.velocities[0] - scene.velocities[1])
+        series = rod_1.impedance * rod_2.impedance / (rod_1.impedance + rod_2.impedance)
+        kappa = scene.contact.alpha * speed * (rod_1.mass * rod_2.mass / (rod_1.mass + rod_2.mass)) / series
     else:
         kappa = 1.0
     if not math.isfinite(kappa):
