@@ -76,3 +76,11 @@ def test_lattice_refuses_what_it_cannot_represent():
         chain(rods, [1.0, 0.0, 0.0, -0.25])
     with pytest.raises(ValueError, match="whole number of cells"):
         chain([[(1.0, 1.0)], [(0.3, 1.0)]], [1.0, 0.0], cell=0.25)
+
+
+@pytest.mark.parametrize("ratio", [0.25, 1.0, 4.0])
+def test_saint_venant_restitution_closed_form(ratio):
+    """e = (v_rod - v_mass) / V = (M/m) (1 - exp(-2m/M)) - exp(-2m/M)."""
+    r = saint_venant(mass=ratio, rod_length=1.0, impedance=1.0, wave_speed=1.0, velocity=1.0)
+    decay = math.exp(-2.0 / ratio)
+    assert r.rod_velocity - r.mass_velocity == pytest.approx(ratio * (1 - decay) - decay, rel=1e-12)
