@@ -103,6 +103,24 @@ def test_unequal_chain_fem_on_the_exact_lattice(lengths):
     assert_matches_lattice(fem(scene, 8 * round(min(lengths) / 0.25)), reference)
 
 
+def test_mixed_chain_with_a_re_contact_on_the_exact_lattice():
+    """Striker 0.5 (Z 1), rod 1.5 (Z 1), stepped rod 1.0 (Z 2) + 0.75 (Z 1), rod 0.25 (Z 0.5), every
+    impedance set by E and rho together (one wave speed): the striker touches the second rod twice."""
+    layout = [[(0.5, 1.0)], [(1.5, 1.0)], [(1.0, 2.0), (0.75, 1.0)], [(0.25, 0.5)]]
+    reference = chain(layout, [1.0, 0.0, 0.0, 0.0])
+    assert len(reference.contacts[0].intervals) == 2
+
+    def body(segments):
+        if len(segments) == 1:
+            (length, z), = segments
+            return Rod(length, density=z, youngs_modulus=z)
+        return PiecewiseRod(tuple(Segment(length=L, youngs_modulus=z, density=z) for L, z in segments))
+
+    scene = Scene(rods=tuple(body(s) for s in layout), velocities=(1.0, 0.0, 0.0, 0.0), contact=Hard(),
+                  gaps=(0.0, 0.0, 0.0))
+    assert_matches_lattice(fem(scene, 8), reference)
+
+
 # -- tapered bar: the observed order against a run at 4x the resolution ---------------------------------------
 
 TAPER_ELEMENTS = (25, 50, 100)
