@@ -8,6 +8,7 @@ be the method's.
 
 import numpy as np
 import pytest
+from references.central_differences import extrapolate, run
 from references.characteristics import chain
 from references.saint_venant import saint_venant
 
@@ -143,6 +144,21 @@ def test_tapered_bar_converges_at_the_observed_order():
         assert error <= result.error_estimate, (n, error, result.error_estimate)
         errors.append(error)
     assert observed_order(TAPER_ELEMENTS, errors) >= 0.9, errors
+
+
+def test_tapered_bar_against_separately_written_finite_differences():
+    """The same scene by tests/references/central_differences.py at 400, 800, 1600 cells per unit length,
+    extrapolated (Richardson, observed order, bound twice the correction): the FE result at 100 elements
+    within its own estimate plus that bound."""
+    levels = [run([[(0.5, 1.0, 1.0, 1.0, 1.0)], [(1.0, 1.0, 0.25, 1.0, 1.0)]], [1.0, 0.0], n, 5.0)
+              for n in (400, 800, 1600)]
+    assert all(o.last_contact < 2.0 for o in levels)  # separated long before the end (round trips 1 and 2)
+    reference, bound, _ = extrapolate([o.velocities for o in levels])
+    horn = PiecewiseRod((Segment(length=1.0, area=1.0, end_area=0.25),))
+    scene = Scene(rods=(Rod(0.5), horn), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
+    result = fem(scene, 100)
+    error = np.abs(np.asarray(result.velocities) - reference)
+    assert np.all(error <= result.error_estimate + bound), (error, result.error_estimate, bound)
 
 
 def test_uniform_limit_of_the_taper_is_the_lattice():

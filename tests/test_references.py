@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from references.central_differences import extrapolate, run
 from references.characteristics import chain
 from references.saint_venant import end_velocity_mean, saint_venant
 
@@ -84,3 +85,28 @@ def test_saint_venant_restitution_closed_form(ratio):
     r = saint_venant(mass=ratio, rod_length=1.0, impedance=1.0, wave_speed=1.0, velocity=1.0)
     decay = math.exp(-2.0 / ratio)
     assert r.rod_velocity - r.mass_velocity == pytest.approx(ratio * (1 - decay) - decay, rel=1e-12)
+
+
+@pytest.mark.parametrize("ratio", [0.25, 1.0, 4.0])
+def test_central_differences_extrapolate_to_saint_venant_within_their_bound(ratio):
+    """The separately written finite differences (first order at a hard impact) and Richardson's
+    bound: the closed form lies within it."""
+    ref = saint_venant(mass=ratio, rod_length=1.0, impedance=1.0, wave_speed=1.0, velocity=1.0)
+    levels = [run([ratio, [(1.0, 1.0, 1.0, 1.0, 1.0)]], [1.0, 0.0], n, 4.0) for n in (100, 200, 400)]
+    value, bound, _ = extrapolate([o.velocities for o in levels])
+    error = np.abs(value - [ref.mass_velocity, ref.rod_velocity])
+    assert np.all(error <= bound), (error, bound)
+    assert np.all(error > 0)  # not exact: the bound is doing the work
+    # the discrete contact ends when the reflected tension arrives (or earlier, where the force at T,
+    # Z V exp(-2m/M), is below what the mesh resolves: 3e-4 at M/m = 0.25)
+    assert ref.last_contact - 0.05 <= levels[-1].last_contact <= ref.last_contact + 0.01
+
+
+def test_central_differences_in_the_uniform_limit_of_a_taper_within_their_bound():
+    ref = chain([[(0.5, 1.0)], [(1.0, 1.0)]], [1.0, 0.0])
+    levels = [run([[(0.5, 1.0, 1.0, 1.0, 1.0)], [(1.0, 1.0, 1.0, 1.0, 1.0)]], [1.0, 0.0], n, 5.0)
+              for n in (100, 200, 400)]
+    value, bound, _ = extrapolate([o.velocities for o in levels])
+    assert np.all(np.abs(value - ref.velocities) <= bound)
+    masses = np.array([0.5, 1.0])
+    assert masses @ levels[-1].velocities == pytest.approx(0.5, rel=1e-12)  # momentum: exact
