@@ -8,6 +8,7 @@ from pathlib import Path
 from .common import (
     CONTACT_HELP,
     FIGURE_SUFFIXES,
+    add_limit_options,
     contact_law,
     files_summary,
     gamma_value,
@@ -53,11 +54,7 @@ def add_parser(subparsers):
     p.add_argument("--save", metavar="FILE", help="save scalars and histories to an .npz file")
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="solve once only; the time printed then includes numba's kernel preparation")
-    p.add_argument("--tolerance", type=positive_float,
-                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check)")
-    p.add_argument("--max-work", type=positive_float, help="limit on the estimated work in updates (default 2e11)")
-    p.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
-                   "(default: half the available memory)")
+    add_limit_options(p)
     delay = p.add_argument_group("delay solver")
     delay.add_argument("--rtol", type=positive_float, help=option_text("delay", "rtol"))
     delay.add_argument("--max-steps", type=positive_int, metavar="N", help=option_text("delay", "max_steps"))

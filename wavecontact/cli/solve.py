@@ -5,7 +5,14 @@ from __future__ import annotations
 import json
 import math
 
-from .common import FIGURE_SUFFIXES, option_choices, option_text, positive_float, positive_int
+from .common import (
+    FIGURE_SUFFIXES,
+    add_limit_options,
+    option_choices,
+    option_text,
+    positive_float,
+    positive_int,
+)
 from .guard import check_outputs
 
 # the solver options the command passes on, by solver (only those given; the file's [solve] table adds more)
@@ -26,11 +33,7 @@ def add_parser(subparsers):
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--out", metavar="FILE", help="write the results as JSON to FILE (.json)")
     p.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress (.png, .pdf or .svg; fem)")
-    p.add_argument("--tolerance", type=positive_float,
-                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check)")
-    p.add_argument("--max-work", type=positive_float, help="limit on the estimated work in updates (default 2e11)")
-    p.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
-                   "(default: half the available memory)")
+    add_limit_options(p)
     options = p.add_argument_group("solver options (passed to the solver, which refuses those it does not take)")
     options.add_argument("--elements", type=positive_int, metavar="N", help="fem: " + option_text("fem", "elements"))
     options.add_argument("--order", type=int, choices=option_choices("fem", "order"),
