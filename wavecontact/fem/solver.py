@@ -115,6 +115,13 @@ class FemSolver(SolverBase):
     def _collide(self, scene: Scene, options: FemOptions) -> dict:
         return _collide(scene, options.as_dict())
 
+    def solve_line(self, scene: Scene, options=None, **limits):
+        """A scene of many bodies on a line: :func:`wavecontact.fem.multibody.solve_line` (an ImpactResult)."""
+        from .multibody import solve_line
+
+        given = options.as_dict() if isinstance(options, FemOptions) else dict(options or {})
+        return solve_line(scene, given, **limits)
+
     def _error_estimate(self, scene: Scene, options: FemOptions, fields: dict) -> tuple:
         """Richardson with the coarser runs held to the contact scheme of the requested run: with
         scheme='auto' a coarser mesh may no longer resolve the contact and switch from the force

@@ -475,6 +475,9 @@ class SolverBase:
         """
         if not isinstance(scene, Scene):
             raise InvalidParameterError(f"scene must be a wavecontact.Scene, got {type(scene).__name__}")
+        if scene.is_line_scene:  # piecewise rods, rigid bodies, chains, walls: an ImpactResult
+            return self.solve_line(scene, options, tolerance=tolerance, max_work=max_work, max_memory=max_memory,
+                                   estimate_error=estimate_error)
         options = self.options(options)
         tolerance = _tolerance(tolerance)
         limits = Limits(max_work=max_work, max_memory=max_memory)
@@ -531,6 +534,14 @@ class SolverBase:
                 f"{self.name}: the error estimate {estimate:.2g} of epsilon = {restitution:.10g} cannot be trusted "
                 f"to meet tolerance={tolerance:g}: {rough}", result=result, advice=rough)
         return result
+
+    def solve_line(self, scene: Scene, options=None, **limits):
+        """A scene beyond the paper's two uniform rods (:attr:`Scene.is_line_scene`): refused here, the fem
+        solver takes it (:mod:`wavecontact.fem.multibody`)."""
+        del options, limits
+        raise UnsupportedSceneError(
+            f"solver {self.name!r} takes the paper's two uniform rods only; this scene ({len(scene.rods)} bodies: "
+            "piecewise rods, rigid bodies, chains or walls) needs solver='fem'")
 
     def rough_estimate(self, scene: Scene, options) -> str:
         """Why the error estimate of this run is only an order of magnitude, not a bound ("" if it is
