@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pytest
 
+from wavecontact import RigidBody
 from wavecontact.cli import main
 from wavecontact.io.scene_file import read_scene_file
 
@@ -13,12 +14,12 @@ SCENES = sorted((Path(__file__).resolve().parent.parent / "examples" / "scenes")
 
 def body_mass(body):
     """Mass of a body from the file's numbers, computed here (rigid: mass; rod: sum of rho A l, tapers by the mean area)."""
+    if isinstance(body, RigidBody):
+        return body.mass
     if hasattr(body, "segments"):
         return sum(s.density * s.length * 0.5 * (s.area + (s.end_area if s.end_area is not None else s.area))
                    for s in body.segments)
-    if hasattr(body, "length"):
-        return body.density * body.area * body.length
-    return body.mass
+    return body.density * body.area * body.length
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.name for p in SCENES])

@@ -103,7 +103,7 @@ def test_bad_files_are_refused_naming_the_file_and_the_key(tmp_path, old, new, w
 
 def test_a_file_without_bodies_or_of_another_kind(tmp_path):
     for name, text, word in (("a.toml", "title = 'x'", "body"), ("a.yaml", "x: 1", ".toml or .json"),
-                             ("a.json", "[1, 2]", "table"), ("b.toml", "[[body]]\nmass = 1.0", "gaps")):
+                             ("a.json", "[1, 2]", "table"), ("b.toml", "[[body]]\nmass = 1.0", "wall")):
         with pytest.raises(InvalidParameterError, match=word):
             read_scene_file(write(tmp_path, text, name))
 

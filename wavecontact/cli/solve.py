@@ -54,7 +54,7 @@ def _record(result, names) -> dict:
         contacts.append({
             "impulse": float(record.impulse), "duration": float(record.duration),
             "first_contact": float(record.first_contact), "last_contact": float(record.last_contact),
-            "intervals": [[float(a), float(b)] for a, b in record.intervals],
+            "intervals": int(record.intervals), "name": str(record.name),
         })
     estimate = getattr(result, "error_estimate", math.nan)
     return {
@@ -77,9 +77,9 @@ def _text(record: dict, path) -> str:
         lines.append(f"  {name:<16} {v:>15.9g} {e:>18.9g}")
     if record["contacts"]:
         lines.append("  contact      impulse         duration        first           last            intervals")
-        for k, c in enumerate(record["contacts"]):
-            lines.append(f"  {k:<10} {c['impulse']:>15.9g} {c['duration']:>15.9g} {c['first_contact']:>15.9g} "
-                         f"{c['last_contact']:>15.9g} {len(c['intervals']):>5d}")
+        for c in record["contacts"]:
+            lines.append(f"  {c['name']:<10} {c['impulse']:>15.9g} {c['duration']:>15.9g} {c['first_contact']:>15.9g} "
+                         f"{c['last_contact']:>15.9g} {c['intervals']:>5d}")
     return "\n".join(lines)
 
 

@@ -115,7 +115,7 @@ def scene_from_mapping(data) -> SceneFile:
     _no_unknown("", data, _TOP_KEYS)
     bodies_data = data.get("body")
     if not isinstance(bodies_data, list) or not bodies_data:
-        raise _Refusal("body: give the bodies from left to right as [[body]] tables (at least 2)")
+        raise _Refusal("body: give the bodies from left to right as [[body]] tables")
     bodies, velocities, names = [], [], []
     for i, body in enumerate(bodies_data):
         where = f"body[{i}]"
@@ -145,20 +145,21 @@ def scene_from_mapping(data) -> SceneFile:
 
 
 def _body(where: str, body: dict):
-    from .. import scene as scene_module
+    from .. import bodies
+    from ..scene import Rod
 
     kind = "rigid" if "mass" in body else "rod"
     _no_unknown(f"{where}.", body, _BODY_KEYS[kind])
     velocity = _number(f"{where}.velocity", body.get("velocity", 0.0))
     if kind == "rigid":
-        return _build(where, scene_module.RigidBody, mass=_number(f"{where}.mass", body["mass"])), velocity
+        return _build(where, bodies.RigidBody, mass=_number(f"{where}.mass", body["mass"])), velocity
     segments = body.get("segment")
     if segments is None:
         if "length" not in body:
             raise _Refusal(f"{where}: a rod needs length (or [[{where.split('[')[0]}.segment]] tables), "
                            "a rigid body needs mass")
         if "end_area" not in body:
-            return _build(where, scene_module.Rod, **_numbers(where, body, exclude=("velocity", "name"))), velocity
+            return _build(where, Rod, **_numbers(where, body, exclude=("velocity", "name"))), velocity
         segments = [{k: v for k, v in body.items() if k in _ROD_KEYS}]
     elif any(k in body for k in _ROD_KEYS):
         raise _Refusal(f"{where}: give either the rod's length, area, ... or its [[segment]] tables, not both")
@@ -171,8 +172,8 @@ def _body(where: str, body: dict):
         _no_unknown(f"{at}.", segment, _ROD_KEYS)
         if "length" not in segment:
             raise _Refusal(f"{at}.length: missing")
-        built.append(_build(at, scene_module.Segment, **_numbers(at, segment)))
-    return _build(where, scene_module.PiecewiseRod, tuple(built)), velocity
+        built.append(_build(at, bodies.Segment, **_numbers(at, segment)))
+    return _build(where, bodies.PiecewiseRod, tuple(built)), velocity
 
 
 def _contacts(where: str, value, pairs: int):
@@ -200,7 +201,7 @@ def _contact(where: str, table):
 def _walls(value):
     if value is None:
         return None
-    from .. import scene as scene_module
+    from ..bodies import Wall
 
     _require_table("walls", value)
     _no_unknown("walls.", value, ("left", "right"))
@@ -212,7 +213,7 @@ def _walls(value):
             continue
         _require_table(f"walls.{side}", table)
         _no_unknown(f"walls.{side}.", table, _WALL_KEYS)
-        walls.append(_build(f"walls.{side}", scene_module.Wall, gap=_number(f"walls.{side}.gap", table.get("gap", 0.0)),
+        walls.append(_build(f"walls.{side}", Wall, gap=_number(f"walls.{side}.gap", table.get("gap", 0.0)),
                                        contact=_contact(f"walls.{side}.contact", table.get("contact", {"law": "hard"}))))
     return tuple(walls)
 
