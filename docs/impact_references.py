@@ -20,6 +20,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 
+from references.central_differences import extrapolate, run
 from references.characteristics import chain
 from references.saint_venant import force_at, saint_venant
 
@@ -34,16 +35,20 @@ def fem(scene, elements):
     return solve(scene, solver="fem", elements=elements, order=1, mass="lumped")
 
 
-def lattice_error(result, reference) -> float:
-    errors = [np.max(np.abs(np.asarray(result.velocities) - reference.velocities)),
-              np.max(np.abs(np.asarray(result.internal_energies) - reference.internal_energies))]
+def lattice_error(result, reference) -> tuple:
+    """(largest error of velocities, impulses, durations, first and last contact times; of internal energies).
+
+    The FE's last_contact is the start of the last step in contact, the reference's its end (one dt apart).
+    """
+    errors = [np.max(np.abs(np.asarray(result.velocities) - reference.velocities))]
+    dt = result.work["dt"]
     for got, want in zip(result.contacts, reference.contacts):
-        errors.append(abs(got.impulse - want.impulse))
-        if len(got.intervals) == len(want.intervals):
-            errors.append(np.max(np.abs(np.ravel(got.intervals) - np.ravel(want.intervals))))
-        else:
-            errors.append(np.inf)
-    return float(max(errors))
+        if got.intervals != len(want.intervals):
+            return np.inf, np.inf
+        errors += [abs(got.impulse - want.impulse), abs(got.duration - want.duration),
+                   abs(got.first_contact - want.first_contact), abs(got.last_contact + dt - want.last_contact)]
+    energy = np.max(np.abs(np.asarray(result.internal_energies) - reference.internal_energies))
+    return float(max(errors)), float(energy)
 
 
 def order(elements, errors) -> float:
@@ -70,7 +75,7 @@ def saint_venant_rows():
         rows.append((f"Saint-Venant, M/m = {ratio:g}", (f"e = {ref.rod_velocity - ref.mass_velocity:.10f}, "
                      f"{len(ref.intervals)} interval of {ref.duration:g}"),
                      f"P1 lumped, {sizes[-1]} el.", f"{errors[-1]:.1e}", f"{estimates[-1]:.1e}",
-                     f"{order(sizes, errors):.2f}", f"{len(c.intervals)} interval(s), duration {c.duration:.4f}"))
+                     f"{order(sizes, errors):.2f}", f"{c.intervals} interval(s), duration {c.duration:.4f}"))
     return rows, curves
 
 
@@ -82,9 +87,10 @@ def lattice_rows():
         ref = chain([[(1.0, 1.0)], [(1.0, 1.0), (1.0, z2)]], [1.0, 0.0])
         bar = PiecewiseRod((Segment(length=1.0), Segment(length=1.0, youngs_modulus=z2, density=z2)))
         result = fem(Scene(rods=(Rod(1.0), bar), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,)), 40)
+        error, energy = lattice_error(result, ref)
         rows.append((f"stepped bar, Z2/Z1 = {z2:g}", f"v = ({ref.velocities[0]:.6f}, {ref.velocities[1]:.6f})",
-                     "P1 lumped, 40 el., Courant 1", f"{lattice_error(result, ref):.1e}", f"{result.error_estimate:.1e}",
-                     "exact", ""))
+                     "P1 lumped, 40 el., Courant 1", f"{error:.1e}", f"{result.error_estimate:.1e}",
+                     "exact", f"internal energies off by {energy:.1e}"))
     for lengths in ((1.0, 1.0, 1.0), (1.0,) * 5, (0.5, 1.5, 1.0), (0.5, 1.5, 1.0, 0.75, 0.25)):
         n = len(lengths)
         ref = chain([[(L, 1.0)] for L in lengths], [1.0] + [0.0] * (n - 1))
@@ -92,10 +98,11 @@ def lattice_rows():
                       gaps=(0.0,) * (n - 1))
         elements = 8 * round(min(lengths) / 0.25)
         result = fem(scene, elements)
+        error, energy = lattice_error(result, ref)
         rows.append((f"chain, lengths {', '.join(f'{L:g}' for L in lengths)}",
                      "v = (" + ", ".join(f"{v:.4g}" for v in ref.velocities) + ")",
-                     f"P1 lumped, {elements} el. on the shortest, Courant 1", f"{lattice_error(result, ref):.1e}",
-                     f"{result.error_estimate:.1e}", "exact", ""))
+                     f"P1 lumped, {elements} el. on the shortest, Courant 1", f"{error:.1e}",
+                     f"{result.error_estimate:.1e}", "exact", f"internal energies off by {energy:.1e}"))
     return rows
 
 
@@ -111,9 +118,17 @@ def taper_rows():
         result = fem(scene, n)
         errors.append(float(np.max(np.abs(np.asarray(result.velocities) - fine))))
         estimates.append(float(result.error_estimate))
+    levels = [run([[(0.5, 1.0, 1.0, 1.0, 1.0)], [(1.0, 1.0, 0.25, 1.0, 1.0)]], [1.0, 0.0], n, 5.0)
+              for n in (400, 800, 1600)]
+    reference, bound, _ = extrapolate([o.velocities for o in levels])
+    result = fem(scene, sizes[-1])
+    independent = ("linear taper (as above)", "finite differences 400-1600 cells/l, Richardson: v = ("
+                   + ", ".join(f"{v:.5f}" for v in reference) + f") +- {bound.max():.0e}",
+                   f"P1 lumped, {sizes[-1]} el.", f"{np.max(np.abs(np.asarray(result.velocities) - reference)):.1e}",
+                   f"{result.error_estimate:.1e}", "", "")
     row = ("linear taper 1 -> 1/4, striker l = 0.5", "v = (" + ", ".join(f"{v:.6f}" for v in fine) + f") at {4 * sizes[-1]} el.",
            f"P1 lumped, {sizes[-1]} el.", f"{errors[-1]:.1e}", f"{estimates[-1]:.1e}", f"{order(sizes, errors):.2f}", "")
-    return [row], (sizes, errors)
+    return [row, independent], (sizes, errors)
 
 
 def table(rows) -> str:

@@ -54,3 +54,21 @@ def test_a_bad_scene_file_is_one_line_and_writes_nothing(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "bad.toml" in err[0] and "body[1]" in err[0] and "length" in err[0]
     assert not out.exists()
+
+
+def test_two_uniform_rods_take_the_two_rod_path_and_agree_with_the_multi_body_loop(tmp_path, capsys):
+    """Two uniform rods return the paper's CollisionResult; the command derives the velocities from
+    epsilon and momentum. The same rods with the second as a one-segment piecewise rod run the
+    multi-body loop: on the lattice both are exact."""
+    two = tmp_path / "two.toml"
+    two.write_text("[[body]]\nlength = 1.0\nvelocity = 1.0\n[[body]]\nlength = 2.0\n")
+    twin = tmp_path / "twin.toml"
+    twin.write_text("[[body]]\nlength = 1.0\nvelocity = 1.0\n[[body]]\n[[body.segment]]\nlength = 2.0\n")
+    records = []
+    for path in (two, twin):
+        assert main(["solve", str(path), "--elements", "8", "--json"]) == 0
+        records.append(json.loads(capsys.readouterr().out))
+    assert records[0]["velocities"] == pytest.approx(records[1]["velocities"], abs=1e-9)
+    assert records[0]["velocities"] == pytest.approx([0.0, 0.5], abs=1e-9)
+    assert records[0]["contacts"][0]["impulse"] == pytest.approx(records[1]["contacts"][0]["impulse"], abs=1e-9)
+    assert records[0]["internal_energies"] == [None, None]
