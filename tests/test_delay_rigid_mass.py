@@ -45,3 +45,51 @@ def test_exponential_law_tends_to_the_hard_limit():
             for a in (1e2, 1e3, 1e4)]
     assert gaps[0] > gaps[1] > gaps[2]
     assert gaps[2] < 2e-3
+
+
+# -- solve(scene, solver="delay") on Saint-Venant's scene -------------------------------------------------------
+
+
+@pytest.mark.parametrize("ratio", [0.25, 1.0, 4.0])
+def test_delay_solver_takes_a_rigid_mass_on_a_rod_within_its_estimate(ratio):
+    from wavecontact import RigidBody, Rod, Scene, solve
+
+    ref = saint_venant(mass=ratio, rod_length=1.0, impedance=1.0, wave_speed=1.0, velocity=1.0)
+    scene = Scene(rods=(RigidBody(mass=ratio), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
+    result = solve(scene, solver="delay", rtol=1e-7)
+    assert result.solver == "delay"
+    error = np.max(np.abs(np.asarray(result.velocities) - [ref.mass_velocity, ref.rod_velocity]))
+    assert error <= result.error_estimate <= 1e-7 * 1.0001, (error, result.error_estimate)
+    (contact,) = result.contacts
+    assert contact.intervals == 1 and contact.first_contact == 0.0
+    assert contact.last_contact + result.work["dt"] == pytest.approx(ref.last_contact, abs=1e-12)
+    assert result.internal_energies[1] == pytest.approx(ref.rod_internal_energy, abs=10 * result.error_estimate)
+
+
+def test_delay_and_fem_agree_on_a_mirrored_scene_with_a_soft_law():
+    """The rod on the left moving right into a resting mass, exponential law (alpha = 200): the delay
+    module and the fem loop within the sum of their error estimates."""
+    from wavecontact import RigidBody, Rod, Scene, solve
+
+    scene = Scene(rods=(Rod(1.0), RigidBody(mass=2.0)), velocities=(1.0, 0.0), contact=Exponential(200.0),
+                  gaps=(0.2,))
+    delay = solve(scene, solver="delay", rtol=1e-6)
+    fem = solve(scene, solver="fem", elements=400)
+    difference = np.max(np.abs(np.asarray(delay.velocities) - fem.velocities))
+    assert difference <= delay.error_estimate + fem.error_estimate, (difference, delay.error_estimate,
+                                                                      fem.error_estimate)
+    assert sum(m * v for m, v in zip(delay.masses, delay.velocities)) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_delay_solver_refuses_other_line_scenes_naming_fem():
+    from wavecontact import PiecewiseRod, RigidBody, Rod, Scene, Segment, solve
+    from wavecontact.errors import UnsupportedSceneError
+
+    scenes = [
+        Scene(rods=(Rod(1.0),) * 3, velocities=(1.0, 0.0, 0.0), contact=Hard(), gaps=(0.0, 0.0)),
+        Scene(rods=(RigidBody(mass=1.0), PiecewiseRod((Segment(1.0, end_area=0.5),))), velocities=(1.0, 0.0),
+              contact=Hard(), gaps=(0.0,)),
+    ]
+    for scene in scenes:
+        with pytest.raises(UnsupportedSceneError, match="fem"):
+            solve(scene, solver="delay")
