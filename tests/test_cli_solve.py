@@ -1,6 +1,7 @@
 """``wavecontact solve FILE``: every example scene file runs (small sizes); the output keeps momentum."""
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -72,3 +73,13 @@ def test_two_uniform_rods_take_the_two_rod_path_and_agree_with_the_multi_body_lo
     assert records[0]["velocities"] == pytest.approx([0.0, 0.5], abs=1e-9)
     assert records[0]["contacts"][0]["impulse"] == pytest.approx(records[1]["contacts"][0]["impulse"], abs=1e-9)
     assert records[0]["internal_energies"] == [None, None]
+
+
+def test_another_solver_ignores_the_files_solve_table(capsys):
+    """hammer_on_bar.toml asks for fem with 400 elements; --solver delay runs the rigid-mass delay module
+    (which takes no elements) and meets Saint-Venant's closed form V exp(-2m/M) (M = m) within its estimate."""
+    path = next(p for p in SCENES if p.name == "hammer_on_bar.toml")
+    assert main(["solve", str(path), "--solver", "delay", "--rtol", "1e-8", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["solver"] == "delay"
+    assert abs(record["velocities"][0] - math.exp(-2.0)) <= record["error_estimate"]

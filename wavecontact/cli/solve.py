@@ -26,7 +26,7 @@ def add_parser(subparsers):
         description="Read a scene (bodies from left to right, contact laws, gaps, walls; schema in docs/usage.md, "
         "'Scene files') from FILE (.toml or .json), solve it and print each body's velocity and internal "
         "energy after the last separation and each contact's impulse and times. Options given here "
-        "override the file's [solve] table.",
+        "override the file's [solve] table, which applies only to the solver it names.",
     )
     p.add_argument("file", metavar="FILE", help="the scene file (.toml or .json)")
     p.add_argument("--solver", help="which solver (default: the file's [solve] solver, else fem)")
@@ -113,7 +113,8 @@ def run(args) -> int:
     check_outputs(files=[("--out", args.out, (".json",)), ("--xt-plot", args.xt_plot, FIGURE_SUFFIXES)])
     scene_file = read_scene_file(args.file)
     solver = args.solver or scene_file.solver or "fem"
-    options = dict(scene_file.options)
+    # the file's [solve] options belong to the file's solver: another --solver starts from its defaults
+    options = dict(scene_file.options) if solver == (scene_file.solver or "fem") else {}
     options.update({name: getattr(args, name) for name in _SOLVER_FLAGS if getattr(args, name) is not None})
     if args.xt_plot:
         options["record_fields"] = True
