@@ -38,13 +38,13 @@ def test_galilean_invariance_and_momentum():
 
 
 def test_exponential_law_tends_to_the_hard_limit():
-    """alpha V l / c = 1e2, 1e3, 1e4: the mass's velocity approaches V exp(-2m/M), the error falling ~ 1/alpha."""
+    """alpha V l / c = 1e2, 1e3, 3e3: the mass's velocity approaches V exp(-2m/M) within 1/alpha."""
     hard = math.exp(-2.0)
+    alphas = (1e2, 1e3, 3e3)
     gaps = [abs(rigid_mass_on_rod(1.0, 1.0, 1.0, 1.0, 1.0, gap=25.0 / a, law=Exponential(a),
-                                  steps_per_round_trip=max(400, int(4 * a))).mass_velocity - hard)
-            for a in (1e2, 1e3, 1e4)]
+                                  steps_per_round_trip=max(400, int(4 * a))).mass_velocity - hard) for a in alphas]
     assert gaps[0] > gaps[1] > gaps[2]
-    assert gaps[2] < 2e-3
+    assert all(g < 1.0 / a for g, a in zip(gaps, alphas)), gaps
 
 
 # -- solve(scene, solver="delay") on Saint-Venant's scene -------------------------------------------------------
@@ -73,7 +73,7 @@ def test_delay_and_fem_agree_on_a_mirrored_scene_with_a_soft_law():
 
     scene = Scene(rods=(Rod(1.0), RigidBody(mass=2.0)), velocities=(1.0, 0.0), contact=Exponential(200.0),
                   gaps=(0.2,))
-    delay = solve(scene, solver="delay", rtol=1e-6)
+    delay = solve(scene, solver="delay", rtol=1e-5)
     fem = solve(scene, solver="fem", elements=400)
     difference = np.max(np.abs(np.asarray(delay.velocities) - fem.velocities))
     assert difference <= delay.error_estimate + fem.error_estimate, (difference, delay.error_estimate,
