@@ -117,3 +117,15 @@ def test_every_example_scene_file_reads(tmp_path):
         read = read_scene_file(path)
         assert read.title and read.solver == "fem"
         assert math.isfinite(sum(getattr(b, "mass", math.nan) for b in read.scene.rods))
+
+
+def test_the_example_in_docs_usage_reads(tmp_path):
+    """The TOML example of docs/usage.md, "Scene files", is a valid scene file."""
+    import re
+    from pathlib import Path
+
+    usage = (Path(__file__).resolve().parent.parent / "docs" / "usage.md").read_text()
+    section = usage[usage.index("### Scene files"):]
+    (block,) = re.findall(r"```toml\n(.*?)```", section[:section.index("### Every option")], re.DOTALL)
+    read = read_scene_file(write(tmp_path, block))
+    assert isinstance(read.scene.rods[0], RigidBody) and read.names == ("hammer", "bar")
