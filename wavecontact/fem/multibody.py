@@ -17,6 +17,7 @@ times the largest difference, over ``max |initial velocity|``.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -156,14 +157,17 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
     status = mk.STATUS_RUNNING
     us_t, vs_t = args_rods[0], args_rods[1]
     worst_drift = 0.0
+    loop_seconds = 0.0
     while status == mk.STATUS_RUNNING:
         if state[mk.S_STEPS] >= max_steps:
             raise SolverFailure(f"the bodies did not separate for good within t = {max_time:.4g}; contacts may keep "
                                 "re-engaging (check the velocities and the walls) or the run needs max_time",
                                 Outcome.TIME_LIMIT)
+        started = time.perf_counter()
         status, _ = mk.advance_line(*args_rods[:7], ru, rv, rinv, setup.body_kind, setup.body_slot, setup.contacts,
                                     setup.columns, records, values, targets, ends, control, state,
                                     int(min(_CHUNK, max_steps - state[mk.S_STEPS])))
+        loop_seconds += time.perf_counter() - started
         now = _energies(setup, us_t, vs_t, ru, rv)
         energy = sum(e for _, _, e in now) + _soft_potential(setup, us_t, ru)
         drift = (energy - energy0) / setup.energy_scale
@@ -199,7 +203,8 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
         "momentum_drift": abs(momentum - momentum0) / momentum_scale if not any(setup.walls) else math.nan,
         "masses": tuple(m for _, m, _ in end),
         "work": {"steps": steps, "elements": elements_total, "nodes": sum(d.n_nodes for d in setup.rods),
-                 "element_steps": steps * elements_total, "dt": dt_},
+                 "element_steps": steps * elements_total, "dt": dt_,
+                 "loop_seconds": loop_seconds},
         "extra": {"lattice": setup.lattice, "stable_step": setup.stable_step,
                   "impact_iterations": int(state[mk.S_MAX_ITERATIONS])},
         "setup": setup,
