@@ -407,7 +407,11 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
             z_eff = 1.0 / sum(1.0 / z for z in impedances) if impedances else math.inf
             if len(impedances) == 1 and impedances[0] == math.inf:
                 z_eff = math.inf
-            cap = FORCE_PEAK * z_eff * speed_scale if math.isfinite(z_eff) else math.inf
+            # the two-rod bound of the peak force, FORCE_PEAK Z_eff V, holds between two free rods; a wall or a
+            # rigid body can press harder (a three-body scene with a wall overflowed the exponential at alpha V h = 10):
+            # there only the energy bound (the potential at most the whole energy) holds
+            free_rods = math.isfinite(z_eff) and not any(walls) and not rigid_masses
+            cap = FORCE_PEAK * z_eff * speed_scale if free_rods else math.inf
             k_contact = _stiffness_bound(law, energy, cap, 1e-6 * length_scale)
             soft_limit = min(soft_limit, FORCE_COURANT * 2.0 / math.sqrt(lam + k_contact * w))
             if law.range > 0.0:  # alpha V dt <= FORCE_RESOLUTION, as the two-rod force scheme
