@@ -17,15 +17,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse as sp
 from skfem import Basis, BilinearForm, MeshLine
 
 from ..bodies import PiecewiseRod, RigidBody, body_segments, pair_laws
 from ..contact import Hard, Penalty
 from ..errors import InvalidParameterError, UnsupportedSceneError
 from ..scene import Rod
-from .discretization import _ELEMENTS, RodDiscretization, _bands, _left_to_right, _lower_bands, discretize_rod
+from .discretization import (
+    _ELEMENTS,
+    RodDiscretization,
+    _left_to_right,
+    assembled_discretization,
+    discretize_rod,
+)
 from .explicit_step import prepare_mass
 from .interleaved_step import LANE_TOLERANCE
 from .multibody_kernel import (
@@ -60,7 +64,7 @@ from .multibody_kernel import (
     SIDE_WALL,
 )
 from .simulation import FORCE_COURANT, FORCE_PEAK, FORCE_RESOLUTION, POTENTIAL_TOLERANCE
-from .stability import banded_mass, check_time_step, count_below, largest_eigenvalue
+from .stability import _reference_eigenvalue, check_time_step, largest_eigenvalue
 
 __all__ = ["LineSetup", "build_line_setup"]
 
@@ -143,27 +147,7 @@ def _piecewise_discretization(body: PiecewiseRod, vertices: np.ndarray, order: i
     stiffness = stiffness_form.assemble(basis).tocsr()[perm][:, perm].tocsr()
     consistent = mass_form.assemble(basis).tocsr()[perm][:, perm].tocsr()
     x = basis.doflocs[0][perm].copy()
-    cells = inverse[basis.element_dofs.T]
-    if order == 2:
-        left_first = x[cells[:, 0]] < x[cells[:, 1]]
-        cells[~left_first, :2] = cells[~left_first, 1::-1]
-    else:
-        cells = np.sort(cells, axis=1)
-    cells = cells[np.argsort(x[cells[:, 0]])]
-    lumped = np.asarray(consistent.sum(axis=1)).ravel()
-    if mass_kind == "lumped":
-        mass_matrix, cholesky = sp.diags(lumped).tocsr(), None
-    else:
-        mass_matrix = consistent
-        cholesky = scipy.linalg.cholesky_banded(_lower_bands(consistent, order), lower=True)
-    return RodDiscretization(rod=body, order=order, mass_kind=mass_kind, x=x, cells=np.ascontiguousarray(cells),
-                             stiffness_bands=_bands(stiffness, order), lumped_mass=lumped, mass_cholesky=cholesky,
-                             stiffness=stiffness, mass_matrix=mass_matrix)
-
-
-def _reference_eigenvalue(order: int, mass_kind: str) -> float:
-    single = discretize_rod(Rod(1.0), np.array([0.0, 1.0]), order, mass_kind)
-    return float(scipy.linalg.eigh(single.stiffness.toarray(), single.mass_matrix.toarray(), eigvals_only=True).max())
+    return assembled_discretization(body, order, mass_kind, basis, inverse, x, stiffness, consistent)
 
 
 def _largest_eigenvalue(disc: RodDiscretization, segments, counts) -> float:
@@ -181,20 +165,7 @@ def _largest_eigenvalue(disc: RodDiscretization, segments, counts) -> float:
         h = s.length / n
         ratio = max(s.area, s.right_area) / min(s.area, s.right_area)
         upper = max(upper, reference * s.wave_speed**2 / h**2 * ratio)
-    upper *= 1.0 + 1e-9
-    stiffness = np.ascontiguousarray(disc.stiffness_bands)
-    mass_bands = np.ascontiguousarray(banded_mass(disc))
-    n_nodes = disc.n_nodes
-    if count_below(stiffness, mass_bands, upper) < n_nodes:
-        raise InvalidParameterError("element bound below the spectrum: the mesh is degenerate")
-    lower = 0.0
-    while upper - lower > 1e-13 * upper:
-        middle = 0.5 * (lower + upper)
-        if count_below(stiffness, mass_bands, middle) >= n_nodes:
-            upper = middle
-        else:
-            lower = middle
-    return upper
+    return largest_eigenvalue(disc, upper=upper * (1.0 + 1e-9))
 
 
 def _mesh(body, travel: float) -> tuple:
