@@ -12,7 +12,7 @@ knows about a solver.  Units are any consistent set, as for ``Rod``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .contact import ContactLaw, Hard
 from .errors import InvalidParameterError, require_finite, require_magnitude
@@ -174,7 +174,7 @@ class Wall:
     """
 
     gap: float | None = None
-    contact: ContactLaw = Hard()
+    contact: ContactLaw = field(default_factory=Hard)
 
     def __post_init__(self):
         if self.gap is not None:

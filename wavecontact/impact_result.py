@@ -106,8 +106,8 @@ class ImpactResult:
 
     def summary(self) -> str:
         """A few lines for a terminal."""
-        lines = [f"{self.solver}: {len(self.velocities)} bodies, stopped at t = {self.end_time:.6g}, "
-                 f"error estimate {self.error_estimate:.2g} (of max |v0|), wall time {self.wall_time_s:.3g} s"]
+        lines = [(f"{self.solver}: {len(self.velocities)} bodies, stopped at t = {self.end_time:.6g}, "
+                  f"error estimate {self.error_estimate:.2g} (of max |v0|), wall time {self.wall_time_s:.3g} s")]
         for i, (name, v0, v, e) in enumerate(zip(self.bodies, self.initial_velocities, self.velocities,
                                                   self.internal_energies)):
             lines.append(f"  body {i} ({name}): v {v0:.6g} -> {v:.10g}, internal energy {e:.6g}")

@@ -108,6 +108,17 @@ class Scene:
         time).  The fields above are then that realisation's mode sums at the
         start; solvers that work with modes or with the noise ``Q(tau)`` use
         the amplitudes directly (see :func:`two_rods`).
+    walls : pair of (Wall or None), or None
+        Fixed walls at the left and right end of a line (:class:`wavecontact.bodies.Wall`).
+
+    Notes
+    -----
+    On a line, ``rods`` may also hold :class:`~wavecontact.bodies.PiecewiseRod`
+    and :class:`~wavecontact.bodies.RigidBody` bodies, ``contact`` may be a
+    tuple of laws (one per facing pair) and ``gaps`` entries may be ``None``;
+    such scenes (and any number of bodies other than two) are checked by
+    :func:`wavecontact.bodies.validate_line_scene` and solved by
+    ``solver='fem'`` only (docs/multibody.md).
     """
 
     rods: tuple

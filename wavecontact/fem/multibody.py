@@ -17,6 +17,7 @@ times the largest difference, over ``max |initial velocity|``.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from ..limits import Cost, Limits, check_cost
 from ..result import Outcome
 from ..solvers.base import ERROR_SAFETY, Stopwatch, richardson_estimate
 from . import multibody_kernel as mk
+from .interleaved_step import L_SHAPE, L_U, L_V, node_position
 from .multibody_setup import LineSetup, build_line_setup, mass_solves
 
 __all__ = ["ESTIMATE_ORDER", "LINE_OPTIONS", "run_line", "solve_line"]
@@ -110,17 +112,6 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
     for d, u, v in zip(setup.rods, us, vs):
         v -= 0.5 * dt_ * np.asarray(-(d.stiffness @ u)) / d.lumped_mass if d.mass_kind == "lumped" else \
             0.5 * dt_ * _consistent_solve(d, -(d.stiffness @ u))
-    n_rods = len(setup.rods)
-    placeholder = [np.zeros(2)]
-    args_rods = (
-        _typed(us if n_rods else placeholder),
-        _typed(vs if n_rods else placeholder),
-        _typed([np.zeros(d.n_nodes) for d in setup.rods] if n_rods else placeholder),
-        _typed([np.ascontiguousarray(d.stiffness_bands) for d in setup.rods] if n_rods else [np.zeros((2, 2))]),
-        np.array([k for k, _ in solves] if n_rods else [0], dtype=np.int64),
-        _typed([t for _, t in solves] if n_rods else [np.zeros((2, 2))]),
-        _typed([d.lumped_mass for d in setup.rods] if n_rods else placeholder),
-    )
     # hard contacts of rod ends (or a rod end and a wall) on the exact lattice: characteristic free ends
     ends = np.zeros((setup.contacts.shape[0], mk.END_FIELDS))
     for c, row in enumerate(setup.contacts):
@@ -135,6 +126,45 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
                     earlier = us[slot][node] - dt_ * vs[slot][node]
                     ends[c, previous] = earlier
                     ends[c, incoming] = 0.5 * (us[slot][node] - earlier)
+    # the loop's arrays: flat, or (consistent mass in the interleaved layout) the rows of the mass-solve table;
+    # rod nodes of the contacts and their M^-1 e_end entries as positions in them
+    stepped_u, stepped_v, kernel_contacts = [], [], setup.contacts.copy()
+    where = np.zeros(setup.columns.size, dtype=np.int64)
+    layout = []
+    for d, u, v, (_, table) in zip(setup.rods, us, vs, solves):
+        rows = int(table[L_SHAPE, 0])
+        layout.append((rows, d.order))
+        stepped_u.append(table[L_U] if rows else u)
+        stepped_v.append(table[L_V] if rows else v)
+
+    def position(slot, node):
+        rows, order = layout[slot]
+        return int(node_position(node, rows, order)) if rows else int(node)
+
+    for row in kernel_contacts:
+        for kind_col, slot_col, node_col, col_col, first_col, len_col in (
+                (mk.C_KIND_A, mk.C_SLOT_A, mk.C_NODE_A, mk.C_COL_A, mk.C_FIRST_A, mk.C_LEN_A),
+                (mk.C_KIND_B, mk.C_SLOT_B, mk.C_NODE_B, mk.C_COL_B, mk.C_FIRST_B, mk.C_LEN_B)):
+            if int(row[kind_col]) == mk.SIDE_ROD:
+                slot, col_start, first = int(row[slot_col]), int(row[col_col]), int(row[first_col])
+                for j in range(int(row[len_col])):
+                    where[col_start + j] = position(slot, first + j)
+                row[node_col] = position(slot, int(row[node_col]))
+            elif int(row[kind_col]) == mk.SIDE_RIGID:
+                where[int(row[col_col])] = 0
+    n_rods = len(setup.rods)
+    placeholder = [np.zeros(2)]
+    args_rods = (
+        _typed(us if n_rods else placeholder),
+        _typed(vs if n_rods else placeholder),
+        _typed(stepped_u if n_rods else placeholder),
+        _typed(stepped_v if n_rods else placeholder),
+        _typed([np.zeros(d.n_nodes) for d in setup.rods] if n_rods else placeholder),
+        _typed([np.ascontiguousarray(d.stiffness_bands) for d in setup.rods] if n_rods else [np.zeros((2, 2))]),
+        np.array([k for k, _ in solves] if n_rods else [0], dtype=np.int64),
+        _typed([t for _, t in solves] if n_rods else [np.zeros((2, 2))]),
+        _typed([d.lumped_mass for d in setup.rods] if n_rods else placeholder),
+    )
     records = np.zeros((setup.contacts.shape[0], mk.RECORD_FIELDS))
     records[:, mk.R_FIRST] = -1.0
     values = np.zeros(setup.contacts.shape[0])
@@ -156,16 +186,20 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
     status = mk.STATUS_RUNNING
     us_t, vs_t = args_rods[0], args_rods[1]
     worst_drift = 0.0
+    loop_seconds = 0.0
     while status == mk.STATUS_RUNNING:
         if state[mk.S_STEPS] >= max_steps:
             raise SolverFailure(f"the bodies did not separate for good within t = {max_time:.4g}; contacts may keep "
                                 "re-engaging (check the velocities and the walls) or the run needs max_time",
                                 Outcome.TIME_LIMIT)
-        status, _ = mk.advance_line(*args_rods[:7], ru, rv, rinv, setup.body_kind, setup.body_slot, setup.contacts,
-                                    setup.columns, records, values, targets, ends, control, state,
+        started = time.perf_counter()
+        status, _ = mk.advance_line(*args_rods, ru, rv, rinv, setup.body_kind, setup.body_slot, kernel_contacts,
+                                    setup.columns, where, records, values, targets, ends, control, state,
                                     int(min(_CHUNK, max_steps - state[mk.S_STEPS])))
-        now = _energies(setup, us_t, vs_t, ru, rv)
-        energy = sum(e for _, _, e in now) + _soft_potential(setup, us_t, ru)
+        loop_seconds += time.perf_counter() - started
+        with np.errstate(all="ignore"):  # a blow-up is reported below, not as a warning
+            now = _energies(setup, us_t, vs_t, ru, rv)
+            energy = sum(e for _, _, e in now) + _soft_potential(setup, us_t, ru)
         drift = (energy - energy0) / setup.energy_scale
         worst_drift = max(worst_drift, abs(drift))
         too_far = drift > energy_tolerance if setup.hard else abs(drift) > energy_tolerance
@@ -199,7 +233,8 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
         "momentum_drift": abs(momentum - momentum0) / momentum_scale if not any(setup.walls) else math.nan,
         "masses": tuple(m for _, m, _ in end),
         "work": {"steps": steps, "elements": elements_total, "nodes": sum(d.n_nodes for d in setup.rods),
-                 "element_steps": steps * elements_total, "dt": dt_},
+                 "element_steps": steps * elements_total, "dt": dt_,
+                 "loop_seconds": loop_seconds},
         "extra": {"lattice": setup.lattice, "stable_step": setup.stable_step,
                   "impact_iterations": int(state[mk.S_MAX_ITERATIONS])},
         "setup": setup,

@@ -41,11 +41,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._jit import kernel
 from ..contact_kernels import law_force
-from .explicit_step import MASS_LUMPED, step_rod
+from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_rod
+from .interleaved_step import L_SHAPE, pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
 from .kernels import _leapfrog_p1
 
 __all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "RECORD_FIELDS", "STATE_SIZE", "advance_line"]
@@ -110,29 +109,29 @@ def _velocity(kind, slot, node, vs, rv):
 
 
 @kernel
-def _push(kind, slot, start, first, length, columns, us, vs, ru, rv, rinv, kick, shift):
-    """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements."""
+def _push(kind, slot, start, length, columns, where, us, vs, ru, rv, rinv, kick, shift):
+    """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements
+    (``where``: the entries' positions in the arrays the loop steps)."""
     if kind == SIDE_ROD:
         u = us[slot]
         v = vs[slot]
         for j in range(length):
             c = columns[start + j]
-            v[first + j] += kick * c
-            u[first + j] += shift * c
+            k = where[start + j]
+            v[k] += kick * c
+            u[k] += shift * c
     elif kind == SIDE_RIGID:
         rv[slot] += kick * rinv[slot]
         ru[slot] += shift * rinv[slot]
 
 
 @kernel
-def _exchange(contacts, c, columns, us, vs, ru, rv, rinv, impulse, dt):
+def _exchange(contacts, c, columns, where, us, vs, ru, rv, rinv, impulse, dt):
     """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes."""
     _push(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_COL_B]),
-          int(contacts[c, C_FIRST_B]), int(contacts[c, C_LEN_B]), columns, us, vs, ru, rv, rinv,
-          impulse, impulse * dt)
+          int(contacts[c, C_LEN_B]), columns, where, us, vs, ru, rv, rinv, impulse, impulse * dt)
     _push(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_COL_A]),
-          int(contacts[c, C_FIRST_A]), int(contacts[c, C_LEN_A]), columns, us, vs, ru, rv, rinv,
-          -impulse, -impulse * dt)
+          int(contacts[c, C_LEN_A]), columns, where, us, vs, ru, rv, rinv, -impulse, -impulse * dt)
 
 
 @kernel
@@ -188,9 +187,7 @@ def _apart(body_kind, body_slot, weights, vs, rv, control):
         elif previous - speed > tolerance:
             return False
         previous = speed
-    if control[K_RIGHT_WALL] > 0.0 and previous > tolerance:
-        return False
-    return True
+    return not (control[K_RIGHT_WALL] > 0.0 and previous > tolerance)
 
 
 @kernel
@@ -213,15 +210,30 @@ def _to_free_end(u, v, end, value, dt):
 
 
 @kernel
-def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, body_kind, body_slot,
-                 contacts, columns, records, values, targets, ends, control, state, max_steps):
+def _flat(flat_u, flat_v, us, vs, tables, bands, n_rods):
+    """Copy the rods that run in the interleaved layout back to their flat arrays."""
+    for b in range(n_rods):
+        rows = int(tables[b][L_SHAPE, 0])
+        if rows:
+            unpack_nodes(us[b], flat_u[b], rows, bands[b].shape[0] - 1)
+            unpack_nodes(vs[b], flat_v[b], rows, bands[b].shape[0] - 1)
+
+
+@kernel
+def advance_line(flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, body_kind, body_slot,
+                 contacts, columns, where, records, values, targets, ends, control, state, max_steps):
     """Run up to ``max_steps`` steps; return ``(status, steps done)``.
 
     Parameters
     ----------
-    us, vs, scratch, bands, tables, weights : lists of arrays, one per rod
-        Displacements now (length), velocities half a step earlier (length/time), a scratch
-        array, the stiffness bands, the mass solve of
+    flat_u, flat_v : lists of arrays, one per rod
+        Displacements now (length) and velocities half a step earlier (length/time), node by node.
+    us, vs : lists of arrays, one per rod
+        The arrays the loop steps: ``flat_u, flat_v`` themselves, or for a consistent mass in the
+        interleaved layout (:mod:`~wavecontact.fem.interleaved_step`) the rows of its table, packed on
+        entry and unpacked to ``flat_u, flat_v`` for the checks and on return.
+    scratch, bands, tables, weights : lists of arrays, one per rod
+        A scratch array, the stiffness bands, the mass solve of
         :func:`~wavecontact.fem.explicit_step.prepare_mass` and the lumped masses.
     kinds : int array
         Mass-solve kind of each rod.
@@ -230,7 +242,8 @@ def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, b
     body_kind, body_slot : arrays, one entry per body in order along the line
         :data:`SIDE_ROD` or :data:`SIDE_RIGID` and the index in the rod or rigid lists.
     contacts : array (n_contacts, CONTACT_FIELDS)
-        The ``C_*`` columns; ``columns`` holds the ``M^-1 e_end`` entries they point to.
+        The ``C_*`` columns (rod nodes as positions in ``us``); ``columns`` holds the ``M^-1 e_end``
+        entries they point to, ``where`` their positions in ``us``.
     records : array (n_contacts, RECORD_FIELDS)
         Accumulated ``R_*`` records.
     values, targets : arrays (n_contacts,)
@@ -245,6 +258,11 @@ def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, b
     n_contacts = contacts.shape[0]
     n_rods = int(control[K_RODS])
     n_rigid = ru.size
+    for b in range(n_rods):
+        rows = int(tables[b][L_SHAPE, 0])
+        if rows:
+            pack_nodes(flat_u[b], us[b], rows, bands[b].shape[0] - 1)
+            pack_nodes(flat_v[b], vs[b], rows, bands[b].shape[0] - 1)
     for step in range(max_steps):
         time = state[S_TIME]
         # 1. soft forces at the current gaps
@@ -267,6 +285,11 @@ def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, b
             table = tables[b]
             if kinds[b] == MASS_LUMPED and bands[b].shape[0] == 2:
                 _leapfrog_p1(us[b], vs[b], bands[b], table[0], dt)
+            elif table[L_SHAPE, 0] > 0.0:
+                if kinds[b] == MASS_CONDENSED:
+                    step_condensed(table, dt)
+                else:
+                    step_tridiagonal(table, dt)
             else:
                 step_rod(us[b], vs[b], scratch[b], bands[b], kinds[b], table, dt)
         for r in range(n_rigid):
@@ -277,7 +300,7 @@ def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, b
             if contacts[c, C_HARD] == HARD_NONE:
                 force = values[c]
                 if force != 0.0:
-                    _exchange(contacts, c, columns, us, vs, ru, rv, rinv, force * dt, dt)
+                    _exchange(contacts, c, columns, where, us, vs, ru, rv, rinv, force * dt, dt)
                 acting = force > contacts[c, C_THRESHOLD]
                 acting_any = acting_any or acting
                 _record(records, c, force * dt, acting, time)
@@ -325,16 +348,14 @@ def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, b
                         continue
                     gap = _gap(contacts, c, us, ru)
                     wanted = values[c] + (targets[c] - gap) / (dt * contacts[c, C_W])
-                    if wanted < 0.0:
-                        wanted = 0.0
+                    wanted = max(wanted, 0.0)
                     change = wanted - values[c]
                     if change != 0.0:
-                        _exchange(contacts, c, columns, us, vs, ru, rv, rinv, change, dt)
+                        _exchange(contacts, c, columns, where, us, vs, ru, rv, rinv, change, dt)
                         values[c] = wanted
                         # converged once no impulse changes by more than round-off (1e-12 of speed / W)
                         moved = moved or abs(change) > 0.01 * contacts[c, C_THRESHOLD]
-                if sweep + 1 > state[S_MAX_ITERATIONS]:
-                    state[S_MAX_ITERATIONS] = sweep + 1
+                state[S_MAX_ITERATIONS] = max(state[S_MAX_ITERATIONS], sweep + 1.0)
                 if not moved:
                     break
             for c in range(n_contacts):
@@ -348,12 +369,13 @@ def advance_line(us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, b
         if acting_any:
             state[S_LAST_ACTIVE] = time
         if (step + 1) % check_every == 0:
-            for b in range(n_rods):
-                if not math.isfinite(us[b][0]) or not math.isfinite(vs[b][0]):
+            for c in range(n_contacts):
+                if not math.isfinite(_gap(contacts, c, us, ru)):
+                    _flat(flat_u, flat_v, us, vs, tables, bands, n_rods)
                     return STATUS_FAILED, step + 1
-            for r in range(n_rigid):
-                if not math.isfinite(ru[r]) or not math.isfinite(rv[r]):
-                    return STATUS_FAILED, step + 1
-            if time - state[S_LAST_ACTIVE] >= period and _apart(body_kind, body_slot, weights, vs, rv, control):
-                return STATUS_SEPARATED, step + 1
+            if time - state[S_LAST_ACTIVE] >= period:
+                _flat(flat_u, flat_v, us, vs, tables, bands, n_rods)
+                if _apart(body_kind, body_slot, weights, flat_v, rv, control):
+                    return STATUS_SEPARATED, step + 1
+    _flat(flat_u, flat_v, us, vs, tables, bands, n_rods)
     return STATUS_RUNNING, max_steps

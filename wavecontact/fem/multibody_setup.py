@@ -17,15 +17,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse as sp
 from skfem import Basis, BilinearForm, MeshLine
 
 from ..bodies import PiecewiseRod, RigidBody, body_segments, pair_laws
 from ..contact import Hard, Penalty
 from ..errors import InvalidParameterError, UnsupportedSceneError
 from ..scene import Rod
-from .discretization import _ELEMENTS, RodDiscretization, _bands, _left_to_right, _lower_bands, discretize_rod
+from .discretization import (
+    _ELEMENTS,
+    RodDiscretization,
+    _left_to_right,
+    assembled_discretization,
+    discretize_rod,
+)
 from .explicit_step import prepare_mass
 from .interleaved_step import LANE_TOLERANCE
 from .multibody_kernel import (
@@ -60,12 +64,16 @@ from .multibody_kernel import (
     SIDE_WALL,
 )
 from .simulation import FORCE_COURANT, FORCE_PEAK, FORCE_RESOLUTION, POTENTIAL_TOLERANCE
-from .stability import banded_mass, check_time_step, count_below, largest_eigenvalue
+from .stability import _reference_eigenvalue, check_time_step, largest_eigenvalue
 
 __all__ = ["LineSetup", "build_line_setup"]
 
 # a hard impulse below this fraction of (end-node mass x velocity scale) is round-off, not a contact
 IMPULSE_ROUNDOFF = 1e-10
+# largest omega dt of the contact oscillation of a law acting on overlap only (penalty, Hertz): central differences
+# on a spring that switches on and off pump energy where a step spans a good part of its period (omega dt = 1.56
+# took a three-rod chain to 12 times its energy)
+OVERLAP_RESOLUTION = 0.5
 
 
 @dataclass
@@ -139,27 +147,7 @@ def _piecewise_discretization(body: PiecewiseRod, vertices: np.ndarray, order: i
     stiffness = stiffness_form.assemble(basis).tocsr()[perm][:, perm].tocsr()
     consistent = mass_form.assemble(basis).tocsr()[perm][:, perm].tocsr()
     x = basis.doflocs[0][perm].copy()
-    cells = inverse[basis.element_dofs.T]
-    if order == 2:
-        left_first = x[cells[:, 0]] < x[cells[:, 1]]
-        cells[~left_first, :2] = cells[~left_first, 1::-1]
-    else:
-        cells = np.sort(cells, axis=1)
-    cells = cells[np.argsort(x[cells[:, 0]])]
-    lumped = np.asarray(consistent.sum(axis=1)).ravel()
-    if mass_kind == "lumped":
-        mass_matrix, cholesky = sp.diags(lumped).tocsr(), None
-    else:
-        mass_matrix = consistent
-        cholesky = scipy.linalg.cholesky_banded(_lower_bands(consistent, order), lower=True)
-    return RodDiscretization(rod=body, order=order, mass_kind=mass_kind, x=x, cells=np.ascontiguousarray(cells),
-                             stiffness_bands=_bands(stiffness, order), lumped_mass=lumped, mass_cholesky=cholesky,
-                             stiffness=stiffness, mass_matrix=mass_matrix)
-
-
-def _reference_eigenvalue(order: int, mass_kind: str) -> float:
-    single = discretize_rod(Rod(1.0), np.array([0.0, 1.0]), order, mass_kind)
-    return float(scipy.linalg.eigh(single.stiffness.toarray(), single.mass_matrix.toarray(), eigvals_only=True).max())
+    return assembled_discretization(body, order, mass_kind, basis, inverse, x, stiffness, consistent)
 
 
 def _largest_eigenvalue(disc: RodDiscretization, segments, counts) -> float:
@@ -177,20 +165,7 @@ def _largest_eigenvalue(disc: RodDiscretization, segments, counts) -> float:
         h = s.length / n
         ratio = max(s.area, s.right_area) / min(s.area, s.right_area)
         upper = max(upper, reference * s.wave_speed**2 / h**2 * ratio)
-    upper *= 1.0 + 1e-9
-    stiffness = np.ascontiguousarray(disc.stiffness_bands)
-    mass_bands = np.ascontiguousarray(banded_mass(disc))
-    n_nodes = disc.n_nodes
-    if count_below(stiffness, mass_bands, upper) < n_nodes:
-        raise InvalidParameterError("element bound below the spectrum: the mesh is degenerate")
-    lower = 0.0
-    while upper - lower > 1e-13 * upper:
-        middle = 0.5 * (lower + upper)
-        if count_below(stiffness, mass_bands, middle) >= n_nodes:
-            upper = middle
-        else:
-            lower = middle
-    return upper
+    return largest_eigenvalue(disc, upper=upper * (1.0 + 1e-9))
 
 
 def _mesh(body, travel: float) -> tuple:
@@ -403,11 +378,17 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
             z_eff = 1.0 / sum(1.0 / z for z in impedances) if impedances else math.inf
             if len(impedances) == 1 and impedances[0] == math.inf:
                 z_eff = math.inf
-            cap = FORCE_PEAK * z_eff * speed_scale if math.isfinite(z_eff) else math.inf
+            # the two-rod bound of the peak force, FORCE_PEAK Z_eff V, holds between two free rods; a wall or a
+            # rigid body can press harder (a three-body scene with a wall overflowed the exponential at alpha V h = 10):
+            # there only the energy bound (the potential at most the whole energy) holds
+            free_rods = math.isfinite(z_eff) and not any(walls) and not rigid_masses
+            cap = FORCE_PEAK * z_eff * speed_scale if free_rods else math.inf
             k_contact = _stiffness_bound(law, energy, cap, 1e-6 * length_scale)
             soft_limit = min(soft_limit, FORCE_COURANT * 2.0 / math.sqrt(lam + k_contact * w))
-            if law.range > 0.0:
+            if law.range > 0.0:  # alpha V dt <= FORCE_RESOLUTION, as the two-rod force scheme
                 resolution = min(resolution, FORCE_RESOLUTION / (law.range**-1 * max(speed_scale, 1e-300)))
+            elif k_contact > 0.0:  # a law acting on overlap only switches on and off: resolve its oscillation
+                resolution = min(resolution, OVERLAP_RESOLUTION / math.sqrt(k_contact * w))
         row = np.zeros(CONTACT_FIELDS)
         for s, prefix in ((a, "A"), (b, "B")):
             kind_col, slot_col, node_col = (C_KIND_A, C_SLOT_A, C_NODE_A) if prefix == "A" else (C_KIND_B, C_SLOT_B,
@@ -452,7 +433,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
         if not math.isfinite(step):  # rigid bodies with hard contact only: resolve the approach
             step = length_scale / speed_scale / elements
     else:
-        step = check_time_step(dt, min(limit, soft_limit))
+        step = check_time_step(dt, limit)  # a soft contact stiffer than its bound shows in the energy check
     round_trips = [2.0 * sum(s.travel_time for s in body_segments(b)) for b in deformable]
     period = max(1.05 * max(round_trips, default=0.0), 2.0 * step)
     return LineSetup(scene=scene, rods=rods, body_kind=np.array(body_kind, dtype=np.int64),
