@@ -186,7 +186,7 @@ BLOCKS = [
     Block("usage-help", "docs/usage.md",
           tuple(("--help",) if c is None else (c, "--help")
                 for c in (None, "collide", "converge", "compare", "ring", "equipartition", "map", "gas", "ensemble",
-                          "bath-figure", "restitution-table", "markov", "paper-figures")),
+                          "bath-figure", "restitution-table", "markov", "paper-figures", "solve")),
           cheap=True),
     Block("usage-compare", "docs/usage.md",
           (("compare", "--gamma", "0.6", "--kappa", "100", "--repeats", "3", "--no-progress"),)),

@@ -8,6 +8,7 @@ would show as that failure, not as a pass.
 
 import os
 import time
+from pathlib import Path
 
 import pytest
 
@@ -30,6 +31,7 @@ WORK = [
     ("wavecontact.gas", "random_gas"),
     ("wavecontact.studies.material_map", "material_map"),
     ("wavecontact.studies.paper_figures", "run_figures"),
+    ("wavecontact.api", "solve"),
 ]
 
 RING = ["ring", "--gamma", "0.6", "--kappa", "100", "--modes", "20", "--collisions", "10", "--no-progress"]
@@ -41,6 +43,7 @@ MARKOV = ["markov", "--gamma", "0.6", "--no-progress"]
 COLLIDE = ["collide", "--gamma", "0.6", "--kappa", "20"]
 CONVERGE = ["converge", "--gamma", "0.6", "--kappa", "20"]
 COMPARE = ["compare", "--gamma", "0.6", "--kappa", "100"]
+SCENE = str(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "hammer_on_bar.toml")
 CLOSED = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
 
 # (argv, words the one-line message must contain)
@@ -79,6 +82,11 @@ CASES = [
     (["map", "--out", ""], ["--out", "empty"]),
     (["paper-figures", "--out", "afile.txt"], ["--out", "not a directory"]),
     (["paper-figures", "--out", "figs", "--page", "adir"], ["--page", "directory"]),
+    (["solve", "missing.toml"], ["missing.toml", "cannot read"]),
+    (["solve", "afile.txt"], ["afile.txt", ".toml or .json"]),
+    (["solve", SCENE, "--out", "adir"], ["--out", "directory"]),
+    (["solve", SCENE, "--out", "r.npz"], ["--out", ".json"]),
+    (["solve", SCENE, "--xt-plot", "missing/f.png"], ["--xt-plot", "does not exist"]),
     # sizes: refused with the estimate, the bound and the option
     (EQUI + ["--collisions", "1000000000000", "--out", "e"], ["equipartition", "--collisions"]),
     (EQUI[:5] + ["--modes", "20000", "--collisions", "5", "--out", "e"], ["max_work", "--modes"]),

@@ -8,6 +8,7 @@ before it are what is exercised, fast.
 import importlib
 import os
 import time
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -44,6 +45,7 @@ BASES = {
     "gas": ["--rods", "10", "--collisions", "100", "--rule", "fixed", "--restitution", "1"],
     "map": ["--out", "d"],
     "paper-figures": ["--out", "d", "--quick"],
+    "solve": [str(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "hammer_on_bar.toml")],
 }
 
 

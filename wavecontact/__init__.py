@@ -14,8 +14,10 @@ Three solvers share one scene model and one entry point:
 
 from ._version import __version__ as __version__
 from .api import collide, solve
+from .bodies import PiecewiseRod, RigidBody, Segment, Wall
 from .contact import ContactLaw, Exponential, Hard, Penalty
 from .errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, WavecontactError
+from .impact_result import ContactRecord, ImpactResult
 from .result import CollisionResult
 from .scene import Rod, Scene, two_rod_parameters, two_rods
 from .studies.ensemble import ensemble
@@ -23,14 +25,20 @@ from .studies.ensemble import ensemble
 __all__ = [
     "CollisionResult",
     "ContactLaw",
+    "ContactRecord",
     "Exponential",
     "Hard",
+    "ImpactResult",
     "InvalidParameterError",
     "Penalty",
+    "PiecewiseRod",
+    "RigidBody",
     "Rod",
     "Scene",
+    "Segment",
     "SolverFailure",
     "UnsupportedSceneError",
+    "Wall",
     "WavecontactError",
     "collide",
     "ensemble",

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .bodies import is_line_scene, needs_line_validation, validate_line_scene
 from .contact import ContactLaw, Exponential, Hard, Penalty, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_magnitude, require_positive
 
@@ -107,6 +108,17 @@ class Scene:
         time).  The fields above are then that realisation's mode sums at the
         start; solvers that work with modes or with the noise ``Q(tau)`` use
         the amplitudes directly (see :func:`two_rods`).
+    walls : pair of (Wall or None), or None
+        Fixed walls at the left and right end of a line (:class:`wavecontact.bodies.Wall`).
+
+    Notes
+    -----
+    On a line, ``rods`` may also hold :class:`~wavecontact.bodies.PiecewiseRod`
+    and :class:`~wavecontact.bodies.RigidBody` bodies, ``contact`` may be a
+    tuple of laws (one per facing pair) and ``gaps`` entries may be ``None``;
+    such scenes (and any number of bodies other than two) are checked by
+    :func:`wavecontact.bodies.validate_line_scene` and solved by
+    ``solver='fem'`` only (docs/multibody.md).
     """
 
     rods: tuple
@@ -118,8 +130,12 @@ class Scene:
     initial_velocity: tuple | None = None
     metadata: dict = field(default_factory=dict, compare=False)
     vibrations: object = None
+    walls: tuple | None = None
 
     def __post_init__(self):
+        if needs_line_validation(self):  # piecewise rods, rigid bodies, per-pair laws or walls (bodies.py)
+            validate_line_scene(self)
+            return
         rods = tuple(self.rods)
         if len(rods) < 2:
             raise InvalidParameterError(f"a scene needs at least 2 rods, got {len(rods)}")
@@ -170,6 +186,11 @@ class Scene:
                         f"{name} must hold one callable (or None) per rod ({len(rods)})"
                     )
                 object.__setattr__(self, name, fields)
+
+    @property
+    def is_line_scene(self) -> bool:
+        """True for a scene beyond the paper's two uniform rods on a line (:func:`wavecontact.bodies.is_line_scene`)."""
+        return is_line_scene(self)
 
     @property
     def is_ring(self) -> bool:
@@ -391,7 +412,7 @@ def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     """
     if "two_rods" in scene.metadata:
         return scene.metadata["two_rods"]
-    if len(scene.rods) != 2 or scene.is_ring:
+    if len(scene.rods) != 2 or scene.is_ring or scene.is_line_scene:
         raise InvalidParameterError("two_rod_parameters needs two rods on a line")
     r1, r2 = scene.rods
     if not r1.same_material(r2):

@@ -14,7 +14,7 @@ import sys
 from ..errors import WavecontactError
 
 COMMANDS = ("collide", "converge", "ring", "equipartition", "compare", "gas", "map", "ensemble", "bath-figure",
-            "restitution-table", "markov", "paper-figures")
+            "restitution-table", "markov", "paper-figures", "solve")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -9,6 +9,7 @@ from ..solvers import get_solver, solver_names
 from .common import (
     CONTACT_HELP,
     FIGURE_SUFFIXES,
+    add_limit_options,
     contact_law,
     files_summary,
     gamma_value,
@@ -59,12 +60,8 @@ def add_parser(subparsers):
     p.add_argument("--save", metavar="FILE", help="save scalars and histories to an .npz file")
     p.add_argument("--no-warmup", dest="warmup", action="store_false",
                    help="solve once only; the time printed then includes numba's kernel preparation")
-    p.add_argument("--tolerance", type=positive_float,
-                   help="fail (exit 2, with advice) if the error estimate exceeds this (default: no check; "
-                   "with --solver auto the target of the choice, default 1e-6)")
-    p.add_argument("--max-work", type=positive_float, help="limit on the estimated work in updates (default 2e11)")
-    p.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
-                   "(default: half the available memory)")
+    add_limit_options(p, tolerance_help="fail (exit 2, with advice) if the error estimate exceeds this (default: no "
+                      "check; with --solver auto the target of the choice, default 1e-6)")
     _add_solver_flags(p)
     p.set_defaults(run=run)
     return p

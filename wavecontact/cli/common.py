@@ -57,6 +57,16 @@ def nonnegative_int(text: str) -> int:
     return value
 
 
+def add_limit_options(parser: argparse.ArgumentParser, tolerance_help: str | None = None) -> None:
+    """``--tolerance``, ``--max-work`` and ``--max-memory`` of one solve (``collide``, ``solve``)."""
+    parser.add_argument("--tolerance", type=positive_float, help=tolerance_help
+                        or "fail (exit 2, with advice) if the error estimate exceeds this (default: no check)")
+    parser.add_argument("--max-work", type=positive_float,
+                        help="limit on the estimated work in updates (default 2e11)")
+    parser.add_argument("--max-memory", type=positive_float, help="limit on the estimated memory in bytes "
+                        "(default: half the available memory)")
+
+
 def add_ring_options(parser: argparse.ArgumentParser) -> None:
     """``--out``, ``--no-progress`` and ``--no-static-correction``, shared by the ring commands."""
     parser.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")

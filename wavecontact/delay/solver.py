@@ -398,6 +398,15 @@ class DelaySolver(SolverBase):
                     f"lower end_time or pass max_steps={math.ceil(steps * 1.1)}")
         return None
 
+    def solve_line(self, scene: Scene, options=None, **limits):
+        """Saint-Venant's scene (a rigid body against one uniform rod): :mod:`wavecontact.delay.rigid_mass`;
+        any other line scene is refused, naming the fem solver."""
+        from . import rigid_mass
+
+        if not rigid_mass.takes(scene):
+            return super().solve_line(scene, options, **limits)
+        return rigid_mass.solve_scene(scene, self.options(options), **limits)
+
     def _collide(self, scene: Scene, options: DelayOptions) -> CollisionFields:
         params = _check_scene(scene)
         kappa = params.kappa

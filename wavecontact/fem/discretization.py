@@ -283,6 +283,12 @@ def discretize_rod(
         end = 0 if remainder_at == "left" else x.size - 1
         extra = sp.csr_matrix(([rod.density * rod.area * missing], ([end], [end])), shape=consistent.shape)
         consistent = (consistent + extra).tocsr()
+    return assembled_discretization(rod, order, mass_kind, basis, inverse, x, stiffness, consistent)
+
+
+def assembled_discretization(rod, order: int, mass_kind: str, basis, inverse, x, stiffness, consistent):
+    """The :class:`RodDiscretization` of assembled matrices in the left-to-right numbering (``inverse``: that
+    numbering of scikit-fem's degrees of freedom; ``x`` the node coordinates in it)."""
     cells = inverse[basis.element_dofs.T]
     if order == 2:
         # scikit-fem's local order is (vertex, vertex, midpoint); make vertices left, right.

@@ -139,6 +139,12 @@ class FemSolver(SolverBase):
         after = np.asarray(fields.extra["rod_energy_after"], dtype=float)
         return after - np.array([float(e.sum()) for e in scene.vibrations.modal_energies()])
 
+    def solve_line(self, scene: Scene, options=None, **limits):
+        """A scene of many bodies on a line: :func:`wavecontact.fem.multibody.solve_line` (an ImpactResult)."""
+        from .multibody import solve_line
+
+        given = options.as_dict() if isinstance(options, FemOptions) else dict(options or {})
+        return solve_line(scene, given, **limits)
     def _error_estimate(self, scene: Scene, options: FemOptions, fields: CollisionFields) -> tuple:
         """Richardson with the coarser runs held to the contact scheme of the requested run: with
         scheme='auto' a coarser mesh may no longer resolve the contact and switch from the force

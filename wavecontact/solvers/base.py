@@ -633,6 +633,9 @@ class SolverBase:
         """
         if not isinstance(scene, Scene):
             raise InvalidParameterError(f"scene must be a wavecontact.Scene, got {type(scene).__name__}")
+        if scene.is_line_scene:  # piecewise rods, rigid bodies, chains, walls: an ImpactResult
+            return self.solve_line(scene, options, tolerance=tolerance, max_work=max_work, max_memory=max_memory,
+                                   estimate_error=estimate_error)
         options = self.options(options)
         tolerance = _tolerance(tolerance)
         limits = Limits(max_work=max_work, max_memory=max_memory)
@@ -770,6 +773,14 @@ class SolverBase:
         """epsilon of a cold two-material collision from ``Z_2 / Z_1``, ``T_1 / T_2`` and ``kappa``
         (:data:`MATERIAL_RATIOS`)."""
         raise _not_offered(self, MATERIAL_RATIOS)
+
+    def solve_line(self, scene: Scene, options=None, **limits):
+        """A scene beyond the paper's two uniform rods (:attr:`Scene.is_line_scene`): refused here, the fem
+        solver takes it (:mod:`wavecontact.fem.multibody`)."""
+        del options, limits
+        raise UnsupportedSceneError(
+            f"solver {self.name!r} takes the paper's two uniform rods only; this scene ({len(scene.rods)} bodies: "
+            "piecewise rods, rigid bodies, chains or walls) needs solver='fem'")
 
     def rough_estimate(self, scene: Scene, options) -> str:
         """Why the error estimate of this run is only an order of magnitude, not a bound ("" if it is

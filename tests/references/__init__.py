@@ -1,0 +1,1 @@
+"""References for impact scenes, written without importing wavecontact (see docs/impact.md)."""

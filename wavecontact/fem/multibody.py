@@ -1,0 +1,370 @@
+"""The fem solver on scenes of many bodies on a line: run, records, error estimate, ImpactResult.
+
+Every body and contact of the scene runs in one explicit time loop
+(:mod:`wavecontact.fem.multibody_kernel`) on the meshes and step of
+:mod:`wavecontact.fem.multibody_setup`.  :func:`solve_line` is what
+``solve(scene, solver="fem", ...)`` calls for a scene beyond the paper's two
+uniform rods; :func:`run_line` is one run (also usable on a two-rod scene, to
+compare with the two-rod loop).
+
+Error estimate: Richardson on every body's final velocity from the runs at
+``elements // 2`` and ``elements // 4``, assuming first order (the plastic
+end-node rule of hard contact and a rigid body's contact with a rod end are
+first order in ``h``; the force scheme of soft contacts is second): three
+times the largest difference, over ``max |initial velocity|``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .._jit import NUMBA_ENABLED, prepared_kernel_count
+from ..bodies import PiecewiseRod, RigidBody
+from ..errors import InvalidParameterError, SolverFailure
+from ..impact_result import ContactRecord, ImpactResult
+from ..limits import Cost, Limits, check_cost
+from ..result import Outcome
+from ..solvers.base import ERROR_SAFETY, Stopwatch, richardson_estimate
+from . import multibody_kernel as mk
+from .interleaved_step import L_SHAPE, L_U, L_V, node_position
+from .multibody_setup import LineSetup, build_line_setup, mass_solves
+
+__all__ = ["ESTIMATE_ORDER", "LINE_OPTIONS", "run_line", "solve_line"]
+
+#: Order in ``h`` the error estimate assumes (the slowest of the loop's contact treatments).
+ESTIMATE_ORDER = 1.0
+#: fem options the multi-body loop takes (the others must keep their defaults).
+LINE_OPTIONS = ("elements", "order", "mass", "dt", "courant", "energy_tolerance", "max_time")
+_CHUNK = 1 << 14
+_PGS_ITERATIONS = 200
+
+
+def _typed(arrays):
+    if not NUMBA_ENABLED:
+        return list(arrays)
+    from numba.typed import List
+
+    typed = List()
+    for a in arrays:
+        typed.append(a)
+    return typed
+
+
+def _energies(setup: LineSetup, us, vs, ru, rv):
+    """Per body: (momentum, mass, discrete energy of the leapfrog) now (energy: ``1/2 v M v + 1/2 u^n K u^(n+1)``)."""
+    out = []
+    for kind, slot in zip(setup.body_kind, setup.body_slot):
+        if kind == mk.SIDE_RIGID:
+            m = setup.rigid_masses[slot]
+            out.append((m * rv[slot], m, 0.5 * m * rv[slot] ** 2))
+            continue
+        d = setup.rods[slot]
+        u, v = us[slot], vs[slot]
+        previous = u - setup.dt * v
+        energy = 0.5 * float(v @ (d.mass_matrix @ v)) + 0.5 * float(previous @ (d.stiffness @ u))
+        out.append((float(d.lumped_mass @ v), float(d.lumped_mass.sum()), energy))
+    return out
+
+
+def _gap(row, us, ru) -> float:
+    """Gap of one contact (length) from its row of the contact table."""
+    def displacement(kind, slot, node):
+        if kind == mk.SIDE_ROD:
+            return float(us[slot][node])
+        return float(ru[slot]) if kind == mk.SIDE_RIGID else 0.0
+
+    return float(row[mk.C_OFFSET] + displacement(int(row[mk.C_KIND_B]), int(row[mk.C_SLOT_B]), int(row[mk.C_NODE_B]))
+                 - displacement(int(row[mk.C_KIND_A]), int(row[mk.C_SLOT_A]), int(row[mk.C_NODE_A])))
+
+
+def _soft_potential(setup: LineSetup, us, ru) -> float:
+    total = 0.0
+    for c, law in enumerate(setup.laws):
+        if setup.contacts[c, mk.C_HARD] == mk.HARD_NONE:
+            total += float(law.potential(_gap(setup.contacts[c], us, ru)))
+    return total
+
+
+def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", dt=None, courant=None,
+             energy_tolerance: float = 0.05, max_time=None) -> dict:
+    """One run of the multi-body loop on a line scene; a dict of the outcome (see :func:`solve_line`)."""
+    setup = build_line_setup(scene, elements, order, mass, dt, courant)
+    solves = mass_solves(setup)
+    us = [u.copy() for u in setup.u0]
+    vs = [v.copy() for v in setup.v0]
+    ru = np.zeros(setup.rigid_masses.size)
+    rv = np.array([scene.velocities[i] for i, k in enumerate(setup.body_kind) if k == mk.SIDE_RIGID], dtype=float)
+    rinv = 1.0 / setup.rigid_masses if setup.rigid_masses.size else np.zeros(0)
+    start = _energies(setup, us, vs, ru, rv)
+    energy0 = sum(e for _, _, e in start) + _soft_potential(setup, us, ru)
+    momentum0 = sum(p for p, _, _ in start)
+    # half a step back: the loop keeps velocities at the half steps (soft forces at the start included)
+    dt_ = setup.dt
+    for c in range(setup.contacts.shape[0]):
+        if setup.contacts[c, mk.C_HARD] == mk.HARD_NONE:
+            gap = setup.contacts[c, mk.C_OFFSET]
+            force = float(setup.laws[c].force(gap))
+            if force:
+                _half_kick(setup, c, -0.5 * dt_ * force, vs, rv, rinv)
+    for d, u, v in zip(setup.rods, us, vs):
+        v -= 0.5 * dt_ * np.asarray(-(d.stiffness @ u)) / d.lumped_mass if d.mass_kind == "lumped" else \
+            0.5 * dt_ * _consistent_solve(d, -(d.stiffness @ u))
+    # hard contacts of rod ends (or a rod end and a wall) on the exact lattice: characteristic free ends
+    ends = np.zeros((setup.contacts.shape[0], mk.END_FIELDS))
+    for c, row in enumerate(setup.contacts):
+        kinds = (int(row[mk.C_KIND_A]), int(row[mk.C_KIND_B]))
+        if setup.lattice and row[mk.C_HARD] != mk.HARD_NONE and mk.SIDE_RIGID not in kinds:
+            row[mk.C_LATTICE] = 1.0
+            for kind, slot_col, node_col, previous, incoming in (
+                    (kinds[0], mk.C_SLOT_A, mk.C_NODE_A, mk.E_PREVIOUS_A, mk.E_INCOMING_A),
+                    (kinds[1], mk.C_SLOT_B, mk.C_NODE_B, mk.E_PREVIOUS_B, mk.E_INCOMING_B)):
+                if kind == mk.SIDE_ROD:
+                    slot, node = int(row[slot_col]), int(row[node_col])
+                    earlier = us[slot][node] - dt_ * vs[slot][node]
+                    ends[c, previous] = earlier
+                    ends[c, incoming] = 0.5 * (us[slot][node] - earlier)
+    # the loop's arrays: flat, or (consistent mass in the interleaved layout) the rows of the mass-solve table;
+    # rod nodes of the contacts and their M^-1 e_end entries as positions in them
+    stepped_u, stepped_v, kernel_contacts = [], [], setup.contacts.copy()
+    where = np.zeros(setup.columns.size, dtype=np.int64)
+    layout = []
+    for d, u, v, (_, table) in zip(setup.rods, us, vs, solves):
+        rows = int(table[L_SHAPE, 0])
+        layout.append((rows, d.order))
+        stepped_u.append(table[L_U] if rows else u)
+        stepped_v.append(table[L_V] if rows else v)
+
+    def position(slot, node):
+        rows, order = layout[slot]
+        return int(node_position(node, rows, order)) if rows else int(node)
+
+    for row in kernel_contacts:
+        for kind_col, slot_col, node_col, col_col, first_col, len_col in (
+                (mk.C_KIND_A, mk.C_SLOT_A, mk.C_NODE_A, mk.C_COL_A, mk.C_FIRST_A, mk.C_LEN_A),
+                (mk.C_KIND_B, mk.C_SLOT_B, mk.C_NODE_B, mk.C_COL_B, mk.C_FIRST_B, mk.C_LEN_B)):
+            if int(row[kind_col]) == mk.SIDE_ROD:
+                slot, col_start, first = int(row[slot_col]), int(row[col_col]), int(row[first_col])
+                for j in range(int(row[len_col])):
+                    where[col_start + j] = position(slot, first + j)
+                row[node_col] = position(slot, int(row[node_col]))
+            elif int(row[kind_col]) == mk.SIDE_RIGID:
+                where[int(row[col_col])] = 0
+    n_rods = len(setup.rods)
+    placeholder = [np.zeros(2)]
+    args_rods = (
+        _typed(us if n_rods else placeholder),
+        _typed(vs if n_rods else placeholder),
+        _typed(stepped_u if n_rods else placeholder),
+        _typed(stepped_v if n_rods else placeholder),
+        _typed([np.zeros(d.n_nodes) for d in setup.rods] if n_rods else placeholder),
+        _typed([np.ascontiguousarray(d.stiffness_bands) for d in setup.rods] if n_rods else [np.zeros((2, 2))]),
+        np.array([k for k, _ in solves] if n_rods else [0], dtype=np.int64),
+        _typed([t for _, t in solves] if n_rods else [np.zeros((2, 2))]),
+        _typed([d.lumped_mass for d in setup.rods] if n_rods else placeholder),
+    )
+    records = np.zeros((setup.contacts.shape[0], mk.RECORD_FIELDS))
+    records[:, mk.R_FIRST] = -1.0
+    values = np.zeros(setup.contacts.shape[0])
+    targets = np.zeros(setup.contacts.shape[0])
+    control = np.zeros(mk.CONTROL_SIZE)
+    control[mk.K_DT] = dt_
+    control[mk.K_PERIOD] = setup.period
+    control[mk.K_CHECK_EVERY] = max(1, int(0.05 * setup.period / dt_))
+    control[mk.K_SPEED_TOLERANCE] = 1e-12 * setup.speed_scale
+    control[mk.K_ITERATIONS] = _PGS_ITERATIONS
+    control[mk.K_LEFT_WALL] = float(setup.walls[0])
+    control[mk.K_RIGHT_WALL] = float(setup.walls[1])
+    control[mk.K_RODS] = n_rods
+    state = np.zeros(mk.STATE_SIZE)
+    if max_time is None:
+        gaps = setup.contacts[:, mk.C_OFFSET]
+        max_time = 40.0 * float(np.sum(np.maximum(gaps, 0.0))) / setup.speed_scale + 100.0 * setup.period
+    max_steps = math.ceil(max_time / dt_)
+    status = mk.STATUS_RUNNING
+    us_t, vs_t = args_rods[0], args_rods[1]
+    worst_drift = 0.0
+    loop_seconds = 0.0
+    while status == mk.STATUS_RUNNING:
+        if state[mk.S_STEPS] >= max_steps:
+            raise SolverFailure(f"the bodies did not separate for good within t = {max_time:.4g}; contacts may keep "
+                                "re-engaging (check the velocities and the walls) or the run needs max_time",
+                                Outcome.TIME_LIMIT)
+        started = time.perf_counter()
+        status, _ = mk.advance_line(*args_rods, ru, rv, rinv, setup.body_kind, setup.body_slot, kernel_contacts,
+                                    setup.columns, where, records, values, targets, ends, control, state,
+                                    int(min(_CHUNK, max_steps - state[mk.S_STEPS])))
+        loop_seconds += time.perf_counter() - started
+        with np.errstate(all="ignore"):  # a blow-up is reported below, not as a warning
+            now = _energies(setup, us_t, vs_t, ru, rv)
+            energy = sum(e for _, _, e in now) + _soft_potential(setup, us_t, ru)
+        drift = (energy - energy0) / setup.energy_scale
+        worst_drift = max(worst_drift, abs(drift))
+        too_far = drift > energy_tolerance if setup.hard else abs(drift) > energy_tolerance
+        if status == mk.STATUS_FAILED or not math.isfinite(energy) or too_far:
+            raise SolverFailure(
+                f"energy balance violated at t = {state[mk.S_TIME]:.6g}: relative energy error {drift:.3g} "
+                f"(energy_tolerance = {energy_tolerance:g}); use more elements or a smaller dt",
+                Outcome.ENERGY_DRIFT)
+    end = _energies(setup, us_t, vs_t, ru, rv)
+    velocities = tuple(p / m for p, m, _ in end)
+    internal = tuple(0.0 if k == mk.SIDE_RIGID else e - p * p / (2 * m) for k, (p, m, e) in zip(setup.body_kind, end))
+    momentum = sum(p for p, _, _ in end)
+    momentum_scale = sum(abs(p) for p, _, _ in start) or 1.0
+    contacts = []
+    for c, name in enumerate(setup.contact_names):
+        r = records[c]
+        never = r[mk.R_INTERVALS] == 0
+        contacts.append(ContactRecord(name=name, impulse=float(r[mk.R_IMPULSE]), duration=float(r[mk.R_STEPS] * dt_),
+                                      first_contact=math.nan if never else float(r[mk.R_FIRST]),
+                                      last_contact=math.nan if never else float(r[mk.R_LAST]),
+                                      intervals=int(r[mk.R_INTERVALS])))
+    steps = int(state[mk.S_STEPS])
+    elements_total = sum(d.n_elements for d in setup.rods)
+    return {
+        "velocities": velocities,
+        "internal_energies": internal,
+        "contacts": tuple(contacts),
+        "end_time": float(state[mk.S_TIME]),
+        "energy_drift": (sum(e for _, _, e in end) - energy0) / setup.energy_scale,
+        "largest_energy_drift": worst_drift,
+        "momentum_drift": abs(momentum - momentum0) / momentum_scale if not any(setup.walls) else math.nan,
+        "masses": tuple(m for _, m, _ in end),
+        "work": {"steps": steps, "elements": elements_total, "nodes": sum(d.n_nodes for d in setup.rods),
+                 "element_steps": steps * elements_total, "dt": dt_,
+                 "loop_seconds": loop_seconds},
+        "extra": {"lattice": setup.lattice, "stable_step": setup.stable_step,
+                  "impact_iterations": int(state[mk.S_MAX_ITERATIONS])},
+        "setup": setup,
+    }
+
+
+def _consistent_solve(d, rhs):
+    import scipy.linalg
+
+    return scipy.linalg.cho_solve_banded((d.mass_cholesky, True), rhs)
+
+
+def _half_kick(setup, c, impulse, vs, rv, rinv):
+    """Kick the two sides of contact ``c`` apart by ``impulse`` along their ``M^-1 e_end`` (no shift)."""
+    row = setup.contacts[c]
+    for kind_col, slot_col, col_col, first_col, len_col, sign in (
+            (mk.C_KIND_B, mk.C_SLOT_B, mk.C_COL_B, mk.C_FIRST_B, mk.C_LEN_B, 1.0),
+            (mk.C_KIND_A, mk.C_SLOT_A, mk.C_COL_A, mk.C_FIRST_A, mk.C_LEN_A, -1.0)):
+        kind, slot = int(row[kind_col]), int(row[slot_col])
+        if kind == mk.SIDE_ROD:
+            start, first, length = int(row[col_col]), int(row[first_col]), int(row[len_col])
+            vs[slot][first:first + length] += sign * impulse * setup.columns[start:start + length]
+        elif kind == mk.SIDE_RIGID:
+            rv[slot] += sign * impulse * rinv[slot]
+
+
+def _describe(body) -> str:
+    if isinstance(body, RigidBody):
+        return f"rigid, mass {body.mass:g}"
+    if isinstance(body, PiecewiseRod):
+        tapered = sum(s.tapered for s in body.segments)
+        return f"piecewise rod, {len(body.segments)} segment(s){f', {tapered} tapered' if tapered else ''}, " \
+               f"length {body.length:g}"
+    return f"rod, length {body.length:g}"
+
+
+def line_cost(scene, options: dict) -> Cost:
+    """Nodes and steps of one run, estimated from the meshes' sizes (the step at the coarsest stable value)."""
+    from ..bodies import body_segments
+
+    elements = options.get("elements", 800)
+    deformable = [b for b in scene.rods if not isinstance(b, RigidBody)]
+    if not deformable:
+        return Cost(steps=1e4, work=1e4, memory=1e6, detail="rigid bodies only")
+    travel = min(sum(s.travel_time for s in body_segments(b)) for b in deformable) / elements
+    nodes = options.get("order", 1) * sum(max(1, round(s.travel_time / travel)) for b in deformable
+                                          for s in body_segments(b)) + len(deformable)
+    longest = max(2.0 * sum(s.travel_time for s in body_segments(b)) for b in deformable)
+    span = 105.0 * longest if options.get("max_time") is None else float(options["max_time"])
+    steps = span / (0.2 * travel)
+    return Cost(steps=steps, work=steps * nodes, memory=8.0 * 48 * nodes,
+                detail=f"{nodes:.3g} nodes, at most {steps:.3g} steps")
+
+
+def solve_line(scene, options: dict, *, tolerance=None, max_work=None, max_memory=None,
+               estimate_error: bool = True) -> ImpactResult:
+    """``solve(scene, solver="fem", ...)`` for a line scene beyond the paper's two rods.
+
+    ``options``: the fem options; of them the loop takes ``elements`` (on the rod of the shortest wave
+    travel time, every segment at about the same ``h / c``), ``order``, ``mass``, ``dt``, ``courant``,
+    ``energy_tolerance`` and ``max_time``; any other option must keep its default.
+    """
+    from .solver import FemOptions
+
+    given = dict(options)
+    checked = FemOptions.from_mapping(given)
+    defaults = FemOptions()
+    for name in given:
+        if name not in LINE_OPTIONS and getattr(checked, name) != getattr(defaults, name):
+            raise InvalidParameterError(f"fem option {name} is not available for multi-body scenes; the multi-body "
+                                        f"loop takes {', '.join(LINE_OPTIONS)}")
+    run_options = {name: getattr(checked, name) for name in LINE_OPTIONS}
+    limits = Limits(max_work=max_work, max_memory=max_memory)
+    check_cost("fem", line_cost(scene, run_options), limits)
+    prepared = prepared_kernel_count()
+    with Stopwatch() as watch:
+        run = run_line(scene, **run_options)
+        levels = [(run_options["elements"], run["velocities"])]
+        method = "not requested"
+        estimate = math.nan
+        if estimate_error or tolerance is not None:
+            estimate, method, levels = _estimate(scene, run_options, run, levels)
+    scale = max(abs(v) for v in scene.velocities) or 1.0
+    result = ImpactResult(
+        velocities=tuple(float(v) for v in run["velocities"]),
+        internal_energies=tuple(float(e) for e in run["internal_energies"]),
+        contacts=run["contacts"],
+        error_estimate=float(estimate),
+        solver="fem",
+        end_time=run["end_time"],
+        initial_velocities=tuple(float(v) for v in scene.velocities),
+        masses=run["masses"],
+        bodies=tuple(_describe(b) for b in scene.rods),
+        wall_time_s=watch.seconds,
+        options=dict(checked.as_dict()),
+        work=run["work"],
+        diagnostics={"energy_drift": float(run["energy_drift"]), "momentum_drift": float(run["momentum_drift"]),
+                     "includes_kernel_preparation": prepared_kernel_count() > prepared,
+                     "error_estimate_method": method,
+                     "error_estimate_levels": [(n, [float(x) for x in v]) for n, v in levels],
+                     "velocity_scale": scale, **run["extra"]},
+    )
+    if tolerance is not None and not estimate <= tolerance:
+        from ..errors import AccuracyError
+
+        wanted = math.ceil(1.2 * run_options["elements"] * estimate / tolerance)
+        advice = f"try elements={wanted}"
+        raise AccuracyError(f"fem: error estimate {estimate:.2g} of the velocities exceeds tolerance={tolerance:g}; "
+                            f"{advice}", result=result, advice=advice)
+    return result
+
+
+def _estimate(scene, run_options: dict, run: dict, levels: list) -> tuple:
+    """Richardson on every body's velocity from the runs at elements // 2 and // 4 (first order)."""
+    scale = max(abs(v) for v in scene.velocities) or 1.0
+    elements = run_options["elements"]
+    for divisor in (2, 4):
+        coarse = elements // divisor
+        if coarse < 1:
+            break
+        try:
+            levels.append((coarse, run_line(scene, **{**run_options, "elements": coarse})["velocities"]))
+        except SolverFailure as failure:
+            if len(levels) == 1:
+                return math.nan, f"none (the run at elements={coarse} failed: {failure})", levels
+            break
+    if len(levels) == 1:
+        return math.nan, "none (no coarser resolution)", levels
+    bodies = len(levels[0][1])
+    estimate = max(richardson_estimate([level[1][i] / scale for level in levels], ESTIMATE_ORDER,
+                                       safety=ERROR_SAFETY) for i in range(bodies))
+    runs = "; ".join(f"elements={n}" for n, _ in levels[1:])
+    return estimate, f"Richardson on the velocities: {runs}; order {ESTIMATE_ORDER:g}, safety {ERROR_SAFETY:g}", levels
