@@ -99,8 +99,8 @@ def test_the_solver_name_check_can_fail():
 LAYERS = (
     ("_version", "_jit", "errors", "progress"),
     ("io", "limits", "contact", "contact_kernels"),
-    ("result", "restitution_table", "scene", "analytic"),
-    ("bath",),
+    ("result", "restitution_table", "scene", "analytic", "bodies", "impact_result"),
+    ("bath", "io.scene_file"),
     ("solvers",),
     SOLVER_PACKAGES,
     ("api",),
