@@ -189,9 +189,11 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
     loop_seconds = 0.0
     while status == mk.STATUS_RUNNING:
         if state[mk.S_STEPS] >= max_steps:
-            raise SolverFailure(f"the bodies did not separate for good within t = {max_time:.4g}; contacts may keep "
-                                "re-engaging (check the velocities and the walls) or the run needs max_time",
-                                Outcome.TIME_LIMIT)
+            acting = [name for name, r in zip(setup.contact_names, records) if r[mk.R_ACTIVE]]
+            raise SolverFailure(f"the bodies did not separate for good within t = {max_time:.4g} (still in contact: "
+                                f"{', '.join(acting) or 'none'}); contacts may keep re-engaging (check the velocities "
+                                "and the walls), a soft contact between bodies that separate slowly stays in range "
+                                "for long, or the run needs a larger max_time", Outcome.TIME_LIMIT)
         started = time.perf_counter()
         status, _ = mk.advance_line(*args_rods, ru, rv, rinv, setup.body_kind, setup.body_slot, kernel_contacts,
                                     setup.columns, where, records, values, targets, ends, control, state,

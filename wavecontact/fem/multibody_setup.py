@@ -20,7 +20,7 @@ import numpy as np
 from skfem import Basis, BilinearForm, MeshLine
 
 from ..bodies import PiecewiseRod, RigidBody, body_segments, pair_laws
-from ..contact import Hard, Penalty
+from ..contact import LAW_EXPONENTIAL, Hard, Penalty
 from ..errors import InvalidParameterError, UnsupportedSceneError
 from ..scene import Rod
 from .discretization import (
@@ -219,7 +219,7 @@ def _stop_gap(law, energy: float, scale: float) -> float:
     if isinstance(law, Hard) or law.range == 0.0:
         return 0.0
     code, alpha, strength, _ = law.kernel_parameters()
-    if code == 0:  # the exponential law in closed form, as the two-rod solver
+    if code == LAW_EXPONENTIAL:  # the exponential law in closed form, as the two-rod solver
         return math.log(strength / (POTENTIAL_TOLERANCE * energy)) / alpha
     return _gap_where(lambda g: float(law.potential(g)), POTENTIAL_TOLERANCE * energy, max(law.range, scale))
 
