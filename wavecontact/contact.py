@@ -3,8 +3,8 @@
 A contact law maps the end-to-end gap ``r`` (length; negative means overlap)
 to a repulsive force (force units) that pushes the two ends apart.  Laws are
 plain immutable values.  Compiled kernels see a law as the four numbers of
-:meth:`ContactLaw.kernel_parameters` (one code table, shared by the FE and
-modal kernels); :mod:`wavecontact.contact_kernels` evaluates them, and its
+:meth:`ContactLaw.kernel_parameters` (one code table, shared by the FE, modal
+and delay kernels); :mod:`wavecontact.contact_kernels` evaluates them, and its
 tests hold it to the Python :meth:`~ContactLaw.force` and
 :meth:`~ContactLaw.potential` methods, the reference.
 """
@@ -36,9 +36,29 @@ LAW_HARD = 2
 
 
 class ContactLaw:
-    """Base class: a repulsive force of the end-to-end gap."""
+    """Base class: a repulsive force of the end-to-end gap.
+
+    Besides its force and energy a law tells the solvers what they need to
+    know about it through properties (no solver checks a law's class):
+    :attr:`code` (its kernel code), :attr:`range`, :attr:`hard` (a
+    constraint, no force law), :attr:`decay_rate` (``alpha`` of an
+    exponential tail, 0 for laws acting on overlap only) and
+    :attr:`stiffness_from_solver` (the solver picks the stiffness).
+    """
 
     name = "abstract"
+    code = -1
+    hard = False
+    stiffness_from_solver = False
+
+    @property
+    def decay_rate(self) -> float:
+        """Inverse length of an exponential tail of the force (1/length); 0 for a law acting on overlap only."""
+        return 0.0
+
+    def stiffness_at(self, gap):
+        """``-dF/dgap`` at gap ``gap`` (force/length, >= 0)."""
+        raise NotImplementedError
 
     def force(self, gap):
         """Repulsive force (>= 0) at end-to-end gap ``gap`` (length units)."""
@@ -79,6 +99,7 @@ class Exponential(ContactLaw):
     alpha: float
     strength: float = 1.0
     name = "exponential"
+    code = LAW_EXPONENTIAL
 
     def __post_init__(self):
         object.__setattr__(self, "alpha", require_positive("alpha", self.alpha))
@@ -90,9 +111,16 @@ class Exponential(ContactLaw):
     def potential(self, gap):
         return self.strength * np.exp(-self.alpha * np.asarray(gap, dtype=float))
 
+    def stiffness_at(self, gap):
+        return self.alpha * self.alpha * self.strength * np.exp(-self.alpha * np.asarray(gap, dtype=float))
+
     @property
     def range(self) -> float:
         return 1.0 / self.alpha
+
+    @property
+    def decay_rate(self) -> float:
+        return self.alpha
 
     def kernel_parameters(self) -> tuple:
         return LAW_EXPONENTIAL, float(self.alpha), float(self.strength), 0.0
@@ -112,6 +140,7 @@ class Penalty(ContactLaw):
 
     stiffness: float | None = None
     name = "penalty"
+    code = LAW_PENALTY
 
     def __post_init__(self):
         if self.stiffness is not None:
@@ -127,9 +156,18 @@ class Penalty(ContactLaw):
             raise InvalidParameterError("penalty stiffness is not set (None means: chosen by the solver)")
         return 0.5 * self.stiffness * np.maximum(0.0, -np.asarray(gap, dtype=float)) ** 2
 
+    def stiffness_at(self, gap):
+        if self.stiffness is None:
+            raise InvalidParameterError("penalty stiffness is not set (None means: chosen by the solver)")
+        return np.where(np.asarray(gap, dtype=float) < 0.0, self.stiffness, 0.0)
+
     @property
     def range(self) -> float:
         return 0.0
+
+    @property
+    def stiffness_from_solver(self) -> bool:
+        return self.stiffness is None
 
     def kernel_parameters(self) -> tuple:
         return LAW_PENALTY, 0.0, 0.0, math.nan if self.stiffness is None else float(self.stiffness)
@@ -143,6 +181,8 @@ class Hard(ContactLaw):
     """
 
     name = "hard"
+    code = LAW_HARD
+    hard = True
 
     def force(self, gap):
         raise InvalidParameterError("hard contact has no force law; it is a constraint")
