@@ -330,10 +330,11 @@ def hard_gap(r, g, duration):
 
 # --- generic solutions for laws acting on overlap only ---------------------------------------------
 
-# RK4 sub-steps per time scale of the motion (the error per time scale is about 6e-11)
+# RK4 sub-steps per time scale of the motion (error about (1/200)^4 = 6e-10 of the scale)
 _SUBSTEPS_PER_SCALE = 200.0
 _MAX_SUBSTEPS = 1_000_000
-# the sub-step in which the ends part is taken again in this many parts (the force has a kink there)
+# the first sub-step and the one in which the ends part are taken again in this many parts (the force has
+# a kink at touching)
 _EXIT_SPLIT = 64.0
 
 
@@ -418,9 +419,9 @@ def overlap_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
     Exact drift outside the overlap, classical Runge-Kutta inside it with
     :data:`_SUBSTEPS_PER_SCALE` sub-steps per time scale of the contact (the
     deepest overlap the energy allows over the speed, and the inverse contact
-    frequency there).  The sub-step in which the ends part is taken again in
-    :data:`_EXIT_SPLIT` parts (the force has a kink there) and the exit located
-    on the cubic through the last part's ends.
+    frequency there).  The first sub-step and the one in which the ends part are
+    taken again in :data:`_EXIT_SPLIT` parts (the force has a kink at touching)
+    and the exit is located on the cubic through the last part's ends.
     """
     remaining = dt
     if r >= 0.0:
@@ -438,9 +439,9 @@ def overlap_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
     rate = max(speed / deepest, frequency) * _SUBSTEPS_PER_SCALE
     n = min(max(int(math.ceil(remaining * rate)), 1), _MAX_SUBSTEPS)  # noqa: RUF046 (numba)
     h = remaining / n
-    for _ in range(n):
+    for i in range(n):
         r1, w1, _a0 = _flow_step(law, r, w, h, m_inv, alpha, strength, stiffness)
-        if r1 > 0.0 and w1 > 0.0:
+        if i == 0 or (r1 > 0.0 and w1 > 0.0):
             # the ends part within this sub-step: again in finer parts, then the exit on the last one
             part = h / _EXIT_SPLIT
             elapsed = 0.0
@@ -469,7 +470,8 @@ def overlap_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     :data:`_SUBSTEPS_PER_SCALE` sub-steps per time scale (the time to close
     the deepest overlap at rate ``|g|``, and ``1 / (compliance k)`` at that
     overlap: the gap relaxes towards the root of ``g + C F(r) = 0``); the
-    sub-step in which the overlap ends is treated as in :func:`overlap_flow`.
+    first sub-step and the one in which the overlap ends are refined as in
+    :func:`overlap_flow`.
     """
     remaining = duration
     if r >= 0.0:
@@ -486,9 +488,9 @@ def overlap_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     rate = max(abs(g) / deepest, relax) * _SUBSTEPS_PER_SCALE
     n = min(max(int(math.ceil(remaining * rate)), 1), _MAX_SUBSTEPS)  # noqa: RUF046 (numba)
     h = remaining / n
-    for _ in range(n):
+    for i in range(n):
         r1, _k1 = _gap_step(law, r, g, h, compliance, alpha, strength, stiffness)
-        if r1 > 0.0:
+        if i == 0 or r1 > 0.0:
             part = h / _EXIT_SPLIT
             elapsed = 0.0
             for _ in range(int(_EXIT_SPLIT)):
