@@ -15,14 +15,14 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from wavecontact import contact_kernels as ck
-from wavecontact.contact import Exponential, Penalty
+from wavecontact.contact import Exponential, Hertz, Penalty
 from wavecontact.delay.law_kernels import STATUS_OK, integrate_overlap_delay
 from wavecontact.delay.parameters import echoes_from_ratios
 from wavecontact.delay.solver import solve_delay_equation
 
 GAPS = np.array([-0.3, -1e-3, -1e-7, 0.0, 1e-4, 0.05, 0.7, 3.0])
 # every law with a force law (Hard is a constraint: tests/test_contact.py)
-LAWS = [Exponential(20.0, 0.5 / 400), Exponential(3.0, 2.0), Penalty(150.0)]
+LAWS = [Exponential(20.0, 0.5 / 400), Exponential(3.0, 2.0), Penalty(150.0), Hertz(7.0), Hertz(2e4)]
 
 
 @pytest.mark.parametrize("law", LAWS, ids=lambda law: f"{law.name}-{law.kernel_parameters()}")
@@ -42,7 +42,8 @@ def test_each_law_compiled_is_its_python_methods(law, compiled):
 def test_stiffness_is_minus_the_slope_of_the_force_and_force_the_slope_of_the_energy(law):
     params = law.kernel_parameters()
     for gap in GAPS[GAPS != 0.0]:  # the penalty law has a kink at 0
-        step = 1e-6 * max(abs(gap), 1e-3)
+        # central differences: relative steps on the Hertz law's kink scale, else above the round-off
+        step = 1e-5 * abs(gap) if law.name == "hertz" else 1e-6 * max(abs(gap), 1e-2)
         slope = (ck.law_force(*params, gap + step) - ck.law_force(*params, gap - step)) / (2 * step)
         assert ck.law_stiffness(*params, gap) == pytest.approx(-slope, rel=1e-6, abs=1e-9)
         energy_slope = (ck.law_potential(*params, gap + step) - ck.law_potential(*params, gap - step)) / (2 * step)
@@ -99,3 +100,33 @@ def test_a_separately_written_rigid_integrator_agrees_with_the_generic_flow():
                           max_step=1e-3).y[:, -1]
     assert ck.overlap_flow(code, 0.01, -0.4, 0.2, m_inv, alpha, strength, stiffness) == pytest.approx(
         tuple(reference), abs=1e-9)
+
+
+@pytest.mark.parametrize(("r", "rate"), [(0.02, -1.0), (-0.01, -0.5), (-0.02, 0.7)])
+def test_the_generic_hertz_flow_and_gap_agree_with_dop853(r, rate):
+    """DOP853 inside the overlap, stopped where the ends part (the force's kink), then the exact drift.
+
+    The generic solutions take 200 RK4 sub-steps per time scale: about (1/200)^4 = 6e-10 of the scale.
+    """
+    code, alpha, strength, stiffness = Hertz(2e3).kernel_parameters()
+    m_inv, compliance, dt = 3.0, 0.5, 0.05
+
+    def force(x):
+        return stiffness * max(0.0, -x) ** 1.5
+
+    def parted(_t, y):
+        return y[0]
+
+    parted.terminal, parted.direction = True, 1
+    start = max(r, 0.0) / -rate if r > 0.0 else 0.0  # a drift to touching first
+    y0 = min(r, 0.0)
+    flow = solve_ivp(lambda _t, y: [y[1], m_inv * force(y[0])], (start, dt), [y0, rate], method="DOP853",
+                     rtol=1e-13, atol=1e-16, events=parted)
+    flow_end = (flow.y[1, -1] * (dt - flow.t[-1]) if flow.status == 1 else flow.y[0, -1], flow.y[1, -1])
+    gap = solve_ivp(lambda _t, y: [rate + compliance * force(y[0])], (start, dt), [y0], method="DOP853",
+                    rtol=1e-13, atol=1e-16, events=parted)
+    gap_end = rate * (dt - gap.t[-1]) if gap.status == 1 else gap.y[0, -1]
+    assert ck.overlap_flow(code, r, rate, dt, m_inv, alpha, strength, stiffness) == pytest.approx(
+        flow_end, abs=1e-9)
+    assert ck.overlap_gap(code, r, rate, dt, compliance, alpha, strength, stiffness) == pytest.approx(
+        gap_end, abs=1e-9)

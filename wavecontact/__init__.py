@@ -14,7 +14,7 @@ Three solvers share one scene model and one entry point:
 
 from ._version import __version__ as __version__
 from .api import collide, solve
-from .contact import ContactLaw, Exponential, Hard, Penalty
+from .contact import ContactLaw, Exponential, Hard, Hertz, Penalty
 from .errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, WavecontactError
 from .result import CollisionResult
 from .scene import Rod, Scene, two_rod_parameters, two_rods
@@ -25,6 +25,7 @@ __all__ = [
     "ContactLaw",
     "Exponential",
     "Hard",
+    "Hertz",
     "InvalidParameterError",
     "Penalty",
     "Rod",

@@ -21,10 +21,12 @@ from .errors import InvalidParameterError, require_positive
 __all__ = [
     "LAW_EXPONENTIAL",
     "LAW_HARD",
+    "LAW_HERTZ",
     "LAW_PENALTY",
     "ContactLaw",
     "Exponential",
     "Hard",
+    "Hertz",
     "Penalty",
     "contact_from_name",
 ]
@@ -33,6 +35,7 @@ __all__ = [
 LAW_EXPONENTIAL = 0
 LAW_PENALTY = 1  # linear spring on overlap; a hard law is its limit of infinite stiffness
 LAW_HARD = 2
+LAW_HERTZ = 3  # K delta^(3/2) on overlap delta = -r (rounded ends)
 
 
 class ContactLaw:
@@ -196,6 +199,48 @@ class Hard(ContactLaw):
 
     def kernel_parameters(self) -> tuple:
         return LAW_HARD, 0.0, 0.0, math.inf
+
+
+@dataclass(frozen=True)
+class Hertz(ContactLaw):
+    """Hertz contact of rounded ends: ``F = K delta^(3/2)`` for the overlap ``delta = max(0, -r)``.
+
+    The ends of Sears' rods are spherical caps; two elastic spheres pressed
+    together by ``delta`` push back with ``K delta^(3/2)`` (Hertz), ``K``
+    fixed by the radii and the materials.  Its dimensionless stiffness is
+    ``k_H = K mu^(3/2) V^(1/2) / Z_s^(5/2)`` (docs/theory.md).
+
+    Parameters
+    ----------
+    stiffness : float
+        ``K`` (force/length^(3/2)), in (0, inf).
+    """
+
+    stiffness: float
+    name = "hertz"
+    code = LAW_HERTZ
+
+    def __post_init__(self):
+        object.__setattr__(self, "stiffness", require_positive("stiffness", self.stiffness))
+
+    def force(self, gap):
+        overlap = np.maximum(0.0, -np.asarray(gap, dtype=float))
+        return self.stiffness * overlap * np.sqrt(overlap)
+
+    def potential(self, gap):
+        overlap = np.maximum(0.0, -np.asarray(gap, dtype=float))
+        return 0.4 * self.stiffness * overlap * overlap * np.sqrt(overlap)
+
+    def stiffness_at(self, gap):
+        overlap = np.maximum(0.0, -np.asarray(gap, dtype=float))
+        return 1.5 * self.stiffness * np.sqrt(overlap)
+
+    @property
+    def range(self) -> float:
+        return 0.0
+
+    def kernel_parameters(self) -> tuple:
+        return LAW_HERTZ, 0.0, 0.0, float(self.stiffness)
 
 
 def contact_from_name(name: str, alpha: float, strength: float = 1.0) -> ContactLaw:

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 from ._jit import kernel
-from .contact import LAW_EXPONENTIAL, LAW_HARD, LAW_PENALTY
+from .contact import LAW_EXPONENTIAL, LAW_HARD, LAW_HERTZ, LAW_PENALTY
 
 __all__ = [
     "law_flow",
@@ -54,6 +54,10 @@ def law_force(code, alpha, strength, stiffness, gap):
         if gap >= 0.0:
             return 0.0
         return stiffness * -gap
+    if code == LAW_HERTZ:
+        if gap >= 0.0:
+            return 0.0
+        return stiffness * -gap * math.sqrt(-gap)
     return math.nan
 
 
@@ -66,6 +70,10 @@ def law_potential(code, alpha, strength, stiffness, gap):
         if gap >= 0.0:
             return 0.0
         return 0.5 * stiffness * gap * gap
+    if code == LAW_HERTZ:
+        if gap >= 0.0:
+            return 0.0
+        return 0.4 * stiffness * gap * gap * math.sqrt(-gap)
     return math.nan
 
 
@@ -78,6 +86,10 @@ def law_stiffness(code, alpha, strength, stiffness, gap):
         if gap >= 0.0:
             return 0.0
         return stiffness
+    if code == LAW_HERTZ:
+        if gap >= 0.0:
+            return 0.0
+        return 1.5 * stiffness * math.sqrt(-gap)
     return math.nan
 
 
