@@ -135,7 +135,7 @@ class Scene:
             self, "velocities", tuple(require_magnitude(f"velocities[{i}]", v, signed=True) for i, v in enumerate(velocities))
         )
         if not isinstance(self.contact, ContactLaw):
-            raise InvalidParameterError("contact must be a wavecontact contact law (Exponential, Penalty, Hard)")
+            raise InvalidParameterError("contact must be a wavecontact contact law (Exponential, Penalty, Hertz, Hard)")
         n_pairs = len(rods) if self.ring_circumference is not None else len(rods) - 1
         if self.ring_circumference is not None:
             circumference = require_positive("ring_circumference", self.ring_circumference)

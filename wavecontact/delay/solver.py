@@ -6,7 +6,9 @@ many modes.  It holds for two rods on a line with exponential contact, and in
 its hard-core limit (Eq. 26); rods of different materials and sections only
 change the round trips and give each rod's echoes the weight ``2 Z_s / Z_i``
 (:mod:`wavecontact.delay.parameters`).  See :mod:`wavecontact.delay.kernels`
-for the method and ``docs/theory.md``.
+for the method and ``docs/theory.md``.  The same equation with ``I' = F(r)``
+holds for any force law of the gap; laws acting on overlap only (penalty with
+its stiffness given, Hertz) are integrated by :mod:`wavecontact.delay.overlap`.
 
 Results are in the scene's units (for :func:`wavecontact.two_rods` scenes those
 are the paper's dimensionless ones): time ``t = tau mu / Z_s`` from the start
