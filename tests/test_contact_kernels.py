@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import wavecontact as wc
 from wavecontact import contact_kernels as ck
 from wavecontact.contact import Exponential, Hertz, Penalty
 from wavecontact.delay.law_kernels import STATUS_OK, integrate_overlap_delay
@@ -130,3 +131,13 @@ def test_the_generic_hertz_flow_and_gap_agree_with_dop853(r, rate):
         flow_end, abs=1e-9)
     assert ck.overlap_gap(code, r, rate, dt, compliance, alpha, strength, stiffness) == pytest.approx(
         gap_end, abs=1e-9)
+
+
+def test_penalty_contact_in_the_delay_equation_is_the_modal_and_fem_solution():
+    """The overlap-law delay solver on the penalty law of two_rods(0.6, 10) (k = kappa / 2), against the
+    modal solver's exact ends and the FE characteristic lattice."""
+    results = {name: wc.collide(0.6, 10, solver=name, contact="penalty", **options)
+               for name, options in (("delay", {}), ("modal", {"modes": 20}), ("fem", {"elements": 800}))}
+    restitution = {name: result.restitution for name, result in results.items()}
+    assert abs(restitution["delay"] - restitution["modal"]) < 1e-8, restitution
+    assert abs(restitution["delay"] - restitution["fem"]) < 1e-6, restitution

@@ -11,11 +11,12 @@ import math
 
 import numpy as np
 
-from ..errors import SolverFailure, UnsupportedSceneError
+from ..errors import LimitError, SolverFailure, UnsupportedSceneError
+from ..limits import Cost
 from ..result import Outcome
 from .law_kernels import STATUS_MAX_STEPS, STATUS_OK, integrate_overlap_delay
 
-__all__ = ["STEPS_PER_SCALE_MIN", "collide_overlap_law", "contact_time_scale"]
+__all__ = ["STEPS_PER_SCALE_MIN", "collide_overlap_law", "contact_time_scale", "overlap_cost"]
 
 # steps per time scale of the contact at least (rtol^(-1/4) above this: RK4 away from the force's kinks)
 STEPS_PER_SCALE_MIN = 16
@@ -40,24 +41,55 @@ def _deepest_rigid_overlap(law, energy: float) -> float:
     return hi
 
 
-def contact_time_scale(law, params) -> float:
-    """Shortest time scale of the contact in units of ``mu / Z_s`` (dimensionless).
+def contact_time_scale(law, params) -> tuple:
+    """``(shortest, rigid)``: time scales of the contact in units of ``mu / Z_s`` (dimensionless).
 
-    The smaller of the rigid bodies' approach time ``delta_max / V`` (``delta_max``:
-    the overlap that stores ``mu V^2 / 2``) and the relaxation time ``Z_s / k`` of a
-    compliant end at that overlap (``k = -dF/dr`` there).
+    ``rigid`` is the rigid bodies' approach time ``delta_max / V`` (``delta_max``: the
+    overlap that stores ``mu V^2 / 2``), ``shortest`` the smaller of it and the
+    relaxation time ``Z_s / k`` of a compliant end at that overlap (``k = -dF/dr`` there).
     """
     speed, mu, z_s = params.approach_speed, params.reduced_mass, params.series_impedance
     deepest = _deepest_rigid_overlap(law, 0.5 * mu * speed * speed)
     length_unit = speed * mu / z_s
     relax = float(law.stiffness_at(-deepest)) * length_unit / (z_s * speed)  # d W' / d rho at the deepest overlap
-    return min(deepest / length_unit, 1.0 / relax)
+    rigid = deepest / length_unit
+    return min(rigid, 1.0 / relax), rigid
+
+
+def _grid(law, params, rtol) -> tuple:
+    """``(h, settle, shortest, span)``: step, settling time, contact time scale and the expected run length
+    (three rigid approach times, two long round trips and the settling time), all in units of ``mu / Z_s``."""
+    delays = params.round_trip_times
+    shortest, rigid = contact_time_scale(law, params)
+    per_scale = max(STEPS_PER_SCALE_MIN, math.ceil(rtol ** -0.25))
+    h = min(0.5 * min(delays), shortest / per_scale)
+    settle = SETTLE_ROUND_TRIPS * max(delays)
+    return h, settle, shortest, 3.0 * rigid + 2.0 * max(delays) + settle
+
+
+def overlap_cost(scene, params, options) -> Cost:
+    """Steps, work (delayed values interpolated) and memory of :func:`collide_overlap_law`, before any step.
+
+    Raises
+    ------
+    LimitError
+        If the expected run needs more than ``max_steps`` steps.
+    """
+    h, _settle, _shortest, span = _grid(scene.contact, params, options.rtol)
+    steps = span / h
+    if steps > options.max_steps:
+        raise LimitError(f"delay: {scene.contact.name} contact needs about {steps:.3g} steps of {h:.3g} (the "
+                         f"contact's time scale over rtol^(-1/4)), more than max_steps={options.max_steps}; raise "
+                         "rtol or max_steps, or use solver='fem' or 'modal'")
+    echoes = 2.0 + sum(span / delay for delay in params.round_trip_times)  # delayed values per evaluation
+    return Cost(steps=1.5 * steps, work=1.5 * steps * 4.0 * echoes, memory=2 * 8.0 * (options.max_steps + 1),
+                detail=f"about {1.5 * steps:.3g} steps with up to {echoes:.3g} echoes each")
 
 
 def collide_overlap_law(scene, params, options) -> dict:
     """One cold collision of ``scene`` (two rods, a law acting on overlap only), as ``_collide`` returns it.
 
-    The step is ``min(Gamma_min / 2, T_c / N)`` with ``T_c`` from :func:`contact_time_scale` and
+    The step is ``min(Gamma_min / 2, T_c / N)`` with ``T_c`` the shorter of :func:`contact_time_scale` and
     ``N = max(STEPS_PER_SCALE_MIN, rtol^(-1/4))``; the result comes from that step and its error
     estimate is the change from twice the step.
     """
@@ -75,10 +107,7 @@ def collide_overlap_law(scene, params, options) -> dict:
     delays = np.array(params.round_trip_times, dtype=float)
     weights = np.array(params.echo_weights, dtype=float)
     a0 = 0.0 if scene.gaps is None else float(scene.gaps[0]) / length_unit
-    scale = contact_time_scale(law, params)
-    per_scale = max(STEPS_PER_SCALE_MIN, math.ceil(options.rtol ** -0.25))
-    h = min(0.5 * float(delays.min()), scale / per_scale)
-    settle = SETTLE_ROUND_TRIPS * float(delays.max())
+    h, settle, scale, _span = _grid(law, params, options.rtol)
     runs = []
     for step in (2.0 * h, h):
         w, d, status = integrate_overlap_delay(code, alpha, strength, float(stiffness), length_unit, force_unit,

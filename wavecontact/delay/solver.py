@@ -37,7 +37,7 @@ from . import kernels
 from .energy_split import NODES, WEIGHTS, vibration_energy_gain
 from .hardcore import contact_intervals, hard_core_history
 from .noise import COLD, FourierNoise
-from .overlap import collide_overlap_law
+from .overlap import collide_overlap_law, overlap_cost
 from .parameters import DelayParameters, delay_parameters, echoes_from_ratios
 from .stochastic_hardcore import hard_core_noise
 
@@ -343,7 +343,9 @@ class DelaySolver(SolverBase):
         """Refuse, before any step, what the method of steps cannot do in bounded time: round trips
         more than ``1/GAMMA_MIN`` apart at finite kappa, and an ``end_time`` beyond ``max_steps`` steps."""
         params = _check_scene(scene)
-        if math.isinf(params.kappa) or scene.contact.hard or scene.contact.decay_rate == 0.0:
+        if not scene.contact.hard and scene.contact.decay_rate == 0.0:  # a law acting on overlap only
+            return overlap_cost(scene, params, options)
+        if math.isinf(params.kappa) or scene.contact.hard:
             return None
         short, long = sorted(params.round_trip_times)
         if long / short > 1.0 / GAMMA_MIN:
