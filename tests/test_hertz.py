@@ -120,3 +120,13 @@ def test_delay_fem_and_modal_agree_where_waves_matter():
 def _reduced_mass(scene):
     m1, m2 = (rod.mass for rod in scene.rods)
     return m1 * m2 / (m1 + m2)
+
+
+def test_the_delay_error_estimate_bounds_the_error():
+    """At rtol = 1e-8 and 1e-10 against the same equation at rtol = 1e-13 (whose estimate is below 1e-11)."""
+    scene = _scene(5.0)
+    reference = wc.solve(scene, "delay", rtol=1e-13)
+    assert reference.error_estimate < 1e-11
+    for rtol in (1e-8, 1e-10):
+        result = wc.solve(scene, "delay", rtol=rtol)
+        assert abs(result.restitution - reference.restitution) <= result.error_estimate, rtol
