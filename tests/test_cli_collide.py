@@ -61,7 +61,7 @@ def test_save_writes_histories(tmp_path):
         ["collide", "--gamma", "0.6", "--kappa", "10", "--rtol", "2"],
         ["collide", "--gamma", "0.6", "--kappa", "10", "--modes", "10", "--rtol", "1e-8"],
         ["collide", "--gamma", "0.6", "--kappa", "10", "--solver", "delay", "--modes", "10"],
-        ["collide", "--gamma", "0.6", "--kappa", "10", "--solver", "delay", "--contact", "penalty"],
+        ["collide", "--gamma", "0.6", "--kappa", "inf", "--solver", "delay", "--contact", "penalty"],
         ["collide", "--gamma", "0.6", "--kappa", "100", "--contact", "hard"],
         ["collide", "--gamma", "0.6", "--kappa", "inf", "--contact", "exponential"],
         ["collide", "--gamma", "0.6", "--kappa", "10", "--order", "3"],

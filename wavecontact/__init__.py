@@ -15,7 +15,7 @@ Three solvers share one scene model and one entry point:
 from ._version import __version__ as __version__
 from .api import collide, solve
 from .bodies import PiecewiseRod, RigidBody, Segment, Wall
-from .contact import ContactLaw, Exponential, Hard, Penalty
+from .contact import ContactLaw, Exponential, Hard, Hertz, Penalty
 from .errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, WavecontactError
 from .impact_result import ContactRecord, ImpactResult
 from .result import CollisionResult
@@ -28,6 +28,7 @@ __all__ = [
     "ContactRecord",
     "Exponential",
     "Hard",
+    "Hertz",
     "ImpactResult",
     "InvalidParameterError",
     "Penalty",

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .bodies import is_line_scene, needs_line_validation, validate_line_scene
-from .contact import ContactLaw, Exponential, Hard, Penalty, contact_from_name
+from .contact import LAW_PENALTY, ContactLaw, Penalty, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_magnitude, require_positive
 
 __all__ = ["Rod", "Scene", "TwoRodParameters", "penalty_stiffness", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
@@ -151,7 +151,7 @@ class Scene:
             self, "velocities", tuple(require_magnitude(f"velocities[{i}]", v, signed=True) for i, v in enumerate(velocities))
         )
         if not isinstance(self.contact, ContactLaw):
-            raise InvalidParameterError("contact must be a wavecontact contact law (Exponential, Penalty, Hard)")
+            raise InvalidParameterError("contact must be a wavecontact contact law (Exponential, Penalty, Hertz, Hard)")
         n_pairs = len(rods) if self.ring_circumference is not None else len(rods) - 1
         if self.ring_circumference is not None:
             circumference = require_positive("ring_circumference", self.ring_circumference)
@@ -310,11 +310,11 @@ def two_rods(
     reduced_mass = 0.5
     if isinstance(contact, ContactLaw):
         law = contact
-        if isinstance(law, Exponential) and not math.isclose(law.alpha, k) and math.isfinite(k):
+        if law.decay_rate > 0.0 and not math.isclose(law.decay_rate, k) and math.isfinite(k):
             raise InvalidParameterError(
-                f"contact alpha ({law.alpha:g}) must equal kappa ({k:g}) in the units of two_rods"
+                f"contact alpha ({law.decay_rate:g}) must equal kappa ({k:g}) in the units of two_rods"
             )
-        if isinstance(law, Penalty) and math.isfinite(k):
+        if law.code == LAW_PENALTY and math.isfinite(k):
             stiffness = penalty_stiffness(k, 0.5, 1.0, 1.0)
             if law.stiffness is None:
                 law = Penalty(stiffness)
@@ -328,7 +328,7 @@ def two_rods(
         law = Penalty(penalty_stiffness(k, 0.5, 1.0, 1.0)) if math.isfinite(k) else Penalty()
     else:
         law = contact_from_name(contact, k, reduced_mass / (k * k) if math.isfinite(k) else 1.0)
-    if isinstance(law, Hard) and math.isfinite(k) and contact == "hard":
+    if law.hard and math.isfinite(k) and contact == "hard":
         k = math.inf
     m1, m2 = rods[0].mass, rods[1].mass
     velocities = (m2 / (m1 + m2), -m1 / (m1 + m2))
@@ -422,12 +422,15 @@ def two_rod_parameters(scene: Scene) -> TwoRodParameters:
     ell = 2.0 * l1 * l2 / (l1 + l2)
     speed = -(scene.velocities[1] - scene.velocities[0])
     c = r1.wave_speed
-    if isinstance(scene.contact, Exponential):
-        kappa = scene.contact.alpha * speed * ell / c
-    elif isinstance(scene.contact, Penalty):
-        stiffness = scene.contact.stiffness
-        kappa = math.nan if stiffness is None else stiffness / penalty_stiffness(1.0, 0.5 * r1.impedance, c, ell)
-    else:
+    law = scene.contact
+    if law.decay_rate > 0.0:
+        kappa = law.decay_rate * speed * ell / c
+    elif law.hard:
         kappa = math.inf
+    elif law.code == LAW_PENALTY:  # the stiffness that corresponds to kappa (penalty_stiffness)
+        stiffness = law.stiffness
+        kappa = math.nan if stiffness is None else stiffness / penalty_stiffness(1.0, 0.5 * r1.impedance, c, ell)
+    else:  # another law has numbers of its own (docs/theory.md)
+        kappa = math.nan
     return TwoRodParameters(gamma=gamma, kappa=kappa, effective_length=ell, approach_speed=speed, wave_speed=c)
 

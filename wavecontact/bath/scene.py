@@ -6,7 +6,6 @@ import math
 
 import numpy as np
 
-from ..contact import Exponential
 from ..errors import InvalidParameterError
 from .model import BathRealisation
 from .noise import POINTS_PER_PERIOD, NoiseTables, noise_tables
@@ -42,8 +41,8 @@ def end_reaches(q, r) -> np.ndarray:
 def start_gap(vibrations: BathRealisation, contact) -> float:
     """The start gap a solver uses for this realisation: out of range of the force whatever the phase."""
     reach = end_reach(vibrations)
-    if isinstance(contact, Exponential):
-        return reach + EXPONENTIAL_MARGIN / contact.alpha
+    if contact.decay_rate > 0.0:
+        return reach + EXPONENTIAL_MARGIN / contact.decay_rate
     return reach + HARD_MARGIN
 
 

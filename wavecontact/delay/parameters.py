@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..contact import Exponential
 from ..errors import InvalidParameterError, UnsupportedSceneError, require_positive
 
 __all__ = ["DelayParameters", "delay_parameters", "echoes_from_ratios"]
@@ -146,10 +145,11 @@ def delay_parameters(scene) -> DelayParameters:
     reduced_mass = rod_1.mass * rod_2.mass / (rod_1.mass + rod_2.mass)
     time_unit = reduced_mass / series
     delays, weights = echoes_from_ratios(z_2 / z_1, rod_1.round_trip_time / rod_2.round_trip_time)
-    if isinstance(scene.contact, Exponential):
-        kappa = scene.contact.alpha * speed * time_unit
-    else:
-        kappa = math.inf
+    law = scene.contact
+    if law.decay_rate > 0.0:
+        kappa = law.decay_rate * speed * time_unit
+    else:  # hard: the limit kappa -> inf; a law acting on overlap only has no alpha (its own numbers)
+        kappa = math.inf if law.hard else math.nan
     return DelayParameters(
         kappa=kappa,
         round_trip_times=delays,

@@ -6,7 +6,9 @@ many modes.  It holds for two rods on a line with exponential contact, and in
 its hard-core limit (Eq. 26); rods of different materials and sections only
 change the round trips and give each rod's echoes the weight ``2 Z_s / Z_i``
 (:mod:`wavecontact.delay.parameters`).  See :mod:`wavecontact.delay.kernels`
-for the method and ``docs/theory.md``.
+for the method and ``docs/theory.md``.  The same equation with ``I' = F(r)``
+holds for any force law of the gap; laws acting on overlap only (penalty with
+its stiffness given, Hertz) are integrated by :mod:`wavecontact.delay.overlap`.
 
 Results are in the scene's units (for :func:`wavecontact.two_rods` scenes those
 are the paper's dimensionless ones): time ``t = tau mu / Z_s`` from the start
@@ -27,7 +29,6 @@ import numpy as np
 from ..bath.model import ThermalBath, seed_sequence
 from ..bath.noise import MAX_POINTS_PER_PERIOD, NOISE_EXCURSION, NoiseTables, noise_table_batch, table_points
 from ..bath.scene import EXPONENTIAL_MARGIN, end_reaches, scene_noise
-from ..contact import Exponential, Hard
 from ..errors import InvalidParameterError, LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
@@ -46,6 +47,7 @@ from . import kernels
 from .energy_split import NODES, WEIGHTS, vibration_energy_gain
 from .hardcore import contact_intervals, hard_core_history
 from .noise import COLD, FourierNoise
+from .overlap import collide_overlap_law, overlap_cost
 from .parameters import DelayParameters, delay_parameters, echoes_from_ratios
 from .stochastic_hardcore import hard_core_noise
 
@@ -132,10 +134,10 @@ def _check_scene(scene: Scene) -> DelayParameters:
     if scene is not last:  # a Scene is frozen (rods, velocities and contact law too): same object, same numbers
         params = delay_parameters(scene)  # refuses rings, other rod counts and receding rods
         _LAST_SCENE = (scene, params)
-    if not isinstance(scene.contact, (Exponential, Hard)):
+    if scene.contact.stiffness_from_solver:
         raise UnsupportedSceneError(
-            f"the delay solver supports exponential and hard contact, not {scene.contact.name!r}; "
-            "use solver='fem' (or 'modal') for penalty contact"
+            f"the delay solver needs an explicit {scene.contact.name} stiffness (it has no mesh to choose one "
+            "from); use solver='fem', or give the stiffness"
         )
     if scene.vibrations is not None and "two_rods" not in scene.metadata:
         raise UnsupportedSceneError("thermal vibrations need the paper's two rods (two_rods(..., vibrations=))")
@@ -301,7 +303,7 @@ class DelaySolver(SolverBase):
         options = self.options(options)
         params = _check_scene(scene)
         self.estimate_cost(scene, options)  # refuses what solve() refuses before any work
-        if scene.vibrations is None or math.isinf(params.kappa) or isinstance(scene.contact, Hard):
+        if scene.vibrations is None or math.isinf(params.kappa) or scene.contact.hard:
             raise UnsupportedSceneError("thermal_restitution needs a finite-kappa scene with vibrations")
         if options.noise is not None:
             raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
@@ -341,7 +343,7 @@ class DelaySolver(SolverBase):
         prototype = two_rods(gamma, kappa)  # the rods, contact and parameters of every sample (cold)
         params = _check_scene(prototype)
         self.estimate_cost(prototype, options)
-        if math.isinf(params.kappa) or isinstance(prototype.contact, Hard):
+        if math.isinf(params.kappa) or prototype.contact.hard:
             raise UnsupportedSceneError("thermal_restitutions needs a finite kappa (kappa = inf: "
                                         "hard_core_thermal_batch)")
         if options.noise is not None:
@@ -378,7 +380,9 @@ class DelaySolver(SolverBase):
         """Refuse, before any step, what the method of steps cannot do in bounded time: round trips
         more than ``1/GAMMA_MIN`` apart at finite kappa, and an ``end_time`` beyond ``max_steps`` steps."""
         params = _check_scene(scene)
-        if math.isinf(params.kappa) or isinstance(scene.contact, Hard):
+        if not scene.contact.hard and scene.contact.decay_rate == 0.0:  # a law acting on overlap only
+            return overlap_cost(scene, params, options)
+        if math.isinf(params.kappa) or scene.contact.hard:
             return None
         short, long = sorted(params.round_trip_times)
         if long / short > 1.0 / GAMMA_MIN:
@@ -409,11 +413,13 @@ class DelaySolver(SolverBase):
 
     def _collide(self, scene: Scene, options: DelayOptions) -> CollisionFields:
         params = _check_scene(scene)
+        if not scene.contact.hard and scene.contact.decay_rate == 0.0:  # a law acting on overlap only
+            return collide_overlap_law(scene, params, options)
         kappa = params.kappa
         vibrations = scene.vibrations
         if vibrations is not None and options.noise is not None:
             raise InvalidParameterError("a scene with vibrations brings its own noise: leave the option noise=None")
-        if isinstance(scene.contact, Hard) or math.isinf(kappa):
+        if scene.contact.hard or math.isinf(kappa):
             if options.noise is not None:
                 raise UnsupportedSceneError("the hard-core delay solver takes thermal vibrations on the scene "
                                             "(two_rods(..., vibrations=)), not the option noise")

@@ -1,4 +1,5 @@
-"""Exact motion of the two facing end nodes under the contact force alone.
+"""The FE contact step: the law's flow and gap solutions (:mod:`wavecontact.contact_kernels`) as the
+FE kernels use them, and the exponential gap equation with a varying incoming rate.
 
 The time step is split (impulse / RESPA style, see docs/fem.md): a half kick
 with the elastic forces, then the flow of ``kinetic + contact`` energy over a
@@ -10,11 +11,15 @@ one-dimensional two-body equation
 
     r'' = m_inv * F(r),    m_inv = (M1^-1)_ee + (M2^-1)_ee,
 
-which is solved here in closed form for each law.  The rest of the mesh
-follows from the two integrals of the force over the step: the impulse
-``I = (r1' - r0') / m_inv`` and ``J = (r1 - r0 - r0' dt) / m_inv``.
+solved for each law by :func:`wavecontact.contact_kernels.law_flow`.  The rest
+of the mesh follows from the two integrals of the force over the step: the
+impulse ``I = (r1' - r0') / m_inv`` and ``J = (r1 - r0 - r0' dt) / m_inv``.
+The massless-end schemes solve ``r' = g + C F(r)`` instead
+(:func:`wavecontact.contact_kernels.law_gap`).
 
-All functions return the gap and its rate after ``dt``: ``(r1, w1)``.
+A hard law is one law code; whether the splitting scheme treats its node
+impact as perfectly plastic or as an elastic mirror is the scheme's flag
+``plastic``, not a law.
 """
 
 from __future__ import annotations
@@ -25,222 +30,73 @@ import numpy as np
 
 from .._jit import kernel
 from ..contact import LAW_EXPONENTIAL, LAW_HARD, LAW_PENALTY
+from ..contact_kernels import (
+    exponential_flow,
+    exponential_gap,
+    hard_elastic_flow,
+    hard_gap,
+    hard_plastic_update,
+    law_flow,
+    law_force,
+    law_gap,
+    law_potential,
+    penalty_flow,
+    penalty_gap,
+)
 
 __all__ = [
     "LAW_EXPONENTIAL",
-    "LAW_HARD_ELASTIC",
-    "LAW_HARD_PLASTIC",
+    "LAW_HARD",
     "LAW_PENALTY",
     "contact_flow",
     "contact_force",
     "contact_potential",
     "exponential_flow",
+    "exponential_gap",
+    "exponential_gap_linear",
+    "exponential_gap_quartic",
     "hard_elastic_flow",
+    "hard_gap",
     "hard_plastic_update",
+    "interface_gap",
     "penalty_flow",
+    "penalty_gap",
 ]
 
-LAW_HARD_ELASTIC = LAW_HARD  # the splitting scheme's end-node impact rules for a hard law
-LAW_HARD_PLASTIC = LAW_HARD + 1
-
-_LN2 = math.log(2.0)
+# the exponential force and energy count as infinite beyond this exponent (a massive overlap)
+_EXPONENT_LIMIT = 700.0
 
 
 @kernel
-def exponential_flow(r, w, dt, m_inv, alpha, strength):
-    """Exact flow of ``r'' = m_inv alpha B exp(-alpha r)`` over ``dt``.
-
-    With ``P = m_inv B exp(-alpha r)`` the energy ``w^2/2 + P`` is conserved,
-    ``w_inf = sqrt(w^2 + 2P)``, and ``w(t) = w_inf tanh(s)`` with
-    ``s' = alpha w_inf / 2``; ``r`` follows from ``ln cosh s``.  Logarithms
-    keep it exact far from contact (``P`` may underflow) and for any
-    ``alpha dt``: the flow never limits the step.
-    """
-    log_p = math.log(m_inv * strength) - alpha * r
-    if log_p < -700.0 or (w != 0.0 and log_p + _LN2 < 2.0 * math.log(abs(w)) - 80.0):
-        return r + w * dt, w  # the force changes nothing at double precision
-    two_p = 2.0 * math.exp(log_p)
-    speed = math.sqrt(w * w + two_p)
-    s0 = math.log(speed + abs(w)) - 0.5 * (log_p + _LN2)
-    if w < 0.0:
-        s0 = -s0
-    s1 = s0 + 0.5 * alpha * speed * dt
-    a0 = abs(s0)
-    a1 = abs(s1)
-    change = (a1 - a0) + math.log1p(math.exp(-2.0 * a1)) - math.log1p(math.exp(-2.0 * a0))
-    return r + (2.0 / alpha) * change, speed * math.tanh(s1)
-
-
-@kernel
-def penalty_flow(r, w, dt, m_inv, stiffness):
-    """Exact flow of ``r'' = -m_inv k min(r, 0)``: drift, half a harmonic swing, drift."""
-    omega = math.sqrt(m_inv * stiffness)
-    remaining = dt
-    for _ in range(3):
-        if r > 0.0 or (r == 0.0 and w >= 0.0):
-            if w >= 0.0:
-                return r + w * remaining, w
-            hit = r / (-w)
-            if hit >= remaining:
-                return r + w * remaining, w
-            remaining -= hit
-            r = 0.0
-        # inside the overlap: r = A sin(omega t + phase), phase in [-pi, 0]
-        amplitude = math.sqrt(r * r + (w / omega) ** 2)
-        phase = math.atan2(r, w / omega)
-        if phase > 0.0:
-            phase = -math.pi
-        exit_time = -phase / omega
-        if remaining <= exit_time:
-            angle = omega * remaining + phase
-            return amplitude * math.sin(angle), amplitude * omega * math.cos(angle)
-        remaining -= exit_time
-        r = 0.0
-        w = amplitude * omega
-    return r + w * remaining, w
-
-
-@kernel
-def hard_elastic_flow(r, w, dt):
-    """Exact flow of two point masses with a hard core: drift, mirror at ``r = 0``."""
-    r1 = r + w * dt
-    if r1 < 0.0:
-        return -r1, -w
-    return r1, w
-
-
-@kernel
-def hard_plastic_update(r, w, dt):
-    """Forward-increment constraint: if the drift would overlap, end the step at ``r = 0``.
-
-    The two end nodes then move together for this step (a momentum-conserving,
-    perfectly plastic node impact), which is the exact interface condition of
-    the continuum while it is in compression.
-    """
-    r1 = r + w * dt
-    if r1 < 0.0:
-        return 0.0, -r / dt
-    return r1, w
-
-
-@kernel
-def contact_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
-    """Dispatch on the law code (``LAW_*``)."""
-    if law == LAW_EXPONENTIAL:
-        return exponential_flow(r, w, dt, m_inv, alpha, strength)
-    if law == LAW_PENALTY:
-        return penalty_flow(r, w, dt, m_inv, stiffness)
-    if law == LAW_HARD_ELASTIC:
-        return hard_elastic_flow(r, w, dt)
-    return hard_plastic_update(r, w, dt)
+def contact_flow(law, plastic, r, w, dt, m_inv, alpha, strength, stiffness):
+    """The splitting scheme's flow of the end-node pair: :func:`~wavecontact.contact_kernels.law_flow`."""
+    return law_flow(law, plastic, r, w, dt, m_inv, alpha, strength, stiffness)
 
 
 @kernel
 def contact_force(law, r, alpha, strength, stiffness):
     """Contact force at gap ``r`` (force, pushing the ends apart); zero for hard contact."""
-    if law == LAW_EXPONENTIAL:
-        exponent = -alpha * r
-        if exponent > 700.0:
-            return math.inf
-        return alpha * strength * math.exp(exponent)
-    if law == LAW_PENALTY:
-        if r < 0.0:
-            return -stiffness * r
+    if law == LAW_HARD:
         return 0.0
-    return 0.0
+    if law == LAW_EXPONENTIAL and -alpha * r > _EXPONENT_LIMIT:
+        return math.inf
+    return law_force(law, alpha, strength, stiffness, r)
 
 
 @kernel
 def contact_potential(law, r, alpha, strength, stiffness):
     """Contact energy at gap ``r`` (energy); zero for hard contact."""
-    if law == LAW_EXPONENTIAL:
-        exponent = -alpha * r
-        if exponent > 700.0:
-            return math.inf
-        return strength * math.exp(exponent)
-    if law == LAW_PENALTY:
-        if r < 0.0:
-            return 0.5 * stiffness * r * r
+    if law == LAW_HARD:
         return 0.0
-    return 0.0
-
-
-# --- massless interface: first-order gap equation of the characteristic scheme -------------
-#
-# On a P1 lumped mesh stepped at exactly the element travel time (Courant number 1),
-# central differences are the method of characteristics.  The end node then moves by
-# the incoming wave plus F / Z (Z = rho c A), so over a double step 2 dt the gap obeys
-#
-#     r' = g + F(r) / Z_eff,     1 / Z_eff = 1/Z1 + 1/Z2,
-#
-# with g fixed by the incoming characteristics.  These functions return the gap after
-# time T for each law (exactly), from which the impulse of the contact follows.
-
-
-@kernel
-def _log_expm1_over(z):
-    """``log(expm1(z) / z)`` without overflow or cancellation."""
-    if abs(z) < 1e-8:
-        return 0.5 * z
-    if z > 0.0:
-        return z + math.log1p(-math.exp(-z)) - math.log(z)
-    return math.log(-math.expm1(z)) - math.log(-z)
-
-
-@kernel
-def exponential_gap(r, g, duration, compliance, alpha, strength):
-    """Solve ``r' = g + compliance * alpha B exp(-alpha r)`` exactly over ``duration``.
-
-    ``y = exp(alpha r)`` obeys the linear equation ``y' = alpha (g y + c)``
-    (``c = compliance alpha B``), solved in logarithms: no step limit for any alpha.
-    """
-    coefficient = compliance * alpha * strength
-    z = alpha * g * duration
-    first = alpha * r + z
-    second = math.log(coefficient * alpha * duration) + _log_expm1_over(z)
-    top = max(first, second)
-    return (top + math.log(math.exp(first - top) + math.exp(second - top))) / alpha
-
-
-@kernel
-def penalty_gap(r, g, duration, compliance, stiffness):
-    """Solve ``r' = g - compliance k min(r, 0)`` exactly over ``duration``."""
-    rate = compliance * stiffness
-    remaining = duration
-    for _ in range(3):
-        if r > 0.0 or (r == 0.0 and g >= 0.0):
-            if g >= 0.0:
-                return r + g * remaining
-            hit = r / (-g)
-            if hit >= remaining:
-                return r + g * remaining
-            remaining -= hit
-            r = 0.0
-        target = g / rate  # the overlap relaxes towards r* = g / rate
-        if target < 0.0 or r == target:
-            return target + (r - target) * math.exp(-rate * remaining)
-        exit_time = math.log((target - r) / target) / rate
-        if exit_time >= remaining:
-            return target + (r - target) * math.exp(-rate * remaining)
-        remaining -= exit_time
-        r = 0.0
-    return r + g * remaining
-
-
-@kernel
-def hard_gap(r, g, duration):
-    """Hard contact of massless ends: the gap closes at rate ``g`` and stays at 0."""
-    return max(r + g * duration, 0.0)
+    if law == LAW_EXPONENTIAL and -alpha * r > _EXPONENT_LIMIT:
+        return math.inf
+    return law_potential(law, alpha, strength, stiffness, r)
 
 
 @kernel
 def interface_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
-    """Dispatch of the first-order gap solutions on the law code."""
-    if law == LAW_EXPONENTIAL:
-        return exponential_gap(r, g, duration, compliance, alpha, strength)
-    if law == LAW_PENALTY:
-        return penalty_gap(r, g, duration, compliance, stiffness)
-    return hard_gap(r, g, duration)
+    """The massless-end gap after ``duration``: :func:`~wavecontact.contact_kernels.law_gap`."""
+    return law_gap(law, r, g, duration, compliance, alpha, strength, stiffness)
 
 
 @kernel

@@ -194,7 +194,8 @@ K_KIND1 = 5  # mass solve of each rod (explicit_step.MASS_*)
 K_KIND2 = 6
 K_BOUND1 = 7  # separation bound factor of each rod
 K_BOUND2 = 8
-CONTROL_SIZE = 9
+K_PLASTIC = 9  # 1: the splitting scheme's hard node impact is perfectly plastic (0: an elastic mirror)
+CONTROL_SIZE = 10
 # contact array (the same layout as the lattice's C_*)
 _C_LAW, _C_ALPHA, _C_STRENGTH, _C_STIFFNESS, _C_OFFSET, _C_R_STOP, _C_M_INV = 0, 1, 2, 3, 4, 5, 6
 
@@ -255,6 +256,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     check_every = int(control[K_CHECK_EVERY])
     energy_tolerance = control[K_ENERGY_TOLERANCE]
     scheme = int(control[K_SCHEME])
+    plastic = control[K_PLASTIC] != 0.0
     kind1 = int(control[K_KIND1])
     kind2 = int(control[K_KIND2])
     max_steps = hist_time.size
@@ -309,7 +311,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             shift = impulse * dt
         elif scheme == SCHEME_SPLITTING:
             w0 = V2[start2] - V1[end1]
-            r1, w1 = contact_flow(law, r_now, w0, dt, m_inv, alpha, strength, stiffness)
+            r1, w1 = contact_flow(law, plastic, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv
             shift = (r1 - r_free) / m_inv
         else:

@@ -20,7 +20,7 @@ import numpy as np
 from skfem import Basis, BilinearForm, MeshLine
 
 from ..bodies import PiecewiseRod, RigidBody, body_segments, pair_laws
-from ..contact import LAW_EXPONENTIAL, Hard, Penalty
+from ..contact import LAW_EXPONENTIAL, Penalty
 from ..errors import InvalidParameterError, UnsupportedSceneError
 from ..scene import Rod
 from .discretization import (
@@ -216,7 +216,7 @@ def _gap_where(function, level: float, scale: float) -> float:
 
 def _stop_gap(law, energy: float, scale: float) -> float:
     """Gap (length) beyond which the law's potential is below POTENTIAL_TOLERANCE of the energy (0 for zero range)."""
-    if isinstance(law, Hard) or law.range == 0.0:
+    if law.hard or law.range == 0.0:
         return 0.0
     code, alpha, strength, _ = law.kernel_parameters()
     if code == LAW_EXPONENTIAL:  # the exponential law in closed form, as the two-rod solver
@@ -347,7 +347,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
                       (last, True), None))
     resolved_laws, stop_gaps, start_gaps = [], [], []
     for a, b, law, gap, name, end_a, end_b in pairs:
-        if isinstance(law, Penalty) and law.stiffness is None:
+        if law.stiffness_from_solver:
             stiffnesses = [_end_section(bodies[e[0]], e[1])[1] / _end_element(rods[body_slot[e[0]]], e[1])
                            for e in (end_a, end_b) if e is not None and body_kind[e[0]] == SIDE_ROD]
             if not stiffnesses:
@@ -371,7 +371,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
     for k, ((a, b, _, _, name, end_a, end_b), law) in enumerate(zip(pairs, resolved_laws)):
         code, alpha, strength, stiffness = law.kernel_parameters()
         w = a.inverse_mass + b.inverse_mass
-        if isinstance(law, Hard):
+        if law.hard:
             hard_any = True
         else:
             impedances = [facing_impedance(s, e[0], e[1]) for s, e in ((a, end_a), (b, end_b)) if e is not None]
@@ -407,7 +407,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
         ref_b = right_wall if b.kind == SIDE_WALL else positions[end_b[0]]
         row[C_OFFSET] = ref_b - ref_a
         row[C_LAW], row[C_ALPHA], row[C_STRENGTH], row[C_STIFFNESS] = code, alpha, strength, stiffness
-        if isinstance(law, Hard):
+        if law.hard:
             rigid_pair = a.kind != SIDE_ROD and b.kind != SIDE_ROD
             row[C_HARD] = HARD_ELASTIC if rigid_pair else HARD_PLASTIC
             row[C_THRESHOLD] = IMPULSE_ROUNDOFF * speed_scale / w

@@ -12,12 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import Exponential, Hard, Penalty
+from ..contact import LAW_EXPONENTIAL
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, require_integer
 from ..result import Outcome
 from ..scene import Scene
 from . import kernels, lattice
-from .contact_flows import LAW_EXPONENTIAL, LAW_HARD_ELASTIC, LAW_HARD_PLASTIC, LAW_PENALTY
 from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
 from .explicit_step import elastic_acceleration, prepare_mass
 from .interleaved_step import LANE_TOLERANCE
@@ -41,7 +40,7 @@ _SCHEMES = {
     "splitting": kernels.SCHEME_SPLITTING,
     "force": kernels.SCHEME_FORCE,
 }
-_HARD_SCHEMES = {"plastic": LAW_HARD_PLASTIC, "elastic": LAW_HARD_ELASTIC}
+_HARD_SCHEMES = ("plastic", "elastic")
 
 
 @dataclass
@@ -65,6 +64,7 @@ class FemSetup:
     centered: bool = False
     gauss: bool = False
     far_theta: tuple = (0.0, 0.0)  # unmeshed remainder beyond each rod's far end node, in elements
+    plastic: bool = True  # the splitting scheme's hard node impact: perfectly plastic (else an elastic mirror)
 
     @property
     def characteristic(self) -> bool:
@@ -72,27 +72,22 @@ class FemSetup:
 
 
 def _law_parameters(scene: Scene, rods, hard_scheme: str):
+    """``(code, alpha, strength, stiffness)`` of the scene's law; a penalty stiffness left to the
+    solver becomes ``E A / h`` of the stiffer facing element."""
     law = scene.contact
-    if isinstance(law, Exponential):
-        return law.kernel_parameters()
-    if isinstance(law, Penalty):
-        if law.stiffness is not None:
-            k = law.stiffness
-        else:  # E A / h of the stiffer facing element
-            left, right = rods
-            h1 = left.x[-1] - left.x[left.cells[-1, 0]]
-            h2 = right.x[right.cells[0, 1]] - right.x[0]
-            k = max(
-                left.rod.youngs_modulus * left.rod.area / h1, right.rod.youngs_modulus * right.rod.area / h2
-            )
-        return LAW_PENALTY, 0.0, 0.0, float(k)
-    if isinstance(law, Hard):
-        if hard_scheme not in _HARD_SCHEMES:
-            raise InvalidParameterError(
-                f"hard_scheme must be one of {tuple(_HARD_SCHEMES)}, got {hard_scheme!r}"
-            )
-        return _HARD_SCHEMES[hard_scheme], 0.0, 0.0, 0.0
-    raise UnsupportedSceneError(f"the fem solver does not know the contact law {type(law).__name__}")
+    if law.hard and hard_scheme not in _HARD_SCHEMES:
+        raise InvalidParameterError(f"hard_scheme must be one of {_HARD_SCHEMES}, got {hard_scheme!r}")
+    code, alpha, strength, stiffness = law.kernel_parameters()
+    if law.hard:
+        return code, alpha, strength, 0.0
+    if law.stiffness_from_solver:
+        left, right = rods
+        h1 = left.x[-1] - left.x[left.cells[-1, 0]]
+        h2 = right.x[right.cells[0, 1]] - right.x[0]
+        stiffness = max(
+            left.rod.youngs_modulus * left.rod.area / h1, right.rod.youngs_modulus * right.rod.area / h2
+        )
+    return code, alpha, strength, float(stiffness)
 
 
 def _check_elements(elements) -> int:
@@ -291,6 +286,7 @@ def build_setup(
         rods=rods, dt=step, stable_step=limit, law=law, alpha=alpha, strength=strength, stiffness=stiffness,
         gap=gap, r_stop=r_stop, u0=tuple(u0), v0=tuple(v0), matched=matched, scheme=scheme_code,
         gap_substeps=gap_substeps, centered=centered, gauss=gap_quadrature == "gauss", far_theta=far_theta,
+        plastic=hard_scheme == "plastic",
     )
 
 
@@ -450,6 +446,7 @@ class _Run:
         control[kernels.K_KIND2] = self.mass_solves[1][0]
         control[kernels.K_BOUND1] = self.bound[0]
         control[kernels.K_BOUND2] = self.bound[1]
+        control[kernels.K_PLASTIC] = 1.0 if s.plastic else 0.0
         self.general_control = control
 
     def _start_lattice(self):

@@ -18,7 +18,6 @@ from types import MappingProxyType
 import numpy as np
 
 from ..bath.scene import end_speed
-from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure
 from ..limits import Cost
 from ..scene import Scene
@@ -212,20 +211,20 @@ class FemSolver(SolverBase):
         approach of the ends, the rods' plus their vibrations' (:func:`wavecontact.bath.scene.end_speed`), unless
         not ``thermal``."""
         contact = scene.contact
-        if not (isinstance(contact, Exponential) and len(scene.rods) == 2 and options.nodes is None):
+        if not (contact.decay_rate > 0.0 and len(scene.rods) == 2 and options.nodes is None):
             return math.inf
         shorter = min(scene.rods, key=lambda rod: rod.length)
         travel = shorter.length / options.elements / shorter.wave_speed
         speed = abs(scene.velocities[0] - scene.velocities[1])
         if thermal and scene.vibrations is not None:
             speed += end_speed(scene.vibrations)
-        return contact.alpha * speed * travel
+        return contact.decay_rate * speed * travel
 
     def _characteristic(self, scene: Scene, options: FemOptions) -> bool:
         """Whether the run uses the characteristic interface with the sub-step gap quadrature."""
         return ((options.order, options.mass) == (1, "lumped") and options.scheme in ("auto", "characteristic")
                 and options.courant in (None, 1.0) and options.dt is None and options.gap_quadrature == "substeps"
-                and isinstance(scene.contact, Exponential))
+                and scene.contact.decay_rate > 0.0)
 
     def _scheme_order(self, options: FemOptions) -> float:
         """Order in ``h`` of the runs the estimate compares: :data:`INTERFACE_ORDER` where they are held to
@@ -286,8 +285,8 @@ class FemSolver(SolverBase):
             dt = stable if (options.order, options.mass) == (1, "lumped") else 0.95 * stable
         speed = max(abs(scene.velocities[0] - scene.velocities[1]), 1e-300)
         span = 4.0 * sum(rod.length / rod.wave_speed for rod in rods)
-        if isinstance(scene.contact, Exponential):
-            span += 100.0 / (scene.contact.alpha * speed)  # in from and out to where the force is negligible
+        if scene.contact.decay_rate > 0.0:
+            span += 100.0 / (scene.contact.decay_rate * speed)  # in from and out to where the force is negligible
         if options.max_time is not None:
             span = min(span, options.max_time)
         steps = span / dt
@@ -353,7 +352,7 @@ def _collide(scene: Scene, options: dict) -> CollisionFields:
         "gap": out["gap"],
         "initial_gap": setup.gap,
         "stable_step": setup.stable_step,
-        "scheme": _scheme_name(setup, options),
+        "scheme": _scheme_name(setup, scene.contact.name, options),
         "contact_scheme": _SCHEME_NAMES[setup.scheme],
         "nodes_per_rod": [d.n_nodes for d in setup.rods],
     }
@@ -381,14 +380,14 @@ _SCHEME_NAMES = {kernels.SCHEME_CHARACTERISTIC: "characteristic", kernels.SCHEME
                  kernels.SCHEME_SPLITTING: "splitting", kernels.SCHEME_FORCE: "force"}
 
 
-def _scheme_name(setup, options) -> str:
-    contact = {0: "exponential", 1: "penalty", 2: "hard (elastic node impact)", 3: "hard"}[setup.law]
+def _scheme_name(setup, law: str, options) -> str:
+    contact = law + (" (elastic node impact)" if law == "hard" and not setup.plastic else "")
     base = f"P{options['order']} {options['mass']} mass, central differences, {contact} contact"
-    if setup.scheme == 0:
+    if setup.scheme == kernels.SCHEME_CHARACTERISTIC:
         return base + " through the characteristic interface (incoming characteristics, exact gap equation)"
-    if setup.scheme == 1:
+    if setup.scheme == kernels.SCHEME_INTERFACE:
         return base + " through the massless-end interface (exact gap equation)"
-    if setup.scheme == 3:
+    if setup.scheme == kernels.SCHEME_FORCE:
         return base + " applied as a force at the end nodes (plain central differences, contact-resolving step)"
     return base + " through the impulse splitting (exact flow of the end-node pair)"
 

@@ -27,6 +27,8 @@ import numpy as np
 
 from .._jit import kernel
 from ..contact import LAW_EXPONENTIAL, LAW_PENALTY
+from ..contact_kernels import contact_response  # noqa: F401 (the modal kernels' name for it)
+from ..contact_kernels import law_response as contact_response_from
 
 TOE_MARGIN = 5.0
 
@@ -39,74 +41,6 @@ STATUS_BUFFER_FULL = 3  # history buffer full: grow it and call again
 STATUS_RECORDS_FULL = 4  # step records (collocation with exact ends) full: grow them and call again
 STATUS_STEP_UNDERFLOW = -1
 STATUS_NOT_FINITE = -2
-
-@kernel(error_model="numpy")
-def contact_response(gap, law, alpha, strength, stiffness, compliance):
-    """See :func:`contact_response_from`; starts the inner solve from scratch."""
-    return contact_response_from(gap, law, alpha, strength, stiffness, compliance, math.nan)
-
-
-@kernel(error_model="numpy")
-def contact_response_from(gap, law, alpha, strength, stiffness, compliance, guess):
-    """Force, interaction energy and stiffness of one pair at the modal gap ``gap``.
-
-    With ``compliance > 0`` the contact acts through a massless spring of that
-    compliance (the omitted modes, statically): the true gap ``r`` solves
-    ``r - compliance * F(r) = gap``, the returned force is ``F(r)``, the energy
-    includes the spring's, and the stiffness is ``dF/dgap``.
-
-    ``guess`` (``nan``: none) starts the inner Newton solve for
-    ``log(alpha (r - gap))``.
-
-    Returns
-    -------
-    force, energy, stiffness, softening : float
-        ``softening = 1 + compliance * dF/dr`` (1 without compliance).
-    """
-    if law == LAW_EXPONENTIAL:
-        x = alpha * gap
-        if compliance <= 0.0:
-            if x < -700.0:
-                return math.inf, math.inf, math.inf, 1.0
-            energy = strength * math.exp(-x)
-            return alpha * energy, energy, alpha * alpha * energy, 1.0
-        # r - C alpha B exp(-alpha r) = gap  <=>  y exp(y) = beta exp(-x), y = alpha (r - gap)
-        log_z = math.log(alpha * alpha * strength * compliance) - x
-        if log_z < -30.0:
-            z = math.exp(log_z)
-            y = z * (1.0 - z)
-        else:
-            # Newton on u + exp(u) = log_z (u = log y): convex, increasing, started right of the root
-            if math.isnan(guess):
-                u = log_z if log_z < 0.0 else math.log1p(log_z)
-            else:
-                u = guess  # the previous step's root: Newton then needs two or three iterations
-            for _ in range(60):
-                eu = math.exp(u)
-                du = (u + eu - log_z) / (1.0 + eu)
-                u -= du
-                if abs(du) < 1e-8 * (1.0 + abs(u)):
-                    # quadratic convergence: one more step reaches round-off
-                    eu = math.exp(u)
-                    u -= (u + eu - log_z) / (1.0 + eu)
-                    break
-            y = math.exp(u)
-        scale = 1.0 / (alpha * compliance)
-        force = y * scale
-        energy = (y + 0.5 * y * y) * scale / alpha
-        return force, energy, alpha * force / (1.0 + y), 1.0 + y
-    # linear spring on overlap (penalty; hard = infinite stiffness, then only the compliance)
-    if gap >= 0.0:
-        return 0.0, 0.0, 0.0, 1.0
-    if stiffness == math.inf:
-        if compliance <= 0.0:
-            # overlap of a hard contact without compliance (round-off: exact ends keep the gap at 0);
-            # the force is unbounded, the constraint stores no energy
-            return math.inf, 0.0, math.inf, 1.0
-        series = 1.0 / compliance
-    else:
-        series = 1.0 / (1.0 / stiffness + compliance)
-    return -series * gap, 0.5 * series * gap * gap, series, 1.0
 
 @kernel(error_model="numpy")
 def free_flight(q, v, omega, X, U, duration):

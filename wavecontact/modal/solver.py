@@ -24,7 +24,6 @@ from types import MappingProxyType
 import numpy as np
 
 from ..bath.model import _ModeSum
-from ..contact import Exponential
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
@@ -202,8 +201,8 @@ def _build(scene: Scene, modes, correction, mode_source, fe_elements, fe_order, 
                         correction == "static", control, exact_ends=correction == "end-response")
     if scene.gaps is not None:
         gap = scene.gaps[0]
-    elif isinstance(scene.contact, Exponential):
-        gap = probe.contact_range + _START_MARGIN / scene.contact.alpha
+    elif scene.contact.decay_rate > 0.0:
+        gap = probe.contact_range + _START_MARGIN / scene.contact.decay_rate
     else:
         gap = 0.0
     positions = (0.5 * rod_a.length + shift[0], rod_a.length + gap + 0.5 * rod_b.length + shift[1])
@@ -418,10 +417,10 @@ class ModalSolver(SolverBase):
         if not options.static_correction:
             return 1.0
         contact = scene.contact
-        if isinstance(contact, Exponential) and len(scene.rods) == 2:
+        if contact.decay_rate > 0.0 and len(scene.rods) == 2:
             shorter = min(scene.rods, key=lambda rod: rod.length)
             speed = abs(scene.velocities[0] - scene.velocities[1])
-            if contact.alpha * speed * shorter.length / (shorter.wave_speed * options.modes) <= RESOLVED_BELOW:
+            if contact.decay_rate * speed * shorter.length / (shorter.wave_speed * options.modes) <= RESOLVED_BELOW:
                 return self.expected_order(options)
         return UNRESOLVED_ORDER
 
@@ -437,9 +436,9 @@ class ModalSolver(SolverBase):
             memory += 2 * (4 * 8.0 * unknowns**2 if unknowns <= 600 else 6 * 8.0 * unknowns * (options.modes + 1))
         shortest = min(rod.length / rod.wave_speed for rod in scene.rods)
         span = 4.0 * sum(rod.length / rod.wave_speed for rod in scene.rods)
-        if isinstance(scene.contact, Exponential):
+        if scene.contact.decay_rate > 0.0:
             speed = max(abs(scene.velocities[0] - scene.velocities[1]), 1e-300)
-            span += 100.0 / (scene.contact.alpha * speed)
+            span += 100.0 / (scene.contact.decay_rate * speed)
         steps = 2.0 * span / (0.05 * shortest)
         memory += steps * 3 * 8.0 if options.history else 0.0
         work = steps * kept * stages

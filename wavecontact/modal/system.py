@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import ContactLaw, Exponential, Hard, Penalty
+from ..contact import ContactLaw
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from . import kernels
@@ -69,10 +69,10 @@ def contact_parameters(law: ContactLaw, force_scale: float, static_correction: b
     (a hard law is a penalty spring of infinite stiffness to these kernels).
     """
     code, alpha, strength, stiffness = law.kernel_parameters()
-    if isinstance(law, Exponential):
-        shift = max(0.0, math.log(law.alpha * law.strength / force_scale))
-        return code, alpha, strength, stiffness, (NEGLIGIBLE_EXPONENT + shift) / law.alpha
-    if isinstance(law, Hard):
+    if law.decay_rate > 0.0:
+        shift = max(0.0, math.log(law.decay_rate * law.strength / force_scale))
+        return code, alpha, strength, stiffness, (NEGLIGIBLE_EXPONENT + shift) / law.decay_rate
+    if law.hard:
         if not static_correction:
             raise UnsupportedSceneError(
                 "hard contact (kappa = inf) needs static_correction=True in the modal solver: without the "
@@ -80,14 +80,12 @@ def contact_parameters(law: ContactLaw, force_scale: float, static_correction: b
                 "instantaneous and undefined (correction='end-response' or 'static' account for them)"
             )
         return kernels.LAW_LINEAR, 1.0, 0.0, stiffness, 0.0
-    if isinstance(law, Penalty):
-        if law.stiffness is None:
-            raise UnsupportedSceneError(
-                "the modal solver needs an explicit penalty stiffness (Penalty(stiffness=k)); "
-                "it has no mesh to choose one from"
-            )
-        return code, 1.0, 0.0, stiffness, 0.0
-    raise UnsupportedSceneError(f"the modal solver does not know the contact law {law!r}")
+    if law.stiffness_from_solver:
+        raise UnsupportedSceneError(
+            f"the modal solver needs an explicit {law.name} stiffness (Penalty(stiffness=k)); "
+            "it has no mesh to choose one from"
+        )
+    return code, 1.0, 0.0, stiffness, 0.0
 
 
 class ModalSystem:

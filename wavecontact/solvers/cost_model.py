@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contact import Exponential, Hard, Penalty
+from ..contact import LAW_EXPONENTIAL, LAW_PENALTY
 from ..errors import InvalidParameterError, UnsupportedSceneError
 from ..scene import Scene
 
@@ -62,11 +62,11 @@ def scene_class(scene: Scene) -> str:
     if scene.is_ring or len(scene.rods) != 2:
         return "other"
     contact = scene.contact
-    if isinstance(contact, Hard):
+    if contact.hard:
         return "hard" if scene.vibrations is None else "other"
-    if isinstance(contact, Penalty):
+    if contact.code == LAW_PENALTY:
         return "penalty" if scene.is_cold else "other"
-    if not isinstance(contact, Exponential):
+    if contact.code != LAW_EXPONENTIAL:
         return "other"
     if scene.vibrations is not None:
         return "thermal"
@@ -87,7 +87,7 @@ def scene_features(scene: Scene) -> dict:
     time_ratio = trips[0] / trips[1]
     if "two_rods" in scene.metadata:
         kappa = float(scene.metadata["two_rods"].kappa)
-    elif isinstance(scene.contact, Exponential):  # alpha V mu / Z_s, as the delay equation defines it
+    elif scene.contact.code == LAW_EXPONENTIAL:  # alpha V mu / Z_s, as the delay equation defines it
         (rod_1, rod_2), speed = scene.rods, abs(scene.velocities[0] - scene.velocities[1])
         series = rod_1.impedance * rod_2.impedance / (rod_1.impedance + rod_2.impedance)
         kappa = scene.contact.alpha * speed * (rod_1.mass * rod_2.mass / (rod_1.mass + rod_2.mass)) / series
