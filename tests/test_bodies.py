@@ -81,7 +81,9 @@ def test_two_rod_parameters_refuse_line_scenes():
 
 @pytest.mark.parametrize("solver", ["delay", "modal"])
 def test_other_solvers_refuse_line_scenes_naming_fem(solver):
-    scene = Scene(rods=(RigidBody(2.0), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
+    # a striker on a chain: beyond the delay solver's rigid mass on one rod and the modal solver's two rods
+    scene = Scene(rods=(RigidBody(2.0), Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0, 0.0), contact=Hard(),
+                  gaps=(0.0, 0.0))
     with pytest.raises(UnsupportedSceneError, match="solver='fem'"):
         solve(scene, solver)
 

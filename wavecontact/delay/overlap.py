@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import LimitError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost
 from ..result import Outcome
+from ..solvers.base import CollisionFields
 from .law_kernels import STATUS_MAX_STEPS, STATUS_OK, integrate_overlap_delay
 
 __all__ = ["ESTIMATE_SAFETY", "STEPS_PER_SCALE_MIN", "collide_overlap_law", "contact_time_scale", "overlap_cost"]
@@ -90,7 +91,7 @@ def overlap_cost(scene, params, options) -> Cost:
                 detail=f"about {1.5 * steps:.3g} steps with up to {echoes:.3g} echoes each")
 
 
-def collide_overlap_law(scene, params, options) -> dict:
+def collide_overlap_law(scene, params, options) -> CollisionFields:
     """One cold collision of ``scene`` (two rods, a law acting on overlap only), as ``_collide`` returns it.
 
     The step is ``min(Gamma_min / 2, T_c / N)`` with ``T_c`` the shorter of :func:`contact_time_scale` and
@@ -124,14 +125,14 @@ def collide_overlap_law(scene, params, options) -> dict:
     (w_coarse, _, _), (w, d, step) = runs
     tau = step * np.arange(w.size)
     unit = params.time_unit
-    return {
-        "restitution": float(w[-1] - 1.0),
-        "time": tau * unit,
-        "relative_velocity": speed * (w - 1.0),
-        "contact_force": force_unit * d,
-        "error_estimate": ESTIMATE_SAFETY * abs(float(w[-1] - w_coarse[-1])),
-        "work": {"steps": int(w.size + w_coarse.size - 2)},
-        "extra": {"grid_step": float(step * unit), "contact_time_scale": float(scale * unit),
-                  "delay_parameters": {"round_trip_times": params.round_trip_times,
-                                       "echo_weights": params.echo_weights}},
-    }
+    return CollisionFields(
+        restitution=float(w[-1] - 1.0),
+        time=tau * unit,
+        relative_velocity=speed * (w - 1.0),
+        contact_force=force_unit * d,
+        error_estimate=ESTIMATE_SAFETY * abs(float(w[-1] - w_coarse[-1])),
+        work={"steps": int(w.size + w_coarse.size - 2)},
+        extra={"grid_step": float(step * unit), "contact_time_scale": float(scale * unit),
+              "delay_parameters": {"round_trip_times": params.round_trip_times,
+                                   "echo_weights": params.echo_weights}},
+    )
