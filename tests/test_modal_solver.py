@@ -204,7 +204,7 @@ def test_penalty_contact_with_a_given_stiffness():
         (Scene(rods=(Rod(0.8), Rod(0.8 / 0.6)), velocities=(1.0, 0.0), contact=Penalty()), {}, "penalty stiffness"),
         (Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(0.5, -0.5), contact=Hard(), ring_circumference=5.0),
          {}, "simulate"),
-        (Scene(rods=(Rod(1.0),) * 3, velocities=(1.0, 0.0, -1.0), contact=Hard()), {}, "two rods"),
+        (Scene(rods=(Rod(1.0),) * 3, velocities=(1.0, 0.0, -1.0), contact=Hard()), {}, "two uniform rods"),
         (Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(-0.5, 0.5), contact=Hard()), {}, "approach"),
     ],
 )
