@@ -442,18 +442,25 @@ def section_ring(collisions, realisations, command):
     run plus its statistics and figures, per integrator (``benchmarks/profile_ring.py`` measures and splits them)."""
     import profile_ring
 
-    for method in profile_ring.METHODS:  # compile or load the kernels before timing
+    methods = ("collocation", "collocation, sampled", "splitting")
+    for method in methods:  # compile or load the kernels before timing
         profile_ring.run_ring(profile_ring.GAMMA, profile_ring.KAPPA, profile_ring.MODES, 3, progress=False,
-                              solver_options={"step_method": method})
-    counts = {"collocation": realisations, "splitting": 1}
+                              solver_options={"step_method": profile_ring.VARIANTS[method][0]})
+    counts = {"collocation": realisations, "collocation, sampled": realisations, "splitting": 1}
+    labels = {"collocation": "exponential collocation, long steps where the force is negligible (default)",
+              "collocation, sampled": "exponential collocation, every step sampled (before)",
+              "splitting": "kick-rotate-kick splitting (before that)"}
     whole = "whole command (run + statistics + figures)"
+    runs = {method: [] for method in methods}
+    for r in range(realisations):  # alternately, so that a change of load hits both collocation rules
+        for method in methods:
+            if r < counts[method]:
+                runs[method].append(profile_ring.profile_run(method, r, collisions))
     rows = []
-    for method in ("collocation", "splitting"):
-        runs = [profile_ring.profile_run(method, r, collisions) for r in range(counts[method])]
-        seconds = [run["phases"][whole] for run in runs]
-        contact = [1e3 * run["phases"]["contact integration"] / collisions for run in runs]
-        label = "exponential collocation (default)" if method == "collocation" else "kick-rotate-kick splitting (before)"
-        rows.append(f"| {label} | {collisions} | {len(runs)} | {np.median(seconds):.1f} | "
+    for method in methods:
+        seconds = [run["phases"][whole] for run in runs[method]]
+        contact = [1e3 * run["phases"]["contact integration"] / collisions for run in runs[method]]
+        rows.append(f"| {labels[method]} | {collisions} | {len(seconds)} | {np.median(seconds):.1f} | "
                     f"{min(seconds):.1f}-{max(seconds):.1f} | {np.median(contact):.2f} |")
     load = os.getloadavg()
     return "\n".join([

@@ -424,7 +424,7 @@ def _echo_force(t, ends, records, count):
 @kernel(error_model="numpy")
 def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
                   contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
-                  node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled,
+                  node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled, free_rungs,
                   ends, free_q, free_v, records, clock, counters, history, max_steps):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
 
@@ -451,6 +451,12 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     nodes, vinv : arrays (s,), (s, s)
         Collocation nodes and the inverse Vandermonde matrix (node forces -> monomial coefficients).
     node_cos ... filled : tables filled on first use by ``_fill_level``.
+    free_rungs : int
+        Rungs of the ladder above the sampling step ``h_top * ladder_ratio**-free_rungs``: a step
+        longer than that is taken only where a bound on the gap's fall over the step (from the kept
+        modes' free motion, :func:`_free_fall`) proves that the
+        force stays below ``exp(-30 + exponent_step)`` of ``force_scale`` throughout the step
+        (exponential law, truncated ends; 0: every step at most the sampling step).
     ends : float array (11,)
         Exact end response of uniform rods (the end-response correction):
         ``(zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap)`` with
@@ -481,6 +487,15 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     n_levels = filled.size
     n_modes = q.size
     log_ratio = math.log(ladder_ratio)
+    # the largest step that samples the gap finely enough; longer ones need _free_fall's proof
+    h_sample = h_top * math.exp(-free_rungs * log_ratio)
+    free_steps = free_rungs > 0 and law == LAW_EXPONENTIAL and ends[0] <= 0.0
+    free_work = np.empty(n_modes if free_steps else 0)
+    amplitudes_now = False  # free_work holds the amplitudes of the modes' shares of the gap now
+    forces_seen = 0.0  # largest node force since free_work was filled
+    # the kept modes' gap at which the force (a compliance in series only lowers it) is exp(-30 + exponent_step)
+    # of force_scale: a step over which the gap provably stays above it cannot miss a touch between its nodes
+    free_gap_lowest = (30.0 - exponent_step + math.log(alpha * strength / force_scale)) / alpha if free_steps else 0.0
     inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
     recording = history.shape[0] > 0
     zeta = ends[0]
@@ -565,6 +580,22 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
                                                   ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
                                                   force_now, warm_accel, travel))
+    h_wanted = min(h_wanted, h_sample)
+    if free_steps:
+        # the force provably negligible over a longer step: no need to feel the way in from the contact's rate
+        _free_amplitudes(q, v, omega, coupling, free_work)
+        amplitudes_now = True
+        for trial in range(free_rungs):
+            if filled[trial] == 0:
+                _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid, nodes,
+                            vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
+                counters[3] += 1
+            h_trial = h_top * math.exp(-trial * log_ratio)
+            allowed = rigid_gap + sq - free_gap_lowest
+            if _free_fall(h_trial, q, v, omega, coupling, free_work, end_cos[trial], end_sin[trial], rigid_rate,
+                          allowed) <= allowed:
+                h_wanted = max(h_wanted, h_trial)
+                break
     level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-12)))  # noqa: RUF046
     steps_here = 0
 
@@ -752,6 +783,9 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         h_previous = h
         have_previous = True
         force_now = forces[s - 1]
+        if free_steps:
+            for i in range(s):
+                forces_seen = max(forces_seen, forces[i])
         counters[0] += 1
         steps_here += 1
         rigid_gap = X[1] - half[1] - X[0] - half[0]
@@ -792,6 +826,33 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
                                                       ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
                                                       force_now, warm_accel, travel))
+        if free_steps and (h_wanted > h_sample or error <= 1e-12):
+            # longer than the sampling step only where the force provably stays negligible: try twice this
+            # step (the error estimate has nothing to say about a force of zero) and two rungs below it
+            if forces_seen > 1e-30 * force_scale:
+                forces_seen = 0.0  # the amplitudes changed by more than round-off since they were taken
+                amplitudes_now = False
+            if not amplitudes_now:
+                _free_amplitudes(q, v, omega, coupling, free_work)
+                amplitudes_now = True
+            h_free = 0.0
+            allowed = rigid_gap + sq - free_gap_lowest
+            trial = max(0, level - 2)  # twice this step, then the rungs down to it
+            while allowed > 0.0 and trial < free_rungs and trial <= level:
+                if filled[trial] == 0:
+                    _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid,
+                                nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response,
+                                filled)
+                    counters[3] += 1
+                h_trial = h_top * math.exp(-trial * log_ratio)
+                if _free_fall(h_trial, q, v, omega, coupling, free_work, end_cos[trial], end_sin[trial], rigid_rate,
+                              allowed) <= allowed:
+                    h_free = h_trial
+                    break
+                trial += 1
+            h_wanted = max(min(h_wanted, h_sample), h_free)
+        elif h_wanted > h_sample:
+            h_wanted = h_sample
         level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
         if hard:
             level = min(level, n_levels - 1)
@@ -805,6 +866,45 @@ def _free_acceleration_bound(coupling, omega, free_q, free_v):
         w = omega[j]
         bound += abs(coupling[j]) * w * math.sqrt(w * w * free_q[j] * free_q[j] + free_v[j] * free_v[j])
     return bound
+
+
+@kernel(error_model="numpy")
+def _free_amplitudes(q, v, omega, coupling, amplitude):
+    """``amplitude[j] = |c_j| A_j``, the amplitude of mode ``j``'s share ``c_j q_j`` of the gap (for :func:`_free_fall`)."""
+    for j in range(q.size):
+        w = omega[j]
+        amplitude[j] = abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
+
+
+@kernel(error_model="numpy")
+def _free_fall(h, q, v, omega, coupling, amplitude, cos_h, sin_h, rigid_rate, allowed):
+    """Bound on how far the gap falls within ``[0, h]`` while the modes move freely (no force).
+
+    Each kept mode's share ``x_j(t) = c_j (q_j cos w_j t + v_j sin(w_j t) / w_j)`` is a sinusoid of amplitude
+    ``|c_j| A_j`` (``amplitude``); ``cos_h = cos(w h)``, ``sin_h = sin(w h) / w`` (the step tables).  Where
+    ``w_j h < pi`` it falls within the step by ``x_j(0) - min(x_j(0), x_j(h))``, or down to its trough,
+    ``x_j(0) + |c_j| A_j``, if its slope turns from falling to rising inside; otherwise by at most the latter.
+    The sum of these and the rigid gap's ``-rigid_rate h`` bounds the gap's fall (the largest of a sum is at
+    most the sum of the largest).  Stops summing once ``allowed`` is exceeded.
+    """
+    fall = max(0.0, -rigid_rate * h)
+    for j in range(q.size):
+        c = coupling[j]
+        now = c * q[j]
+        w = omega[j]
+        if w * h < math.pi:
+            rate_now = c * v[j]
+            later = c * (q[j] * cos_h[j] + v[j] * sin_h[j])
+            rate_later = c * (v[j] * cos_h[j] - w * w * q[j] * sin_h[j])
+            if rate_now < 0.0 and rate_later > 0.0:
+                fall += now + amplitude[j]
+            elif later < now:
+                fall += now - later
+        else:
+            fall += now + amplitude[j]
+        if fall > allowed:
+            return fall
+    return fall
 
 
 @kernel(error_model="numpy")
@@ -868,19 +968,25 @@ class CollocationTables:
     stages : int
         Radau IIA stages ``s`` (order up to ``2 s - 1``).
     h_top : float
-        Largest step (time).
+        Largest step that samples the gap (time).
     ladder_ratio : float
         Ratio of consecutive step sizes.
     levels : int
-        Number of step sizes.
+        Number of step sizes up to ``h_top``.
+    free_rungs : int
+        Further rungs above ``h_top``, taken only where the force provably stays negligible over the
+        step (see ``free_rungs`` of :func:`run_collision`); 0: none.
     """
 
-    def __init__(self, omega, coupling, inverse_mass_rigid, stages, h_top, ladder_ratio=2.0**0.5, levels=60):
+    def __init__(self, omega, coupling, inverse_mass_rigid, stages, h_top, ladder_ratio=2.0**0.5, levels=60,
+                 free_rungs=0):
         self.nodes = radau_nodes(stages)
         s = self.nodes.size
         self.vinv = np.linalg.inv(np.vander(self.nodes, s, increasing=True))
         m = omega.size
-        self.h_top = float(h_top)
+        self.free_rungs = int(free_rungs)
+        levels += self.free_rungs
+        self.h_top = float(h_top) * float(ladder_ratio) ** self.free_rungs
         self.ladder_ratio = float(ladder_ratio)
         self.node_cos = np.empty((levels, s, m))
         self.node_sin = np.empty((levels, s, m))
@@ -895,4 +1001,4 @@ class CollocationTables:
 
     def arrays(self):
         return (self.h_top, self.ladder_ratio, self.nodes, self.vinv, self.node_cos, self.node_sin, self.end_cos,
-                self.end_sin, self.end_wsin, self.end_s, self.end_c, self.response, self.filled)
+                self.end_sin, self.end_wsin, self.end_s, self.end_c, self.response, self.filled, self.free_rungs)
