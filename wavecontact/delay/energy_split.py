@@ -35,7 +35,6 @@ NODES = 0.5 * (_X + 1.0)
 WEIGHTS = 0.5 * _W
 
 
-@kernel
 def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
     """``Delta E_i`` per rod (see module docstring), Gauss-Legendre on each stored step.
 
@@ -53,7 +52,20 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
         Quadrature rule on [0, 1].
     subdivide : int
         Sub-intervals per stored step.
+
+    Returns
+    -------
+    ndarray (2,)
+        ``Delta E_1, Delta E_2`` (``E_tr = 1/4``).
     """
+    if periods.shape[0] != 2:  # a cold bath: numba compiles the kernel without the tables' code
+        periods = tables = table_slopes = None
+    return _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide)
+
+
+@kernel
+def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
+    """:func:`vibration_energy_gain` with ``tables`` None for a cold bath."""
     last = t.shape[0] - 1
     gain = np.zeros(2)
     # the nodes advance through the history, so each delayed copy's step is found by walking on from
@@ -83,7 +95,7 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
                         memory_slope += ds
                         n += 1
                     noise_slope = 0.0
-                    if periods.shape[0] == 2:
+                    if tables is not None:
                         _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
                     end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
                     gain[i] += weights[m] * (b - a) * slope * end_slope

@@ -340,18 +340,24 @@ def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_
 
 @kernel(inline="always")
 def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
-    """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod)."""
+    """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod).
+
+    ``freq`` (with its amplitudes) or ``tables`` (with ``periods`` and ``table_slopes``) None: no such
+    term, and numba compiles none of its code (see :func:`integrate_delay_equation`).
+    """
     q = 0.0
     dq = 0.0
-    for j in range(freq.shape[0]):
-        c = math.cos(freq[j] * s)
-        sn = math.sin(freq[j] * s)
-        q += cos_amp[j] * c + sin_amp[j] * sn
-        dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
-    for i in range(periods.shape[0]):
-        value, slope = table_value(s, periods[i], tables[i], table_slopes[i])
-        q += value
-        dq += slope
+    if freq is not None:
+        for j in range(freq.shape[0]):
+            c = math.cos(freq[j] * s)
+            sn = math.sin(freq[j] * s)
+            q += cos_amp[j] * c + sin_amp[j] * sn
+            dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
+    if tables is not None:
+        for i in range(periods.shape[0]):
+            value, slope = table_value(s, periods[i], tables[i], table_slopes[i])
+            q += value
+            dq += slope
     return q, dq
 
 
@@ -360,7 +366,7 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope
     """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)`` and ``S''(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
-    round-off) are skipped.  With ``direct_copies = K > 0`` the copies older
+    round-off) are skipped.  With ``direct_copies = K`` (an int; None: every copy on its own) the copies older
     than ``K`` round trips are taken at once from the stored comb sums
     ``C_i(v) = sum_{m>=1} W(v - m Gamma_i)`` (rows ``3i, 3i+1, 3i+2`` of
     ``comb``: value, slope, curvature) as ``C_i(s - K Gamma_i)``.
@@ -378,7 +384,7 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope
             u = s - n * gamma_i
             if u <= t_significant:
                 break
-            if direct_copies > 0 and n > direct_copies:
+            if direct_copies is not None and n > direct_copies:
                 value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
                                                      u + gamma_i)
                 rod_total += value
@@ -411,8 +417,9 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
 def _series_curvature(s, freq, cos_amp, sin_amp):
     """``Q''(s)`` of the Fourier series (Eq. 17)."""
     ddq = 0.0
-    for j in range(freq.shape[0]):
-        ddq -= freq[j] * freq[j] * (cos_amp[j] * math.cos(freq[j] * s) + sin_amp[j] * math.sin(freq[j] * s))
+    if freq is not None:
+        for j in range(freq.shape[0]):
+            ddq -= freq[j] * freq[j] * (cos_amp[j] * math.cos(freq[j] * s) + sin_amp[j] * math.sin(freq[j] * s))
     return ddq
 
 
@@ -424,7 +431,7 @@ def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, 
                                                         want_slope, comb, direct_copies)
     q, dq = noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes)
     gpp = math.nan
-    if want_slope and periods.shape[0] == 0:
+    if want_slope and tables is None:
         gpp = _series_curvature(s, freq, cos_amp, sin_amp) - memory_curvature
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq, gpp
 
@@ -466,7 +473,7 @@ def _logaddexp(x, y):
 
 
 @kernel
-def integrate_delay_equation(
+def _method_of_steps(
     kappa,
     a0,
     delays,
@@ -491,66 +498,8 @@ def integrate_delay_equation(
     weights_g,
     direct_copies,
 ):
-    """Integrate Eq. 16 from ``tau = 0`` until ``W`` has settled.
-
-    Parameters
-    ----------
-    kappa, a0 : float
-        ``alpha V l / c`` and the scaled initial gap ``alpha R0``.
-    delays : ndarray
-        ``(Gamma_1, Gamma_2)``, the round-trip times of the two rods.
-    weights : ndarray
-        ``(beta_1, beta_2)``, the echo weights ``2 Z_s / Z_i`` (1 for one material).
-    rtol : float
-        Target absolute accuracy of ``W / kappa`` (hence of epsilon).
-    freq, cos_amp, sin_amp : ndarray
-        Fourier series of the noise ``Q`` (empty for a cold bath).
-    periods, tables, table_slopes : ndarray
-        Further noise terms as periodic tables, shapes ``(R,)``, ``(R, n)``,
-        ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
-    block_max : ndarray
-        Upper bounds of the tables over blocks of cells, ``(R, n / B)``
-        (:func:`wavecontact.bath.noise.block_maxima`): with tables, a step is
-        taken as force-free only where these bounds show the force negligible
-        all along it (:func:`free_span`).
-    noise_rate : float
-        An upper bound of ``|Q'|`` from the tables (0 without tables; unused
-        with tables, whose local bounds are sharper).
-    noise_excursion, curvature_blocks : float, ndarray
-        Wherever the force may become appreciable, a step is short enough that
-        the tabulated ``Q`` departs from its secant by at most ``noise_excursion``
-        units of the exponent (``max|Q''| h^2 / 8``, ``|Q''|`` bounded on the step
-        by the per-block bounds ``curvature_blocks``, shape ``(R, n / C)``;
-        :func:`noise_curvature_bound`), so that no narrow rise of the noise slips
-        between the quadrature nodes of a step that looked force-free (0: no limit).
-    t_end_min : float
-        Never stop before this time.
-    t_limit : float
-        Give up (status 4) past this time.
-    settle_time : float
-        Stop once ``W'`` has stayed negligible for this long.
-    max_steps : int
-        Give up (status 1) after this many accepted steps.
-    nodes, weights_k, weights_g : ndarray
-        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and embedded weights; one of
-        :data:`QUADRATURE_RULES`).  Nodes at 0 and 1 take ``g`` from the step's ends.
-    direct_copies : int
-        0: every delayed copy of ``W`` is interpolated on its own.  ``K > 0``:
-        copies older than ``K`` round trips come from running comb sums, one
-        interpolation per rod whatever the number of copies.  Only for smooth
-        ``W`` (soft contact), where the comb sums interpolate as well as ``W``.
-
-    Returns
-    -------
-    t, w, d1, d2 : ndarray
-        The accepted grid and ``W, W', W''`` on it.
-    status : int
-        0 on success.
-    error_estimate : float
-        Sum of the local error estimates of ``W / kappa`` plus the neglected tail.
-    rejected, evaluations : int
-        Rejected steps and evaluations of the exponent ``g``.
-    """
+    """:func:`integrate_delay_equation` with None for each absent part of the noise and for
+    ``direct_copies = 0`` (each combination of present parts compiles on its own, without the others' code)."""
     capacity = 1024
     t = np.empty(capacity)
     w = np.empty(capacity)
@@ -587,10 +536,11 @@ def integrate_delay_equation(
     status = STATUS_OK
     gx = np.empty(nodes.shape[0])
     series_rate = kappa
-    for j in range(freq.shape[0]):
-        series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+    if freq is not None:
+        for j in range(freq.shape[0]):
+            series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
     exponent_rate = series_rate + noise_rate
-    tabulated = periods.shape[0] > 0
+    tabulated = tables is not None
 
     while True:
         t0 = t[last]
@@ -602,7 +552,7 @@ def integrate_delay_equation(
             break
         # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
         h_wanted = h
-        if tabulated:
+        if tables is not None:
             # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
             # step is free or it is not (a free step is the proposed one in either branch below)
             distance = negligible - (g_now - w[last])
@@ -622,7 +572,7 @@ def integrate_delay_equation(
                 n = 1
                 while True:
                     u = t0 - n * delays[i]
-                    if u <= t_significant - h_max or (0 < direct_copies < n - 1):
+                    if u <= t_significant - h_max or (direct_copies is not None and direct_copies < n - 1):
                         break
                     if u >= 0.0:
                         lo = locate(t, last, u)
@@ -635,7 +585,7 @@ def integrate_delay_equation(
             free = h_free > h
         if free:
             h = min(h_wanted, h_free)
-        elif tabulated and noise_excursion > 0.0:
+        elif tables is not None and noise_excursion > 0.0:
             curvature = noise_curvature_bound(t0, t0 + h, periods, tables, curvature_blocks)
             if curvature > 0.0:
                 h = min(h, math.sqrt(8.0 * noise_excursion / curvature))
@@ -742,7 +692,7 @@ def integrate_delay_equation(
                     comb_new[row, k] = comb[row, k]
             t, w, d1, d2 = t_new, w_new, d1_new, d2_new
             comb = comb_new
-        if direct_copies > 0:
+        if direct_copies is not None:
             for i in range(delays.shape[0]):
                 value, slope, curvature = comb_values(t, w, d1, d2, last, t1, delays[i], comb, 3 * i)
                 comb[3 * i, last + 1] = value
@@ -763,7 +713,7 @@ def integrate_delay_equation(
         h *= max(0.2, factor)
         # with tabulated noise a contact may come back later than one memory period: stop on a certificate
         settled = t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time
-        if settled and (not tabulated or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
+        if settled and (tables is None or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
                                                           periods, tables, block_max, negligible)):
             break
 
@@ -778,3 +728,78 @@ def integrate_delay_equation(
         rejected,
         evaluations,
     )
+
+
+def integrate_delay_equation(kappa, a0, delays, weights, rtol, freq, cos_amp, sin_amp, periods, tables, table_slopes, block_max, noise_rate, noise_excursion, curvature_blocks, t_end_min, t_limit, settle_time, max_steps, nodes, weights_k, weights_g, direct_copies):
+    """Integrate Eq. 16 from ``tau = 0`` until ``W`` has settled.
+
+    Parameters
+    ----------
+    kappa, a0 : float
+        ``alpha V l / c`` and the scaled initial gap ``alpha R0``.
+    delays : ndarray
+        ``(Gamma_1, Gamma_2)``, the round-trip times of the two rods.
+    weights : ndarray
+        ``(beta_1, beta_2)``, the echo weights ``2 Z_s / Z_i`` (1 for one material).
+    rtol : float
+        Target absolute accuracy of ``W / kappa`` (hence of epsilon).
+    freq, cos_amp, sin_amp : ndarray
+        Fourier series of the noise ``Q`` (empty for a cold bath).
+    periods, tables, table_slopes : ndarray
+        Further noise terms as periodic tables, shapes ``(R,)``, ``(R, n)``,
+        ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
+    block_max : ndarray
+        Upper bounds of the tables over blocks of cells, ``(R, n / B)``
+        (:func:`wavecontact.bath.noise.block_maxima`): with tables, a step is
+        taken as force-free only where these bounds show the force negligible
+        all along it (:func:`free_span`).
+    noise_rate : float
+        An upper bound of ``|Q'|`` from the tables (0 without tables; unused
+        with tables, whose local bounds are sharper).
+    noise_excursion, curvature_blocks : float, ndarray
+        Wherever the force may become appreciable, a step is short enough that
+        the tabulated ``Q`` departs from its secant by at most ``noise_excursion``
+        units of the exponent (``max|Q''| h^2 / 8``, ``|Q''|`` bounded on the step
+        by the per-block bounds ``curvature_blocks``, shape ``(R, n / C)``;
+        :func:`noise_curvature_bound`), so that no narrow rise of the noise slips
+        between the quadrature nodes of a step that looked force-free (0: no limit).
+    t_end_min : float
+        Never stop before this time.
+    t_limit : float
+        Give up (status 4) past this time.
+    settle_time : float
+        Stop once ``W'`` has stayed negligible for this long.
+    max_steps : int
+        Give up (status 1) after this many accepted steps.
+    nodes, weights_k, weights_g : ndarray
+        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and embedded weights; one of
+        :data:`QUADRATURE_RULES`).  Nodes at 0 and 1 take ``g`` from the step's ends.
+    direct_copies : int
+        0: every delayed copy of ``W`` is interpolated on its own.  ``K > 0``:
+        copies older than ``K`` round trips come from running comb sums, one
+        interpolation per rod whatever the number of copies.  Only for smooth
+        ``W`` (soft contact), where the comb sums interpolate as well as ``W``.
+
+    Returns
+    -------
+    t, w, d1, d2 : ndarray
+        The accepted grid and ``W, W', W''`` on it.
+    status : int
+        0 on success.
+    error_estimate : float
+        Sum of the local error estimates of ``W / kappa`` plus the neglected tail.
+    rejected, evaluations : int
+        Rejected steps and evaluations of the exponent ``g``.
+
+    Notes
+    -----
+    The compiled kernel (:func:`_method_of_steps`) takes each absent part (no Fourier series, no
+    tables, ``direct_copies = 0``) as None, and numba compiles a separate, smaller specialisation
+    for each combination without the code of the absent parts: a cold collision compiles neither
+    the noise tables' bounds nor the comb sums.  The arithmetic of what remains is the same.
+    """
+    if freq.shape[0] == 0:
+        freq = cos_amp = sin_amp = None
+    if periods.shape[0] == 0:
+        periods = tables = table_slopes = block_max = curvature_blocks = None
+    return _method_of_steps(kappa, a0, delays, weights, rtol, freq, cos_amp, sin_amp, periods, tables, table_slopes, block_max, noise_rate, noise_excursion, curvature_blocks, t_end_min, t_limit, settle_time, max_steps, nodes, weights_k, weights_g, direct_copies if direct_copies > 0 else None)
