@@ -84,6 +84,30 @@ def test_cheap_blocks_are_what_their_commands_print(name):
         f"{BLOCKS[name].page} is out of date: python docs/generate.py {name}")
 
 
+# The expensive blocks that CI's second pass re-runs whole (.ci/run: ``-m "not slow or docs_ci"``, kernels cached
+# by the first pass): together about SECOND_PASS_SECONDS of 2 cores; the cheap blocks run in every pass
+# (test above) and ``python -m pytest -m slow -k expensive_blocks`` (or ``python docs/generate.py --check``,
+# the same comparison) runs every block.
+SECOND_PASS = ()
+SECOND_PASS_SECONDS = 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.docs_ci) if name in SECOND_PASS else name
+                                  for name in sorted(n for n, b in BLOCKS.items() if not b.cheap)])
+def test_expensive_blocks_are_what_their_commands_print(name):
+    """What ``python docs/generate.py --check`` compares, block by block (wall times masked)."""
+    block = BLOCKS[name]
+    fresh = generate.render(block, write_figures=False)
+    current = block_text(name)
+    assert generate.mask(block, current) == generate.mask(block, fresh), (
+        f"{block.page} is out of date (python docs/generate.py {name}):\n{generate.stale_lines(block, current, fresh)}")
+
+
+def test_second_pass_blocks_are_expensive_blocks():
+    assert set(SECOND_PASS) <= {n for n, b in BLOCKS.items() if not b.cheap}
+
+
 def test_error_estimate_tuning_figures_are_what_the_stored_sweeps_give():
     """docs/error_estimates.md section 1: the ratios the FE estimate's orders rest on (seconds: it reads
     the stored sweeps, no solve)."""

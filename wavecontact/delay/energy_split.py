@@ -67,11 +67,17 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
 def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
     """:func:`vibration_energy_gain` with ``tables`` None for a cold bath."""
     last = t.shape[0] - 1
-    gain = np.zeros(2)
+    # np.empty and loops, not np.zeros: each of numba's array helpers is a compilation of its own
+    gain = np.empty(2)
+    gain[0] = 0.0
+    gain[1] = 0.0
     # the nodes advance through the history, so each delayed copy's step is found by walking on from
     # where it was last (locate_from: the same step as hermite5's binary search, without the search)
     copies = int((t[last] - t[0]) / min(delays[0], delays[1])) + 2
-    hints = np.zeros((2, copies), dtype=np.int64)
+    hints = np.empty((2, copies), dtype=np.int64)
+    for n in range(copies):
+        hints[0, n] = 0
+        hints[1, n] = 0
     here = 0
     for j in range(last):
         for part in range(subdivide):
@@ -99,4 +105,7 @@ def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nod
                         _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
                     end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
                     gain[i] += weights[m] * (b - a) * slope * end_slope
-    return gain / (2.0 * kappa * kappa)
+    scale = 2.0 * kappa * kappa
+    for i in range(2):  # not gain / scale: an array expression compiles a ufunc loop, a second of compilation
+        gain[i] /= scale
+    return gain

@@ -127,9 +127,14 @@ def hermite5(t, w, d1, d2, last, s):
     return hermite5_on(t, w, d1, d2, locate(t, last, s), s)
 
 
-@kernel(inline="always")
+@kernel
 def hermite5_on(t, w, d1, d2, lo, s):
-    """:func:`hermite5` on the stored step ``[t[lo], t[lo + 1]]`` (found by the caller)."""
+    """:func:`hermite5` on the stored step ``[t[lo], t[lo + 1]]`` (found by the caller).
+
+    Compiled once and called, not inlined: each inlined copy of its polynomials cost numba a
+    second of compilation, and the call costs the delay integrator no measurable time (LLVM may
+    still inline it).
+    """
     h = t[lo + 1] - t[lo]
     x = (s - t[lo]) / h
     x = min(x, 1.0)
@@ -362,8 +367,8 @@ def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
 
 
 @kernel(inline="always")
-def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb, direct_copies):
-    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)`` and ``S''(s)``.
+def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, direct_copies):
+    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)``, ``S'(s)`` and ``S''(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
     round-off) are skipped.  With ``direct_copies = K`` (an int; None: every copy on its own) the copies older
@@ -388,15 +393,13 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope
                 value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
                                                      u + gamma_i)
                 rod_total += value
-                if want_slope:
-                    rod_slope += derivative
-                    rod_curvature += second
+                rod_slope += derivative
+                rod_curvature += second
                 break
             value, derivative, second = hermite5(t, w, d1, d2, last, u)
             rod_total += value
-            if want_slope:
-                rod_slope += derivative
-                rod_curvature += second
+            rod_slope += derivative
+            rod_curvature += second
             n += 1
         total += weights[i] * rod_total
         slope += weights[i] * rod_slope
@@ -423,15 +426,20 @@ def _series_curvature(s, freq, cos_amp, sin_amp):
     return ddq
 
 
-@kernel(inline="always")
+@kernel
 def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-              tables, table_slopes, want_slope, comb, direct_copies):
-    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; the derivatives only if ``want_slope``."""
+              tables, table_slopes, comb, direct_copies):
+    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``.
+
+    Not inlined: the integrator calls it from two places, and one compiled copy takes seconds less to
+    compile than two inlined ones (the derivatives, which only the step's end needs, cost a few additions
+    once :func:`hermite5_on` gives them anyway).
+    """
     memory, memory_slope, memory_curvature = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant,
-                                                        want_slope, comb, direct_copies)
+                                                        comb, direct_copies)
     q, dq = noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes)
     gpp = math.nan
-    if want_slope and tables is None:
+    if tables is None:
         gpp = _series_curvature(s, freq, cos_amp, sin_amp) - memory_curvature
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq, gpp
 
@@ -505,7 +513,10 @@ def _method_of_steps(
     w = np.empty(capacity)
     d1 = np.empty(capacity)
     d2 = np.empty(capacity)
-    comb = np.zeros((3 * delays.shape[0], capacity))
+    # np.empty and loops, not np.zeros and slices: each of numba's array helpers is a compilation of its own
+    comb = np.empty((3 * delays.shape[0], capacity))  # column k <= last is read once written; 0 is zero
+    for row in range(comb.shape[0]):
+        comb[row, 0] = 0.0
     scale = max(kappa, 1e-300)
     tol = rtol * scale * 0.05
     negligible = math.log(max(rtol * 1e-4 * min(scale, 1.0) * scale, 1e-300))
@@ -597,8 +608,7 @@ def _method_of_steps(
         t1 = t0 + h
         g1, gp1, gpp1 = _exponent(
             t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-            tables, table_slopes, True, comb,
-            direct_copies,
+            tables, table_slopes, comb, direct_copies,
         )
         a = (g1 - g_now) / h
         # nodes of the transformed rule: e^{a s} ds becomes uniform
@@ -630,10 +640,10 @@ def _method_of_steps(
                     s = math.log1p(x * em) / a
                 else:
                     s = h * x
-                gs, _unused, _unused2 = _exponent(
+                gs = _exponent(
                     t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
-                    periods, tables, table_slopes, False, comb, direct_copies,
-                )
+                    periods, tables, table_slopes, comb, direct_copies,
+                )[0]
                 evaluations += 1
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)
@@ -680,7 +690,7 @@ def _method_of_steps(
             w_new = np.empty(capacity)
             d1_new = np.empty(capacity)
             d2_new = np.empty(capacity)
-            comb_new = np.zeros((comb.shape[0], capacity))
+            comb_new = np.empty((comb.shape[0], capacity))
             # element by element: a slice assignment would compile numba's shape check and its error
             # message (string formatting), seconds of compilation for a copy
             for k in range(last + 1):
@@ -718,11 +728,20 @@ def _method_of_steps(
             break
 
     tail = d1[last] * settle_time
+    t_out = np.empty(last + 1)
+    w_out = np.empty(last + 1)
+    d1_out = np.empty(last + 1)
+    d2_out = np.empty(last + 1)
+    for k in range(last + 1):
+        t_out[k] = t[k]
+        w_out[k] = w[k]
+        d1_out[k] = d1[k]
+        d2_out[k] = d2[k]
     return (
-        t[: last + 1].copy(),
-        w[: last + 1].copy(),
-        d1[: last + 1].copy(),
-        d2[: last + 1].copy(),
+        t_out,
+        w_out,
+        d1_out,
+        d2_out,
         status,
         (error_sum + tail) / scale,
         rejected,
