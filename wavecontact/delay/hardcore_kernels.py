@@ -26,7 +26,7 @@ STATUS_OK = 0
 STATUS_MAX_WINDOWS = 1
 
 
-@kernel
+@kernel(inline="always")
 def _w_at(kt, kw, n, u):
     """``w(u)`` from the kinks ``(kt, kw)[:n]``."""
     if u <= kt[0]:
@@ -97,7 +97,7 @@ def _sorted(values, count):
     return a
 
 
-@kernel
+@kernel(inline="always")
 def _smallest(values):
     """``values.min()`` of a non-empty 1-D array, without compiling numba's reduction."""
     best = values[0]
@@ -138,7 +138,7 @@ def _window_points(kt, n, delays, start, stop, merge, buffer):
     return points[:kept], buffer
 
 
-@kernel
+@kernel(inline="always")
 def _periodic_table(kt, kw, n, gamma_i):
     """``P_i(s) = F_i(s) - w_inf s / Gamma_i`` on one period ``[end, end + Gamma_i]`` at its kinks."""
     end = kt[n - 1]
@@ -154,7 +154,7 @@ def _periodic_table(kt, kw, n, gamma_i):
     return points, values
 
 
-@kernel
+@kernel(inline="always")
 def _table_value(points, values, s, end, gamma_i):
     u = end + (s - end) % gamma_i
     lo = locate(points, points.shape[0] - 1, u)

@@ -469,7 +469,7 @@ def _sturdy_curvature(slope1, g1, gp1, gpp1, w1, drift):
     return curvature
 
 
-@kernel
+@kernel(inline="always")
 def _logaddexp(x, y):
     if x == -math.inf:
         return y
