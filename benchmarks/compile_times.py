@@ -32,7 +32,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from docs_block import run_and_write
+from docs_block import DOCS, captured_stdout, run_and_write, run_header, write_block
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -174,8 +174,31 @@ def main(argv=None):
     parser.add_argument("--update-docs", action="store_true",
                         help="write the table into docs/performance.md (block compile-times)")
     args = parser.parse_args(argv)
+    if args.only and args.update_docs:  # rewrite these rows only; the others keep their run's numbers
+        header = run_header(argv and [str(Path(__file__).resolve()), *argv])
+        with captured_stdout() as tee:
+            measure(args.only, args.tree.resolve())
+        write_block("performance.md", "compile-times", merged_rows(read_block("performance.md", "compile-times"),
+                                                                   tee.copy.getvalue(), header))
+        return
     run_and_write(lambda: measure(args.only, args.tree.resolve()), "performance.md", "compile-times",
                   args.update_docs)
+
+
+def read_block(page: str, name: str) -> str:
+    """The text between a block's markers on docs/``page``."""
+    text = (DOCS / page).read_text(encoding="utf-8")
+    return text.split(f"<!-- {name}:start -->\n", 1)[1].split(f"<!-- {name}:end -->", 1)[0]
+
+
+def merged_rows(block: str, fresh: str, header: str) -> str:
+    """``block`` with each of its table rows that ``fresh`` measured again replaced (new ones appended), and
+    ``header`` (the rerun's command and load) added under the block's first line."""
+    rows = {line.split(" | ", 1)[0]: line for line in fresh.splitlines() if line.startswith("| `")}
+    lines = [rows.pop(line.split(" | ", 1)[0], line) if line.startswith("| `") else line
+             for line in block.strip().splitlines()]
+    lines[1:1] = [f"The rows of {header}"]
+    return "\n".join(lines + list(rows.values()))
 
 
 if __name__ == "__main__":

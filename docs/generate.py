@@ -28,11 +28,13 @@ wall time of the machine that last ran them; those numbers are masked when compa
 from __future__ import annotations
 
 import argparse
+import difflib
 import os
 import re
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -307,6 +309,15 @@ def replace_block(page: Path, name: str, body: str) -> None:
     page.write_text(f"{head}{start}{body}{end}{tail}")
 
 
+def stale_lines(block: Block, current: str, fresh: str, limit: int = 40) -> str:
+    """The lines of a stale block that differ from a fresh run (masked as compared; at most ``limit``)."""
+    lines = list(difflib.unified_diff(mask(block, current).splitlines(), mask(block, fresh).splitlines(),
+                                      "page", "fresh run", n=0, lineterm=""))
+    if len(lines) > limit:
+        lines = lines[:limit] + [f"... {len(lines) - limit} more lines"]
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help="blocks to regenerate (default: all)")
@@ -324,16 +335,21 @@ def main(argv=None) -> int:
         parser.error(f"unknown block(s) {', '.join(unknown)}; see --list")
     stale = 0
     for block in [known[n] for n in args.names] or BLOCKS:
+        started = time.perf_counter()
         body = render(block, write_figures=not args.check)
+        took = f"{time.perf_counter() - started:.1f} s, load {os.getloadavg()[0]:.1f}"
         page = ROOT / block.page
         if args.check:
             current = page_blocks(page).get(block.name)
             if current is None or mask(block, current) != mask(block, body):
                 stale += 1
-                print(f"{block.page}: block {block.name} is out of date", file=sys.stderr)
+                print(f"{block.page}: block {block.name} is out of date ({took})", file=sys.stderr)
+                print(stale_lines(block, current or "", body), file=sys.stderr)
+            else:
+                print(f"{block.page}: block {block.name} is up to date ({took})", file=sys.stderr)
             continue
         replace_block(page, block.name, body)
-        print(f"{block.page}: {block.name}", file=sys.stderr)
+        print(f"{block.page}: {block.name} ({took})", file=sys.stderr)
     return 1 if stale else 0
 
 

@@ -84,3 +84,20 @@ def test_extreme_ratios_are_refused_before_work_starts():
     delays, weights = echoes_from_ratios(1e-6, 1e-6)  # force steps down by 1 - 2e-6 per echo
     with pytest.raises(InvalidParameterError, match="max_windows"):
         hard_core_history(delays, weights)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_kinks_are_sorted_as_numpy_sorts_them(compiled):
+    """hardcore_kernels._sorted (a merge sort numba compiles fast) against np.sort: random, tied, sorted and
+    reversed values, every prefix length up to 40."""
+    from wavecontact.delay.hardcore_kernels import _smallest, _sorted
+
+    sort = _sorted if compiled else _sorted.py_func
+    smallest = _smallest if compiled else _smallest.py_func
+    rng = np.random.default_rng(np.random.SeedSequence(3))
+    for values in (rng.uniform(0.0, 5.0, 40), np.round(rng.uniform(0.0, 5.0, 40), 1), np.arange(40.0),
+                   np.arange(40.0)[::-1].copy()):
+        for count in range(1, 41):
+            assert np.array_equal(sort(values, count), np.sort(values[:count]))
+            assert smallest(values[:count]) == values[:count].min()
+    assert sort(np.empty(3), 0).size == 0

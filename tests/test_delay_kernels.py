@@ -7,9 +7,16 @@ equal the same quadrature written here with a fresh bisection for every point.
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from wavecontact._jit import NUMBA_ENABLED
 from wavecontact.bath.noise import NoiseTables
 from wavecontact.delay import kernels
 from wavecontact.delay.energy_split import NODES, WEIGHTS, vibration_energy_gain
@@ -104,3 +111,28 @@ def test_lobatto_rule_converges_to_the_gauss_kronrod_reference(gamma, kappa):
         assert abs(w[-1] - reference[1][-1]) / kappa <= error
         evaluations_per_step = work["evaluations"] / (work["steps"] + work["rejected_steps"])
         assert evaluations_per_step < 6.1
+
+
+
+_COLD_COMPILE = """
+import json
+from wavecontact.delay import kernels
+from wavecontact.delay.solver import solve_delay_equation
+solve_delay_equation(0.6, 100.0)
+noise = [kernels.table_value, kernels.span_is_free, kernels.noise_upper_bound, kernels.noise_curvature_bound,
+         kernels.no_later_contact, kernels.comb_values]
+print(json.dumps({"noise_kernels": {k.py_func.__name__: len(k.signatures) for k in noise},
+                  "integrator": [str(s) for s in kernels._method_of_steps.signatures]}))
+"""
+
+
+@pytest.mark.skipif(not NUMBA_ENABLED, reason="kernels run as plain Python")
+def test_a_cold_solve_compiles_none_of_the_noise_or_comb_code(tmp_path):
+    """Compile time (docs/performance.md): on an empty numba cache a cold collision compiles the integrator's
+    cold specialisation only, neither the noise tables' kernels nor the comb sums (seconds each)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
+    done = subprocess.run([sys.executable, "-c", _COLD_COMPILE], env=env, capture_output=True, text=True, check=True)
+    record = json.loads(done.stdout.splitlines()[-1])
+    assert record["noise_kernels"] == dict.fromkeys(record["noise_kernels"], 0)
+    (signature,) = record["integrator"]
+    assert signature.count("none") == 9  # the series (3 arrays), the tables (5) and direct_copies

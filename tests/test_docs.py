@@ -84,6 +84,36 @@ def test_cheap_blocks_are_what_their_commands_print(name):
         f"{BLOCKS[name].page} is out of date: python docs/generate.py {name}")
 
 
+# The expensive blocks that CI's second pass re-runs whole (.ci/run: ``-m "not slow or docs_ci"``, kernels cached
+# by the first pass): together about SECOND_PASS_SECONDS s on 2 cores; the cheap blocks run in every pass
+# (test above) and ``python -m pytest -m slow -k expensive_blocks`` (or ``python docs/generate.py --check``,
+# the same comparison) runs every block.
+SECOND_PASS = ("convergence-kappa-20", "convergence-kappa-inf", "fem-two-materials", "fem-remainder-orders",
+               "fem-discretizations", "fem-discretizations-100", "fem-quadrature", "fem-gamma-one", "fem-dispersive",
+               "materials-striker", "example-compare_discretizations_and_solvers", "example-mesh_convergence_study",
+               "example-paraview_fields", "example-restitution_map_gamma_kappa")
+# measured by python docs/generate.py --check on a fresh clone (it prints each block's time): the convergence
+# blocks 19.3 + 14.8 s at load 11.5, the rest 2-6 s each (41 s together) at load 4-6; the left-out blocks take
+# 16-810 s each (usage-compare, the ring blocks, fem-default, modal-accuracy, materials-map, the long examples)
+SECOND_PASS_SECONDS = 75  # these 14 tests: 44.8 s wall at load 4 (pytest -m docs_ci, kernels cached)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.docs_ci) if name in SECOND_PASS else name
+                                  for name in sorted(n for n, b in BLOCKS.items() if not b.cheap)])
+def test_expensive_blocks_are_what_their_commands_print(name):
+    """What ``python docs/generate.py --check`` compares, block by block (wall times masked)."""
+    block = BLOCKS[name]
+    fresh = generate.render(block, write_figures=False)
+    current = block_text(name)
+    assert generate.mask(block, current) == generate.mask(block, fresh), (
+        f"{block.page} is out of date (python docs/generate.py {name}):\n{generate.stale_lines(block, current, fresh)}")
+
+
+def test_second_pass_blocks_are_expensive_blocks():
+    assert set(SECOND_PASS) <= {n for n, b in BLOCKS.items() if not b.cheap}
+
+
 def test_error_estimate_tuning_figures_are_what_the_stored_sweeps_give():
     """docs/error_estimates.md section 1: the ratios the FE estimate's orders rest on (seconds: it reads
     the stored sweeps, no solve)."""

@@ -35,7 +35,6 @@ NODES = 0.5 * (_X + 1.0)
 WEIGHTS = 0.5 * _W
 
 
-@kernel
 def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
     """``Delta E_i`` per rod (see module docstring), Gauss-Legendre on each stored step.
 
@@ -53,13 +52,32 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
         Quadrature rule on [0, 1].
     subdivide : int
         Sub-intervals per stored step.
+
+    Returns
+    -------
+    ndarray (2,)
+        ``Delta E_1, Delta E_2`` (``E_tr = 1/4``).
     """
+    if periods.shape[0] != 2:  # a cold bath: numba compiles the kernel without the tables' code
+        periods = tables = table_slopes = None
+    return _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide)
+
+
+@kernel
+def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
+    """:func:`vibration_energy_gain` with ``tables`` None for a cold bath."""
     last = t.shape[0] - 1
-    gain = np.zeros(2)
+    # np.empty and loops, not np.zeros: each of numba's array helpers is a compilation of its own
+    gain = np.empty(2)
+    gain[0] = 0.0
+    gain[1] = 0.0
     # the nodes advance through the history, so each delayed copy's step is found by walking on from
     # where it was last (locate_from: the same step as hermite5's binary search, without the search)
     copies = int((t[last] - t[0]) / min(delays[0], delays[1])) + 2
-    hints = np.zeros((2, copies), dtype=np.int64)
+    hints = np.empty((2, copies), dtype=np.int64)
+    for n in range(copies):
+        hints[0, n] = 0
+        hints[1, n] = 0
     here = 0
     for j in range(last):
         for part in range(subdivide):
@@ -83,8 +101,11 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
                         memory_slope += ds
                         n += 1
                     noise_slope = 0.0
-                    if periods.shape[0] == 2:
+                    if tables is not None:
                         _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
                     end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
                     gain[i] += weights[m] * (b - a) * slope * end_slope
-    return gain / (2.0 * kappa * kappa)
+    scale = 2.0 * kappa * kappa
+    for i in range(2):  # not gain / scale: an array expression compiles a ufunc loop, a second of compilation
+        gain[i] /= scale
+    return gain

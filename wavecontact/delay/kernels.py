@@ -129,7 +129,12 @@ def hermite5(t, w, d1, d2, last, s):
 
 @kernel(inline="always")
 def hermite5_on(t, w, d1, d2, lo, s):
-    """:func:`hermite5` on the stored step ``[t[lo], t[lo + 1]]`` (found by the caller)."""
+    """:func:`hermite5` on the stored step ``[t[lo], t[lo + 1]]`` (found by the caller).
+
+    Inlined: each copy costs numba about half a second of compilation, but called instead, it made
+    cold solves at the default tolerance 15-85 % slower and the energy split 50 % (CPU time, the
+    memory sums call it for every delayed copy).
+    """
     h = t[lo + 1] - t[lo]
     x = (s - t[lo]) / h
     x = min(x, 1.0)
@@ -340,27 +345,33 @@ def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_
 
 @kernel(inline="always")
 def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
-    """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod)."""
+    """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod).
+
+    ``freq`` (with its amplitudes) or ``tables`` (with ``periods`` and ``table_slopes``) None: no such
+    term, and numba compiles none of its code (see :func:`integrate_delay_equation`).
+    """
     q = 0.0
     dq = 0.0
-    for j in range(freq.shape[0]):
-        c = math.cos(freq[j] * s)
-        sn = math.sin(freq[j] * s)
-        q += cos_amp[j] * c + sin_amp[j] * sn
-        dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
-    for i in range(periods.shape[0]):
-        value, slope = table_value(s, periods[i], tables[i], table_slopes[i])
-        q += value
-        dq += slope
+    if freq is not None:
+        for j in range(freq.shape[0]):
+            c = math.cos(freq[j] * s)
+            sn = math.sin(freq[j] * s)
+            q += cos_amp[j] * c + sin_amp[j] * sn
+            dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
+    if tables is not None:
+        for i in range(periods.shape[0]):
+            value, slope = table_value(s, periods[i], tables[i], table_slopes[i])
+            q += value
+            dq += slope
     return q, dq
 
 
 @kernel(inline="always")
-def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope, comb, direct_copies):
-    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)`` and, if asked, ``S'(s)`` and ``S''(s)``.
+def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, direct_copies):
+    """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)``, ``S'(s)`` and ``S''(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
-    round-off) are skipped.  With ``direct_copies = K > 0`` the copies older
+    round-off) are skipped.  With ``direct_copies = K`` (an int; None: every copy on its own) the copies older
     than ``K`` round trips are taken at once from the stored comb sums
     ``C_i(v) = sum_{m>=1} W(v - m Gamma_i)`` (rows ``3i, 3i+1, 3i+2`` of
     ``comb``: value, slope, curvature) as ``C_i(s - K Gamma_i)``.
@@ -378,19 +389,17 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, want_slope
             u = s - n * gamma_i
             if u <= t_significant:
                 break
-            if direct_copies > 0 and n > direct_copies:
+            if direct_copies is not None and n > direct_copies:
                 value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
                                                      u + gamma_i)
                 rod_total += value
-                if want_slope:
-                    rod_slope += derivative
-                    rod_curvature += second
+                rod_slope += derivative
+                rod_curvature += second
                 break
             value, derivative, second = hermite5(t, w, d1, d2, last, u)
             rod_total += value
-            if want_slope:
-                rod_slope += derivative
-                rod_curvature += second
+            rod_slope += derivative
+            rod_curvature += second
             n += 1
         total += weights[i] * rod_total
         slope += weights[i] * rod_slope
@@ -411,20 +420,26 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
 def _series_curvature(s, freq, cos_amp, sin_amp):
     """``Q''(s)`` of the Fourier series (Eq. 17)."""
     ddq = 0.0
-    for j in range(freq.shape[0]):
-        ddq -= freq[j] * freq[j] * (cos_amp[j] * math.cos(freq[j] * s) + sin_amp[j] * math.sin(freq[j] * s))
+    if freq is not None:
+        for j in range(freq.shape[0]):
+            ddq -= freq[j] * freq[j] * (cos_amp[j] * math.cos(freq[j] * s) + sin_amp[j] * math.sin(freq[j] * s))
     return ddq
 
 
-@kernel(inline="always")
+@kernel
 def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-              tables, table_slopes, want_slope, comb, direct_copies):
-    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; the derivatives only if ``want_slope``."""
+              tables, table_slopes, comb, direct_copies):
+    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``.
+
+    Not inlined: the integrator calls it from two places, and one compiled copy takes seconds less to
+    compile than two inlined ones (the derivatives, which only the step's end needs, cost a few additions:
+    :func:`hermite5_on` computes them anyway).
+    """
     memory, memory_slope, memory_curvature = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant,
-                                                        want_slope, comb, direct_copies)
+                                                        comb, direct_copies)
     q, dq = noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes)
     gpp = math.nan
-    if want_slope and periods.shape[0] == 0:
+    if tables is None:
         gpp = _series_curvature(s, freq, cos_amp, sin_amp) - memory_curvature
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq, gpp
 
@@ -454,7 +469,7 @@ def _sturdy_curvature(slope1, g1, gp1, gpp1, w1, drift):
     return curvature
 
 
-@kernel
+@kernel(inline="always")
 def _logaddexp(x, y):
     if x == -math.inf:
         return y
@@ -466,7 +481,7 @@ def _logaddexp(x, y):
 
 
 @kernel
-def integrate_delay_equation(
+def _method_of_steps(
     kappa,
     a0,
     delays,
@@ -491,6 +506,250 @@ def integrate_delay_equation(
     weights_g,
     direct_copies,
 ):
+    """:func:`integrate_delay_equation` with None for each absent part of the noise and for
+    ``direct_copies = 0`` (each combination of present parts compiles on its own, without the others' code)."""
+    capacity = 1024
+    t = np.empty(capacity)
+    w = np.empty(capacity)
+    d1 = np.empty(capacity)
+    d2 = np.empty(capacity)
+    # np.empty and loops, not np.zeros and slices: each of numba's array helpers is a compilation of its own
+    comb = np.empty((3 * delays.shape[0], capacity))  # column k <= last is read once written; 0 is zero
+    for row in range(comb.shape[0]):
+        comb[row, 0] = 0.0
+    scale = max(kappa, 1e-300)
+    tol = rtol * scale * 0.05
+    negligible = math.log(max(rtol * 1e-4 * min(scale, 1.0) * scale, 1e-300))
+    significant = math.log(1e-18 * scale) if scale > 0 else -700.0
+    gamma_min = delays[0]
+    for i in range(delays.shape[0]):
+        gamma_min = min(gamma_min, delays[i])
+    h_max = 0.95 * gamma_min
+
+    t[0] = 0.0
+    w[0] = 0.0
+    # int64 from the start: a literal 0 would be typed as the value 0 until the loop's increments widen
+    # it, and numba compiles every kernel called with it for both types
+    last = np.int64(0)
+    # g and g' at tau = 0 as _exponent gives them: no delayed copy is back yet, so its memory terms are
+    # exactly 0 (written out here rather than a third inlined copy of _exponent, seconds of compilation)
+    q_start, dq_start = noise_value(0.0, freq, cos_amp, sin_amp, periods, tables, table_slopes)
+    g_now = kappa * 0.0 - a0 - 0.0 + q_start
+    gp_now = kappa - 0.0 + dq_start
+    d1[0] = math.exp(g_now)
+    d2[0] = d1[0] * (gp_now - d1[0])
+    h = min(h_max, 1.0 / scale)
+    t_significant = math.inf
+    t_active = -math.inf
+    error_sum = 0.0
+    rejected = 0
+    evaluations = 1
+    status = STATUS_OK
+    gx = np.empty(nodes.shape[0])
+    series_rate = kappa
+    if freq is not None:
+        for j in range(freq.shape[0]):
+            series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
+    exponent_rate = series_rate + noise_rate
+    tabulated = tables is not None
+
+    while True:
+        t0 = t[last]
+        if last + 1 >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if t0 > t_limit:
+            status = STATUS_TIME_LIMIT
+            break
+        # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
+        h_wanted = h
+        if tables is not None:
+            # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
+            # step is free or it is not (a free step is the proposed one in either branch below)
+            distance = negligible - (g_now - w[last])
+            free = False
+            if distance > 0.0 and series_rate * h < distance:  # else span_is_free is False at once
+                q0 = 0.0
+                for i in range(periods.shape[0]):
+                    q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
+                free = span_is_free(t0, h, distance, series_rate, periods, tables, table_slopes, block_max, q0)
+            h_free = h if free else 0.0
+        else:
+            h_free = (negligible - (g_now - w[last])) / exponent_rate
+            free = not h_free < h
+        # do not stride over more than two stored steps around any delayed time
+        if t_significant < math.inf and not free:
+            for i in range(delays.shape[0]):
+                n = 1
+                while True:
+                    u = t0 - n * delays[i]
+                    if u <= t_significant - h_max or (direct_copies is not None and direct_copies < n - 1):
+                        break
+                    if u >= 0.0:
+                        lo = locate(t, last, u)
+                        j = min(lo + 2, last)
+                        reach = t[j] - u
+                        if reach > 0.0 and j > lo:
+                            h = min(h, reach)
+                    n += 1
+        if not tabulated:
+            free = h_free > h
+        if free:
+            h = min(h_wanted, h_free)
+        elif tables is not None and noise_excursion > 0.0:
+            curvature = noise_curvature_bound(t0, t0 + h, periods, tables, curvature_blocks)
+            if curvature > 0.0:
+                h = min(h, math.sqrt(8.0 * noise_excursion / curvature))
+        h = min(h, h_max)
+        if h < 1e-14 * max(1.0, abs(t0)):
+            status = STATUS_STEP_UNDERFLOW
+            break
+
+        t1 = t0 + h
+        g1, gp1, gpp1 = _exponent(
+            t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
+            tables, table_slopes, comb, direct_copies,
+        )
+        a = (g1 - g_now) / h
+        # nodes of the transformed rule: e^{a s} ds becomes uniform
+        z = a * h
+        if z > _LINEAR_THRESHOLD:
+            em = math.expm1(-z)
+            log_base = g1 + math.log(-em / a)
+        elif z < -_LINEAR_THRESHOLD:
+            em = math.expm1(z)
+            log_base = g_now + math.log(-em / (-a))
+        else:
+            em = 0.0
+            log_base = g_now + math.log(h)
+        r_max = -math.inf
+        # a free step of tabulated noise: the bounds show W' below e^negligible all along it, so its whole
+        # increment (at most h e^negligible) is taken as its error and g only at the ends (the secant)
+        for j in range(0 if free and tabulated else nodes.shape[0]):
+            x = nodes[j]
+            if x == 0.0:  # a node at a step end (Lobatto rules): g is known there
+                s = 0.0
+                gs = g_now
+            elif x == 1.0:
+                s = h
+                gs = g1
+            else:
+                if z > _LINEAR_THRESHOLD:
+                    s = h + math.log1p((1.0 - x) * em) / a
+                elif z < -_LINEAR_THRESHOLD:
+                    s = math.log1p(x * em) / a
+                else:
+                    s = h * x
+                gs = _exponent(
+                    t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
+                    periods, tables, table_slopes, comb, direct_copies,
+                )[0]
+                evaluations += 1
+            if z > _LINEAR_THRESHOLD:
+                gx[j] = gs - g1 - a * (s - h)
+            elif z < -_LINEAR_THRESHOLD:
+                gx[j] = gs - g_now - a * s
+            else:
+                gx[j] = gs - g_now
+            r_max = max(r_max, gx[j])
+        evaluations += 1
+        secant_only = free and tabulated
+        sum_k = 1.0
+        sum_g = 1.0
+        log_integral = log_base
+        if not secant_only:
+            sum_k = 0.0
+            sum_g = 0.0
+            for j in range(nodes.shape[0]):
+                e = math.exp(gx[j] - r_max)
+                sum_k += weights_k[j] * e
+                sum_g += weights_g[j] * e
+            log_integral = log_base + r_max + math.log(sum_k)
+        w1 = _logaddexp(w[last], log_integral)
+        if not math.isfinite(w1) or not math.isfinite(g1):
+            status = STATUS_NONFINITE
+            break
+        if secant_only:
+            error_quadrature = h * math.exp(negligible)
+        else:
+            error_quadrature = math.exp(log_integral - w1) * abs(1.0 - sum_g / sum_k)
+        slope1 = math.exp(g1 - w1)
+        curvature1 = _sturdy_curvature(slope1, g1, gp1, gpp1, w1, kappa * t1)
+        top = 12.0 * (w[last] - w1) + 6.0 * h * (d1[last] + slope1) + h * h * (d2[last] - curvature1)
+        error_interpolation = _QUARTIC_GAP * abs(top)
+        error = error_quadrature + error_interpolation
+        if error > tol and h > 1e-14 * max(1.0, abs(t0)):
+            rejected += 1
+            h *= max(0.1, 0.8 * (tol / error) ** 0.2)
+            continue
+
+        # accept
+        if last + 1 >= capacity:
+            capacity *= 2
+            t_new = np.empty(capacity)
+            w_new = np.empty(capacity)
+            d1_new = np.empty(capacity)
+            d2_new = np.empty(capacity)
+            comb_new = np.empty((comb.shape[0], capacity))
+            # element by element: a slice assignment would compile numba's shape check and its error
+            # message (string formatting), seconds of compilation for a copy
+            for k in range(last + 1):
+                t_new[k] = t[k]
+                w_new[k] = w[k]
+                d1_new[k] = d1[k]
+                d2_new[k] = d2[k]
+                for row in range(comb.shape[0]):
+                    comb_new[row, k] = comb[row, k]
+            t, w, d1, d2 = t_new, w_new, d1_new, d2_new
+            comb = comb_new
+        if direct_copies is not None:
+            for i in range(delays.shape[0]):
+                value, slope, curvature = comb_values(t, w, d1, d2, last, t1, delays[i], comb, 3 * i)
+                comb[3 * i, last + 1] = value
+                comb[3 * i + 1, last + 1] = slope
+                comb[3 * i + 2, last + 1] = curvature
+        last += 1
+        t[last] = t1
+        w[last] = w1
+        d1[last] = slope1
+        d2[last] = curvature1
+        g_now = g1
+        error_sum += error
+        if t_significant == math.inf and (g1 - w1) > significant:
+            t_significant = t0
+        if (g1 - w1) > negligible:
+            t_active = t1
+        factor = 4.0 if error == 0.0 else min(4.0, 0.8 * (tol / error) ** 0.2)
+        h *= max(0.2, factor)
+        # with tabulated noise a contact may come back later than one memory period: stop on a certificate
+        settled = t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time
+        if settled and (tables is None or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
+                                                          periods, tables, block_max, negligible)):
+            break
+
+    tail = d1[last] * settle_time
+    t_out = np.empty(last + 1)
+    w_out = np.empty(last + 1)
+    d1_out = np.empty(last + 1)
+    d2_out = np.empty(last + 1)
+    for k in range(last + 1):
+        t_out[k] = t[k]
+        w_out[k] = w[k]
+        d1_out[k] = d1[k]
+        d2_out[k] = d2[k]
+    return (
+        t_out,
+        w_out,
+        d1_out,
+        d2_out,
+        status,
+        (error_sum + tail) / scale,
+        rejected,
+        evaluations,
+    )
+
+
+def integrate_delay_equation(kappa, a0, delays, weights, rtol, freq, cos_amp, sin_amp, periods, tables, table_slopes, block_max, noise_rate, noise_excursion, curvature_blocks, t_end_min, t_limit, settle_time, max_steps, nodes, weights_k, weights_g, direct_copies):
     """Integrate Eq. 16 from ``tau = 0`` until ``W`` has settled.
 
     Parameters
@@ -550,231 +809,16 @@ def integrate_delay_equation(
         Sum of the local error estimates of ``W / kappa`` plus the neglected tail.
     rejected, evaluations : int
         Rejected steps and evaluations of the exponent ``g``.
+
+    Notes
+    -----
+    The compiled kernel (:func:`_method_of_steps`) takes each absent part (no Fourier series, no
+    tables, ``direct_copies = 0``) as None, and numba compiles a separate, smaller specialisation
+    for each combination without the code of the absent parts: a cold collision compiles neither
+    the noise tables' bounds nor the comb sums.  The arithmetic of what remains is the same.
     """
-    capacity = 1024
-    t = np.empty(capacity)
-    w = np.empty(capacity)
-    d1 = np.empty(capacity)
-    d2 = np.empty(capacity)
-    comb = np.zeros((3 * delays.shape[0], capacity))
-    scale = max(kappa, 1e-300)
-    tol = rtol * scale * 0.05
-    negligible = math.log(max(rtol * 1e-4 * min(scale, 1.0) * scale, 1e-300))
-    significant = math.log(1e-18 * scale) if scale > 0 else -700.0
-    gamma_min = delays[0]
-    for i in range(delays.shape[0]):
-        gamma_min = min(gamma_min, delays[i])
-    h_max = 0.95 * gamma_min
-
-    t[0] = 0.0
-    w[0] = 0.0
-    # int64 from the start: a literal 0 would be typed as the value 0 until the loop's increments widen
-    # it, and numba compiles every kernel called with it for both types
-    last = np.int64(0)
-    # g and g' at tau = 0 as _exponent gives them: no delayed copy is back yet, so its memory terms are
-    # exactly 0 (written out here rather than a third inlined copy of _exponent, seconds of compilation)
-    q_start, dq_start = noise_value(0.0, freq, cos_amp, sin_amp, periods, tables, table_slopes)
-    g_now = kappa * 0.0 - a0 - 0.0 + q_start
-    gp_now = kappa - 0.0 + dq_start
-    d1[0] = math.exp(g_now)
-    d2[0] = d1[0] * (gp_now - d1[0])
-    h = min(h_max, 1.0 / scale)
-    t_significant = math.inf
-    t_active = -math.inf
-    error_sum = 0.0
-    rejected = 0
-    evaluations = 1
-    status = STATUS_OK
-    gx = np.empty(nodes.shape[0])
-    series_rate = kappa
-    for j in range(freq.shape[0]):
-        series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
-    exponent_rate = series_rate + noise_rate
-    tabulated = periods.shape[0] > 0
-
-    while True:
-        t0 = t[last]
-        if last + 1 >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        if t0 > t_limit:
-            status = STATUS_TIME_LIMIT
-            break
-        # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
-        h_wanted = h
-        if tabulated:
-            # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
-            # step is free or it is not (a free step is the proposed one in either branch below)
-            distance = negligible - (g_now - w[last])
-            free = False
-            if distance > 0.0 and series_rate * h < distance:  # else span_is_free is False at once
-                q0 = 0.0
-                for i in range(periods.shape[0]):
-                    q0 += table_value(t0, periods[i], tables[i], table_slopes[i])[0]
-                free = span_is_free(t0, h, distance, series_rate, periods, tables, table_slopes, block_max, q0)
-            h_free = h if free else 0.0
-        else:
-            h_free = (negligible - (g_now - w[last])) / exponent_rate
-            free = not h_free < h
-        # do not stride over more than two stored steps around any delayed time
-        if t_significant < math.inf and not free:
-            for i in range(delays.shape[0]):
-                n = 1
-                while True:
-                    u = t0 - n * delays[i]
-                    if u <= t_significant - h_max or (0 < direct_copies < n - 1):
-                        break
-                    if u >= 0.0:
-                        lo = locate(t, last, u)
-                        j = min(lo + 2, last)
-                        reach = t[j] - u
-                        if reach > 0.0 and j > lo:
-                            h = min(h, reach)
-                    n += 1
-        if not tabulated:
-            free = h_free > h
-        if free:
-            h = min(h_wanted, h_free)
-        elif tabulated and noise_excursion > 0.0:
-            curvature = noise_curvature_bound(t0, t0 + h, periods, tables, curvature_blocks)
-            if curvature > 0.0:
-                h = min(h, math.sqrt(8.0 * noise_excursion / curvature))
-        h = min(h, h_max)
-        if h < 1e-14 * max(1.0, abs(t0)):
-            status = STATUS_STEP_UNDERFLOW
-            break
-
-        t1 = t0 + h
-        g1, gp1, gpp1 = _exponent(
-            t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-            tables, table_slopes, True, comb,
-            direct_copies,
-        )
-        a = (g1 - g_now) / h
-        # nodes of the transformed rule: e^{a s} ds becomes uniform
-        z = a * h
-        if z > _LINEAR_THRESHOLD:
-            em = math.expm1(-z)
-            log_base = g1 + math.log(-em / a)
-        elif z < -_LINEAR_THRESHOLD:
-            em = math.expm1(z)
-            log_base = g_now + math.log(-em / (-a))
-        else:
-            em = 0.0
-            log_base = g_now + math.log(h)
-        r_max = -math.inf
-        # a free step of tabulated noise: the bounds show W' below e^negligible all along it, so its whole
-        # increment (at most h e^negligible) is taken as its error and g only at the ends (the secant)
-        for j in range(0 if free and tabulated else nodes.shape[0]):
-            x = nodes[j]
-            if x == 0.0:  # a node at a step end (Lobatto rules): g is known there
-                s = 0.0
-                gs = g_now
-            elif x == 1.0:
-                s = h
-                gs = g1
-            else:
-                if z > _LINEAR_THRESHOLD:
-                    s = h + math.log1p((1.0 - x) * em) / a
-                elif z < -_LINEAR_THRESHOLD:
-                    s = math.log1p(x * em) / a
-                else:
-                    s = h * x
-                gs, _unused, _unused2 = _exponent(
-                    t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
-                    periods, tables, table_slopes, False, comb, direct_copies,
-                )
-                evaluations += 1
-            if z > _LINEAR_THRESHOLD:
-                gx[j] = gs - g1 - a * (s - h)
-            elif z < -_LINEAR_THRESHOLD:
-                gx[j] = gs - g_now - a * s
-            else:
-                gx[j] = gs - g_now
-            r_max = max(r_max, gx[j])
-        evaluations += 1
-        secant_only = free and tabulated
-        sum_k = 1.0
-        sum_g = 1.0
-        log_integral = log_base
-        if not secant_only:
-            sum_k = 0.0
-            sum_g = 0.0
-            for j in range(nodes.shape[0]):
-                e = math.exp(gx[j] - r_max)
-                sum_k += weights_k[j] * e
-                sum_g += weights_g[j] * e
-            log_integral = log_base + r_max + math.log(sum_k)
-        w1 = _logaddexp(w[last], log_integral)
-        if not math.isfinite(w1) or not math.isfinite(g1):
-            status = STATUS_NONFINITE
-            break
-        if secant_only:
-            error_quadrature = h * math.exp(negligible)
-        else:
-            error_quadrature = math.exp(log_integral - w1) * abs(1.0 - sum_g / sum_k)
-        slope1 = math.exp(g1 - w1)
-        curvature1 = _sturdy_curvature(slope1, g1, gp1, gpp1, w1, kappa * t1)
-        top = 12.0 * (w[last] - w1) + 6.0 * h * (d1[last] + slope1) + h * h * (d2[last] - curvature1)
-        error_interpolation = _QUARTIC_GAP * abs(top)
-        error = error_quadrature + error_interpolation
-        if error > tol and h > 1e-14 * max(1.0, abs(t0)):
-            rejected += 1
-            h *= max(0.1, 0.8 * (tol / error) ** 0.2)
-            continue
-
-        # accept
-        if last + 1 >= capacity:
-            capacity *= 2
-            t_new = np.empty(capacity)
-            w_new = np.empty(capacity)
-            d1_new = np.empty(capacity)
-            d2_new = np.empty(capacity)
-            comb_new = np.zeros((comb.shape[0], capacity))
-            # element by element: a slice assignment would compile numba's shape check and its error
-            # message (string formatting), seconds of compilation for a copy
-            for k in range(last + 1):
-                t_new[k] = t[k]
-                w_new[k] = w[k]
-                d1_new[k] = d1[k]
-                d2_new[k] = d2[k]
-                for row in range(comb.shape[0]):
-                    comb_new[row, k] = comb[row, k]
-            t, w, d1, d2 = t_new, w_new, d1_new, d2_new
-            comb = comb_new
-        if direct_copies > 0:
-            for i in range(delays.shape[0]):
-                value, slope, curvature = comb_values(t, w, d1, d2, last, t1, delays[i], comb, 3 * i)
-                comb[3 * i, last + 1] = value
-                comb[3 * i + 1, last + 1] = slope
-                comb[3 * i + 2, last + 1] = curvature
-        last += 1
-        t[last] = t1
-        w[last] = w1
-        d1[last] = slope1
-        d2[last] = curvature1
-        g_now = g1
-        error_sum += error
-        if t_significant == math.inf and (g1 - w1) > significant:
-            t_significant = t0
-        if (g1 - w1) > negligible:
-            t_active = t1
-        factor = 4.0 if error == 0.0 else min(4.0, 0.8 * (tol / error) ** 0.2)
-        h *= max(0.2, factor)
-        # with tabulated noise a contact may come back later than one memory period: stop on a certificate
-        settled = t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time
-        if settled and (not tabulated or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
-                                                          periods, tables, block_max, negligible)):
-            break
-
-    tail = d1[last] * settle_time
-    return (
-        t[: last + 1].copy(),
-        w[: last + 1].copy(),
-        d1[: last + 1].copy(),
-        d2[: last + 1].copy(),
-        status,
-        (error_sum + tail) / scale,
-        rejected,
-        evaluations,
-    )
+    if freq.shape[0] == 0:
+        freq = cos_amp = sin_amp = None
+    if periods.shape[0] == 0:
+        periods = tables = table_slopes = block_max = curvature_blocks = None
+    return _method_of_steps(kappa, a0, delays, weights, rtol, freq, cos_amp, sin_amp, periods, tables, table_slopes, block_max, noise_rate, noise_excursion, curvature_blocks, t_end_min, t_limit, settle_time, max_steps, nodes, weights_k, weights_g, direct_copies if direct_copies > 0 else None)
