@@ -165,5 +165,7 @@ def test_ctrl_c_at_a_terminal_stops_the_worker_processes_too_in_one_line():
     finally:
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)
+    # a worker that had to compile says so once before its work (not part of the ending); nothing else
+    err = "".join(line for line in err.splitlines(keepends=True) if "compiling numba kernels" not in line)
     assert process.returncode == 130 and err == "wavecontact: interrupted\n", err
     assert time.monotonic() - stopped < 30
