@@ -72,6 +72,9 @@ UNIT_SYSTEMS = {
     },
     # a Scene given in SI units (wavecontact.solve)
     "SI": {"length": "m", "time": "s", "displacement": "m", "velocity": "m/s", "stress": "Pa"},
+    # a scene in any consistent units (wavecontact solve FILE): those of its lengths, densities and moduli
+    "scene": {"length": "the scene's length unit", "time": "the scene's time unit", "displacement": "length unit",
+              "velocity": "length unit / time unit", "stress": "the unit of Young's modulus"},
 }
 
 
