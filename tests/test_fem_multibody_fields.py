@@ -135,3 +135,12 @@ def test_cli_writes_and_lists_fields_and_xt(tmp_path, capsys):
     assert (tmp_path / "xt.png").stat().st_size > 0
     assert captured.err.count("xt.png") == 1
     assert len(read_fields(tmp_path / "f")["time"]) == len(list((tmp_path / "f").glob("fields_*.vtu")))
+
+
+def test_cli_refuses_fields_of_another_solver_before_work(tmp_path, capsys):
+    scene = Path(__file__).resolve().parent.parent / "examples" / "scenes" / "hammer_on_bar.toml"
+    code = main(["solve", str(scene), "--solver", "delay", "--fields", str(tmp_path / "f"), "--xt-plot",
+                 str(tmp_path / "xt.png")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--fields" in err[0] and "fem" in err[0]
+    assert not (tmp_path / "f").exists() and not (tmp_path / "xt.png").exists()
