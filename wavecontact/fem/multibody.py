@@ -414,7 +414,9 @@ def solve_line(scene, options: dict, *, tolerance=None, max_work=None, max_memor
 
     ``options``: the fem options; of them the loop takes ``elements`` (on the rod of the shortest wave
     travel time, every segment at about the same ``h / c``), ``order``, ``mass``, ``dt``, ``courant``,
-    ``energy_tolerance`` and ``max_time``; any other option must keep its default.
+    ``energy_tolerance``, ``max_time``, ``record_fields`` and ``field_samples`` (the fields of
+    :func:`replay_fields` in ``result.fields``: a second run, its memory counted in the cost checked
+    against ``max_memory`` before any work); any other option must keep its default.
     """
     from .solver import FemOptions
 
