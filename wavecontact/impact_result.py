@@ -3,16 +3,18 @@
 The paper's two-rod scenes keep :class:`~wavecontact.result.CollisionResult`;
 every other line scene (piecewise rods, rigid bodies, chains, walls) returns an
 :class:`ImpactResult`.  Times, velocities and energies are in the scene's own
-units.  :meth:`ImpactResult.save` writes JSON (no pickle); :meth:`ImpactResult.load`
-reads it back.
+units.  :meth:`ImpactResult.save` writes JSON, or NumPy's npz for a ``.npz`` path (no pickle either
+way); :meth:`ImpactResult.load` reads both back, sampled fields included.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
+
+import numpy as np
 
 from .errors import InvalidParameterError
 
@@ -78,6 +80,10 @@ class ImpactResult:
     diagnostics : dict
         ``energy_drift`` (relative, the contact losses of hard contact included), ``momentum_drift``,
         ``error_estimate_method``, ``error_estimate_levels``, ``includes_kernel_preparation``, ...
+    fields : dict or None
+        The sampled fields when run with ``record_fields=True`` (layout:
+        :func:`wavecontact.fem.multibody.replay_fields`; written for ParaView by
+        :func:`wavecontact.io.fields.write_fields`), else None.
     """
 
     velocities: tuple
@@ -93,6 +99,7 @@ class ImpactResult:
     options: dict = field(default_factory=dict)
     work: dict = field(default_factory=dict)
     diagnostics: dict = field(default_factory=dict)
+    fields: dict | None = field(default=None, repr=False, compare=False)
 
     @property
     def momentum(self) -> float:
@@ -118,28 +125,50 @@ class ImpactResult:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """Plain JSON-ready values (NaN as null)."""
-        data = asdict(self)
+        """Plain JSON-ready values (NaN as null); the sampled fields, if any, are left out."""
+        data = asdict(replace(self, fields=None))
+        del data["fields"]
         data["contacts"] = [asdict(c) for c in self.contacts]
         return _json_safe(data)
 
     def save(self, path) -> Path:
-        """Write the result as JSON to ``path``; return the path."""
+        """Write the result to ``path``; return the path.
+
+        A ``.npz`` path gets NumPy's npz (the scalars as a JSON text entry, the fields as arrays; read with
+        ``allow_pickle=False``), any other path JSON (the fields, if any, as lists of numbers).
+        """
         path = Path(path)
         payload = {"format": _FORMAT, "version": _VERSION, "result": self.to_dict()}
+        if path.suffix == ".npz":
+            arrays = _flat_fields(self.fields) if self.fields is not None else {}
+            with open(path, "wb") as stream:
+                np.savez_compressed(stream, result=np.array(json.dumps(payload, allow_nan=False)), **arrays)
+            return path
+        if self.fields is not None:
+            payload["fields"] = _json_safe(_listed(self.fields))
         path.write_text(json.dumps(payload, indent=1, allow_nan=False) + "\n")
         return path
 
     @classmethod
     def load(cls, path) -> ImpactResult:
-        """Read a result written by :meth:`save`."""
+        """Read a result written by :meth:`save` (JSON, or npz for a ``.npz`` path)."""
+        fields = None
         try:
-            payload = json.loads(Path(path).read_text())
-        except (OSError, ValueError) as error:
+            if Path(path).suffix == ".npz":
+                with np.load(path, allow_pickle=False) as archive:
+                    payload = json.loads(str(archive["result"]))
+                    arrays = {name: archive[name] for name in archive.files if name != "result"}
+                fields = _nested_fields(arrays) if arrays else None
+            else:
+                payload = json.loads(Path(path).read_text())
+        except (OSError, ValueError, KeyError) as error:
             raise InvalidParameterError(f"cannot read an impact result from {str(path)!r}: {error}") from None
         if not isinstance(payload, dict) or payload.get("format") != _FORMAT:
             raise InvalidParameterError(f"{str(path)!r} is not a wavecontact impact result (JSON of ImpactResult.save)")
+        if "fields" in payload:
+            fields = _arrays(payload["fields"])
         data = payload["result"]
+        data["fields"] = fields
         records = tuple(ContactRecord(**{k: _number(v) if k != "name" else v for k, v in c.items()})
                         for c in data.pop("contacts"))
         records = tuple(ContactRecord(r.name, r.impulse, r.duration, r.first_contact, r.last_contact,
@@ -150,6 +179,61 @@ class ImpactResult:
         for name in ("error_estimate", "end_time", "wall_time_s"):
             data[name] = _number(data[name])
         return cls(contacts=records, **data)
+
+
+def _listed(fields: dict) -> dict:
+    """The fields with every array as (nested) lists."""
+    def convert(value):
+        if isinstance(value, np.ndarray):
+            return value.tolist()
+        if isinstance(value, dict):
+            return {k: convert(v) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [convert(v) for v in value]
+        return value
+    return convert(fields)
+
+
+def _arrays(fields: dict) -> dict:
+    """Fields read from JSON: the lists of numbers back to arrays (cells as integers)."""
+    out = {"time": np.asarray(fields["time"], dtype=float), "walls": list(fields.get("walls", [None, None])),
+           "rods": [], "points": []}
+    for rod in fields["rods"]:
+        out["rods"].append({k: (int(v) if k == "body" else np.asarray(v, dtype=np.int64 if k == "cells" else float))
+                            for k, v in rod.items()})
+    for point in fields.get("points", []):
+        out["points"].append({k: (int(v) if k == "body" else float(v) if k == "x" else np.asarray(v, dtype=float))
+                              for k, v in point.items()})
+    return out
+
+
+def _flat_fields(fields: dict) -> dict:
+    """The fields as named arrays for npz: ``time``, ``walls`` (NaN: none), ``rod3_x``, ``point0_velocity``, ..."""
+    arrays = {"time": fields["time"], "walls": np.array([math.nan if w is None else w for w in fields["walls"]])}
+    for kind, items in (("rod", fields["rods"]), ("point", fields.get("points", []))):
+        for item in items:
+            for name, value in item.items():
+                if name != "body":
+                    arrays[f"{kind}{item['body']}_{name}"] = np.asarray(value)
+    return arrays
+
+
+def _nested_fields(arrays: dict) -> dict:
+    """The inverse of :func:`_flat_fields`."""
+    fields = {"time": arrays["time"], "walls": [None if math.isnan(w) else float(w) for w in arrays["walls"]],
+              "rods": [], "points": []}
+    grouped = {}
+    for key, value in arrays.items():
+        if key in ("time", "walls"):
+            continue
+        head, name = key.split("_", 1)
+        kind = "rods" if head.startswith("rod") else "points"
+        body = int(head[3:] if kind == "rods" else head[5:])
+        grouped.setdefault((kind, body), {"body": body})[name] = float(value) if name == "x" and kind == "points" \
+            else value
+    for (kind, _), item in sorted(grouped.items(), key=lambda entry: entry[1]["body"]):
+        fields[kind].append(item)
+    return fields
 
 
 def _number(value):

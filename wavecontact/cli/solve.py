@@ -32,8 +32,11 @@ def add_parser(subparsers):
     p.add_argument("--solver", help="which solver (default: the file's [solve] solver, else fem)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--out", metavar="FILE", help="write the results as JSON to FILE (.json)")
-    p.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress (.png, .pdf or .svg; fem, "
-                   "two uniform rods only so far: the multi-body loop records no fields)")
+    p.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress over all bodies (.png, .pdf "
+                   "or .svg; fem: the fields are sampled in a second run)")
+    p.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress of every body for "
+                   "ParaView into DIR (fields.pvd and one VTU file per sample, each body at its place on the line; "
+                   "units and parameters in each file's field data; fem)")
     add_limit_options(p)
     options = p.add_argument_group("solver options (passed to the solver, which refuses those it does not take)")
     options.add_argument("--elements", type=positive_int, metavar="N", help="fem: " + option_text("fem", "elements"))
@@ -110,13 +113,16 @@ def run(args) -> int:
     from ..io.scene_file import read_scene_file
     from .common import report_written
 
-    check_outputs(files=[("--out", args.out, (".json",)), ("--xt-plot", args.xt_plot, FIGURE_SUFFIXES)])
+    check_outputs(files=[("--out", args.out, (".json",)), ("--xt-plot", args.xt_plot, FIGURE_SUFFIXES)],
+                  directories=[("--fields", args.fields, ("fields.pvd",))])
     scene_file = read_scene_file(args.file)
     solver = args.solver or scene_file.solver or "fem"
     # the file's [solve] options belong to the file's solver: another --solver starts from its defaults
     options = dict(scene_file.options) if solver == (scene_file.solver or "fem") else {}
     options.update({name: getattr(args, name) for name in _SOLVER_FLAGS if getattr(args, name) is not None})
-    if args.xt_plot:
+    if args.xt_plot or args.fields:
+        if solver != "fem":
+            raise ValueError(f"--fields and --xt-plot need --solver fem (the solver that records fields), not {solver}")
         options["record_fields"] = True
     result = solve(scene_file.scene, solver=solver, tolerance=args.tolerance, max_work=args.max_work,
                    max_memory=args.max_memory, **options)
@@ -129,10 +135,21 @@ def run(args) -> int:
         with open(args.out, "w", encoding="utf-8") as stream:
             json.dump({"file": str(args.file), **record}, stream, indent=1)
         written.append(args.out)
+    if args.fields:
+        from ..io.fields import write_fields
+        from .common import files_summary
+
+        parameters = {"scene_file": str(args.file), "bodies": ", ".join(scene_file.names)}
+        if scene_file.title:
+            parameters["title"] = scene_file.title
+        files = write_fields(result, args.fields, units="scene", parameters=parameters).files
+        written += [path for path in files if str(path).endswith(".pvd")]
+        written.append(files_summary(args.fields, "fields_*.vtu"))
     if args.xt_plot:
         from ..plotting.xt import plot_xt_diagram
 
-        written.append(plot_xt_diagram(result, args.xt_plot))
+        written.append(plot_xt_diagram(result, args.xt_plot, names=scene_file.names,
+                                       title=scene_file.title or str(args.file)))
     files = report_written(written)
     print(json.dumps({"file": str(args.file), **record, "files_written": files}) if args.json
           else _text(record, args.file))

@@ -29,15 +29,17 @@ from ..limits import Cost, Limits, check_cost
 from ..result import Outcome
 from ..solvers.base import ERROR_SAFETY, Stopwatch, richardson_estimate
 from . import multibody_kernel as mk
+from .discretization import _stress_recovery
 from .interleaved_step import L_SHAPE, L_U, L_V, node_position
 from .multibody_setup import LineSetup, build_line_setup, mass_solves
 
-__all__ = ["ESTIMATE_ORDER", "LINE_OPTIONS", "run_line", "solve_line"]
+__all__ = ["ESTIMATE_ORDER", "LINE_OPTIONS", "field_bytes", "replay_fields", "run_line", "solve_line"]
 
 #: Order in ``h`` the error estimate assumes (the slowest of the loop's contact treatments).
 ESTIMATE_ORDER = 1.0
 #: fem options the multi-body loop takes (the others must keep their defaults).
-LINE_OPTIONS = ("elements", "order", "mass", "dt", "courant", "energy_tolerance", "max_time")
+LINE_OPTIONS = ("elements", "order", "mass", "dt", "courant", "energy_tolerance", "max_time", "record_fields",
+                "field_samples")
 _CHUNK = 1 << 14
 _PGS_ITERATIONS = 200
 
@@ -88,10 +90,8 @@ def _soft_potential(setup: LineSetup, us, ru) -> float:
     return total
 
 
-def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", dt=None, courant=None,
-             energy_tolerance: float = 0.05, max_time=None) -> dict:
-    """One run of the multi-body loop on a line scene; a dict of the outcome (see :func:`solve_line`)."""
-    setup = build_line_setup(scene, elements, order, mass, dt, courant)
+def _start(scene, setup: LineSetup) -> dict:
+    """The loop's arrays at the start of a run (velocities half a step back), as a dict."""
     solves = mass_solves(setup)
     us = [u.copy() for u in setup.u0]
     vs = [v.copy() for v in setup.v0]
@@ -179,6 +179,33 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
     control[mk.K_RIGHT_WALL] = float(setup.walls[1])
     control[mk.K_RODS] = n_rods
     state = np.zeros(mk.STATE_SIZE)
+    return {"us": us, "vs": vs, "ru": ru, "rv": rv, "rinv": rinv, "start": start, "energy0": energy0,
+            "momentum0": momentum0, "args_rods": args_rods, "contacts": kernel_contacts, "where": where,
+            "records": records, "values": values, "targets": targets, "ends": ends, "control": control,
+            "state": state}
+
+
+def _advance(setup: LineSetup, loop: dict, steps: int):
+    """Up to ``steps`` steps of the loop; ``(status, steps done)``."""
+    return mk.advance_line(*loop["args_rods"], loop["ru"], loop["rv"], loop["rinv"], setup.body_kind, setup.body_slot,
+                           loop["contacts"], setup.columns, loop["where"], loop["records"], loop["values"],
+                           loop["targets"], loop["ends"], loop["control"], loop["state"], steps)
+
+
+def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", dt=None, courant=None,
+             energy_tolerance: float = 0.05, max_time=None, record_fields: bool = False,
+             field_samples: int = 300) -> dict:
+    """One run of the multi-body loop on a line scene; a dict of the outcome (see :func:`solve_line`).
+
+    With ``record_fields`` the loop runs a second time from the start to the same last step, stopping at
+    ``field_samples`` evenly spread steps to copy the fields (:func:`replay_fields`); the first run, and so
+    every result, is the same as without.
+    """
+    setup = build_line_setup(scene, elements, order, mass, dt, courant)
+    loop = _start(scene, setup)
+    dt_ = setup.dt
+    ru, rv, args_rods, records, state = loop["ru"], loop["rv"], loop["args_rods"], loop["records"], loop["state"]
+    start, energy0, momentum0 = loop["start"], loop["energy0"], loop["momentum0"]
     if max_time is None:
         gaps = setup.contacts[:, mk.C_OFFSET]
         max_time = 40.0 * float(np.sum(np.maximum(gaps, 0.0))) / setup.speed_scale + 100.0 * setup.period
@@ -195,9 +222,7 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
                                 "and the walls), a soft contact between bodies that separate slowly stays in range "
                                 "for long, or the run needs a larger max_time", Outcome.TIME_LIMIT)
         started = time.perf_counter()
-        status, _ = mk.advance_line(*args_rods, ru, rv, rinv, setup.body_kind, setup.body_slot, kernel_contacts,
-                                    setup.columns, where, records, values, targets, ends, control, state,
-                                    int(min(_CHUNK, max_steps - state[mk.S_STEPS])))
+        status, _ = _advance(setup, loop, int(min(_CHUNK, max_steps - state[mk.S_STEPS])))
         loop_seconds += time.perf_counter() - started
         with np.errstate(all="ignore"):  # a blow-up is reported below, not as a warning
             now = _energies(setup, us_t, vs_t, ru, rv)
@@ -225,7 +250,9 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
                                       intervals=int(r[mk.R_INTERVALS])))
     steps = int(state[mk.S_STEPS])
     elements_total = sum(d.n_elements for d in setup.rods)
+    fields = replay_fields(scene, setup, loop, steps, field_samples) if record_fields else None
     return {
+        "fields": fields,
         "velocities": velocities,
         "internal_energies": internal,
         "contacts": tuple(contacts),
@@ -241,6 +268,90 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
                   "impact_iterations": int(state[mk.S_MAX_ITERATIONS])},
         "setup": setup,
     }
+
+
+def field_bytes(nodes: float, rigid: int, samples: int) -> float:
+    """Bytes the sampled fields take: displacement, velocity and stress per node, two values per rigid body."""
+    return 8.0 * samples * (3.0 * nodes + 2.0 * rigid + 1.0)
+
+
+def replay_fields(scene, setup: LineSetup, first_run: dict, steps: int, samples: int) -> dict:
+    """Run the loop again from the start for ``steps`` steps, copying the fields at ``samples`` steps.
+
+    The replay takes the same steps as the first run (the loop's state does not depend on where a call
+    of the kernel ends; the separation check, which only reads it, is switched off), and its last
+    state is checked to be the first run's, bit for bit.
+
+    Returns
+    -------
+    dict
+        ``{"time": (nt,), "rods": [{"body", "x", "displacement", "velocity", "stress", "cells"}, ...],
+        "points": [{"body", "x", "displacement", "velocity"}, ...], "walls": [x_left, x_right]}``:
+        node coordinates on the line (each body at its reference position, :mod:`.multibody_setup`),
+        displacement (length), velocity (length/time, half a step before the sample time, as the
+        leapfrog keeps it) and stress ``E du/dx`` (force/area, averaged over the elements at a node)
+        of every rod; the same without stress for each rigid body (a point); wall positions (None
+        where there is no wall).
+    """
+    at = np.unique(np.linspace(0, steps, max(int(samples), 2)).round().astype(np.int64))
+    loop = _start(scene, setup)
+    loop["control"][mk.K_PERIOD] = math.inf  # never stop on separation: run exactly to the first run's end
+    flat_u, flat_v, ru, rv, state = loop["args_rods"][0], loop["args_rods"][1], loop["ru"], loop["rv"], loop["state"]
+    n_rods, n_rigid = len(setup.rods), setup.rigid_masses.size
+    times = np.empty(at.size)
+    u_samples = [np.empty((at.size, d.n_nodes)) for d in setup.rods]
+    v_samples = [np.empty((at.size, d.n_nodes)) for d in setup.rods]
+    rigid_u, rigid_v = np.empty((at.size, n_rigid)), np.empty((at.size, n_rigid))
+    for k, target in enumerate(at):
+        while state[mk.S_STEPS] < target:
+            status, _ = _advance(setup, loop, int(target - state[mk.S_STEPS]))
+            if status == mk.STATUS_FAILED:
+                raise SolverFailure("the replay that samples the fields failed where the first run did not",
+                                    Outcome.ENERGY_DRIFT)
+        times[k] = state[mk.S_TIME]
+        for b in range(n_rods):
+            u_samples[b][k] = flat_u[b]
+            v_samples[b][k] = flat_v[b]
+        rigid_u[k], rigid_v[k] = ru, rv
+    final = first_run["args_rods"]
+    if not (all(np.array_equal(a, b) for a, b in zip(final[0], flat_u))
+            and np.array_equal(first_run["ru"], ru) and np.array_equal(first_run["rv"], rv)):
+        raise SolverFailure("the replay that samples the fields did not end in the first run's state")
+    rods, points = [], []
+    for i, (kind, slot) in enumerate(zip(setup.body_kind, setup.body_slot)):
+        origin = float(setup.positions[i])
+        if kind == mk.SIDE_RIGID:
+            points.append({"body": i, "x": origin, "displacement": rigid_u[:, slot].copy(),
+                           "velocity": rigid_v[:, slot].copy()})
+            continue
+        d = setup.rods[slot]
+        recovery = _stress_recovery(d.x, d.cells, _element_moduli(scene.rods[i], d)).tocsr()
+        rods.append({"body": i, "x": d.x + origin, "displacement": u_samples[slot], "velocity": v_samples[slot],
+                     "stress": np.asarray((recovery @ u_samples[slot].T).T), "cells": d.cells.copy()})
+    return {"time": times, "rods": rods, "points": points, "walls": list(_wall_positions(scene, setup))}
+
+
+def _element_moduli(body, d) -> np.ndarray:
+    """Young's modulus of each element (of the segment holding its midpoint)."""
+    from ..bodies import body_segments
+
+    segments = body_segments(body)
+    ends = np.cumsum([s.length for s in segments])
+    middle = d.x[d.cells[:, :2]].mean(axis=1)
+    index = np.clip(np.searchsorted(ends, middle, side="right"), 0, len(segments) - 1)
+    return np.array([s.youngs_modulus for s in segments])[index]
+
+
+def _wall_positions(scene, setup: LineSetup) -> tuple:
+    """Reference positions of the left and right wall (None where absent)."""
+    left = right = None
+    for name, row in zip(setup.contact_names, setup.contacts):
+        if name == "left wall":
+            left = float(setup.positions[0]) - float(row[mk.C_OFFSET])
+        elif name == "right wall":
+            last = len(setup.body_kind) - 1
+            right = float(setup.positions[last]) + float(scene.rods[last].length) + float(row[mk.C_OFFSET])
+    return left, right
 
 
 def _consistent_solve(d, rhs):
@@ -287,6 +398,12 @@ def line_cost(scene, options: dict) -> Cost:
     longest = max(2.0 * sum(s.travel_time for s in body_segments(b)) for b in deformable)
     span = 105.0 * longest if options.get("max_time") is None else float(options["max_time"])
     steps = span / (0.2 * travel)
+    if options.get("record_fields"):  # a second run samples the fields, held in memory at once
+        rigid = sum(isinstance(b, RigidBody) for b in scene.rods)
+        fields = field_bytes(nodes, rigid, options.get("field_samples", 300))
+        return Cost(steps=steps, work=2.0 * steps * nodes, memory=8.0 * 48 * nodes + fields,
+                    detail=f"{nodes:.3g} nodes, at most {steps:.3g} steps, {options.get('field_samples', 300)} "
+                    f"field samples of {fields:.3g} bytes")
     return Cost(steps=steps, work=steps * nodes, memory=8.0 * 48 * nodes,
                 detail=f"{nodes:.3g} nodes, at most {steps:.3g} steps")
 
@@ -297,7 +414,9 @@ def solve_line(scene, options: dict, *, tolerance=None, max_work=None, max_memor
 
     ``options``: the fem options; of them the loop takes ``elements`` (on the rod of the shortest wave
     travel time, every segment at about the same ``h / c``), ``order``, ``mass``, ``dt``, ``courant``,
-    ``energy_tolerance`` and ``max_time``; any other option must keep its default.
+    ``energy_tolerance``, ``max_time``, ``record_fields`` and ``field_samples`` (the fields of
+    :func:`replay_fields` in ``result.fields``: a second run, its memory counted in the cost checked
+    against ``max_memory`` before any work); any other option must keep its default.
     """
     from .solver import FemOptions
 
@@ -338,6 +457,7 @@ def solve_line(scene, options: dict, *, tolerance=None, max_work=None, max_memor
                      "error_estimate_method": method,
                      "error_estimate_levels": [(n, [float(x) for x in v]) for n, v in levels],
                      "velocity_scale": scale, **run["extra"]},
+        fields=run["fields"],
     )
     if tolerance is not None and not estimate <= tolerance:
         from ..errors import AccuracyError
@@ -358,7 +478,8 @@ def _estimate(scene, run_options: dict, run: dict, levels: list) -> tuple:
         if coarse < 1:
             break
         try:
-            levels.append((coarse, run_line(scene, **{**run_options, "elements": coarse})["velocities"]))
+            coarse_options = {**run_options, "elements": coarse, "record_fields": False}
+            levels.append((coarse, run_line(scene, **coarse_options)["velocities"]))
         except SolverFailure as failure:
             if len(levels) == 1:
                 return math.nan, f"none (the run at elements={coarse} failed: {failure})", levels

@@ -72,6 +72,9 @@ UNIT_SYSTEMS = {
     },
     # a Scene given in SI units (wavecontact.solve)
     "SI": {"length": "m", "time": "s", "displacement": "m", "velocity": "m/s", "stress": "Pa"},
+    # a scene in any consistent units (wavecontact solve FILE): those of its lengths, densities and moduli
+    "scene": {"length": "the scene's length unit", "time": "the scene's time unit", "displacement": "length unit",
+              "velocity": "length unit / time unit", "stress": "the unit of Young's modulus"},
 }
 
 
@@ -128,7 +131,7 @@ def sampled_fields(result) -> dict:
         raw = result
     else:
         extra = getattr(result, "extra", None) or {}
-        raw = extra.get("fields")
+        raw = extra.get("fields", getattr(result, "fields", None))  # CollisionResult, or ImpactResult of a scene
         if raw is None:
             solver = getattr(result, "solver", "?")
             raise MissingFieldsError(
@@ -150,7 +153,22 @@ def sampled_fields(result) -> dict:
     rods = []
     for i, rod in enumerate(rods_in):
         rods.append(_validated_rod(i, rod, time.size))
-    return {"time": time, "rods": rods}
+    out = {"time": time, "rods": rods}
+    if "points" in raw:  # rigid bodies of a scene on a line: points with displacement and velocity
+        out["points"] = [_validated_point(i, point, time.size) for i, point in enumerate(raw["points"])]
+        out["walls"] = [None if w is None else float(w) for w in raw.get("walls", (None, None))]
+    return out
+
+
+def _validated_point(index: int, point: dict, n_times: int) -> dict:
+    where = f"fields['points'][{index}]"
+    out = {"body": int(point["body"]), "x": float(point["x"])}
+    for name in ("displacement", "velocity"):
+        values = np.asarray(point[name], dtype=float)
+        if values.shape != (n_times,) or not np.all(np.isfinite(values)):
+            raise InvalidParameterError(f"{where}['{name}'] must be {n_times} finite values")
+        out[name] = values
+    return out
 
 
 def _validated_rod(index: int, rod: dict, n_times: int) -> dict:
@@ -172,6 +190,8 @@ def _validated_rod(index: int, rod: dict, n_times: int) -> dict:
         if not np.all(np.isfinite(values)):
             raise InvalidParameterError(f"{where}['{name}'] holds non-finite values")
         out[name] = values
+    if "body" in rod:
+        out["body"] = int(rod["body"])
     cells = np.asarray(rod["cells"])
     if (
         cells.ndim != 2
@@ -209,18 +229,31 @@ def line_segments(x: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def _assemble(fields: dict):
-    """Points, segments and per-point arrays of all rods joined."""
+    """Points, segments, vertices (rigid bodies) and per-point arrays of all bodies joined.
+
+    ``rod`` numbers the bodies from 1 (a scene's body ``i`` is ``i + 1``; rigid bodies, written as
+    vertices with zero stress, count too).
+    """
     xs, segments, rod_ids, offset = [], [], [], 0
     for number, rod in enumerate(fields["rods"], start=1):
         xs.append(rod["x"])
         segments.append(line_segments(rod["x"], rod["cells"]) + offset)
-        rod_ids.append(np.full(rod["x"].size, number, dtype=np.int64))
+        rod_ids.append(np.full(rod["x"].size, rod.get("body", number - 1) + 1, dtype=np.int64))
         offset += rod["x"].size
+    values = {name: [rod[name] for rod in fields["rods"]] for name in FIELD_NAMES}
+    vertices = []
+    for point in fields.get("points", ()):
+        xs.append(np.array([point["x"]]))
+        rod_ids.append(np.array([point["body"] + 1], dtype=np.int64))
+        vertices.append(offset)
+        offset += 1
+        for name in FIELD_NAMES:
+            values[name].append(point[name][:, None] if name in point else np.zeros((fields["time"].size, 1)))
     x = np.concatenate(xs)
     points = np.zeros((x.size, 3))
     points[:, 0] = x
-    values = {name: np.concatenate([rod[name] for rod in fields["rods"]], axis=1) for name in FIELD_NAMES}
-    return points, np.concatenate(segments), np.concatenate(rod_ids), values
+    values = {name: np.concatenate(values[name], axis=1) for name in FIELD_NAMES}
+    return points, np.concatenate(segments), np.concatenate(rod_ids), values, np.array(vertices, dtype=np.int64)
 
 
 def _frame_data(values: dict, k: int, rod_ids: np.ndarray) -> dict:
@@ -370,7 +403,9 @@ def _write_vtu_series(fields: dict, directory: Path, prefix: str, metadata: dict
 
     from .files import atomic_write
 
-    points, segments, rod_ids, values = _assemble(fields)
+    points, segments, rod_ids, values, vertices = _assemble(fields)
+    cells = [("line", segments)] + ([("vertex", vertices[:, None])] if vertices.size else [])
+    cell_rods = [rod_ids[segments[:, 0]]] + ([rod_ids[vertices]] if vertices.size else [])
     time = fields["time"]
     width = max(5, len(str(time.size - 1)))
     collection = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
@@ -380,9 +415,9 @@ def _write_vtu_series(fields: dict, directory: Path, prefix: str, metadata: dict
         name = f"{prefix}_{k:0{width}d}.vtu"
         mesh = meshio.Mesh(
             points,
-            [("line", segments)],
+            cells,
             point_data=_frame_data(values, k, rod_ids),
-            cell_data={"rod": [rod_ids[segments[:, 0]]]},
+            cell_data={"rod": cell_rods},
         )
         path = directory / name
         meshio.write(path, mesh, file_format="vtu")  # binary, zlib-compressed

@@ -37,6 +37,9 @@ def xt_figure(
     cmap: str = "RdBu_r",
     max_nodes: int = 800,
     max_times: int = 800,
+    names=None,
+    title: str | None = None,
+    units: str | None = None,
 ):
     """Draw the x-t diagram of ``result`` and return the matplotlib Figure.
 
@@ -58,6 +61,12 @@ def xt_figure(
     max_nodes, max_times : int
         At most this many nodes per rod and samples in time are drawn
         (evenly thinned; the files keep everything).
+    names : sequence of str or None
+        Scene results (:class:`~wavecontact.ImpactResult`): a name per body for the labels.
+    title : str or None
+        Scene results: a first title line (the scene's summary); the bodies and contacts follow.
+    units : str or None
+        Scene results: ``'SI'`` puts m, s and Pa on the axes; None leaves the scene's own units unnamed.
 
     Returns
     -------
@@ -76,6 +85,11 @@ def xt_figure(
             f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}"
         )
     fields = sampled_fields(result)
+    if "points" in fields:  # a scene on a line (ImpactResult): every body at its place, contacts and walls marked
+        from .xt_scene import scene_xt_figure
+
+        return scene_xt_figure(result, fields, field=field, coordinates=coordinates, cmap=cmap, rows=_thin(
+            fields["time"].size, max_times), max_nodes=max_nodes, names=names, title=title, units=units)
     time = fields["time"]
     rows = _thin(time.size, max_times)
 
