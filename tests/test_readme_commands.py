@@ -38,6 +38,8 @@ SMALL = [
     (r"^(wavecontact map .*)--out", r"\1--impedance-ratio 0.5:2:3 --time-ratio 0.5:2:3 --out", "map: 3 x 3 grid"),
     (r"^(wavecontact paper-figures)", r"\1 --quick --only 5", "paper figures: one figure, quick sizes"),
     (r"^(wavecontact compare .*)$", r"\1 --repeats 1", "compare: one timing per method"),
+    (r"(wavecontact solve )examples/", r"\1" + str(ROOT / "examples") + "/", "scene files: read from the checkout"),
+    (r"(hammer_on_bar.toml)", r"\1 --elements 50", "scene file: mesh"),
 ]
 NOT_RUN = {
     r"^pip install": "installs the package; this test runs the checkout itself",
