@@ -36,7 +36,7 @@ from . import get_solver as _registry
 from .base import _tolerance, reusing_runs
 from .cost_model import Prediction, load_model, scene_class, scene_features
 
-__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "solve_auto", "solve_refined"]
+__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "run_cost", "solve_auto", "solve_refined"]
 
 #: Tolerance on the restitution's error estimate when ``solve`` is given none (absolute).
 DEFAULT_TOLERANCE = 1e-6
@@ -67,16 +67,49 @@ class Choice:
 
 def _check_limits(solver, scene: Scene, resolution: dict, limits: Limits):
     """The solver's own cost estimate of a run with its error estimate, refused over ``limits``."""
-    options = solver.options(resolution)
-    cost = solver.total_cost(scene, options, True)
+    cost = run_cost(solver, scene, resolution)
     check_cost(solver.name, cost, limits)
     return cost
+
+
+def run_cost(solver, scene: Scene, option: dict):
+    """The estimated cost (:class:`~wavecontact.limits.Cost`, None: bounded) of one run of ``solver`` with
+    ``option`` and its error estimate, as ``auto`` checks it against the limits."""
+    options = solver.options(option)
+    return _line_cost(solver, scene, options) if scene.is_line_scene else solver.total_cost(scene, options, True)
+
+
+def _line_cost(solver, scene: Scene, options):
+    """Cost of a line-scene run with its error estimate: the fem loop's (:func:`~wavecontact.fem.multibody.line_cost`)
+    with the runs at ``elements // 2`` and ``// 4`` (work ~ elements^2: 1 + 1/4 + 1/16); the delay solver's rigid
+    mass is bounded by its own step cap (None)."""
+    if solver.name != "fem":
+        return None
+    from ..fem.multibody import line_cost
+    from ..limits import Cost
+
+    cost = line_cost(scene, options.as_dict())
+    return Cost(steps=cost.steps, work=cost.work * (1.0 + 1.0 / 4.0 + 1.0 / 16.0), memory=cost.memory,
+                detail=f"{cost.detail}; with the error estimate's runs at elements // 2 and // 4")
+
+
+def _takes_line(solver, scene: Scene) -> bool:
+    """Whether ``solver`` takes a line scene: fem every one, delay a rigid mass on one uniform rod."""
+    if solver.name == "fem":
+        return True
+    if solver.name == "delay":
+        from ..delay.rigid_mass import takes
+
+        return takes(scene)
+    return False
 
 
 def _accepts(solver, scene: Scene) -> bool:
     """Whether ``solver`` takes ``scene`` (its cost estimate refuses what it cannot run)."""
     if scene.is_ring:
         return False
+    if scene.is_line_scene:
+        return _takes_line(solver, scene)
     try:
         solver.total_cost(scene, solver.options(), True)
     except (UnsupportedSceneError, LimitError, InvalidParameterError):
@@ -130,8 +163,18 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
     meeting = sorted((p for p in predictions if p.error <= tolerance), key=lambda p: p.cpu_s)
     others = sorted((p for p in predictions if p.error > tolerance), key=lambda p: (p.error, p.cpu_s))
     usable = _Usable(scene, limits)
+    lattice = None
+    if scene.is_line_scene and kind in model.fits:
+        lattice = _lattice_prediction(model, kind, features, scene)
+        meeting = _beyond_ladders(model, kind, features, tolerance, meeting, usable)
+        if lattice is not None:
+            meeting = [lattice, *meeting]
     first = next((p for p in meeting if usable(p)), None)
-    if first is not None:
+    if first is not None and first is lattice:
+        reason = (f"on the exact lattice at {first.text()} (every element one wave travel time, hard contacts "
+                  f"between rod ends, the error estimate's coarser runs too): exact to round-off, "
+                  f"{first.cpu_s * 1e3:.3g} ms CPU predicted")
+    elif first is not None:
         reason = (f"predicted cheapest to meet tolerance={tolerance:g}: error estimate {first.error:.2g}, "
                   f"{first.cpu_s * 1e3:.3g} ms CPU")
     elif usable.refusals:
@@ -151,13 +194,91 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
                   scene_class=kind, usable=usable)
 
 
+def _lattice_prediction(model, kind: str, features: dict, scene: Scene):
+    """The fem prediction at the coarsest ladder resolution whose run and error-estimate runs (``// 2``, ``// 4``)
+    are all on the exact lattice (P1 lumped at Courant number 1, every element one wave travel time, only hard
+    contacts between rod ends: d'Alembert's solution at the nodes, tests/test_impact_references.py), with the
+    round-off floor as its error; None where the scene has a rigid body, a soft contact, or no such resolution."""
+    from ..bodies import RigidBody, pair_laws
+    from ..fem.multibody_setup import build_line_setup
+    from .cost_model import ERROR_FLOOR
+
+    if any(isinstance(b, RigidBody) for b in scene.rods) or not all(law.hard for law in pair_laws(scene)):
+        return None
+    for elements in model.ladders.get("fem", []):
+        levels = (int(elements), int(elements) // 2, int(elements) // 4)
+        if levels[-1] < 1:
+            continue
+        try:
+            if all(build_line_setup(scene, n, 1, "lumped", None, None).lattice for n in levels):
+                prediction = model.predict(kind, "fem", features, elements)
+                return dataclasses.replace(prediction, error=ERROR_FLOOR) if prediction is not None else None
+        except (InvalidParameterError, UnsupportedSceneError):
+            return None
+        if elements >= 100:  # the meshes a ladder's first rungs give: finer ones are no more likely on it
+            return None
+    return None
+
+
+def _beyond_ladders(model, kind: str, features: dict, tolerance: float, meeting: list, usable) -> list:
+    """``meeting`` of a line scene, or where no ladder resolution of a solver that takes the scene is predicted
+    to meet ``tolerance``, with the resolution its error fit needs beyond the ladder (elements or modes:
+    ``log10 error`` linear in ``log10 resolution``), so that a tolerance the limits cannot reach is refused
+    before any work, with the work it would need (the fem solver is first order on line scenes)."""
+    added = []
+    for name in SOLVER_NAMES:
+        fit = model.fits.get(kind, {}).get(name)
+        if fit is None or any(p.solver == name for p in meeting) or not _takes_line(get_solver(name), usable.scene):
+            continue
+        coef = fit["error"]["coef"]
+        slope = coef[2]
+        if name == "delay" or slope >= 0.0:
+            continue
+        row = model.predict(kind, name, features, 1.0)
+        needed = 10.0 ** ((math.log10(tolerance) - math.log10(row.error)) / slope)
+        ladder = model.ladders.get(name, [1.0])
+        resolution = float(ladder[-1] * 2.0 ** max(math.ceil(math.log2(needed / ladder[-1])), 1))
+        prediction = model.predict(kind, name, features, resolution)
+        if not prediction.error <= tolerance or not math.isfinite(prediction.cpu_s):
+            continue
+        refusal = _over_limits(name, usable.scene, resolution, usable.limits)
+        if refusal:
+            usable.refusals[prediction] = refusal  # beyond what the solver's options take: refused here
+        else:
+            added.append(prediction)
+    return sorted(meeting + added, key=lambda p: p.cpu_s)
+
+
+def _over_limits(name: str, scene: Scene, elements: float, limits: Limits) -> str:
+    """Why a fem run of a line scene at ``elements`` (any size, not validated as an option) is over the limits
+    ("" if it is within them)."""
+    if name != "fem":
+        return ""
+    from ..fem.multibody import line_cost
+
+    cost = line_cost(scene, {"elements": elements})
+    work = cost.work * (1.0 + 1.0 / 4.0 + 1.0 / 16.0)
+    if work <= limits.max_work and cost.memory <= limits.max_memory:
+        return ""
+    return (f"fem: this solve would take about {work:.2g} updates and {cost.memory:.2g} bytes ({cost.detail}; "
+            f"with the error estimate's runs at elements // 2 and // 4), more than max_work={limits.max_work:g} or "
+            f"max_memory={limits.max_memory:g}; the fem solver is first order on line scenes")
+
+
+def _level_change(a, b) -> float:
+    """``|a - b|`` of two levels' values: numbers (a restitution) or sequences (a line scene's velocities)."""
+    if isinstance(a, (list, tuple)):
+        return max((abs(x - y) for x, y in zip(a, b)), default=0.0)
+    return abs(a - b)
+
+
 def _observed_order(solver, options, result) -> float:
     """Order of the error in the resolution, from the run's three finest Richardson levels where they
     show one (between 0.5 and 6), else the solver's declared order (1 where it declares none)."""
     levels = sorted(result.diagnostics.get("error_estimate_levels") or [], key=lambda level: -level[0])
     if len(levels) >= 3:
         (n0, v0), (n1, v1), (_n2, v2) = levels[:3]
-        d0, d1 = abs(v0 - v1), abs(v1 - v2)
+        d0, d1 = _level_change(v0, v1), _level_change(v1, v2)
         if d0 > 0.0 and d1 > 0.0 and n0 > n1:
             order = math.log(d1 / d0) / math.log(n0 / n1)
             if 0.5 <= order <= 6.0:
@@ -181,6 +302,8 @@ def refined_resolution(solver, options, result, tolerance: float):
     if not math.isfinite(estimate) or level is None:
         return None
     if solver.refines < 0:
+        if result.work.get("steps_per_round_trip", 0) >= _rigid_mass_steps_max():
+            return None  # the rigid mass's delay equation at its finest grid: a smaller rtol changes nothing
         wanted = level * tolerance / estimate / 2.0
         if wanted >= level:
             wanted = level / 10.0
@@ -195,6 +318,12 @@ def refined_resolution(solver, options, result, tolerance: float):
     if spec["high"] is not None and wanted > spec["high"]:
         return None
     return {name: wanted}
+
+
+def _rigid_mass_steps_max() -> int:
+    from ..delay.rigid_mass import STEPS_MAX
+
+    return STEPS_MAX
 
 
 def _cpu_run(solver, scene, option: dict, limits: Limits):
