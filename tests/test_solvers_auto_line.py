@@ -151,9 +151,10 @@ def test_every_line_class_is_calibrated():
 
 def test_the_observed_order_reads_the_velocities_of_line_levels():
     """Levels of a line scene hold every body's velocity: the order is read from their largest change."""
-    class Result:
-        diagnostics = {"error_estimate_levels": [(400, [1.0, 0.25]), (200, [1.0 + 1e-4, 0.25]),
-                                                 (100, [1.0 + 3e-4, 0.25 - 4e-4])]}
+    from types import SimpleNamespace
+
+    Result = SimpleNamespace(diagnostics={"error_estimate_levels": [
+        (400, [1.0, 0.25]), (200, [1.0 + 1e-4, 0.25]), (100, [1.0 + 3e-4, 0.25 - 4e-4])]})
 
     class Solver:
         @staticmethod

@@ -37,7 +37,9 @@ def add_parser(subparsers):
     p.add_argument("--out", metavar="FILE", help="write the results as JSON to FILE (.json)")
     p.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress (.png, .pdf or .svg; fem, "
                    "two uniform rods only so far: the multi-body loop records no fields)")
-    add_limit_options(p)
+    add_limit_options(p, tolerance_help="fail (exit 2, with advice) if the error estimate exceeds this (default: no "
+                      "check; with auto the target of the choice, default 1e-6; a line scene's estimate is of its "
+                      "velocities over the largest initial speed)")
     options = p.add_argument_group("solver options (passed to the solver, which refuses those it does not take)")
     options.add_argument("--elements", type=positive_int, metavar="N", help="fem: " + option_text("fem", "elements"))
     options.add_argument("--order", type=int, choices=option_choices("fem", "order"),

@@ -198,23 +198,30 @@ def _lattice_prediction(model, kind: str, features: dict, scene: Scene):
     """The fem prediction at the coarsest ladder resolution whose run and error-estimate runs (``// 2``, ``// 4``)
     are all on the exact lattice (P1 lumped at Courant number 1, every element one wave travel time, only hard
     contacts between rod ends: d'Alembert's solution at the nodes, tests/test_impact_references.py), with the
-    round-off floor as its error; None where the scene has a rigid body, a soft contact, or no such resolution."""
-    from ..bodies import RigidBody, pair_laws
-    from ..fem.multibody_setup import build_line_setup
+    round-off floor as its error; None where the scene has a rigid body, a soft contact, a taper, or no such
+    resolution.  Decided from the meshes' travel times (a set-up costs milliseconds, as much as the run); the
+    run's ``diagnostics["lattice"]`` confirms it, and a run off the lattice shows in its estimate (refined,
+    logged as a miss)."""
+    from ..bodies import RigidBody, body_segments, pair_laws
     from .cost_model import ERROR_FLOOR
 
     if any(isinstance(b, RigidBody) for b in scene.rods) or not all(law.hard for law in pair_laws(scene)):
         return None
+    segments = [s for b in scene.rods for s in body_segments(b)]
+    if any(s.tapered for s in segments):
+        return None
+    shortest = min(sum(s.travel_time for s in body_segments(b)) for b in scene.rods)
+
+    def one_travel(elements: int) -> bool:  # the multi-body set-up's meshes (_mesh): one element travel time
+        travel = shortest / elements
+        times = [s.travel_time / max(1, round(s.travel_time / travel)) for s in segments]
+        return max(times) - min(times) <= 1e-9 * min(times)
+
     for elements in model.ladders.get("fem", []):
         levels = (int(elements), int(elements) // 2, int(elements) // 4)
-        if levels[-1] < 1:
-            continue
-        try:
-            if all(build_line_setup(scene, n, 1, "lumped", None, None).lattice for n in levels):
-                prediction = model.predict(kind, "fem", features, elements)
-                return dataclasses.replace(prediction, error=ERROR_FLOOR) if prediction is not None else None
-        except (InvalidParameterError, UnsupportedSceneError):
-            return None
+        if levels[-1] >= 1 and all(one_travel(n) for n in levels):
+            prediction = model.predict(kind, "fem", features, elements)
+            return dataclasses.replace(prediction, error=ERROR_FLOOR) if prediction is not None else None
         if elements >= 100:  # the meshes a ladder's first rungs give: finer ones are no more likely on it
             return None
     return None
