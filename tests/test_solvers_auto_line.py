@@ -10,7 +10,7 @@ from references.characteristics import chain
 from references.saint_venant import saint_venant
 
 from wavecontact import Hard, PiecewiseRod, RigidBody, Rod, Scene, Segment, solve
-from wavecontact.errors import LimitError
+from wavecontact.errors import AccuracyError, LimitError
 from wavecontact.fem import multibody
 from wavecontact.solvers.auto import _level_change, _observed_order
 from wavecontact.solvers.cost_model import load_model, scene_class
@@ -89,22 +89,40 @@ OFF_LATTICE = Scene(rods=(Rod(0.5), Rod(1.3), Rod(0.77)), velocities=(1.0, 0.0, 
                     gaps=(0.0, 0.0))
 
 
-@pytest.mark.parametrize("scene", [OFF_LATTICE, hammer(1.0)], ids=["chain", "hammer"])
-def test_a_tolerance_first_order_fem_cannot_reach_is_refused_before_any_run(monkeypatch, scene):
-    """1e-12: the fem solver is first order on line scenes, the elements its fit needs are over max_work, and
-    the delay equations of a rigid mass stop at their finest grid near 1e-9; refused with the elements and
-    the work, and no run of the multi-body loop or of the delay equations made."""
-    from wavecontact.delay import rigid_mass
-
+def test_a_tolerance_first_order_fem_cannot_reach_is_refused_before_any_run(monkeypatch):
+    """A chain at 1e-9: the fem solver is first order on line scenes, the elements its fit needs are over
+    max_work; refused with the elements and the work, and no run of the multi-body loop made."""
     def no_run(*args, **kwargs):
         raise AssertionError("a run was made before the refusal")
 
     monkeypatch.setattr(multibody, "run_line", no_run)
-    monkeypatch.setattr(rigid_mass, "rigid_mass_on_rod", no_run)
     with pytest.raises(LimitError) as refused:
-        solve(scene, tolerance=1e-12)
+        solve(OFF_LATTICE, tolerance=1e-9)
     message = str(refused.value)
-    assert "tolerance=1e-12" in message and "fem: elements=" in message and "max_work" in message
+    assert "tolerance=1e-09" in message and "fem: elements=" in message and "max_work" in message
+
+
+def test_a_rigid_mass_gets_one_bounded_delay_attempt_before_the_refusal(monkeypatch):
+    """1e-12 on a hammer: the delay equations stop near 1e-9 (8192 steps per round trip, about 0.1 s) and fem
+    would need more than max_work: one delay run at the smallest predicted error, no fem run, then the refusal
+    with the fem work it would need."""
+    def no_run(*args, **kwargs):
+        raise AssertionError("a fem run was made")
+
+    monkeypatch.setattr(multibody, "run_line", no_run)
+    with pytest.raises(AccuracyError) as refused:
+        solve(hammer(1.0), tolerance=1e-12)
+    message = str(refused.value)
+    assert message.startswith("auto: delay: rtol=") and "fem: elements=" in message and "max_work" in message
+    assert refused.value.result.error_estimate > 1e-12
+
+
+def test_at_1e_9_the_bounded_delay_attempt_meets_a_light_hammer():
+    """M/m = 0.25: the delay equations' finest grid meets 1e-9 though the model predicts a little above it."""
+    result = solve(hammer(0.25), tolerance=1e-9)
+    assert_reports_its_choice(result, 1e-9)
+    reference = saint_venant(mass=0.25, rod_length=1.0, impedance=1.0, wave_speed=1.0, velocity=1.0)
+    assert velocity_error(result, (reference.mass_velocity, reference.rod_velocity)) <= 1e-9
 
 
 def test_the_refusal_follows_max_work(monkeypatch):

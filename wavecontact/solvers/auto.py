@@ -63,6 +63,18 @@ class Choice:
     reason: str
     scene_class: str
     usable: object = None
+    refusal: str = ""  # the refusal a last bounded attempt precedes (its miss raises it)
+
+
+def _bounded_attempt(scene: Scene, others: list, usable):
+    """The candidate of smallest predicted error among those whose work is bounded by the solver itself (no
+    cost estimate: the delay equations of a rigid mass on a line), or None; two-rod scenes: None."""
+    if not scene.is_line_scene:
+        return None
+    for prediction in others:
+        if usable(prediction) and run_cost(get_solver(prediction.solver), scene, prediction.option) is None:
+            return prediction
+    return None
 
 
 def _check_limits(solver, scene: Scene, resolution: dict, limits: Limits):
@@ -179,8 +191,16 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
                   f"{first.cpu_s * 1e3:.3g} ms CPU")
     elif usable.refusals:
         cheapest = min(usable.refusals, key=lambda p: p.cpu_s)
-        raise LimitError(f"tolerance={tolerance:g}: the cheapest method predicted to meet it, "
-                         f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+        refusal = (f"tolerance={tolerance:g}: the cheapest method predicted to meet it, "
+                   f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+        bounded = _bounded_attempt(scene, others, usable)
+        if bounded is None:
+            raise LimitError(refusal)
+        # the delay equations of a rigid mass stop at their own finest grid (about 0.1 s): their smallest
+        # predicted error is tried before the refusal, with nothing after it
+        reason = (f"no candidate within the limits is predicted to meet tolerance={tolerance:g}; {bounded.text()} "
+                  f"(bounded work, predicted error estimate {bounded.error:.2g}) is tried before refusing")
+        return Choice(ranked=[bounded], reason=reason, scene_class=kind, usable=usable, refusal=refusal)
     else:
         first = next((p for p in others if usable(p)), None)
         if first is None:
@@ -454,6 +474,9 @@ def _run_until_met(scene, tolerance, limits, choice, pending, fixed: dict):
             elif choice.usable is not None:
                 pending = _next(queue, tried, choice.usable)
     estimate = math.nan if last is None else last.error_estimate
+    if choice.refusal:
+        raise AccuracyError(f"auto: {', '.join(a['method'] for a in attempts)} gave error estimate {estimate:.2g}; "
+                            f"{choice.refusal}", result=last, advice="raise max_work or the tolerance")
     raise AccuracyError(f"auto: no method met tolerance={tolerance:g} within {len(attempts)} runs "
                         f"(last error estimate {estimate:.2g}; tried "
                         f"{', '.join(a['method'] for a in attempts)}); raise max_work or the tolerance",
