@@ -66,6 +66,16 @@ class Choice:
     refusal: str = ""  # the refusal a last bounded attempt precedes (its miss raises it)
 
 
+def _rigid_mass_target(prediction: Prediction) -> Prediction:
+    """A delay prediction on a line scene (a rigid mass on a rod) at most its ``rtol``: the delay equations double
+    their steps per round trip until the estimate meets ``rtol`` (the fit, pulled up by the runs that stop at
+    the finest grid, says more); where the grid's cap stops them first the run misses and is refined or handed
+    over like any other."""
+    if prediction.solver != "delay" or prediction.error <= prediction.resolution:
+        return prediction
+    return dataclasses.replace(prediction, error=prediction.resolution)
+
+
 def _bounded_attempt(scene: Scene, others: list, usable):
     """The candidate of smallest predicted error among those whose work is bounded by the solver itself (no
     cost estimate: the delay equations of a rigid mass on a line), or None; two-rod scenes: None."""
@@ -172,6 +182,8 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
     except UnsupportedSceneError:
         features = {"kappa": 1.0, "time_ratio": 1.0, "vibration_energy": 0.0}
     predictions = [p for name in SOLVER_NAMES for p in model.candidates(proxy, name, features)]
+    if scene.is_line_scene:
+        predictions = [_rigid_mass_target(p) for p in predictions]
     meeting = sorted((p for p in predictions if p.error <= tolerance), key=lambda p: p.cpu_s)
     others = sorted((p for p in predictions if p.error > tolerance), key=lambda p: (p.error, p.cpu_s))
     usable = _Usable(scene, limits)
@@ -209,6 +221,16 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
                   f"estimate, {first.error:.2g}, runs first and is refined")
     if proxy != kind:
         reason += f" (scene class {kind!r} has no calibration: the model of two cold rods stands in)"
+    if scene.is_line_scene:
+        # a line scene hands over only to candidates predicted to meet the tolerance: the others are the fem
+        # solver's coarse rungs, whose refinement the limits refused already
+        refusal = ""
+        if usable.refusals:
+            cheapest = min(usable.refusals, key=lambda p: p.cpu_s)
+            refusal = (f"tolerance={tolerance:g}: the cheapest method predicted to meet it within the model, "
+                       f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+        return Choice(ranked=[first, *(p for p in meeting if p is not first)], reason=reason, scene_class=kind,
+                      usable=usable, refusal=refusal)
     # a refinement that cannot proceed hands over to the next usable candidate of another solver
     return Choice(ranked=[first, *(p for p in meeting + others if p is not first)], reason=reason,
                   scene_class=kind, usable=usable)
