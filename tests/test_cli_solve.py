@@ -101,7 +101,7 @@ def test_without_a_solver_the_command_runs_auto_and_says_what_it_chose(tmp_path,
 
 def test_auto_refuses_an_unreachable_tolerance_in_one_line(tmp_path, capsys):
     path = tmp_path / "chain.toml"
-    path.write_text("[[body]]\nlength = 0.5\nvelocity = 1.0\n[[body]]\nlength = 1.3\n[[body]]\nlength = 0.77\n")
+    path.write_text("[[body]]\nlength = 0.5\nvelocity = 1.0\n[[body]]\nlength = 1.3\n[[body]]\nlength = 0.7733333\n")
     out = tmp_path / "r.json"
     assert main(["solve", str(path), "--tolerance", "1e-12", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -264,8 +264,6 @@ def _lattice_prediction(model, kind: str, features: dict, scene: Scene):
         if levels[-1] >= 1 and all(one_travel(n) for n in levels):
             prediction = model.predict(kind, "fem", features, elements)
             return dataclasses.replace(prediction, error=ERROR_FLOOR) if prediction is not None else None
-        if elements >= 100:  # the meshes a ladder's first rungs give: finer ones are no more likely on it
-            return None
     return None
 
 
