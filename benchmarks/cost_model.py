@@ -27,11 +27,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout this script lives in
 
-from wavecontact import Exponential, Hard, Rod, Scene, two_rods
+from wavecontact import Exponential, Hard, PiecewiseRod, RigidBody, Rod, Scene, Segment, two_rods
 from wavecontact.bath.collide import thermal_scene
 from wavecontact.bath.model import ThermalBath
 from wavecontact.errors import WavecontactError
 from wavecontact.solvers import SOLVER_NAMES, get_solver
+from wavecontact.solvers.auto import _accepts, run_cost
 from wavecontact.solvers.cost_model import DATA_PATH, FORMAT, fit_points, scene_class, scene_features
 
 LADDERS = {
@@ -41,6 +42,9 @@ LADDERS = {
 }
 #: Runs over this estimated work (updates, the error estimate's runs included) are skipped.
 MAX_WORK = 2e9
+#: The same for line scenes, whose estimated work is the fem loop's bound (105 round trips of the longest
+#: body) where the runs stop at the last separation, a few round trips: 1600 elements take about 0.5 s.
+LINE_MAX_WORK = 6e10
 
 
 def two_material_scene(impedance_ratio: float, time_ratio: float, kappa: float) -> Scene:
@@ -59,6 +63,33 @@ def thermal(gamma: float, kappa: float, temperature: float, seed: int) -> Scene:
     return thermal_scene(gamma, kappa, ThermalBath(temperature, 250), seed)
 
 
+def line_calibration_scenes() -> list:
+    """``(label, scene)`` of the line scenes, three per line class, hard contact.  Their lengths are not
+    commensurate with the meshes of the FE ladder (25 x 2^k elements on the body of the shortest travel
+    time), so that no run is on the exact lattice, where the FE is exact and says nothing of its
+    convergence elsewhere."""
+    def striker_on(body, length):
+        return Scene(rods=(Rod(length), body), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
+
+    scenes = []
+    for ratio in (0.5, 1.5, 4.0):
+        scenes.append((f"line rigid mass M/m={ratio:g} on a rod",
+                       Scene(rods=(RigidBody(mass=ratio), Rod(1.0)), velocities=(1.0, 0.0), contact=Hard(),
+                             gaps=(0.0,))))
+    for lengths in ((1.0, 0.7, 0.45), (0.61, 1.0, 0.83, 1.3), (0.37, 0.37, 1.0)):
+        n = len(lengths)
+        scenes.append((f"line chain lengths {'/'.join(f'{x:g}' for x in lengths)}",
+                       Scene(rods=tuple(Rod(x) for x in lengths), velocities=(1.0,) + (0.0,) * (n - 1),
+                             contact=Hard(), gaps=(0.0,) * (n - 1))))
+    for a2, length, striker in ((1.5, 0.71, 0.83), (0.6, 0.47, 0.83), (3.0, 1.13, 0.59)):
+        bar = PiecewiseRod((Segment(length=1.0, area=1.0), Segment(length=length, area=a2)))
+        scenes.append((f"line stepped bar A2/A1={a2:g} l2={length:g} striker {striker:g}", striker_on(bar, striker)))
+    for end_area, striker in ((0.3, 0.61), (2.0, 0.93), (0.1, 0.37)):
+        horn = PiecewiseRod((Segment(length=1.0, area=1.0, end_area=end_area),))
+        scenes.append((f"line taper A_end/A={end_area:g} striker {striker:g}", striker_on(horn, striker)))
+    return scenes
+
+
 def calibration_scenes() -> list:
     """``(label, scene)`` of every calibration scene."""
     scenes = []
@@ -72,7 +103,7 @@ def calibration_scenes() -> list:
         scenes.append((f"thermal gamma=0.6 kappa={kappa:g} T={temperature:g}", thermal(0.6, kappa, temperature, 1)))
     for ratio, kappa in ((0.4, 10.0), (2.5, 1e3)):
         scenes.append((f"two materials Z2/Z1={ratio:g} kappa={kappa:g}", two_material_scene(ratio, 0.6, kappa)))
-    return scenes
+    return scenes + line_calibration_scenes()
 
 
 def cpu_run(solver, scene, option: dict, repeats: int):
@@ -91,16 +122,18 @@ def cpu_run(solver, scene, option: dict, repeats: int):
 
 
 def accepts(solver, scene) -> bool:
-    try:
-        solver.total_cost(scene, solver.options(), True)
-    except WavecontactError:
-        return False
-    return True
+    return _accepts(solver, scene)
+
+
+def estimated_work(solver, scene, option: dict):
+    """The estimated work of a run with its error estimate (as ``auto`` checks it; None: bounded)."""
+    cost = run_cost(solver, scene, option)
+    return None if cost is None else cost.work
 
 
 def scan(scene, repeats: int, ladders=LADDERS, max_work=MAX_WORK):
     """Every solver that takes ``scene`` at every resolution of its ladder: a list of dicts with
-    ``solver``, ``resolution``, ``restitution``, ``estimate`` (None when the run was refused or
+    ``solver``, ``resolution``, ``restitution`` (a line scene: ``velocities``), ``estimate`` (None when the run was refused or
     failed, or skipped over ``max_work``) and ``cpu_s``."""
     rows = []
     for name in SOLVER_NAMES:
@@ -111,32 +144,40 @@ def scan(scene, repeats: int, ladders=LADDERS, max_work=MAX_WORK):
         for value in ladders[name]:
             option = {solver.resolution: value}
             try:
-                cost = solver.total_cost(scene, solver.options(option), True)
+                work = estimated_work(solver, scene, option)
             except WavecontactError:
                 continue
-            if cost is not None and cost.work > max_work:
+            if work is not None and work > max_work:
                 continue
             if not warm:
                 cpu_run(solver, scene, option, 1)
                 warm = True
             result, cpu = cpu_run(solver, scene, option, repeats)
             if result is None:
-                rows.append({"solver": name, "resolution": value, "restitution": None, "estimate": None,
-                             "cpu_s": None})
+                rows.append({"solver": name, "resolution": value, "restitution": None, "velocities": None,
+                             "estimate": None, "cpu_s": None})
                 continue
             rough = bool(result.diagnostics.get("error_estimate_rough"))
             estimate = result.error_estimate
-            rows.append({"solver": name, "resolution": value, "restitution": result.restitution,
+            rows.append({"solver": name, "resolution": value, "restitution": getattr(result, "restitution", None),
+                         "velocities": getattr(result, "velocities", None),
                          "estimate": None if rough or not math.isfinite(estimate) else estimate, "cpu_s": cpu})
     return rows
 
 
-def calibrate(repeats: int) -> dict:
+def calibrate(repeats: int, stored=None) -> dict:
+    """The document of every calibration scene's points; with ``stored`` (a document) only the line scenes
+    run, the two-rod scenes' points are kept from it."""
     points = []
-    for label, scene in calibration_scenes():
+    scenes = calibration_scenes()
+    if stored is not None:
+        lines = {label for label, _scene in line_calibration_scenes()}
+        points = [p for p in stored["points"] if p["scene"] not in lines]
+        scenes = line_calibration_scenes()
+    for label, scene in scenes:
         began = time.monotonic()
         features = scene_features(scene)
-        for row in scan(scene, repeats):
+        for row in scan(scene, repeats, max_work=LINE_MAX_WORK if scene.is_line_scene else MAX_WORK):
             points.append({"scene": label, "class": scene_class(scene), "solver": row["solver"],
                            "resolution": row["resolution"], "features": features,
                            "estimate": row["estimate"], "cpu_s": row["cpu_s"]})
@@ -186,6 +227,9 @@ def main(argv=None) -> int:
     parser.add_argument("--check", action="store_true", help="verify the stored model instead of writing one")
     parser.add_argument("--refit", action="store_true",
                         help="recompute the fits from the stored points (no runs), after a change of the fit")
+    parser.add_argument("--line-only", action="store_true",
+                        help="run the line scenes only (chains, stepped and tapered bars, a rigid mass), keeping the "
+                        "stored points of the two-rod scenes")
     args = parser.parse_args(argv)
     if args.refit:
         stored = json.loads(args.output.read_text(encoding="utf-8"))
@@ -202,7 +246,7 @@ def main(argv=None) -> int:
         return 1 if problems else 0
     began = time.monotonic()
     load = os.getloadavg()[0]
-    data = calibrate(args.repeats)
+    data = calibrate(args.repeats, json.loads(args.output.read_text(encoding="utf-8")) if args.line_only else None)
     data["load_average_at_start"] = round(load, 2)
     args.output.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     print(f"wrote {args.output}: {len(data['points'])} points in {time.monotonic() - began:.0f} s "

@@ -83,3 +83,27 @@ def test_another_solver_ignores_the_files_solve_table(capsys):
     record = json.loads(capsys.readouterr().out)
     assert record["solver"] == "delay"
     assert abs(record["velocities"][0] - math.exp(-2.0)) <= record["error_estimate"]
+
+
+def test_without_a_solver_the_command_runs_auto_and_says_what_it_chose(tmp_path, capsys):
+    """A hammer on a bar, no [solve] table, no solver options: auto takes the delay equations of a rigid mass
+    and meets --tolerance against Saint-Venant's closed form V exp(-2 m / M) (M = m: V e^-2)."""
+    path = tmp_path / "hammer.toml"
+    path.write_text("[[body]]\nmass = 1.0\nvelocity = 1.0\n[[body]]\nlength = 1.0\n")
+    assert main(["solve", str(path), "--tolerance", "1e-6", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["solver"] == "delay" and record["auto"]["method"].startswith("delay")
+    assert record["auto"]["tolerance"] == 1e-6 and record["error_estimate"] <= 1e-6
+    assert record["velocities"][0] == pytest.approx(math.exp(-2.0), abs=1e-6)
+    assert main(["solve", str(path), "--tolerance", "1e-6"]) == 0
+    assert "auto: delay" in capsys.readouterr().out
+
+
+def test_auto_refuses_an_unreachable_tolerance_in_one_line(tmp_path, capsys):
+    path = tmp_path / "chain.toml"
+    path.write_text("[[body]]\nlength = 0.5\nvelocity = 1.0\n[[body]]\nlength = 1.3\n[[body]]\nlength = 0.7733333\n")
+    out = tmp_path / "r.json"
+    assert main(["solve", str(path), "--tolerance", "1e-12", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "tolerance=1e-12" in err[0] and "elements=" in err[0]
+    assert not out.exists()

@@ -21,7 +21,8 @@ _SPEC.loader.exec_module(benchmark)
 
 def test_the_stored_model_loads_and_covers_every_scene_class():
     model = load_model()
-    assert set(model.classes()) == {"cold", "hard", "penalty", "thermal", "two_materials"}
+    assert set(model.classes()) == {"cold", "hard", "penalty", "thermal", "two_materials", "line_rigid", "line_chain",
+                                    "line_stepped", "line_tapered"}
     assert set(model.ladders) == {"delay", "fem", "modal"}
     prediction = model.predict("cold", "delay", {"kappa": 100.0, "time_ratio": 0.6, "vibration_energy": 0.0}, 1e-9)
     assert 0 < prediction.error < 1 and 0 < prediction.cpu_s < 1

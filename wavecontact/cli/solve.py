@@ -17,6 +17,7 @@ from .guard import check_outputs
 
 # the solver options the command passes on, by solver (only those given; the file's [solve] table adds more)
 _SOLVER_FLAGS = ("elements", "order", "mass", "modes", "rtol", "max_steps")
+_FLAGS_BY_SOLVER = {"fem": ("elements", "order", "mass"), "modal": ("modes",), "delay": ("rtol", "max_steps")}
 
 
 def add_parser(subparsers):
@@ -29,7 +30,9 @@ def add_parser(subparsers):
         "override the file's [solve] table, which applies only to the solver it names.",
     )
     p.add_argument("file", metavar="FILE", help="the scene file (.toml or .json)")
-    p.add_argument("--solver", help="which solver (default: the file's [solve] solver, else fem)")
+    p.add_argument("--solver", help="which solver (default: the file's [solve] solver, else the one solver whose "
+                   "options are given, else auto: the method and resolution predicted cheapest to meet --tolerance, "
+                   "default 1e-6 on the velocities' error estimate relative to the largest initial speed)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--out", metavar="FILE", help="write the results as JSON to FILE (.json)")
     p.add_argument("--xt-plot", metavar="FILE", help="draw the x-t diagram of stress over all bodies (.png, .pdf "
@@ -37,7 +40,9 @@ def add_parser(subparsers):
     p.add_argument("--fields", metavar="DIR", help="write displacement, velocity and stress of every body for "
                    "ParaView into DIR (fields.pvd and one VTU file per sample, each body at its place on the line; "
                    "units and parameters in each file's field data; fem)")
-    add_limit_options(p)
+    add_limit_options(p, tolerance_help="fail (exit 2, with advice) if the error estimate exceeds this (default: no "
+                      "check; with auto the target of the choice, default 1e-6; a line scene's estimate is of its "
+                      "velocities over the largest initial speed)")
     options = p.add_argument_group("solver options (passed to the solver, which refuses those it does not take)")
     options.add_argument("--elements", type=positive_int, metavar="N", help="fem: " + option_text("fem", "elements"))
     options.add_argument("--order", type=int, choices=option_choices("fem", "order"),
@@ -97,6 +102,8 @@ def _record(result, names) -> dict:
 def _text(record: dict, path) -> str:
     lines = [f"{path}: solver {record['solver']}"
              + (f", error estimate {record['error_estimate']:.1e}" if record["error_estimate"] is not None else "")]
+    if "auto" in record:
+        lines.append(f"  auto: {record['auto']['method']} ({record['auto']['reason']})")
     lines.append("  body                velocity        internal energy")
     for name, v, e in zip(record["bodies"], record["velocities"], record["internal_energies"]):
         lines.append(f"  {name:<16} {v:>15.9g} {'(not split)' if e is None else format(e, '.9g'):>18}")
@@ -108,6 +115,17 @@ def _text(record: dict, path) -> str:
     return "\n".join(lines)
 
 
+def _implied_solver(args, scene_file) -> str:
+    """``--solver``, else the file's, else the one solver whose options are given (the file's [solve] options
+    without a solver and an x-t plot are fem's), else ``auto``."""
+    if args.solver or scene_file.solver:
+        return args.solver or scene_file.solver
+    named = {name for name, flags in _FLAGS_BY_SOLVER.items() if any(getattr(args, f) is not None for f in flags)}
+    if scene_file.options or args.xt_plot or args.fields:
+        named.add("fem")
+    return named.pop() if len(named) == 1 else "auto"
+
+
 def run(args) -> int:
     from ..api import solve
     from ..io.scene_file import read_scene_file
@@ -116,8 +134,9 @@ def run(args) -> int:
     check_outputs(files=[("--out", args.out, (".json",)), ("--xt-plot", args.xt_plot, FIGURE_SUFFIXES)],
                   directories=[("--fields", args.fields, ("fields.pvd",))])
     scene_file = read_scene_file(args.file)
-    solver = args.solver or scene_file.solver or "fem"
-    # the file's [solve] options belong to the file's solver: another --solver starts from its defaults
+    solver = _implied_solver(args, scene_file)
+    # the file's [solve] options belong to the file's solver (fem if it names none): another --solver starts
+    # from its defaults
     options = dict(scene_file.options) if solver == (scene_file.solver or "fem") else {}
     options.update({name: getattr(args, name) for name in _SOLVER_FLAGS if getattr(args, name) is not None})
     if args.xt_plot or args.fields:
@@ -130,6 +149,10 @@ def run(args) -> int:
         record = _record(result, scene_file.names)
     else:
         record = _two_rod_record(result, scene_file.scene, scene_file.names)
+    auto = (getattr(result, "diagnostics", None) or {}).get("auto")
+    if auto is not None:
+        record["auto"] = {name: auto[name] for name in ("method", "reason", "tolerance", "predicted_cpu_s",
+                                                         "actual_cpu_s")}
     written = []
     if args.out:
         with open(args.out, "w", encoding="utf-8") as stream:

@@ -36,7 +36,7 @@ from . import get_solver as _registry
 from .base import _tolerance, reusing_runs
 from .cost_model import Prediction, load_model, scene_class, scene_features
 
-__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "solve_auto", "solve_refined"]
+__all__ = ["DEFAULT_TOLERANCE", "MAX_ATTEMPTS", "choose", "run_cost", "solve_auto", "solve_refined"]
 
 #: Tolerance on the restitution's error estimate when ``solve`` is given none (absolute).
 DEFAULT_TOLERANCE = 1e-6
@@ -63,20 +63,75 @@ class Choice:
     reason: str
     scene_class: str
     usable: object = None
+    refusal: str = ""  # the refusal a last bounded attempt precedes (its miss raises it)
+
+
+def _rigid_mass_target(prediction: Prediction) -> Prediction:
+    """A delay prediction on a line scene (a rigid mass on a rod) at most its ``rtol``: the delay equations double
+    their steps per round trip until the estimate meets ``rtol`` (the fit, pulled up by the runs that stop at
+    the finest grid, says more); where the grid's cap stops them first the run misses and is refined or handed
+    over like any other."""
+    if prediction.solver != "delay" or prediction.error <= prediction.resolution:
+        return prediction
+    return dataclasses.replace(prediction, error=prediction.resolution)
+
+
+def _bounded_attempt(scene: Scene, others: list, usable):
+    """The candidate of smallest predicted error among those whose work is bounded by the solver itself (no
+    cost estimate: the delay equations of a rigid mass on a line), or None; two-rod scenes: None."""
+    if not scene.is_line_scene:
+        return None
+    for prediction in others:
+        if usable(prediction) and run_cost(get_solver(prediction.solver), scene, prediction.option) is None:
+            return prediction
+    return None
 
 
 def _check_limits(solver, scene: Scene, resolution: dict, limits: Limits):
     """The solver's own cost estimate of a run with its error estimate, refused over ``limits``."""
-    options = solver.options(resolution)
-    cost = solver.total_cost(scene, options, True)
+    cost = run_cost(solver, scene, resolution)
     check_cost(solver.name, cost, limits)
     return cost
+
+
+def run_cost(solver, scene: Scene, option: dict):
+    """The estimated cost (:class:`~wavecontact.limits.Cost`, None: bounded) of one run of ``solver`` with
+    ``option`` and its error estimate, as ``auto`` checks it against the limits."""
+    options = solver.options(option)
+    return _line_cost(solver, scene, options) if scene.is_line_scene else solver.total_cost(scene, options, True)
+
+
+def _line_cost(solver, scene: Scene, options):
+    """Cost of a line-scene run with its error estimate: the fem loop's (:func:`~wavecontact.fem.multibody.line_cost`)
+    with the runs at ``elements // 2`` and ``// 4`` (work ~ elements^2: 1 + 1/4 + 1/16); the delay solver's rigid
+    mass is bounded by its own step cap (None)."""
+    if solver.name != "fem":
+        return None
+    from ..fem.multibody import line_cost
+    from ..limits import Cost
+
+    cost = line_cost(scene, options.as_dict())
+    return Cost(steps=cost.steps, work=cost.work * (1.0 + 1.0 / 4.0 + 1.0 / 16.0), memory=cost.memory,
+                detail=f"{cost.detail}; with the error estimate's runs at elements // 2 and // 4")
+
+
+def _takes_line(solver, scene: Scene) -> bool:
+    """Whether ``solver`` takes a line scene: fem every one, delay a rigid mass on one uniform rod."""
+    if solver.name == "fem":
+        return True
+    if solver.name == "delay":
+        from ..delay.rigid_mass import takes
+
+        return takes(scene)
+    return False
 
 
 def _accepts(solver, scene: Scene) -> bool:
     """Whether ``solver`` takes ``scene`` (its cost estimate refuses what it cannot run)."""
     if scene.is_ring:
         return False
+    if scene.is_line_scene:
+        return _takes_line(solver, scene)
     try:
         solver.total_cost(scene, solver.options(), True)
     except (UnsupportedSceneError, LimitError, InvalidParameterError):
@@ -127,17 +182,37 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
     except UnsupportedSceneError:
         features = {"kappa": 1.0, "time_ratio": 1.0, "vibration_energy": 0.0}
     predictions = [p for name in SOLVER_NAMES for p in model.candidates(proxy, name, features)]
+    if scene.is_line_scene:
+        predictions = [_rigid_mass_target(p) for p in predictions]
     meeting = sorted((p for p in predictions if p.error <= tolerance), key=lambda p: p.cpu_s)
     others = sorted((p for p in predictions if p.error > tolerance), key=lambda p: (p.error, p.cpu_s))
     usable = _Usable(scene, limits)
+    lattice = None
+    if scene.is_line_scene and kind in model.fits:
+        lattice = _lattice_prediction(model, kind, features, scene)
+        meeting = _beyond_ladders(model, kind, features, tolerance, meeting, usable)
+        if lattice is not None:
+            meeting = [lattice, *meeting]
     first = next((p for p in meeting if usable(p)), None)
-    if first is not None:
+    if first is not None and first is lattice:
+        reason = (f"on the exact lattice at {first.text()} (every element one wave travel time, hard contacts "
+                  f"between rod ends, the error estimate's coarser runs too): exact to round-off, "
+                  f"{first.cpu_s * 1e3:.3g} ms CPU predicted")
+    elif first is not None:
         reason = (f"predicted cheapest to meet tolerance={tolerance:g}: error estimate {first.error:.2g}, "
                   f"{first.cpu_s * 1e3:.3g} ms CPU")
     elif usable.refusals:
         cheapest = min(usable.refusals, key=lambda p: p.cpu_s)
-        raise LimitError(f"tolerance={tolerance:g}: the cheapest method predicted to meet it, "
-                         f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+        refusal = (f"tolerance={tolerance:g}: the cheapest method predicted to meet it, "
+                   f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+        bounded = _bounded_attempt(scene, others, usable)
+        if bounded is None:
+            raise LimitError(refusal)
+        # the delay equations of a rigid mass stop at their own finest grid (about 0.1 s): their smallest
+        # predicted error is tried before the refusal, with nothing after it
+        reason = (f"no candidate within the limits is predicted to meet tolerance={tolerance:g}; {bounded.text()} "
+                  f"(bounded work, predicted error estimate {bounded.error:.2g}) is tried before refusing")
+        return Choice(ranked=[bounded], reason=reason, scene_class=kind, usable=usable, refusal=refusal)
     else:
         first = next((p for p in others if usable(p)), None)
         if first is None:
@@ -146,9 +221,102 @@ def choose(scene: Scene, tolerance: float, limits: Limits, model=None) -> Choice
                   f"estimate, {first.error:.2g}, runs first and is refined")
     if proxy != kind:
         reason += f" (scene class {kind!r} has no calibration: the model of two cold rods stands in)"
+    if scene.is_line_scene:
+        # a line scene hands over only to candidates predicted to meet the tolerance: the others are the fem
+        # solver's coarse rungs, whose refinement the limits refused already
+        refusal = ""
+        if usable.refusals:
+            cheapest = min(usable.refusals, key=lambda p: p.cpu_s)
+            refusal = (f"tolerance={tolerance:g}: the cheapest method predicted to meet it within the model, "
+                       f"{cheapest.text()}, is over the limits: {usable.refusals[cheapest]}")
+        return Choice(ranked=[first, *(p for p in meeting if p is not first)], reason=reason, scene_class=kind,
+                      usable=usable, refusal=refusal)
     # a refinement that cannot proceed hands over to the next usable candidate of another solver
     return Choice(ranked=[first, *(p for p in meeting + others if p is not first)], reason=reason,
                   scene_class=kind, usable=usable)
+
+
+def _lattice_prediction(model, kind: str, features: dict, scene: Scene):
+    """The fem prediction at the coarsest ladder resolution whose run and error-estimate runs (``// 2``, ``// 4``)
+    are all on the exact lattice (P1 lumped at Courant number 1, every element one wave travel time, only hard
+    contacts between rod ends: d'Alembert's solution at the nodes, tests/test_impact_references.py), with the
+    round-off floor as its error; None where the scene has a rigid body, a soft contact, a taper, or no such
+    resolution.  Decided from the meshes' travel times (a set-up costs milliseconds, as much as the run); the
+    run's ``diagnostics["lattice"]`` confirms it, and a run off the lattice shows in its estimate (refined,
+    logged as a miss)."""
+    from ..bodies import RigidBody, body_segments, pair_laws
+    from .cost_model import ERROR_FLOOR
+
+    if any(isinstance(b, RigidBody) for b in scene.rods) or not all(law.hard for law in pair_laws(scene)):
+        return None
+    segments = [s for b in scene.rods for s in body_segments(b)]
+    if any(s.tapered for s in segments):
+        return None
+    shortest = min(sum(s.travel_time for s in body_segments(b)) for b in scene.rods)
+
+    def one_travel(elements: int) -> bool:  # the multi-body set-up's meshes (_mesh): one element travel time
+        travel = shortest / elements
+        times = [s.travel_time / max(1, round(s.travel_time / travel)) for s in segments]
+        return max(times) - min(times) <= 1e-9 * min(times)
+
+    for elements in model.ladders.get("fem", []):
+        levels = (int(elements), int(elements) // 2, int(elements) // 4)
+        if levels[-1] >= 1 and all(one_travel(n) for n in levels):
+            prediction = model.predict(kind, "fem", features, elements)
+            return dataclasses.replace(prediction, error=ERROR_FLOOR) if prediction is not None else None
+    return None
+
+
+def _beyond_ladders(model, kind: str, features: dict, tolerance: float, meeting: list, usable) -> list:
+    """``meeting`` of a line scene, or where no ladder resolution of a solver that takes the scene is predicted
+    to meet ``tolerance``, with the resolution its error fit needs beyond the ladder (elements or modes:
+    ``log10 error`` linear in ``log10 resolution``), so that a tolerance the limits cannot reach is refused
+    before any work, with the work it would need (the fem solver is first order on line scenes)."""
+    added = []
+    for name in SOLVER_NAMES:
+        fit = model.fits.get(kind, {}).get(name)
+        if fit is None or any(p.solver == name for p in meeting) or not _takes_line(get_solver(name), usable.scene):
+            continue
+        coef = fit["error"]["coef"]
+        slope = coef[2]
+        if name == "delay" or slope >= 0.0:
+            continue
+        row = model.predict(kind, name, features, 1.0)
+        needed = 10.0 ** ((math.log10(tolerance) - math.log10(row.error)) / slope)
+        ladder = model.ladders.get(name, [1.0])
+        resolution = float(ladder[-1] * 2.0 ** max(math.ceil(math.log2(needed / ladder[-1])), 1))
+        prediction = model.predict(kind, name, features, resolution)
+        if not prediction.error <= tolerance or not math.isfinite(prediction.cpu_s):
+            continue
+        refusal = _over_limits(name, usable.scene, resolution, usable.limits)
+        if refusal:
+            usable.refusals[prediction] = refusal  # beyond what the solver's options take: refused here
+        else:
+            added.append(prediction)
+    return sorted(meeting + added, key=lambda p: p.cpu_s)
+
+
+def _over_limits(name: str, scene: Scene, elements: float, limits: Limits) -> str:
+    """Why a fem run of a line scene at ``elements`` (any size, not validated as an option) is over the limits
+    ("" if it is within them)."""
+    if name != "fem":
+        return ""
+    from ..fem.multibody import line_cost
+
+    cost = line_cost(scene, {"elements": elements})
+    work = cost.work * (1.0 + 1.0 / 4.0 + 1.0 / 16.0)
+    if work <= limits.max_work and cost.memory <= limits.max_memory:
+        return ""
+    return (f"fem: this solve would take about {work:.2g} updates and {cost.memory:.2g} bytes ({cost.detail}; "
+            f"with the error estimate's runs at elements // 2 and // 4), more than max_work={limits.max_work:g} or "
+            f"max_memory={limits.max_memory:g}; the fem solver is first order on line scenes")
+
+
+def _level_change(a, b) -> float:
+    """``|a - b|`` of two levels' values: numbers (a restitution) or sequences (a line scene's velocities)."""
+    if isinstance(a, (list, tuple)):
+        return max((abs(x - y) for x, y in zip(a, b)), default=0.0)
+    return abs(a - b)
 
 
 def _observed_order(solver, options, result) -> float:
@@ -157,7 +325,7 @@ def _observed_order(solver, options, result) -> float:
     levels = sorted(result.diagnostics.get("error_estimate_levels") or [], key=lambda level: -level[0])
     if len(levels) >= 3:
         (n0, v0), (n1, v1), (_n2, v2) = levels[:3]
-        d0, d1 = abs(v0 - v1), abs(v1 - v2)
+        d0, d1 = _level_change(v0, v1), _level_change(v1, v2)
         if d0 > 0.0 and d1 > 0.0 and n0 > n1:
             order = math.log(d1 / d0) / math.log(n0 / n1)
             if 0.5 <= order <= 6.0:
@@ -181,6 +349,8 @@ def refined_resolution(solver, options, result, tolerance: float):
     if not math.isfinite(estimate) or level is None:
         return None
     if solver.refines < 0:
+        if result.work.get("steps_per_round_trip", 0) >= _rigid_mass_steps_max():
+            return None  # the rigid mass's delay equation at its finest grid: a smaller rtol changes nothing
         wanted = level * tolerance / estimate / 2.0
         if wanted >= level:
             wanted = level / 10.0
@@ -195,6 +365,12 @@ def refined_resolution(solver, options, result, tolerance: float):
     if spec["high"] is not None and wanted > spec["high"]:
         return None
     return {name: wanted}
+
+
+def _rigid_mass_steps_max() -> int:
+    from ..delay.rigid_mass import STEPS_MAX
+
+    return STEPS_MAX
 
 
 def _cpu_run(solver, scene, option: dict, limits: Limits):
@@ -318,6 +494,9 @@ def _run_until_met(scene, tolerance, limits, choice, pending, fixed: dict):
             elif choice.usable is not None:
                 pending = _next(queue, tried, choice.usable)
     estimate = math.nan if last is None else last.error_estimate
+    if choice.refusal:
+        raise AccuracyError(f"auto: {', '.join(a['method'] for a in attempts)} gave error estimate {estimate:.2g}; "
+                            f"{choice.refusal}", result=last, advice="raise max_work or the tolerance")
     raise AccuracyError(f"auto: no method met tolerance={tolerance:g} within {len(attempts)} runs "
                         f"(last error estimate {estimate:.2g}; tried "
                         f"{', '.join(a['method'] for a in attempts)}); raise max_work or the tolerance",
