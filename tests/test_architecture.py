@@ -103,7 +103,7 @@ LAYERS = (
     ("bath", "io.scene_file"),
     ("solvers",),
     SOLVER_PACKAGES,
-    ("api",),
+    ("api", "solvers.auto"),  # auto chooses among the solver packages: above them
     ("gas",),
     ("studies",),
     ("plotting",),

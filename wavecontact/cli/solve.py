@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 
+from ..solvers import get_solver, solver_names
 from .common import (
     FIGURE_SUFFIXES,
     add_limit_options,
@@ -17,7 +18,17 @@ from .guard import check_outputs
 
 # the solver options the command passes on, by solver (only those given; the file's [solve] table adds more)
 _SOLVER_FLAGS = ("elements", "order", "mass", "modes", "rtol", "max_steps")
-_FLAGS_BY_SOLVER = {"fem": ("elements", "order", "mass"), "modal": ("modes",), "delay": ("rtol", "max_steps")}
+
+
+def _flags_of(solver: str) -> tuple:
+    """The flags of this command that are options of ``solver`` (its declared ``cli_flags``)."""
+    return tuple(flag for flag in _SOLVER_FLAGS if flag in get_solver(solver).cli_flags)
+
+
+def _line_solver() -> str:
+    """The solver that takes every line scene and records fields (the one whose options offer
+    ``record_fields``): the file's ``[solve]`` options without a solver name are its options."""
+    return next(name for name in solver_names() if "record_fields" in get_solver(name).Options.__dataclass_fields__)
 
 
 def add_parser(subparsers):
@@ -120,9 +131,9 @@ def _implied_solver(args, scene_file) -> str:
     without a solver and an x-t plot are fem's), else ``auto``."""
     if args.solver or scene_file.solver:
         return args.solver or scene_file.solver
-    named = {name for name, flags in _FLAGS_BY_SOLVER.items() if any(getattr(args, f) is not None for f in flags)}
+    named = {name for name in solver_names() if any(getattr(args, f) is not None for f in _flags_of(name))}
     if scene_file.options or args.xt_plot or args.fields:
-        named.add("fem")
+        named.add(_line_solver())
     return named.pop() if len(named) == 1 else "auto"
 
 
@@ -137,11 +148,12 @@ def run(args) -> int:
     solver = _implied_solver(args, scene_file)
     # the file's [solve] options belong to the file's solver (fem if it names none): another --solver starts
     # from its defaults
-    options = dict(scene_file.options) if solver == (scene_file.solver or "fem") else {}
+    options = dict(scene_file.options) if solver == (scene_file.solver or _line_solver()) else {}
     options.update({name: getattr(args, name) for name in _SOLVER_FLAGS if getattr(args, name) is not None})
     if args.xt_plot or args.fields:
-        if solver != "fem":
-            raise ValueError(f"--fields and --xt-plot need --solver fem (the solver that records fields), not {solver}")
+        if solver != _line_solver():
+            raise ValueError(f"--fields and --xt-plot need --solver {_line_solver()} (the solver that records fields), "
+                             f"not {solver}")
         options["record_fields"] = True
     result = solve(scene_file.scene, solver=solver, tolerance=args.tolerance, max_work=args.max_work,
                    max_memory=args.max_memory, **options)
