@@ -45,6 +45,34 @@ from .interleaved_step import (
     step_tridiagonal_loaded,
     unpack_nodes,
 )
+from .layout import (
+    C_ALPHA,
+    C_LAW,
+    C_M_INV,
+    C_OFFSET,
+    C_R_STOP,
+    C_STIFFNESS,
+    C_STRENGTH,
+    K_BOUND1,
+    K_BOUND2,
+    K_CHECK_EVERY,
+    K_DT,
+    K_ENERGY_TOLERANCE,
+    K_KIND1,
+    K_KIND2,
+    K_PERIOD,
+    K_PLASTIC,
+    K_SCHEME,
+    S_ENERGY0,
+    S_ENERGY_SCALE,
+    S_FAILED_ENERGY,
+    S_LAST_IN_RANGE,
+    S_MAX_DRIFT,
+    S_MOMENTUM1,
+    S_MOMENTUM2,
+    S_STEPS,
+    S_TIME,
+)
 
 __all__ = [
     "STATUS_FAILED",
@@ -63,22 +91,6 @@ SCHEME_FORCE = 3  # any mesh, resolved contact: plain central differences, force
 STATUS_SEPARATED = 1
 STATUS_FAILED = 2
 
-# indices into the float state vector of `advance`
-S_TIME = 0
-S_MOMENTUM1 = 1
-S_MOMENTUM2 = 2
-S_LAST_IN_RANGE = 3
-S_STEPS = 4
-S_ENERGY0 = 5
-S_MAX_DRIFT = 6
-S_FAILED_ENERGY = 7
-S_ENERGY_SCALE = 8
-S_PREVIOUS_END1 = 9
-S_PREVIOUS_END2 = 10
-S_INCOMING = 11
-S_INCOMING_EARLIER = 12  # incoming rate one step before S_INCOMING
-S_LEVEL = 13  # time level of the exact lattice's waves, counted from the start of the run
-STATE_SIZE = 14
 
 
 @kernel
@@ -184,20 +196,6 @@ def _energy_check(
     return samples, internal1, internal2, True
 
 
-# entries of the general loop's control array (the contact array uses lattice.C_*)
-K_DT = 0
-K_PERIOD = 1  # stop once out of range for this long
-K_CHECK_EVERY = 2
-K_ENERGY_TOLERANCE = 3
-K_SCHEME = 4
-K_KIND1 = 5  # mass solve of each rod (explicit_step.MASS_*)
-K_KIND2 = 6
-K_BOUND1 = 7  # separation bound factor of each rod
-K_BOUND2 = 8
-K_PLASTIC = 9  # 1: the splitting scheme's hard node impact is perfectly plastic (0: an elastic mirror)
-CONTROL_SIZE = 10
-# contact array (the same layout as the lattice's C_*)
-_C_LAW, _C_ALPHA, _C_STRENGTH, _C_STIFFNESS, _C_OFFSET, _C_R_STOP, _C_M_INV = 0, 1, 2, 3, 4, 5, 6
 
 
 @kernel
@@ -222,9 +220,9 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
         force).
     contact : ndarray
         Law, its parameters, reference gap (``gap = offset + u2[0] - u1[-1]``),
-        stop gap and ``m_inv`` (layout of ``lattice.C_*``).
+        stop gap and ``m_inv`` (:mod:`~wavecontact.fem.layout` ``C_*``).
     control : ndarray
-        ``K_*`` entries.
+        ``K_*`` entries (:mod:`~wavecontact.fem.layout`).
     state : ndarray
         ``S_*`` entries carried between calls (time, momenta, run control).
     history : tuple of 4 arrays
@@ -244,13 +242,13 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     table1, table2 = tables
     column1, column2 = columns
     hist_time, hist_force, hist_vrel, hist_gap = history
-    law = int(contact[_C_LAW])
-    alpha = contact[_C_ALPHA]
-    strength = contact[_C_STRENGTH]
-    stiffness = contact[_C_STIFFNESS]
-    offset = contact[_C_OFFSET]
-    r_stop = contact[_C_R_STOP]
-    m_inv = contact[_C_M_INV]
+    law = int(contact[C_LAW])
+    alpha = contact[C_ALPHA]
+    strength = contact[C_STRENGTH]
+    stiffness = contact[C_STIFFNESS]
+    offset = contact[C_OFFSET]
+    r_stop = contact[C_R_STOP]
+    m_inv = contact[C_M_INV]
     dt = control[K_DT]
     period = control[K_PERIOD]
     check_every = int(control[K_CHECK_EVERY])
