@@ -46,21 +46,10 @@ from .interleaved_step import (
     unpack_nodes,
 )
 from .layout import (
-    C_ALPHA,
-    C_LAW,
-    C_M_INV,
-    C_OFFSET,
-    C_R_STOP,
-    C_STIFFNESS,
-    C_STRENGTH,
     K_BOUND1,
     K_BOUND2,
-    K_CHECK_EVERY,
-    K_DT,
-    K_ENERGY_TOLERANCE,
     K_KIND1,
     K_KIND2,
-    K_PERIOD,
     K_PLASTIC,
     K_SCHEME,
     S_ENERGY0,
@@ -72,6 +61,8 @@ from .layout import (
     S_MOMENTUM2,
     S_STEPS,
     S_TIME,
+    read_contact,
+    read_run_control,
 )
 
 __all__ = [
@@ -242,17 +233,8 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     table1, table2 = tables
     column1, column2 = columns
     hist_time, hist_force, hist_vrel, hist_gap = history
-    law = int(contact[C_LAW])
-    alpha = contact[C_ALPHA]
-    strength = contact[C_STRENGTH]
-    stiffness = contact[C_STIFFNESS]
-    offset = contact[C_OFFSET]
-    r_stop = contact[C_R_STOP]
-    m_inv = contact[C_M_INV]
-    dt = control[K_DT]
-    period = control[K_PERIOD]
-    check_every = int(control[K_CHECK_EVERY])
-    energy_tolerance = control[K_ENERGY_TOLERANCE]
+    law, alpha, strength, stiffness, offset, r_stop, m_inv = read_contact(contact)
+    dt, period, check_every, energy_tolerance = read_run_control(control)
     scheme = int(control[K_SCHEME])
     plastic = control[K_PLASTIC] != 0.0
     kind1 = int(control[K_KIND1])

@@ -50,20 +50,9 @@ from .kernels import (
     _mean_displacement,
 )
 from .layout import (
-    C_ALPHA,
     C_COMPLIANCE,
-    C_LAW,
-    C_M_INV,
-    C_OFFSET,
-    C_R_STOP,
-    C_STIFFNESS,
-    C_STRENGTH,
     K_CENTERED,
-    K_CHECK_EVERY,
-    K_DT,
-    K_ENERGY_TOLERANCE,
     K_GAUSS,
-    K_PERIOD,
     K_SUBSTEPS,
     R_BOUND,
     R_CONTACT_COEFFICIENT,
@@ -79,6 +68,8 @@ from .layout import (
     S_MOMENTUM2,
     S_STEPS,
     S_TIME,
+    read_contact,
+    read_run_control,
 )
 
 __all__ = [
@@ -329,18 +320,9 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
     mirror2 = parameters2[R_FAR_THETA] == 0.0
     coefficient1 = parameters1[R_CONTACT_COEFFICIENT]
     coefficient2 = parameters2[R_CONTACT_COEFFICIENT]
-    law = int(contact[C_LAW])
-    alpha = contact[C_ALPHA]
-    strength = contact[C_STRENGTH]
-    stiffness = contact[C_STIFFNESS]
-    offset = contact[C_OFFSET]
-    r_stop = contact[C_R_STOP]
-    m_inv = contact[C_M_INV]
+    law, alpha, strength, stiffness, offset, r_stop, m_inv = read_contact(contact)
     compliance = contact[C_COMPLIANCE]
-    dt = control[K_DT]
-    period = control[K_PERIOD]
-    check_every = int(control[K_CHECK_EVERY])
-    energy_tolerance = control[K_ENERGY_TOLERANCE]
+    dt, period, check_every, energy_tolerance = read_run_control(control)
     substeps = int(control[K_SUBSTEPS])
     centered = control[K_CENTERED] != 0.0
     gauss = control[K_GAUSS] != 0.0

@@ -17,6 +17,8 @@ The multi-body kernel keeps its own arrays and tables
 
 from __future__ import annotations
 
+from .._jit import kernel
+
 # run state (one float array)
 S_TIME = 0
 S_MOMENTUM1 = 1
@@ -68,3 +70,16 @@ R_CONTACT_COEFFICIENT = 2  # dt^2 M^-1 K (end, neighbour) of the contact end nod
 R_CONTACT_INVERSE_MASS = 3  # 1 / mass of the contact end node
 R_BOUND = 4  # |u_end - u_mean| <= R_BOUND sqrt(internal energy): the separation bound
 ROD_SIZE = 5
+
+
+@kernel(inline="always")
+def read_contact(contact):
+    """``(law, alpha, strength, stiffness, offset, r_stop, m_inv)`` of a packed contact array (``C_*``)."""
+    return (int(contact[C_LAW]), contact[C_ALPHA], contact[C_STRENGTH], contact[C_STIFFNESS], contact[C_OFFSET],
+            contact[C_R_STOP], contact[C_M_INV])
+
+
+@kernel(inline="always")
+def read_run_control(control):
+    """``(dt, period, check_every, energy_tolerance)`` of a packed control array, the entries both loops read."""
+    return control[K_DT], control[K_PERIOD], int(control[K_CHECK_EVERY]), control[K_ENERGY_TOLERANCE]
