@@ -157,11 +157,12 @@ def _synchronize(u, v, a, sync, bands, kind, table, dt):
 
 
 @kernel
-def _energy_check(
-    kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state, samples,
-    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
-):
+def _energy_check(kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state,
+                  samples, energies):
     """Record one energy sample and watch the balance (the periodic check of both time loops).
+
+    ``energies``: the 6 sample arrays of the loops (time, kinetic, strain and contact energy, internal
+    energy of each rod).
 
     Returns ``(samples, internal1, internal2, within)``: the updated sample
     count, each rod's internal energy (total minus its translation), and
@@ -171,6 +172,7 @@ def _energy_check(
     total = kinetic1 + strain1 + kinetic2 + strain2 + potential
     internal1 = kinetic1 + strain1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
     internal2 = kinetic2 + strain2 - 0.5 * state[S_MOMENTUM2] ** 2 / mass2
+    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2 = energies
     if samples < energy_time.size:
         energy_time[samples] = time
         energy_kinetic[samples] = kinetic1 + kinetic2
@@ -336,7 +338,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             samples, internal1, internal2, within = _energy_check(
                 kin1 - cor1, str1, kin2 - cor2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
-                energies[0], energies[1], energies[2], energies[3], energies[4], energies[5],
+                energies,
             )
             if not within:
                 return STATUS_FAILED, step + 1, samples

@@ -431,8 +431,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
             kin2, str2 = _staggered_energies(u2, w2, bands2, weights2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             samples, internal1, internal2, within = _energy_check(
-                kin1, str1, kin2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
-                energies[0], energies[1], energies[2], energies[3], energies[4], energies[5],
+                kin1, str1, kin2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples, energies,
             )
             if not within:
                 status = STATUS_FAILED
