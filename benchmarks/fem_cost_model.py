@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout thi
 from docs_block import run_and_write
 
 import wavecontact
-from wavecontact.fem import lattice
+from wavecontact.fem import layout
 from wavecontact.fem.simulation import _Run, build_setup, run_collision
 
 GAMMA = 0.6
@@ -39,7 +39,7 @@ def _cpu_times(setup, steps: int, check_every: int, repeats: int) -> tuple:
         began = time.process_time()
         run = _Run(setup, 0.05)
         start.append(time.process_time() - began)
-        run.control[lattice.K_CHECK_EVERY] = check_every
+        run.control[layout.K_CHECK_EVERY] = check_every
         began = time.process_time()
         _status, history, _energies = run.advance(steps)
         loop.append(time.process_time() - began)

@@ -171,3 +171,91 @@ def test_the_layering_check_sees_an_upward_import(tmp_path):
                      encoding="utf-8")
     found = _upward_imports(probe, rel=("io", "probe"))
     assert len(found) == 2 and "wavecontact.__version__" in found[0] and "studies.ring" in found[1]
+
+
+# ---------------------------------------------------------------- grouped arguments
+#: no function takes more than this many parameters (issue 25: kernels take grouped arguments)
+MOST_PARAMETERS = 12
+#: the functions still above it, each with its count: an entry may only fall (lower it, or remove it once
+#: the function takes at most MOST_PARAMETERS); no function may join the list
+OVER_THE_LIMIT = {
+    "delay/kernels.py:_exponent": 20,
+    "delay/kernels.py:integrate_delay_equation": 23,
+    "delay/kernels.py:no_later_contact": 15,
+    "delay/stochastic_hardcore.py:max_plus_recursion": 14,
+    "delay/stochastic_hardcore_batch.py:_max_plus_one": 15,
+    "delay/stochastic_hardcore_batch.py:_noise_coefficients": 13,
+    "delay/stochastic_hardcore_batch.py:_quiet_chunk": 15,
+    "delay/stochastic_hardcore_batch.py:max_plus_batch": 18,
+    "fem/multibody_kernel.py:_push": 13,
+    "fem/multibody_kernel.py:advance_line": 24,
+    "gas/collision_law.py:build_collision_law": 13,
+    "gas/simulation.py:GasSimulation.__init__": 15,
+    "io/run_controller.py:RunController.__init__": 13,
+    "modal/collocation.py:_fill_level": 16,
+    "modal/collocation.py:_newton_forces": 14,
+    "modal/collocation.py:run_collision": 38,
+    "modal/kernels.py:_bounds": 20,
+    "modal/kernels.py:run_episode": 35,
+    "modal/solver.py:_collide": 15,
+    "studies/ensemble.py:ensemble": 15,
+    "studies/gas.py:gas_ensemble": 15,
+    "studies/markov.py:markov_chains": 18,
+    "studies/ring.py:run_ring": 16,
+}
+
+
+def _parameter_counts(tree) -> dict:
+    """``{qualified name: parameters}`` of every function in ``tree`` (``self``, ``*args`` and ``**kwargs``
+    count; a lambda is named ``<lambda>`` at its line)."""
+    counts = {}
+
+    def visit(node, prefix):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+                name = child.name if not isinstance(child, ast.Lambda) else f"<lambda>:{child.lineno}"
+                a = child.args
+                counts[prefix + name] = (len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
+                                         + (a.vararg is not None) + (a.kwarg is not None))
+                visit(child, prefix + name + ".")
+            elif isinstance(child, ast.ClassDef):
+                visit(child, prefix + child.name + ".")
+            else:
+                visit(child, prefix)
+
+    visit(tree, "")
+    return counts
+
+
+def _over_the_limit(paths, root=PACKAGE) -> dict:
+    """``{'module.py:qualified name': parameters}`` of the functions in ``paths`` above MOST_PARAMETERS."""
+    over = {}
+    for path in paths:
+        rel = path.relative_to(root).as_posix()
+        for name, count in _parameter_counts(ast.parse(path.read_text(encoding="utf-8"))).items():
+            if count > MOST_PARAMETERS:
+                over[f"{rel}:{name}"] = count
+    return over
+
+
+def test_no_function_takes_more_parameters_than_its_allowance():
+    over = _over_the_limit(sorted(PACKAGE.rglob("*.py")))
+    problems = [f"{name} takes {count} parameters (at most {MOST_PARAMETERS}: group them)"
+                for name, count in over.items() if name not in OVER_THE_LIMIT]
+    problems += [f"{name} takes {over[name]} parameters, above its allowance of {allowed}"
+                 for name, allowed in OVER_THE_LIMIT.items() if over.get(name, 0) > allowed]
+    problems += [f"{name} now takes {over.get(name, 'at most ' + str(MOST_PARAMETERS))} parameters: lower or "
+                 f"remove its entry in OVER_THE_LIMIT ({allowed})"
+                 for name, allowed in OVER_THE_LIMIT.items() if over.get(name, 0) < allowed]
+    assert not problems, "\n".join(problems)
+
+
+def test_the_parameter_check_sees_a_long_signature(tmp_path):
+    # the check must be able to fail: 13 parameters in a method and in a nested function, 12 let through
+    probe = tmp_path / "probe.py"
+    probe.write_text("class A:\n    def m(self, a, b, c, d, e, f, g, h, i, j, k, *rest):\n        pass\n"
+                     "def outer(x):\n    def inner(a, b, c, d, e, f, g, h, i, j, k, l, *, m=0):\n        pass\n"
+                     "def fine(a, b, c, d, e, f, g, h, i, j, k, l):\n    pass\n", encoding="utf-8")
+    assert _parameter_counts(ast.parse(probe.read_text(encoding="utf-8"))) == {
+        "A.m": 13, "outer": 1, "outer.inner": 13, "fine": 12}
+    assert _over_the_limit([probe], root=tmp_path) == {"probe.py:A.m": 13, "probe.py:outer.inner": 13}

@@ -17,7 +17,7 @@ import pytest
 
 import wavecontact as wc
 from wavecontact import Hard, Rod, Scene
-from wavecontact.fem import kernels, lattice
+from wavecontact.fem import kernels, lattice, layout
 from wavecontact.fem.contact_flows import (
     LAW_EXPONENTIAL,
     exponential_gap,
@@ -51,9 +51,9 @@ class ReferenceLattice:
     def _incoming(self):
         (u1, u2), (w1, w2), dt = self.u, self.w, self.setup.dt
         mean_rate = ((u2[1] - w2[0]) - (u1[-2] - w1[-1])) / dt
-        incoming = 2.0 * mean_rate - self.state[kernels.S_INCOMING]
+        incoming = 2.0 * mean_rate - self.state[layout.S_INCOMING]
         rates = np.zeros(5)
-        rates[:3] = self.state[kernels.S_INCOMING_EARLIER], self.state[kernels.S_INCOMING], incoming
+        rates[:3] = self.state[layout.S_INCOMING_EARLIER], self.state[layout.S_INCOMING], incoming
         if self.setup.centered:
             for j in (2, 3):
                 later = ((u2[j] - w2[j - 1]) - (u1[-1 - j] - w1[-j])) / dt
@@ -72,11 +72,11 @@ class ReferenceLattice:
             if s.centered:
                 variation = np.max(np.abs(rates[[0, 1, 3, 4]] - incoming))
             else:
-                variation = abs(incoming - state[kernels.S_INCOMING])
+                variation = abs(incoming - state[layout.S_INCOMING])
             varies = s.law == LAW_EXPONENTIAL and variation > (1e-13 if s.gauss else 1e-7) * abs(incoming)
-        earlier = state[kernels.S_INCOMING]
-        state[kernels.S_INCOMING_EARLIER] = earlier
-        state[kernels.S_INCOMING] = incoming
+        earlier = state[layout.S_INCOMING]
+        state[layout.S_INCOMING_EARLIER] = earlier
+        state[layout.S_INCOMING] = incoming
         new = []
         for u, w, disc, inverse_mass in zip(self.u, self.w, s.rods, self.inverse_mass):
             first, last = _end_rule(u, w, disc.stiffness_bands, inverse_mass, dt)
@@ -105,8 +105,8 @@ class ReferenceLattice:
         new[0][-1] -= self.inverse_mass[0][-1] * shift
         new[1][0] += self.inverse_mass[1][0] * shift
         self.w, self.u = self.u, new
-        state[kernels.S_MOMENTUM1] -= shift / dt
-        state[kernels.S_MOMENTUM2] += shift / dt
+        state[layout.S_MOMENTUM1] -= shift / dt
+        state[layout.S_MOMENTUM2] += shift / dt
         return shift / dt / dt, s.gap + new[1][0] - new[0][-1]
 
     def energies(self):
@@ -191,7 +191,7 @@ def _pulse_errors(elements, profile, long_rod=1.3733):
     """Largest node error of each rod after 3.3 time units against d'Alembert's solution (free true ends)."""
     setup, run = _free_rods_with_a_pulse(elements, profile, long_rod)
     run.advance(int(3.3 / setup.dt))
-    time = run.state[kernels.S_TIME]
+    time = run.state[layout.S_TIME]
     errors = []
     for index, (length, initial) in enumerate(((1.0, lambda x: profile(1.0 - x)), (long_rod, profile))):
         x = setup.rods[index].x

@@ -100,7 +100,7 @@ def test_kernel_blend_over_kappa_matches_the_plain_python_statement():
             _below, ir, wr, i_s, ws = kernels._law_point(lx, s, hard[1], hard[2])
             e_hard, g_hard = kernels._table_draw(u, ig, wg, ir, wr, i_s, ws, hard[3], True, hard[4][0], hard[5][0],
                                                  True)
-            eps2, gain, softer, _below, _floored = kernels._soft_draw(u, g, kappa, lx, s, e_hard, g_hard, *soft)
+            eps2, gain, softer, _below, _floored = kernels._soft_draw(u, g, kappa, lx, s, e_hard, g_hard, soft)
             expected = blend_draw(LAW, SOFT, g, 10.0**lx, u, s, kappa, corrections)
             assert eps2 == pytest.approx(expected[0], rel=1e-9, abs=1e-12)
             assert gain == pytest.approx(expected[1], rel=1e-9, abs=1e-12)

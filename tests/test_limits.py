@@ -114,6 +114,30 @@ def test_kappa_outside_the_supported_range_is_refused_up_front(kappa):
     assert "strength" not in str(error)
 
 
+@pytest.mark.parametrize("kappa", [1e-3, 1.001 * KAPPA_MAX])
+def test_two_rods_refuses_kappa_outside_the_range_where_the_scene_is_built(kappa):
+    error = refused(lambda: wavecontact.two_rods(0.6, kappa), "kappa", "inf")
+    assert "strength" not in str(error)
+
+
+def test_kappa_is_checked_once_along_a_collide_call(monkeypatch):
+    # issue 25: the range check runs where the Scene is built, not again in collide or the solver
+    import wavecontact.limits
+    import wavecontact.scene
+    import wavecontact.solvers.base
+
+    calls = []
+
+    def counted(kappa, name="kappa"):
+        calls.append(kappa)
+        return wavecontact.limits.check_kappa(kappa, name)
+
+    for module in (wavecontact.scene, wavecontact.solvers.base):
+        monkeypatch.setattr(module, "check_kappa", counted)
+    assert collide(0.6, 37.25).restitution > 0  # a kappa no other test builds: not a cached scene
+    assert calls == [37.25]
+
+
 def test_kappa_inside_the_range_runs():
     assert 0.0 < collide(0.6, 1e6).restitution - 0.6 < 2e-5  # Eq. 23: ln(kappa (Gamma_2 - Gamma_1))/kappa
 

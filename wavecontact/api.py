@@ -6,16 +6,25 @@ import functools
 
 from .contact import ContactLaw
 from .errors import InvalidParameterError
-from .limits import check_kappa
 from .result import CollisionResult
-from .scene import Scene, two_rods, validate_gamma_kappa
+from .scene import Scene, two_rods
 from .solvers import get_solver
 
 __all__ = ["collide", "solve"]
 
 
+def _cold_scene(gamma, kappa, contact) -> Scene:
+    """The cold two-rod scene, from the cache where the arguments allow (a named law, hashable numbers)."""
+    try:
+        if isinstance(contact, str):
+            return _cached_cold_scene(gamma, kappa, contact)
+    except TypeError:  # unhashable numbers: two_rods refuses them with a message
+        pass
+    return two_rods(gamma, kappa, contact=contact)
+
+
 @functools.lru_cache(maxsize=256)
-def _cold_scene(gamma: float, kappa: float, contact: str) -> Scene:
+def _cached_cold_scene(gamma, kappa, contact: str) -> Scene:
     # a Scene is frozen and no solver changes it: sweeps of fast solves reuse it instead of rebuilding
     # and revalidating its rods on every call
     return two_rods(gamma, kappa, contact=contact)
@@ -112,11 +121,10 @@ def collide(gamma: float, kappa: float, solver: str = "delay", *, contact="expon
     """
     if not isinstance(contact, (str, ContactLaw)):
         raise InvalidParameterError(f"contact must be a name or a ContactLaw, got {contact!r}")
-    check_kappa(validate_gamma_kappa(gamma, kappa)[1])
+    # gamma and kappa are validated once, by two_rods where the scene is built (and its solver does not
+    # check them again)
     if bath_temperature is None:
-        scene = _cold_scene(float(gamma), float(kappa), contact) if isinstance(contact, str) else \
-            two_rods(gamma, kappa, contact=contact)
-        return solve(scene, solver, **options)
+        return solve(_cold_scene(gamma, kappa, contact), solver, **options)
     from .bath.collide import thermal_scene
     from .bath.model import ThermalBath
 

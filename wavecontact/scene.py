@@ -17,6 +17,7 @@ import numpy as np
 from .bodies import is_line_scene, needs_line_validation, validate_line_scene
 from .contact import LAW_PENALTY, ContactLaw, Penalty, contact_from_name
 from .errors import InvalidParameterError, require_finite, require_magnitude, require_positive
+from .limits import check_kappa
 
 __all__ = ["Rod", "Scene", "TwoRodParameters", "penalty_stiffness", "two_rod_parameters", "two_rods", "two_rods_on_a_ring"]
 
@@ -275,7 +276,8 @@ def two_rods(
     gamma : float
         Length ratio ``l1 / l2`` in (0, 1].
     kappa : float
-        ``alpha V l / c`` in (0, inf]; ``inf`` selects hard contact.
+        ``alpha V l / c`` in [1e-2, 1e7] or ``inf`` (selects hard contact;
+        :data:`wavecontact.limits.KAPPA_MIN`, :data:`~wavecontact.limits.KAPPA_MAX`).
     contact : {'exponential', 'penalty', 'hard'} or ContactLaw
         The contact law.  The exponential law gets ``B = mu c^2 / (alpha l)^2``,
         the value for which the delay equation (Eq. 16) holds without a shift.
@@ -304,6 +306,7 @@ def two_rods(
         With ``metadata['two_rods']`` holding the :class:`TwoRodParameters`.
     """
     g, k = validate_gamma_kappa(gamma, kappa)
+    check_kappa(k)  # the one check of kappa's range along a solve (the solvers trust metadata['two_rods'])
     l1 = 0.5 * (1.0 + g)
     l2 = 0.5 * (1.0 + g) / g
     rods = (Rod(l1), Rod(l2))

@@ -45,6 +45,25 @@ from .interleaved_step import (
     step_tridiagonal_loaded,
     unpack_nodes,
 )
+from .layout import (
+    K_BOUND1,
+    K_BOUND2,
+    K_KIND1,
+    K_KIND2,
+    K_PLASTIC,
+    K_SCHEME,
+    S_ENERGY0,
+    S_ENERGY_SCALE,
+    S_FAILED_ENERGY,
+    S_LAST_IN_RANGE,
+    S_MAX_DRIFT,
+    S_MOMENTUM1,
+    S_MOMENTUM2,
+    S_STEPS,
+    S_TIME,
+    read_contact,
+    read_run_control,
+)
 
 __all__ = [
     "STATUS_FAILED",
@@ -63,22 +82,6 @@ SCHEME_FORCE = 3  # any mesh, resolved contact: plain central differences, force
 STATUS_SEPARATED = 1
 STATUS_FAILED = 2
 
-# indices into the float state vector of `advance`
-S_TIME = 0
-S_MOMENTUM1 = 1
-S_MOMENTUM2 = 2
-S_LAST_IN_RANGE = 3
-S_STEPS = 4
-S_ENERGY0 = 5
-S_MAX_DRIFT = 6
-S_FAILED_ENERGY = 7
-S_ENERGY_SCALE = 8
-S_PREVIOUS_END1 = 9
-S_PREVIOUS_END2 = 10
-S_INCOMING = 11
-S_INCOMING_EARLIER = 12  # incoming rate one step before S_INCOMING
-S_LEVEL = 13  # time level of the exact lattice's waves, counted from the start of the run
-STATE_SIZE = 14
 
 
 @kernel
@@ -154,11 +157,12 @@ def _synchronize(u, v, a, sync, bands, kind, table, dt):
 
 
 @kernel
-def _energy_check(
-    kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state, samples,
-    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2,
-):
+def _energy_check(kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state,
+                  samples, energies):
     """Record one energy sample and watch the balance (the periodic check of both time loops).
+
+    ``energies``: the 6 sample arrays of the loops (time, kinetic, strain and contact energy, internal
+    energy of each rod).
 
     Returns ``(samples, internal1, internal2, within)``: the updated sample
     count, each rod's internal energy (total minus its translation), and
@@ -168,6 +172,7 @@ def _energy_check(
     total = kinetic1 + strain1 + kinetic2 + strain2 + potential
     internal1 = kinetic1 + strain1 - 0.5 * state[S_MOMENTUM1] ** 2 / mass1
     internal2 = kinetic2 + strain2 - 0.5 * state[S_MOMENTUM2] ** 2 / mass2
+    energy_time, energy_kinetic, energy_strain, energy_contact, energy_internal1, energy_internal2 = energies
     if samples < energy_time.size:
         energy_time[samples] = time
         energy_kinetic[samples] = kinetic1 + kinetic2
@@ -184,20 +189,6 @@ def _energy_check(
     return samples, internal1, internal2, True
 
 
-# entries of the general loop's control array (the contact array uses lattice.C_*)
-K_DT = 0
-K_PERIOD = 1  # stop once out of range for this long
-K_CHECK_EVERY = 2
-K_ENERGY_TOLERANCE = 3
-K_SCHEME = 4
-K_KIND1 = 5  # mass solve of each rod (explicit_step.MASS_*)
-K_KIND2 = 6
-K_BOUND1 = 7  # separation bound factor of each rod
-K_BOUND2 = 8
-K_PLASTIC = 9  # 1: the splitting scheme's hard node impact is perfectly plastic (0: an elastic mirror)
-CONTROL_SIZE = 10
-# contact array (the same layout as the lattice's C_*)
-_C_LAW, _C_ALPHA, _C_STRENGTH, _C_STIFFNESS, _C_OFFSET, _C_R_STOP, _C_M_INV = 0, 1, 2, 3, 4, 5, 6
 
 
 @kernel
@@ -222,9 +213,9 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
         force).
     contact : ndarray
         Law, its parameters, reference gap (``gap = offset + u2[0] - u1[-1]``),
-        stop gap and ``m_inv`` (layout of ``lattice.C_*``).
+        stop gap and ``m_inv`` (:mod:`~wavecontact.fem.layout` ``C_*``).
     control : ndarray
-        ``K_*`` entries.
+        ``K_*`` entries (:mod:`~wavecontact.fem.layout`).
     state : ndarray
         ``S_*`` entries carried between calls (time, momenta, run control).
     history : tuple of 4 arrays
@@ -244,17 +235,8 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     table1, table2 = tables
     column1, column2 = columns
     hist_time, hist_force, hist_vrel, hist_gap = history
-    law = int(contact[_C_LAW])
-    alpha = contact[_C_ALPHA]
-    strength = contact[_C_STRENGTH]
-    stiffness = contact[_C_STIFFNESS]
-    offset = contact[_C_OFFSET]
-    r_stop = contact[_C_R_STOP]
-    m_inv = contact[_C_M_INV]
-    dt = control[K_DT]
-    period = control[K_PERIOD]
-    check_every = int(control[K_CHECK_EVERY])
-    energy_tolerance = control[K_ENERGY_TOLERANCE]
+    law, alpha, strength, stiffness, offset, r_stop, m_inv = read_contact(contact)
+    dt, period, check_every, energy_tolerance = read_run_control(control)
     scheme = int(control[K_SCHEME])
     plastic = control[K_PLASTIC] != 0.0
     kind1 = int(control[K_KIND1])
@@ -356,7 +338,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             samples, internal1, internal2, within = _energy_check(
                 kin1 - cor1, str1, kin2 - cor2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
-                energies[0], energies[1], energies[2], energies[3], energies[4], energies[5],
+                energies,
             )
             if not within:
                 return STATUS_FAILED, step + 1, samples

@@ -43,6 +43,22 @@ from .contact_flows import (
     interface_gap,
 )
 from .kernels import (
+    STATUS_FAILED,
+    STATUS_RUNNING,
+    STATUS_SEPARATED,
+    _energy_check,
+    _mean_displacement,
+)
+from .layout import (
+    C_COMPLIANCE,
+    K_CENTERED,
+    K_GAUSS,
+    K_SUBSTEPS,
+    R_BOUND,
+    R_CONTACT_COEFFICIENT,
+    R_CONTACT_INVERSE_MASS,
+    R_FAR_THETA,
+    R_MASK,
     S_FAILED_ENERGY,
     S_INCOMING,
     S_INCOMING_EARLIER,
@@ -52,61 +68,16 @@ from .kernels import (
     S_MOMENTUM2,
     S_STEPS,
     S_TIME,
-    STATUS_FAILED,
-    STATUS_RUNNING,
-    STATUS_SEPARATED,
-    _energy_check,
-    _mean_displacement,
+    read_contact,
+    read_run_control,
 )
 
 __all__ = [
-    "CONTACT_SIZE",
-    "C_ALPHA",
-    "C_COMPLIANCE",
-    "C_LAW",
-    "C_M_INV",
-    "C_OFFSET",
-    "C_R_STOP",
-    "C_STIFFNESS",
-    "C_STRENGTH",
-    "ROD_SIZE",
-    "R_BOUND",
-    "R_CONTACT_COEFFICIENT",
-    "R_CONTACT_INVERSE_MASS",
-    "R_FAR_THETA",
-    "R_MASK",
     "advance_lattice",
     "buffer_mask",
     "far_end_weights",
     "split_rod",
 ]
-
-# rod parameters (float array per rod)
-R_MASK = 0  # circular buffers hold mask + 1 entries
-R_FAR_THETA = 1  # unmeshed remainder beyond the far node, in elements (0 <= theta < 1)
-R_CONTACT_COEFFICIENT = 2  # dt^2 M^-1 K (end, neighbour) of the contact end node
-R_CONTACT_INVERSE_MASS = 3  # 1 / mass of the contact end node
-R_BOUND = 4  # |u_end - u_mean| <= R_BOUND sqrt(internal energy): the separation bound
-ROD_SIZE = 5
-# contact parameters (one float array)
-C_LAW = 0
-C_ALPHA = 1
-C_STRENGTH = 2
-C_STIFFNESS = 3
-C_OFFSET = 4  # reference gap: gap = offset + u2[0] - u1[-1]
-C_R_STOP = 5  # gap beyond which the force counts as absent
-C_M_INV = 6  # (M1^-1)_ee + (M2^-1)_ee
-C_COMPLIANCE = 7  # 1/Z1 + 1/Z2 = m_inv dt / 2 (time/mass)
-CONTACT_SIZE = 8
-# run control (one float array)
-K_DT = 0
-K_PERIOD = 1  # stop once out of range for this long
-K_CHECK_EVERY = 2
-K_ENERGY_TOLERANCE = 3
-K_SUBSTEPS = 4
-K_CENTERED = 5  # 1: five step means of the incoming rate are read (rods of >= 5 nodes)
-K_GAUSS = 6
-CONTROL_SIZE = 7
 
 # relative tolerance for "the incoming rate is constant" in the one-jump reconstruction
 _JUMP_FLAT = 1e-6
@@ -349,18 +320,9 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
     mirror2 = parameters2[R_FAR_THETA] == 0.0
     coefficient1 = parameters1[R_CONTACT_COEFFICIENT]
     coefficient2 = parameters2[R_CONTACT_COEFFICIENT]
-    law = int(contact[C_LAW])
-    alpha = contact[C_ALPHA]
-    strength = contact[C_STRENGTH]
-    stiffness = contact[C_STIFFNESS]
-    offset = contact[C_OFFSET]
-    r_stop = contact[C_R_STOP]
-    m_inv = contact[C_M_INV]
+    law, alpha, strength, stiffness, offset, r_stop, m_inv = read_contact(contact)
     compliance = contact[C_COMPLIANCE]
-    dt = control[K_DT]
-    period = control[K_PERIOD]
-    check_every = int(control[K_CHECK_EVERY])
-    energy_tolerance = control[K_ENERGY_TOLERANCE]
+    dt, period, check_every, energy_tolerance = read_run_control(control)
     substeps = int(control[K_SUBSTEPS])
     centered = control[K_CENTERED] != 0.0
     gauss = control[K_GAUSS] != 0.0
@@ -469,8 +431,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
             kin2, str2 = _staggered_energies(u2, w2, bands2, weights2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
             samples, internal1, internal2, within = _energy_check(
-                kin1, str1, kin2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples,
-                energies[0], energies[1], energies[2], energies[3], energies[4], energies[5],
+                kin1, str1, kin2, str2, pot, mass1, mass2, time, energy_tolerance, state, samples, energies,
             )
             if not within:
                 status = STATUS_FAILED

@@ -16,7 +16,7 @@ from ..contact import LAW_EXPONENTIAL
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError, require_integer
 from ..result import Outcome
 from ..scene import Scene
-from . import kernels, lattice
+from . import kernels, lattice, layout
 from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
 from .explicit_step import elastic_acceleration, prepare_mass
 from .interleaved_step import LANE_TOLERANCE
@@ -380,20 +380,20 @@ class _Run:
         energy += contact_potential(setup.law, setup.gap, setup.alpha, setup.strength, setup.stiffness)
         total_mass = sum(masses)
         scale = energy - sum(momenta) ** 2 / (2 * total_mass)
-        self.state = np.zeros(kernels.STATE_SIZE)
-        self.state[kernels.S_MOMENTUM1] = momenta[0]
-        self.state[kernels.S_MOMENTUM2] = momenta[1]
-        self.state[kernels.S_ENERGY0] = energy
-        self.state[kernels.S_ENERGY_SCALE] = scale
-        self.state[kernels.S_LAST_IN_RANGE] = 0.0
+        self.state = np.zeros(layout.STATE_SIZE)
+        self.state[layout.S_MOMENTUM1] = momenta[0]
+        self.state[layout.S_MOMENTUM2] = momenta[1]
+        self.state[layout.S_ENERGY0] = energy
+        self.state[layout.S_ENERGY_SCALE] = scale
+        self.state[layout.S_LAST_IN_RANGE] = 0.0
         # end positions one step before the start (central differences run backwards)
         dt = setup.dt
-        self.state[kernels.S_PREVIOUS_END1] = self.u[0][-1] - dt * self.v[0][-1] + 0.5 * dt * dt * self.a[0][-1]
-        self.state[kernels.S_PREVIOUS_END2] = self.u[1][0] - dt * self.v[1][0] + 0.5 * dt * dt * self.a[1][0]
-        self.state[kernels.S_INCOMING] = (self.v[1][0] - 0.5 * dt * self.a[1][0]) - (
+        self.state[layout.S_PREVIOUS_END1] = self.u[0][-1] - dt * self.v[0][-1] + 0.5 * dt * dt * self.a[0][-1]
+        self.state[layout.S_PREVIOUS_END2] = self.u[1][0] - dt * self.v[1][0] + 0.5 * dt * dt * self.a[1][0]
+        self.state[layout.S_INCOMING] = (self.v[1][0] - 0.5 * dt * self.a[1][0]) - (
             self.v[0][-1] - 0.5 * dt * self.a[0][-1]
         )
-        self.state[kernels.S_INCOMING_EARLIER] = self.state[kernels.S_INCOMING]
+        self.state[layout.S_INCOMING_EARLIER] = self.state[layout.S_INCOMING]
         # the time loop keeps velocities half a step behind the displacements
         for v, a in zip(self.v, self.a):
             v -= 0.5 * dt * a
@@ -424,30 +424,33 @@ class _Run:
             self._start_lattice()
 
     def _pack_contact_and_control(self):
-        """The contact law and the general loop's run control as the kernels' plain arrays."""
+        """The contact law and the run control as the kernels' plain arrays (:mod:`~wavecontact.fem.layout`)."""
         s = self.setup
-        contact = np.zeros(lattice.CONTACT_SIZE)
-        contact[lattice.C_LAW] = s.law
-        contact[lattice.C_ALPHA] = s.alpha
-        contact[lattice.C_STRENGTH] = s.strength
-        contact[lattice.C_STIFFNESS] = s.stiffness
-        contact[lattice.C_OFFSET] = s.gap
-        contact[lattice.C_R_STOP] = s.r_stop
-        contact[lattice.C_M_INV] = self.m_inv
-        contact[lattice.C_COMPLIANCE] = 0.5 * self.m_inv * s.dt
+        contact = np.zeros(layout.CONTACT_SIZE)
+        contact[layout.C_LAW] = s.law
+        contact[layout.C_ALPHA] = s.alpha
+        contact[layout.C_STRENGTH] = s.strength
+        contact[layout.C_STIFFNESS] = s.stiffness
+        contact[layout.C_OFFSET] = s.gap
+        contact[layout.C_R_STOP] = s.r_stop
+        contact[layout.C_M_INV] = self.m_inv
+        contact[layout.C_COMPLIANCE] = 0.5 * self.m_inv * s.dt
         self.contact = contact
-        control = np.zeros(kernels.CONTROL_SIZE)
-        control[kernels.K_DT] = s.dt
-        control[kernels.K_PERIOD] = self.period
-        control[kernels.K_CHECK_EVERY] = self.check_every
-        control[kernels.K_ENERGY_TOLERANCE] = self.watchdog_tolerance
-        control[kernels.K_SCHEME] = s.scheme
-        control[kernels.K_KIND1] = self.mass_solves[0][0]
-        control[kernels.K_KIND2] = self.mass_solves[1][0]
-        control[kernels.K_BOUND1] = self.bound[0]
-        control[kernels.K_BOUND2] = self.bound[1]
-        control[kernels.K_PLASTIC] = 1.0 if s.plastic else 0.0
-        self.general_control = control
+        control = np.zeros(layout.CONTROL_SIZE)
+        control[layout.K_DT] = s.dt
+        control[layout.K_PERIOD] = self.period
+        control[layout.K_CHECK_EVERY] = self.check_every
+        control[layout.K_ENERGY_TOLERANCE] = self.watchdog_tolerance
+        control[layout.K_SCHEME] = s.scheme
+        control[layout.K_KIND1] = self.mass_solves[0][0]
+        control[layout.K_KIND2] = self.mass_solves[1][0]
+        control[layout.K_BOUND1] = self.bound[0]
+        control[layout.K_BOUND2] = self.bound[1]
+        control[layout.K_PLASTIC] = 1.0 if s.plastic else 0.0
+        control[layout.K_SUBSTEPS] = s.gap_substeps
+        control[layout.K_CENTERED] = float(s.centered)
+        control[layout.K_GAUSS] = float(s.gauss)
+        self.control = control
 
     def _start_lattice(self):
         """Split both rods into their waves and pack the lattice kernel's grouped arrays."""
@@ -460,23 +463,14 @@ class _Run:
             contact_node = disc.n_nodes - 1 if index == 0 else 0
             neighbour = contact_node - 1 if index == 0 else 1
             band = disc.stiffness_bands[1, min(contact_node, neighbour)]
-            parameters = np.zeros(lattice.ROD_SIZE)
-            parameters[lattice.R_MASK] = mask
-            parameters[lattice.R_FAR_THETA] = theta
-            parameters[lattice.R_CONTACT_COEFFICIENT] = s.dt * s.dt * band / disc.lumped_mass[contact_node]
-            parameters[lattice.R_CONTACT_INVERSE_MASS] = 1.0 / disc.lumped_mass[contact_node]
-            parameters[lattice.R_BOUND] = self.bound[index]
+            parameters = np.zeros(layout.ROD_SIZE)
+            parameters[layout.R_MASK] = mask
+            parameters[layout.R_FAR_THETA] = theta
+            parameters[layout.R_CONTACT_COEFFICIENT] = s.dt * s.dt * band / disc.lumped_mass[contact_node]
+            parameters[layout.R_CONTACT_INVERSE_MASS] = 1.0 / disc.lumped_mass[contact_node]
+            parameters[layout.R_BOUND] = self.bound[index]
             self.waves.append((f, g, np.array([u[contact_node], w[contact_node]])))
             self.rod_parameters.append(parameters)
-        control = np.zeros(lattice.CONTROL_SIZE)
-        control[lattice.K_DT] = s.dt
-        control[lattice.K_PERIOD] = self.period
-        control[lattice.K_CHECK_EVERY] = self.check_every
-        control[lattice.K_ENERGY_TOLERANCE] = self.watchdog_tolerance
-        control[lattice.K_SUBSTEPS] = s.gap_substeps
-        control[lattice.K_CENTERED] = float(s.centered)
-        control[lattice.K_GAUSS] = float(s.gauss)
-        self.control = control
 
     def advance(self, max_steps: int):
         s = self.setup
@@ -500,7 +494,7 @@ class _Run:
             (self.u[1], self.v[1], self.a[1], self.sync[1], right.stiffness_bands, self.mass_bands[1],
              right.lumped_mass),
             (self.mass_solves[0][1], self.mass_solves[1][1]), (self.column1, self.column2),
-            self.contact, self.general_control, self.state, hist, energies,
+            self.contact, self.control, self.state, hist, energies,
         )
         return status, [h[:done] for h in hist], [e[:samples] for e in energies]
 
@@ -514,14 +508,14 @@ class _Run:
         if not self.lattice:
             return sum(float(d.lumped_mass @ v) for d, v in zip(self.setup.rods, self.v))
         total = 0.0
-        level = int(self.state[kernels.S_LEVEL])
+        level = int(self.state[layout.S_LEVEL])
         for index, (d, v, (f, g, _), parameters, theta) in enumerate(
             zip(self.setup.rods, self.v, self.waves, self.rod_parameters, self.setup.far_theta)
         ):
             far, inner = (0, 1) if index == 0 else (d.n_nodes - 1, d.n_nodes - 2)
             weights = d.lumped_mass.copy()
             weights[far] = 0.5 * d.rod.density * d.rod.area * abs(d.x[far] - d.x[inner])
-            mask = int(parameters[lattice.R_MASK])
+            mask = int(parameters[layout.R_MASK])
             remainder = sum(
                 lattice.remainder_momentum(f, g, mask, n, theta, far, d.rod.impedance) for n in (level, level - 1)
             )
@@ -544,8 +538,8 @@ class _Run:
 
 
 def _failure_message(run: _Run, setup: FemSetup) -> str:
-    time = run.state[kernels.S_TIME]
-    energy = run.state[kernels.S_FAILED_ENERGY]
+    time = run.state[layout.S_TIME]
+    energy = run.state[layout.S_FAILED_ENERGY]
     drift = abs(energy - run.energy0) / run.energy_scale if math.isfinite(energy) else math.inf
     elements = [d.n_elements for d in setup.rods]
     if setup.scheme == kernels.SCHEME_SPLITTING:
@@ -573,7 +567,7 @@ def run_collision(setup: FemSetup, energy_tolerance: float = 0.05, max_time=None
     pieces_hist, pieces_energy = [], []
     status = kernels.STATUS_RUNNING
     while status == kernels.STATUS_RUNNING:
-        if run.state[kernels.S_STEPS] >= max_steps:
+        if run.state[layout.S_STEPS] >= max_steps:
             raise SolverFailure(
                 f"the rods did not separate within t = {max_time:.4g}; the contact may keep "
                 f"re-engaging (check the scene's velocities) or the run needs max_time",
@@ -597,7 +591,7 @@ def run_collision(setup: FemSetup, energy_tolerance: float = 0.05, max_time=None
         "strain": energies[2],
         "contact": energies[3],
         "internal": (energies[4], energies[5]),
-        "steps": int(run.state[kernels.S_STEPS]),
+        "steps": int(run.state[layout.S_STEPS]),
     }
     if record_fields:
         out["fields"] = _replay_fields(setup, energy_tolerance, hist[0], hist[1], field_samples)
@@ -625,7 +619,7 @@ def _replay_fields(setup: FemSetup, energy_tolerance, times, force, samples: int
             done = target
             if status == kernels.STATUS_FAILED:
                 raise SolverFailure(_failure_message(run, setup), Outcome.ENERGY_DRIFT)
-        sample_times.append(run.state[kernels.S_TIME])
+        sample_times.append(run.state[layout.S_TIME])
         for record, u, v, stress in zip(records, run.u, run.synchronized_velocities(), run.stresses()):
             record["displacement"].append(u.copy())
             record["velocity"].append(v.copy())

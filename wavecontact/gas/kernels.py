@@ -379,17 +379,18 @@ def _law_point(log_x, short_share, log_x_grid, share_grid):
 
 
 @kernel
-def _soft_draw(u, gamma, kappa, log_x, short_share, eps2_hard, gain_hard, soft_kappa, soft_gamma, soft_log_x,
-               soft_share, soft_probability, soft_d_eps2, soft_d_gain):
+def _soft_draw(u, gamma, kappa, log_x, short_share, eps2_hard, gain_hard, soft):
     """The hard-core draw plus the soft law's correction at this collision's ``kappa`` (same level ``u``).
 
-    ``soft_d_eps2``, ``soft_d_gain``: per kappa row, the soft law minus the hard-core law on the soft law's
+    ``soft``: the soft law's ``(kappa, gamma, log_x, share, probability, d_eps2, d_gain)``
+    (:meth:`VibrationLaw.soft_arrays`); ``d_eps2``, ``d_gain``: per kappa row, the soft law minus the hard-core law on the soft law's
     grid (:func:`wavecontact.gas.collision_law.soft_corrections`), interpolated linearly in
     ``z = ln(kappa)/kappa`` between the rows and, above the stiffest, between it and zero (the hard core);
     below the softest row that row's correction.  Returns ``(eps2, gain, softer, below, floored)``:
     ``softer`` when ``kappa`` lies below the softest row, ``below`` when the pair lies below the soft law's
     last ``x`` row, ``floored`` when the corrected ``eps2`` came out negative and was set to 0.
     """
+    soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_d_eps2, soft_d_gain = soft
     rows = soft_kappa.size
     ig, wg = _lookup(soft_gamma, gamma)
     below, ix, wx, i_s, ws = _law_point(log_x, short_share, soft_log_x, soft_share)
@@ -544,82 +545,65 @@ def _accelerating(window, count, factor, clock):
 
 
 @kernel
-def run_events(
-    x, v, local_time, temperature, mass, reach, pair_gamma, pair_gamma_index, pair_gamma_weight, left_is_short,
-    tree_time, tree_event, ring, box,
-    rule, restitution_squared, table_ratio, share_grid, probability, uniform_levels, quantiles, share, bath_modes,
-    decay_rate, stiffness, soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains,
-    uniforms, pending, max_collisions, time_limit,
-    window, collapse, scalars, counters,
-):
+def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, monitor):
     """Process events until ``max_collisions`` rod-rod collisions, a stop condition, or a needed draw.
 
     Parameters
     ----------
-    x, v, local_time, temperature, mass : ndarray, shape (N,)
-        Rod centres at their own clocks, velocities, clocks, bath
-        temperatures (energy per bath mode) and masses; updated in place.
-    reach : ndarray
-        Centre distance at contact of each event.
-    pair_gamma, pair_gamma_index, pair_gamma_weight : ndarray
-        Per event, the pair's length ratio, and its lower gamma-grid index and weight
-        (table and law rules).
-    left_is_short : ndarray of bool
-        Per event, whether the left rod of the pair is the shorter one.
-    tree_time, tree_event : ndarray
-        The tournament tree of event times (see :func:`build_tree`; updated in place).
+    rods : tuple of 5 ndarray, shape (N,)
+        ``(x, v, local_time, temperature, mass)``: rod centres at their own clocks (length), velocities
+        (length/time), clocks (time), bath temperatures (energy per bath mode) and masses; updated in place.
+    pairs : tuple of 5 ndarray, one entry per event
+        ``(reach, gamma, gamma_index, gamma_weight, left_is_short)``: centre distance at contact (length);
+        the pair's length ratio and its lower gamma-grid index and weight (table and law rules); whether
+        the left rod of the pair is the shorter one.
+    tree : tuple of 2 ndarray
+        ``(tree_time, tree_event)``: the tournament tree of event times (see :func:`build_tree`; updated in
+        place).
     ring : bool
         Periodic ring (True) or box with elastic walls (False).
     box : float
         Circumference or box length.
-    rule : int
-        :data:`RULE_FIXED`, :data:`RULE_TABLE`, :data:`RULE_EXTERNAL` or :data:`RULE_LAW`.
-    restitution_squared : float
-        eps^2 of the fixed rule.
-    table_ratio, share_grid, probability, quantiles, share : ndarray
-        The restitution table's arrays (:meth:`RestitutionTable.arrays`, ``quantiles`` as ``(G, R, 1, P)``,
-        ``share`` as ``(G, R, 1, 1)``), or for :data:`RULE_LAW` the hard-core collision law's
-        (:meth:`CollisionLaw.kernel_arrays`: ``log10 x`` grid, short-rod-share grid, levels, eps^2 quantiles
-        and short-rod gains per level, ``(G, X, S, P)``).
-    uniform_levels : bool
-        Whether ``probability`` is ``linspace(0, 1, P)`` exactly (then the
-        level is found by one multiplication instead of a search).
-    bath_modes : float
-        Modes per rod: a bath at temperature T holds ``bath_modes * T``.
-    decay_rate : float
-        ``1 / tau_diss`` (0: no bath dissipation).
-    stiffness : float
-        :data:`RULE_LAW`: the contact's ``alpha`` (inverse length); each collision has
-        ``kappa = alpha V l`` with ``V`` the approach speed and ``l = 2 l_i l_j / (l_i + l_j)``
-        (``= 2 mu``: masses equal lengths).  0: hard core (the soft arrays are not used).
-    soft_kappa, soft_gamma, soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains : ndarray
-        The soft (finite-kappa) collision law: its kappa rows, grids, levels, and its corrections to the
-        hard-core law, arrays ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`).
-    uniforms : ndarray
-        Levels in [0, 1), one per collision of the table rule.
-    pending : ndarray, shape (3,)
-        ``(flag, eps2, share)`` supplied by the caller for the external rule.
-    max_collisions : int
-        Rod-rod collisions to process in this call.
-    time_limit : float
-        Stop before any event later than this.
-    window : ndarray, shape (2 W,)
-        Times of the last ``2 W`` collisions (ring buffer; ``2 W`` a power of two).
-    collapse : ndarray, shape (6,)
-        The collapse detector (indices ``COLLAPSE_*``, ``FROZEN_*``).  When the last ``W`` collisions
-        took less than ``collapse[COLLAPSE_FACTOR]`` times the time the ``W`` before them took and no more
-        than ``collapse[COLLAPSE_CLOCK]`` times the clock (the collisions accelerated until their count
-        diverged at the clock's rounding), the run stops as frozen if the pair's relative velocity was at most
-        ``collapse[FROZEN_SPEED]`` times the larger of its two speeds, or if ``collapse[FROZEN_POSITION]``
-        times its centres' magnitude (their rounding) reaches ``collapse[COLLAPSE_GAP]`` (the relative motion
-        is lost in the rounding); else as collapsed if the colliding pair's cluster
-        (:func:`collapse_cluster`) joins at least ``collapse[COLLAPSE_RODS]`` bodies by gaps below
-        ``collapse[COLLAPSE_GAP]`` (a length); else it goes on (a false alarm).
-        ``collapse[COLLAPSE_FACTOR] = 0`` switches the detector off.
-    scalars, counters : ndarray
-        Running clock and energies, and counters (see the module constants).
-        The run stops (``STATUS_COOLED``) once the kinetic energy in the
-        centre-of-mass frame falls below ``scalars[ENERGY_FLOOR]``.
+    rule : tuple
+        ``(code, restitution_squared, bath_modes, decay_rate, stiffness, uniform_levels)``:
+        :data:`RULE_FIXED`, :data:`RULE_TABLE`, :data:`RULE_EXTERNAL` or :data:`RULE_LAW`; eps^2 of the
+        fixed rule; modes per rod (a bath at temperature T holds ``bath_modes * T``); ``1 / tau_diss``
+        (0: no bath dissipation); for :data:`RULE_LAW` the contact's ``alpha`` (inverse length), each
+        collision having ``kappa = alpha V l`` with ``V`` the approach speed and ``l = 2 l_i l_j / (l_i +
+        l_j)`` (``= 2 mu``: masses equal lengths), 0: hard core (``soft`` is not used); whether
+        ``probability`` is ``linspace(0, 1, P)`` exactly (then the level is found by one multiplication
+        instead of a search).
+    table : tuple of 5 ndarray
+        ``(ratio, share_grid, probability, quantiles, share)``: the restitution table's arrays
+        (:meth:`RestitutionTable.arrays`, ``quantiles`` as ``(G, R, 1, P)``, ``share`` as ``(G, R, 1, 1)``),
+        or for :data:`RULE_LAW` the hard-core collision law's (:meth:`CollisionLaw.kernel_arrays`:
+        ``log10 x`` grid, short-rod-share grid, levels, eps^2 quantiles and short-rod gains per level,
+        ``(G, X, S, P)``).
+    soft : tuple of 7 ndarray
+        ``(kappa, gamma, log_x, share, probability, quantiles, gains)``: the soft (finite-kappa) collision
+        law, its kappa rows, grids, levels, and its corrections to the hard-core law, arrays
+        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`; :func:`empty_soft_law` when unused).
+    draws : tuple of 2 ndarray
+        ``(uniforms, pending)``: levels in [0, 1), one per collision of the table and law rules; ``(flag,
+        eps2, share)`` supplied by the caller for the external rule (shape (3,)).
+    stop : tuple
+        ``(max_collisions, time_limit)``: rod-rod collisions to process in this call; stop before any
+        event later than this time.
+    monitor : tuple of 4 ndarray
+        ``(window, collapse, scalars, counters)``.  ``window``, shape (2 W,): times of the last ``2 W``
+        collisions (ring buffer; ``2 W`` a power of two).  ``collapse``, shape (6,): the collapse
+        detector (indices ``COLLAPSE_*``, ``FROZEN_*``).  When the last ``W`` collisions took less than
+        ``collapse[COLLAPSE_FACTOR]`` times the time the ``W`` before them took and no more than
+        ``collapse[COLLAPSE_CLOCK]`` times the clock (the collisions accelerated until their count
+        diverged at the clock's rounding), the run stops as frozen if the pair's relative velocity was at
+        most ``collapse[FROZEN_SPEED]`` times the larger of its two speeds, or if
+        ``collapse[FROZEN_POSITION]`` times its centres' magnitude (their rounding) reaches
+        ``collapse[COLLAPSE_GAP]`` (the relative motion is lost in the rounding); else as collapsed if the
+        colliding pair's cluster (:func:`collapse_cluster`) joins at least ``collapse[COLLAPSE_RODS]``
+        bodies by gaps below ``collapse[COLLAPSE_GAP]`` (a length); else it goes on (a false alarm).
+        ``collapse[COLLAPSE_FACTOR] = 0`` switches the detector off.  ``scalars``, ``counters``: running
+        clock and energies, and counters (see the module constants).  The run stops (``STATUS_COOLED``)
+        once the kinetic energy in the centre-of-mass frame falls below ``scalars[ENERGY_FLOOR]``.
 
     Returns
     -------
@@ -631,6 +615,14 @@ def run_events(
     done : int
         Rod-rod collisions processed in this call.
     """
+    x, v, local_time, temperature, mass = rods
+    reach, pair_gamma, pair_gamma_index, pair_gamma_weight, left_is_short = pairs
+    tree_time, tree_event = tree
+    code, restitution_squared, bath_modes, decay_rate, stiffness, uniform_levels = rule
+    table_ratio, share_grid, probability, quantiles, share = table
+    uniforms, pending = draws
+    max_collisions, time_limit = stop
+    window, collapse, scalars, counters = monitor
     n = x.size
     events = reach.size
     leaves = tree_time.size >> 1
@@ -691,7 +683,7 @@ def run_events(
         else:
             i = k - 1
             j = k
-        if rule == RULE_EXTERNAL and pending[0] == 0.0:
+        if code == RULE_EXTERNAL and pending[0] == 0.0:
             return STATUS_NEED_DRAW, k, done
         dt_i, x_i = _advance(i, t, x, v, local_time)
         dt_j, x_j = _advance(j, t, x, v, local_time)
@@ -710,10 +702,10 @@ def run_events(
         else:
             short = j
             long = i
-        if rule == RULE_FIXED:
+        if code == RULE_FIXED:
             eps2 = restitution_squared
             s = 0.0
-        elif rule == RULE_TABLE:
+        elif code == RULE_TABLE:
             pair_temperature = 0.5 * (temperature[i] + temperature[j])
             ratio = pair_temperature / e_tr if e_tr > 0.0 else math.inf
             ir, wr = _lookup(table_ratio, ratio)
@@ -722,7 +714,7 @@ def run_events(
                 return STATUS_OFF_TABLE, k, done
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, 0, 0.0,
                                   probability, uniform_levels, quantiles, share, False)
-        elif rule == RULE_LAW:
+        elif code == RULE_LAW:
             # the law in x = E_tr / (E_tr + T_pair) and s = T_short / (T_short + T_long): every pair lies in
             # (0, 1] x [0, 1]; below the last x row that row's law is used (counted); the gain comes in units of
             # E_tr + T_pair
@@ -736,8 +728,7 @@ def run_events(
             if stiffness > 0.0:
                 kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
                 eps2, s, softer, below_soft, floored = _soft_draw(
-                    uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft_kappa, soft_gamma,
-                    soft_log_x, soft_share, soft_probability, soft_quantiles, soft_gains)
+                    uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft)
                 below = below or below_soft
                 if softer:
                     counters[SOFTER] += 1
@@ -751,7 +742,7 @@ def run_events(
             s = pending[2]
             pending[0] = 0.0
         lost = (1.0 - eps2) * e_tr
-        if rule == RULE_LAW:
+        if code == RULE_LAW:
             # s: the short rod's gain, lost - s the long rod's. A bath cannot give more than it holds: the
             # deficit goes to the other bath, and if that one cannot give it either, eps^2 is reduced
             gain_short = s
@@ -773,7 +764,7 @@ def run_events(
                 counters[BATH_LIMITED] += 1  # once per draw, so that bath_limited / collisions is a fraction
             temperature[short] = max(temperature[short] + gain_short / bath_modes, 0.0)
             temperature[long] = max(temperature[long] + gain_long / bath_modes, 0.0)
-        elif rule != RULE_FIXED and lost < 0.0:
+        elif code != RULE_FIXED and lost < 0.0:
             # energy returned from the baths cannot exceed what they hold
             floor = 0.0
             if s > 0.0:
@@ -786,17 +777,17 @@ def run_events(
                 lost = floor
                 eps2 = 1.0 - lost / e_tr
                 counters[BATH_LIMITED] += 1
-        elif rule != RULE_FIXED and (s < 0.0 or s > 1.0):
+        elif code != RULE_FIXED and (s < 0.0 or s > 1.0):
             # a per-collision split may take energy from one bath while filling the other
             ceiling = bath_modes * temperature[short] / -s if s < 0.0 else bath_modes * temperature[long] / (s - 1.0)
             if lost > ceiling:
                 lost = ceiling
                 eps2 = 1.0 - lost / e_tr
                 counters[BATH_LIMITED] += 1
-        if rule == RULE_FIXED:
+        if code == RULE_FIXED:
             lost_total += lost
             scalars[LOST] = lost_total
-        elif rule != RULE_LAW:
+        elif code != RULE_LAW:
             temperature[short] += s * lost / bath_modes
             temperature[long] += (1.0 - s) * lost / bath_modes
             # a bath emptied by the cap above can end a rounding error below zero: it is empty

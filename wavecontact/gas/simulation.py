@@ -477,12 +477,19 @@ class GasSimulation:
 
     def _run_chunks(self, target, max_time, controller) -> GasResult:
         rule = self.rule
-        ratio, share_grid, probability, quantiles, share = rule.kernel_arrays()
+        table = rule.kernel_arrays()
+        probability = table[2]
         soft_law = self.contact_stiffness is not None and rule.code == kernels.RULE_LAW
         soft = rule.soft_arrays() if soft_law else kernels.empty_soft_law()
         stiffness = self.contact_stiffness if soft_law else 0.0
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
+        # the kernel's argument groups (kernels.run_events): the ones that stay the same for the whole run
+        rods = (self.x, self.v, self.local_time, self.temperature, self.mass)
+        pairs = (self.reach, self.pair_gamma, self.gamma_index, self.gamma_weight, self.left_is_short)
+        tree = (self.tree_time, self.tree_event)
+        constants = (rule.code, restitution2, float(rule.bath_modes), self._decay_rate(), stiffness, uniform)
+        monitor = (self.window, self.collapse, self.scalars, self.counters)
         no_uniforms = np.zeros(0)
         status = kernels.STATUS_DONE
         start = time.perf_counter()
@@ -497,13 +504,9 @@ class GasSimulation:
             before = self.collisions
             while True:
                 status, event, _done = kernels.run_events(
-                    self.x, self.v, self.local_time, self.temperature, self.mass, self.reach, self.pair_gamma,
-                    self.gamma_index, self.gamma_weight, self.left_is_short, self.tree_time, self.tree_event,
-                    self.ring, self.gas.system_length, rule.code, restitution2, ratio, share_grid, probability,
-                    uniform, quantiles, share, float(rule.bath_modes), self._decay_rate(), stiffness, *soft,
-                    uniforms[self.collisions - before:],
-                    self.pending, chunk - (self.collisions - before), float(max_time), self.window,
-                    self.collapse, self.scalars, self.counters)
+                    rods, pairs, tree, self.ring, self.gas.system_length, constants, table, soft,
+                    (uniforms[self.collisions - before:], self.pending),
+                    (chunk - (self.collisions - before), float(max_time)), monitor)
                 if status == kernels.STATUS_OFF_TABLE:
                     self.off_table = self._pair_state(event)
                 if status == kernels.STATUS_COLLAPSE and self.collapse_detected is None:
