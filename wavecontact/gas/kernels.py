@@ -222,7 +222,7 @@ def _pull_nodes(tree_time, tree_event, lo, hi):
 
 @kernel(inline="always")
 def _pull_triple(tree_time, tree_event, leaf):
-    """Recompute the ancestors of the leaves ``leaf - 1 .. leaf + 1`` (their times already set), up to the
+    """Recompute the ancestors of the leaves ``leaf - 1`` to ``leaf + 1`` (their times already set), up to the
     root; returns the root's ``(time, event)``.
 
     Their parents are one node or two neighbours, and so are the grandparents
@@ -300,7 +300,7 @@ def _relax_bath(i, dt, temperature, decay_rate, bath_modes, scalars):
 
 @kernel
 def _bracket(grid, value):
-    """Largest ``i`` in ``0 .. grid.size - 2`` with ``grid[i] <= value`` (0 if none), for an ascending ``grid``.
+    """Largest ``i`` in ``0`` to ``grid.size - 2`` with ``grid[i] <= value`` (0 if none), for an ascending ``grid``.
 
     A binary search whose steps are selects rather than branches (the
     outcome of each comparison is random from one collision to the next, so
@@ -466,7 +466,7 @@ def _event_gap(e, now, x, v, local_time, reach, ring, box):
 
 @kernel
 def collapse_cluster(k, now, x, v, local_time, reach, ring, box, gap_floor):
-    """The cluster of event ``k``: ``(first, last, members)``, the events ``first .. last`` (cyclic on a ring)
+    """The cluster of event ``k``: ``(first, last, members)``, the events ``first`` to ``last`` (cyclic on a ring)
     next to each other whose gaps at time ``now`` all lie below ``gap_floor``, and the bodies they join
     (rods, and a wall that takes part).  ``members`` is 0 when the gap of ``k`` itself does not lie below
     the floor.  ``k < 0``: the largest such cluster anywhere (``O(N)``; ties: the first found).

@@ -40,7 +40,7 @@ def _chains(series) -> np.ndarray:
 
 
 def autocovariance(series) -> np.ndarray:
-    """Autocovariance ``C(t)``, ``t = 0 .. n - 1``, pooled over chains (each centred on its own mean).
+    """Autocovariance ``C(t)``, ``t`` from 0 to ``n - 1``, pooled over chains (each centred on its own mean).
 
     ``C(t) = mean over chains of sum_s (x_s - m)(x_{s+t} - m) / n`` (the biased estimator, which
     keeps the estimated spectrum non-negative), by FFT with zero padding.
