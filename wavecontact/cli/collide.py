@@ -104,8 +104,7 @@ def _implied_solver(args) -> str:
     named = {solver for solver in solver_names()
              if any(getattr(args, n) is not None for n in get_solver(solver).cli_flags)}
     if args.fields or args.xt_plot:
-        named.update(solver for solver in solver_names()
-                     if "record_fields" in get_solver(solver).Options.__dataclass_fields__)
+        named.update(solvers_with_option("record_fields"))
     return named.pop() if len(named) == 1 else "auto"
 
 

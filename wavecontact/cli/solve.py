@@ -13,6 +13,7 @@ from .common import (
     option_text,
     positive_float,
     positive_int,
+    solvers_with_option,
 )
 from .guard import check_outputs
 
@@ -26,9 +27,9 @@ def _flags_of(solver: str) -> tuple:
 
 
 def _line_solver() -> str:
-    """The solver that takes every line scene and records fields (the one whose options offer
-    ``record_fields``): the file's ``[solve]`` options without a solver name are its options."""
-    return next(name for name in solver_names() if "record_fields" in get_solver(name).Options.__dataclass_fields__)
+    """The solver that takes every line scene and records fields: the file's ``[solve]`` options without a
+    solver name are its options."""
+    return solvers_with_option("record_fields")[0]
 
 
 def add_parser(subparsers):
