@@ -85,8 +85,8 @@ gap = 0.25
     ("velocity = 1.0", 'velocity = "fast"', ["body[0].velocity", "fast"]),
     ("mass = 2.0", "mass = 2.0\nlength = 1.0", ["body[0].length", "unknown key"]),
     ('law = "hard"', 'law = "hard"\nalpha = 3.0', ["contact.alpha", "unknown key"]),
-    ("[[body]]\nmass", "gaps = [-1.0, 0.0]\n[[body]]\nmass", ["gaps", "-1"]),
-    ("[[body]]\nmass", "gaps = [0.0]\n[[body]]\nmass", ["gaps"]),
+    ("[contact]", "gaps = [-1.0, 0.0]\n[contact]", ["gaps[0]", ">= 0", "overlap"]),
+    ("[contact]", "gaps = [0.0]\n[contact]", ["gaps"]),
     ("velocity = 1.0", "velocity = 1.0\n[body.segment]", ["body[0]", "segment"]),
     ('[contact]', 'x = = 1\n[contact]', ["not valid TOML"]),
 ])
