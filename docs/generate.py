@@ -204,6 +204,9 @@ BLOCKS = [
     Block("ring-result", "docs/ring.md", (("python", "docs/ring_result.py", "--only", "paper"),), markdown=True,
           volatile=(r"peak memory (\d+) MB",)),
     Block("ring-spread", "docs/ring.md", (("python", "docs/ring_result.py", "--only", "spread"),), markdown=True),
+    Block("ring-model", "docs/ring.md", (("python", "benchmarks/ring_model.py", "--table"),), cheap=True, markdown=True),
+    Block("ring-auto", "docs/ring.md", (("ring", "--gamma", "0.6173", "--kappa", "40", "--collisions", "300",
+                                         "--tolerance", "1e-3", "--out", "{tmp}/auto", "--no-progress"),)),
     # the default table's finest cell (gamma 0.12, kappa 0.1, 3200 elements) needs 2.3e11 updates: its limit is stated
     *(Block(f"fem-{table}", "docs/fem.md", (("python", "benchmarks/fem_accuracy_tables.py", "--table", table,
                                              *(("--max-work", "3e11") if table == "default" else ())),),

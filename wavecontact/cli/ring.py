@@ -8,7 +8,16 @@ import math
 import sys
 from pathlib import Path
 
-from .common import add_ring_options, gamma_value, kappa_value, nonnegative_int, positive_int, report_written
+from ..solvers.auto_ring import CHECK_EVERY, DEFAULT_TOLERANCE, ERROR_QUANTILE
+from .common import (
+    add_ring_options,
+    gamma_value,
+    kappa_value,
+    nonnegative_int,
+    positive_float,
+    positive_int,
+    report_written,
+)
 from .costs import add_work_option, check_run, ring_cost
 from .guard import check_outputs
 
@@ -28,7 +37,14 @@ def add_parser(subparsers):
     )
     p.add_argument("--gamma", type=gamma_value, required=True, help="length ratio l1/l2 in (0, 1]")
     p.add_argument("--kappa", type=kappa_value, required=True, help="alpha V l / c in (0, inf]")
-    p.add_argument("--modes", type=positive_int, required=True, help="modes per rod N")
+    p.add_argument("--modes", type=positive_int, default=None,
+                   help="modes per rod N (default: the fewest predicted to meet --tolerance)")
+    p.add_argument("--tolerance", type=positive_float, default=None,
+                   help=f"tolerance on each collision's restitution error from truncating the modes (absolute; "
+                        f"default {DEFAULT_TOLERANCE:g}): without --modes it chooses N (the fewest predicted to "
+                        f"keep {ERROR_QUANTILE:.0%} of the collisions within it); with --modes it is reported "
+                        f"against; the first and every {CHECK_EVERY}th collision is checked against a run of it "
+                        f"with 2N modes")
     p.add_argument("--collisions", type=positive_int, required=True, help="number of collisions M")
     add_ring_options(p)
     p.add_argument("--checkpoint-every", type=positive_int, default=100, metavar="K",
@@ -72,6 +88,7 @@ def run(args) -> int:
     from ..errors import InvalidParameterError
     from ..io.run_controller import write_summary
     from ..plotting.ring import plot_ring_figures
+    from ..solvers.auto_ring import choose_modes
     from ..studies.ring import CHECKPOINT_NAME, run_ring
 
     out = Path(args.out)
@@ -82,17 +99,22 @@ def run(args) -> int:
             f"--transient must be at most collisions - 3 = {args.collisions - 3}, got {args.transient}"
         )
     check_outputs(directories=[("--out", args.out, output_names())])
-    check_run(args, f"ring: {args.collisions} collisions at N = {args.modes}", ring_cost(args.kappa, [args.modes], args.collisions),
-              "use fewer --collisions or --modes")
+    choice = choose_modes(args.gamma, args.kappa, args.collisions, modes=args.modes, tolerance=args.tolerance,
+                          static_correction=args.static_correction, max_work=args.max_work)
+    if choice.chosen:
+        _log(f"modes: {choice.reason}")
+    check_run(args, f"ring: {args.collisions} collisions at N = {choice.modes}",
+              ring_cost(args.kappa, [choice.modes], args.collisions), "use fewer --collisions or --modes")
     ring_run = run_ring(
         args.gamma,
         args.kappa,
-        args.modes,
+        choice.modes,
         args.collisions,
         out_dir=out,
         checkpoint_every=args.checkpoint_every,
         progress=args.progress,
-        static_correction=args.static_correction,
+        tolerance=choice,
+        solver_options={"static_correction": args.static_correction},
         log=_log,
         overwrite=args.overwrite,
     )
@@ -104,6 +126,7 @@ def run(args) -> int:
         "wall_time_s": ring_run.wall_time_s,
         "resumed_from": ring_run.resumed_from,
         **stats.as_dict(),
+        "accuracy": ring_run.metadata.get("accuracy"),
     }
     summary.pop("mean_relative_spectrum")
     write_summary(out / SUMMARY_NAME, summary)
@@ -130,4 +153,8 @@ def run(args) -> int:
           f"{_format(stats.entropy_settling_collisions, 'd')} collisions")
     print(f"  restitution: mean {stats.mean_restitution:.4f}, C(1)/C(0) = "
           f"{stats.restitution_correlation_coefficient_lag1:+.3f}; energy drift {stats.energy_drift:.2e}")
+    accuracy = summary["accuracy"]
+    if accuracy is not None:
+        print(f"  modes: {accuracy['reason']}")
+        print(f"  per-collision error checks: {accuracy['checks']['verdict']}")
     return 0

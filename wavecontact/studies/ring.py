@@ -38,6 +38,7 @@ from ..limits import Limits, check_study_cost, ring_cost
 from ..result import to_jsonable
 from ..scene import two_rods_on_a_ring
 from ..solvers import get_solver
+from ..solvers.auto_ring import CollisionChecks, RingChoice, choose_modes
 from .ring_statistics import RingStatistics, relative_modal_energies, ring_statistics, spectral_entropy
 
 __all__ = [
@@ -366,16 +367,41 @@ def _resume(checkpoint: Path, arrays: dict, simulation, recorder: _Recorder) -> 
     return stored, wall_before
 
 
+def _choice(gamma, kappa, collisions, modes, tolerance, static_correction):
+    """The run's :class:`RingChoice` (None: ``modes`` given without a tolerance, as before)."""
+    if isinstance(tolerance, RingChoice):
+        if modes is not None and int(modes) != tolerance.modes:
+            raise InvalidParameterError(f"modes={modes} contradicts the choice of N = {tolerance.modes} passed as tolerance")
+        return tolerance
+    if tolerance is None and modes is not None:
+        return None
+    return choose_modes(gamma, kappa, collisions, modes=modes, tolerance=tolerance, static_correction=static_correction)
+
+
+def _accuracy(choice: RingChoice, checks, resumed_from: int, log) -> dict:
+    """``metadata["accuracy"]``: the choice and the run's checks (this session's collisions only)."""
+    accuracy = choice.as_dict()
+    if checks is None:
+        accuracy["checks"] = {"verdict": "not checked (a stand-in simulation)"}
+        return accuracy
+    accuracy["checks"] = checks.summary()
+    if resumed_from:
+        accuracy["checks"]["verdict"] += f" (collisions after {resumed_from} only: resumed from a checkpoint)"
+    if checks.above() and log is not None:
+        log(accuracy["checks"]["verdict"])
+    return accuracy
+
+
 def run_ring(
     gamma: float,
     kappa: float,
-    modes: int,
-    collisions: int,
+    modes: int | None = None,
+    collisions: int | None = None,
     out_dir=None,
     checkpoint_every: int = 100,
     progress: bool = True,
     *,
-    static_correction: bool = True,
+    tolerance=None,
     circumference: float | None = None,
     solver: str = "modal",
     solver_options: dict | None = None,
@@ -393,10 +419,11 @@ def run_ring(
         Length ratio ``l1 / l2`` in (0, 1].
     kappa : float
         Softness ``alpha V l / c`` in (0, inf].
-    modes : int
-        Modes per rod ``N``.
+    modes : int or None
+        Modes per rod ``N``; None: the fewest predicted to meet ``tolerance``
+        (:func:`wavecontact.solvers.auto_ring.choose_modes`).
     collisions : int
-        Total number of collisions wanted (including any already in a checkpoint).
+        Total number of collisions wanted (including any already in a checkpoint); required.
     out_dir : path, optional
         Directory for the checkpoint (``checkpoint.npz``) and the data
         (``ring.npz``, ``ring.csv``), locked against a second run while this
@@ -410,14 +437,20 @@ def run_ring(
         Write a checkpoint whenever the collision count reaches a multiple of this (and at the end).
     progress : bool
         Show a progress bar on stderr.
-    static_correction : bool
-        Add the omitted modes' static flexibility (modal solver option).
+    tolerance : float, RingChoice or None
+        Tolerance on the per-collision restitution error (absolute, on each ``eps_j``), or a
+        :class:`~wavecontact.solvers.auto_ring.RingChoice` made already.  Given (or ``modes`` None, which takes
+        :data:`~wavecontact.solvers.auto_ring.DEFAULT_TOLERANCE`), the run's ``metadata["accuracy"]`` holds the
+        modes, the predicted per-collision error and the reason, and every
+        :data:`~wavecontact.solvers.auto_ring.CHECK_EVERY`-th collision (and the first) is checked against a run of
+        it with twice the modes, which changes nothing in the run; None with ``modes`` given: neither.
     circumference : float, optional
         Ring circumference (see :func:`~wavecontact.scene.two_rods_on_a_ring`).
     solver : str
         A registered solver that can ``simulate`` a ring scene (``"modal"``).
     solver_options : dict, optional
-        Further options of that solver (``step_accuracy`` ...).
+        Further options of that solver (``static_correction`` (default True: add the omitted modes' static
+        flexibility), ``step_accuracy`` ...).
     simulation_factory : callable, optional
         ``factory(scene, options) -> RepeatedCollisions`` instead of the
         solver's ``simulate`` (a stand-in with a known answer, in tests).
@@ -442,11 +475,16 @@ def run_ring(
     SIGINT or SIGTERM end the run after the collision in progress, with a checkpoint of it
     (:class:`~wavecontact.io.run_controller.RunController`); a retry of the same call resumes there.
     """
-    g, k, n, m, every = _validate(gamma, kappa, modes, collisions, checkpoint_every)
+    if collisions is None:
+        raise InvalidParameterError("collisions must be given (the number of collisions of the run)")
+    g, k, _n, m, every = _validate(gamma, kappa, 1 if modes is None else modes, collisions, checkpoint_every)
+    options = {"static_correction": True, **(solver_options or {})}
+    choice = _choice(g, k, m, modes, tolerance, bool(options["static_correction"]))
+    n = int(modes) if choice is None else choice.modes
     # every collision's record is held in memory until the end: refuse before any work what cannot fit
     check_study_cost(f"run_ring: {m} collisions at N = {n}", ring_cost(k, [n], m), Limits(max_work=float("inf")),
                      "use fewer collisions or modes")
-    options = {**(solver_options or {}), "modes": n, "static_correction": bool(static_correction)}
+    options["modes"] = n
     engine = get_solver(solver)
     options = engine.options(options)
     scene = two_rods_on_a_ring(g, k, circumference)
@@ -458,6 +496,9 @@ def run_ring(
         out_dir = check_output_directory("out_dir", out_dir)
         checkpoint = out_dir / CHECKPOINT_NAME
     simulation = (simulation_factory or engine.simulate)(scene, options)
+    checks = None
+    if choice is not None and simulation_factory is None:
+        checks = CollisionChecks(engine.simulate, scene, options.as_dict(), choice.tolerance)
     recorder = _Recorder(n)
     wall_before = 0.0
     resumed_from = 0
@@ -486,8 +527,11 @@ def run_ring(
                 else:
                     log(f"resuming from checkpoint {checkpoint} after collision {resumed_from}")
         while len(recorder) < m:
+            state = simulation.get_state() if checks is not None and checks.due(len(recorder)) else None
             record = simulation.next_collision()
             recorder.add(record)
+            if state is not None:
+                checks.add(len(recorder) - 1, state, record.restitution)
             if callback is not None:
                 callback(len(recorder) - 1, record)
             run.advance()
@@ -498,7 +542,7 @@ def run_ring(
             gamma=g,
             kappa=k,
             modes=n,
-            static_correction=bool(static_correction),
+            static_correction=bool(options.static_correction),
             reduced_mass=float(simulation.reduced_mass),
             initial_energy=float(simulation.total_energy),
             wall_time_s=wall,
@@ -506,6 +550,8 @@ def run_ring(
             metadata={"circumference": scene.ring_circumference, "solver": solver, "checkpoint_every": every},
             **arrays,
         )
+        if choice is not None:
+            result.metadata["accuracy"] = _accuracy(choice, checks, resumed_from, log)
         if out_dir is not None:
             result.save_npz(out_dir / DATA_NPZ_NAME)
             result.save_csv(out_dir / DATA_CSV_NAME)
