@@ -161,13 +161,37 @@ def choices_table(model, gamma: float = 0.6173, collisions: int = 4500) -> str:
     return "\n".join(lines)
 
 
+def check_cost(repeats: int = 3, collisions: int = 300) -> str:
+    """CPU seconds of the paper's ring (N = 75, kappa 4000) for ``collisions`` collisions with and without the
+    checks (``tolerance=`` given or not), alternating, medians."""
+    from wavecontact.solvers import auto_ring
+    from wavecontact.studies.ring import run_ring
+
+    run_ring(0.6173, 4000.0, 75, 3, progress=False, tolerance=auto_ring.DEFAULT_TOLERANCE)  # compile or load
+    times: dict = {"without": [], "with": []}
+    for _ in range(repeats):
+        for label, tolerance in (("without", None), ("with", auto_ring.DEFAULT_TOLERANCE)):
+            start = time.process_time()
+            run_ring(0.6173, 4000.0, 75, collisions, progress=False, tolerance=tolerance)
+            times[label].append(time.process_time() - start)
+    plain, checked = (float(np.median(times[k])) for k in ("without", "with"))
+    checks = len(range(0, collisions, auto_ring.CHECK_EVERY))
+    return (f"gamma 0.6173, kappa 4000, N = 75, {collisions} collisions ({checks} checked), median of {repeats} CPU "
+            f"times: {plain:.2f} s without the checks, {checked:.2f} s with them (+{checked / plain - 1:.0%}; load "
+            f"{os.getloadavg()[0]:.1f})")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--refit", action="store_true", help="recompute the fits from the stored points")
     parser.add_argument("--check", action="store_true", help="verify the stored fits (writes nothing)")
     parser.add_argument("--table", action="store_true", help="print the docs' table from the stored file")
+    parser.add_argument("--check-cost", action="store_true", help="time a ring run with and without the checks")
     parser.add_argument("--out", default=str(DATA_PATH))
     args = parser.parse_args(argv)
+    if args.check_cost:
+        print(check_cost())
+        return 0
     if args.check or args.refit or args.table:
         stored = json.loads(Path(args.out).read_text(encoding="utf-8"))
         if args.table:

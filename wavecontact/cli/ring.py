@@ -42,7 +42,7 @@ def add_parser(subparsers):
     p.add_argument("--tolerance", type=positive_float, default=None,
                    help=f"tolerance on each collision's restitution error from truncating the modes (absolute; "
                         f"default {DEFAULT_TOLERANCE:g}): without --modes it chooses N (the fewest predicted to "
-                        f"keep {ERROR_QUANTILE:.0%} of the collisions within it); with --modes it is reported "
+                        f"keep {ERROR_QUANTILE * 100:g} %% of the collisions within it); with --modes it is reported "
                         f"against; the first and every {CHECK_EVERY}th collision is checked against a run of it "
                         f"with 2N modes")
     p.add_argument("--collisions", type=positive_int, required=True, help="number of collisions M")

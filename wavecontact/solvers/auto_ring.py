@@ -14,7 +14,7 @@ state, is computed with the omitted modes kept (at rest where the run has none).
 * **Choice** (:func:`choose_modes`): the fewest modes predicted to meet the tolerance (the cost grows with
   ``N``), checked against the limits before any work; a tolerance that no ``N`` within the limits meets is
   refused with the modes and the work it would need.
-* **Check during the run** (:class:`CollisionEstimator`): every :data:`CHECK_EVERY`-th collision (and the
+* **Check during the run** (:class:`CollisionChecks`): every :data:`CHECK_EVERY`-th collision (and the
   first) is run again from the state before it with ``2 N`` modes (the added ones at rest);
   ``ESTIMATE_FACTOR |eps_N - eps_2N|`` is that collision's error estimate (a bound where the error falls at
   least like ``1/N``).  Estimates above the tolerance are reported, and so is a model that is wrong (more
@@ -40,7 +40,6 @@ __all__ = [
     "DEFAULT_TOLERANCE",
     "ERROR_QUANTILE",
     "ESTIMATE_FACTOR",
-    "CollisionEstimator",
     "RingChoice",
     "RingModel",
     "choose_modes",
@@ -164,20 +163,15 @@ class RingModel:
             modes += 1
         return modes
 
+@functools.lru_cache(maxsize=4)
 def load_ring_model(path=None) -> RingModel:
     """The ring model from ``path`` (default :data:`DATA_PATH`), read once per path."""
-    return _load(str(path or DATA_PATH))
-
-
-@functools.lru_cache(maxsize=4)
-def _load(path: str) -> RingModel:
+    path = Path(path or DATA_PATH)
     try:
-        with open(path, encoding="utf-8") as handle:
-            data = json.load(handle)
+        return RingModel(json.loads(path.read_text(encoding="utf-8")))
     except (OSError, ValueError) as error:
         raise InvalidParameterError(f"cannot read the ring model {path}: {error}; regenerate it with "
                                     "python benchmarks/ring_model.py") from None
-    return RingModel(data)
 
 
 @dataclass(frozen=True)
@@ -321,36 +315,6 @@ def padded_state(state: dict, modes: int, reference) -> dict:
     return out
 
 
-class CollisionEstimator:
-    """Error estimates of single ring collisions: the collision again with ``2 N`` modes (module docstring).
-
-    Parameters
-    ----------
-    simulate : callable
-        ``simulate(scene, options)`` of the run's solver.
-    scene : Scene
-        The ring scene.
-    options : dict
-        The run's solver options (``modes`` among them).
-    """
-
-    def __init__(self, simulate, scene, options: dict):
-        self.modes = int(options["modes"])
-        self.reference = simulate(scene, {**options, "modes": 2 * self.modes})
-
-    def usable(self) -> bool:
-        """Whether the simulation's state holds modal coordinates to pad (a stand-in's may not)."""
-        state = self.reference.get_state()
-        return all(np.shape(state.get(key)) == (4 * self.modes,) for key in ("q", "v")) and \
-            getattr(self.reference, "modes", None) == 2 * self.modes
-
-    def estimate(self, state: dict, restitution: float) -> float:
-        """The error estimate of the collision that followed ``state`` and gave ``restitution``."""
-        self.reference.set_state(padded_state(state, self.modes, self.reference))
-        finer = self.reference.next_collision().restitution
-        return ESTIMATE_FACTOR * abs(float(restitution) - float(finer))
-
-
 class CollisionChecks:
     """The checks of one ring run: which collisions, their error estimates, and what they say of the model.
 
@@ -360,7 +324,7 @@ class CollisionChecks:
         ``simulate(scene, options)`` of the run's solver.
     scene : Scene
         The ring scene.
-    options : dict
+    options : SolverOptions
         The run's solver options.
     tolerance : float
         Tolerance on the per-collision restitution error.
@@ -368,13 +332,14 @@ class CollisionChecks:
         Collisions between checks (the first collision is always checked); None: :data:`CHECK_EVERY`; 0: none.
     """
 
-    def __init__(self, simulate, scene, options: dict, tolerance: float, every=None):
+    def __init__(self, simulate, scene, options, tolerance: float, every=None):
         self.every = CHECK_EVERY if every is None else int(every)
         self.tolerance = float(tolerance)
-        self.estimator = CollisionEstimator(simulate, scene, options) if self.every > 0 else None
+        self.modes = int(options.modes)
+        self.reference = simulate(scene, options.replace(modes=2 * self.modes)) if self.every > 0 else None
         self.note = ""
-        if self.estimator is not None and not self.estimator.usable():
-            self.every, self.estimator = 0, None
+        if self.reference is not None and not self._usable():
+            self.every, self.reference = 0, None
             self.note = " (the simulation's state has no modal coordinates to check with more modes)"
         self.collisions: list = []
         self.estimates: list = []
@@ -383,9 +348,22 @@ class CollisionChecks:
         """Whether collision ``index`` (0-based) is checked."""
         return self.every > 0 and index % self.every == 0
 
+    def _usable(self) -> bool:
+        """Whether the simulation's state holds modal coordinates to pad (a stand-in's may not)."""
+        state = self.reference.get_state()
+        return all(np.shape(state.get(key)) == (4 * self.modes,) for key in ("q", "v")) and \
+            getattr(self.reference, "modes", None) == 2 * self.modes
+
+    def estimate(self, state: dict, restitution: float) -> float:
+        """The error estimate of the collision that followed ``state`` and gave ``restitution``: ``ESTIMATE_FACTOR
+        |eps_N - eps_2N|``, ``eps_2N`` from ``state`` with twice the modes (the added ones at rest)."""
+        self.reference.set_state(padded_state(state, self.modes, self.reference))
+        finer = self.reference.next_collision().restitution
+        return ESTIMATE_FACTOR * abs(float(restitution) - float(finer))
+
     def add(self, index: int, state: dict, restitution: float) -> float:
         """Check collision ``index`` (0-based), which followed ``state`` and gave ``restitution``."""
-        estimate = self.estimator.estimate(state, restitution)
+        estimate = self.estimate(state, restitution)
         self.collisions.append(int(index) + 1)
         self.estimates.append(float(estimate))
         return estimate

@@ -498,7 +498,7 @@ def run_ring(
     simulation = (simulation_factory or engine.simulate)(scene, options)
     checks = None
     if choice is not None and simulation_factory is None:
-        checks = CollisionChecks(engine.simulate, scene, options.as_dict(), choice.tolerance)
+        checks = CollisionChecks(engine.simulate, scene, options, choice.tolerance)
     recorder = _Recorder(n)
     wall_before = 0.0
     resumed_from = 0
