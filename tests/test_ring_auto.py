@@ -94,13 +94,20 @@ def test_a_run_with_a_tolerance_reports_its_choice_and_checks_without_changing_t
     assert accuracy["checks"]["estimates"][0] == pytest.approx(2.0 * abs(checked.restitution[0] - finer), rel=1e-9)
 
 
-def test_estimates_above_the_tolerance_are_reported_as_the_model_being_wrong(monkeypatch):
+def test_estimates_above_the_tolerance_and_a_wrong_model_are_reported(monkeypatch):
     monkeypatch.setattr(auto_ring, "CHECK_EVERY", 1)
     messages = []
     run = run_ring(GAMMA, 4000.0, 8, 4, tolerance=1e-9, progress=False, log=messages.append)
     checks = run.metadata["accuracy"]["checks"]
-    assert checks["above_tolerance"] == [1, 2, 3, 4] and "the model is wrong here" in checks["verdict"]
+    assert checks["above_tolerance"] == [1, 2, 3, 4] and "4 of 4" in checks["verdict"]
     assert messages and "4 of 4" in messages[-1]
+    # a model that claims far too little (a deliberately wrong choice) is called wrong by the checks
+    wrong = auto_ring.RingChoice(8, 1e-9, 1e-12, None, "a wrong model", True)
+    checks = run_ring(GAMMA, 4000.0, None, 4, tolerance=wrong, progress=False).metadata["accuracy"]["checks"]
+    assert "the model is wrong here" in checks["verdict"]
+    right = auto_ring.RingChoice(8, 1e-9, 10.0, None, "a model that claims enough", True)
+    checks = run_ring(GAMMA, 4000.0, None, 4, tolerance=right, progress=False).metadata["accuracy"]["checks"]
+    assert "model is wrong" not in checks["verdict"]
 
 
 def test_cli_chooses_the_modes_and_says_why(tmp_path, capsys):

@@ -387,7 +387,7 @@ def _accuracy(choice: RingChoice, checks, resumed_from: int, log) -> dict:
     accuracy["checks"] = checks.summary()
     if resumed_from:
         accuracy["checks"]["verdict"] += f" (collisions after {resumed_from} only: resumed from a checkpoint)"
-    if checks.above() and log is not None:
+    if (checks.above() or "model is wrong" in accuracy["checks"]["verdict"]) and log is not None:
         log(accuracy["checks"]["verdict"])
     return accuracy
 
@@ -498,7 +498,7 @@ def run_ring(
     simulation = (simulation_factory or engine.simulate)(scene, options)
     checks = None
     if choice is not None and simulation_factory is None:
-        checks = CollisionChecks(engine.simulate, scene, options, choice.tolerance)
+        checks = CollisionChecks(engine.simulate, scene, options, choice.tolerance, choice.predicted_error)
     recorder = _Recorder(n)
     wall_before = 0.0
     resumed_from = 0
