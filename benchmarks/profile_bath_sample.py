@@ -83,7 +83,12 @@ def hard_core_pieces(modes, resolution, samples=256, repeats=15):
     import math
 
     from wavecontact.bath.streams import SpawnedSeeds, seed_states, standard_normals
-    from wavecontact.delay.stochastic_hardcore_batch import _temperature_rows, cached_grid, max_plus_batch
+    from wavecontact.delay.stochastic_hardcore_batch import (
+        SampleTables,
+        _temperature_rows,
+        cached_grid,
+        max_plus_batch,
+    )
     from wavecontact.studies.ensemble import ensemble
 
     grid = cached_grid(GAMMA, modes, resolution)
@@ -95,13 +100,13 @@ def hard_core_pieces(modes, resolution, samples=256, repeats=15):
     coefficients = [c.copy() for c in grid.coefficients(normals[block], temperatures[block])]
     tables = [t.copy() for t in grid.tables(*coefficients)]
     q1, q2v, q2s, cell2, block2, reach2, _reach, starts = tables
+    rows = SampleTables(q1, q2v, q2s, cell2, block2, reach2, starts)
     capacity = int(starts.max()) + 6 * grid.n1 + 4 * grid.j2
     work = np.empty(capacity), np.empty(capacity)
     w, nodes, status = np.empty(32), np.empty(32, dtype=np.int64), np.empty(32, dtype=np.int64)
 
     def kernel():
-        max_plus_batch(grid.h, grid.n1, grid.j2, grid.f2, q1, q2v, q2s, cell2, block2, grid.r2, reach2, starts,
-                       capacity, *work, w, nodes, status)
+        max_plus_batch(grid.steps, rows, capacity, work, (w, nodes, status))
 
     pieces = {
         "seed words (SpawnedSeeds -> PCG64 state)": (lambda: seed_states(seeds), samples),

@@ -11,6 +11,7 @@ import pytest
 
 import wavecontact
 from wavecontact import InvalidParameterError
+from wavecontact.io.run_controller import RunSettings
 from wavecontact.studies.ensemble import EnsembleSpec, ensemble, sample_seed
 
 HARD = dict(gamma=0.6173, kappa=math.inf, bath_temperature=1.0, samples=24, seed=11, bath_modes=40)  # noqa: C408
@@ -231,3 +232,18 @@ def test_a_second_writer_is_refused_and_overwrite_replaces_another_ensemble(tmp_
     replaced = ensemble(**other, batch_size=8, out=out, overwrite=True)
     assert np.array_equal(replaced.restitution, ensemble(**other, batch_size=8).restitution)
     assert not np.array_equal(replaced.restitution, first.restitution)
+
+
+def test_run_settings_whole_or_as_keywords_give_the_same_ensemble(tmp_path):
+    """``run=RunSettings(...)`` and its fields as keywords are one path (the same samples, batches and stored
+    description); solver options stay solver options, and a field given both ways is refused."""
+    flat = ensemble(**HARD, batch_size=5, out=tmp_path / "a", hard_core_resolution=16)
+    whole = ensemble(**HARD, run=RunSettings(batch_size=5, out=tmp_path / "b"), hard_core_resolution=16)
+    assert whole.spec == flat.spec and whole.spec.batch_size == 5
+    assert whole.spec.options == {"hard_core_resolution": 16}
+    np.testing.assert_array_equal(whole.restitution, flat.restitution)
+    assert sorted(p.name for p in (tmp_path / "b").glob("batch_*.npz")) == \
+        sorted(p.name for p in (tmp_path / "a").glob("batch_*.npz"))
+    assert ensemble(**HARD).spec.batch_size == 256
+    with pytest.raises(InvalidParameterError, match="batch_size: give it in run=RunSettings"):
+        ensemble(**HARD, run=RunSettings(), batch_size=5)

@@ -28,6 +28,7 @@ from wavecontact.gas.collision_law import (
     REGENERATE,
     REGENERATE_SOFT,
     CollisionLaw,
+    LawGrid,
     blend_draw,
     build_collision_law,
     kappa_variable,
@@ -364,8 +365,8 @@ def test_resolution_rule_grows_like_sqrt_of_one_over_x_and_is_stored(tmp_path):
     with pytest.raises(InvalidParameterError, match="resolution cap"):
         row_resolutions([0.0], 16, 8)
     options = {"levels": 5, "bath_modes": 250, "resolution": 16}
-    fixed = build_collision_law([1.0], [-3.0, 0.0], 8, 5, **options)
-    grown = build_collision_law([1.0], [-3.0, 0.0], 8, 5, resolution_cap=128, **options)
+    fixed = build_collision_law(LawGrid([1.0], [-3.0, 0.0]), 8, 5, **options)
+    grown = build_collision_law(LawGrid([1.0], [-3.0, 0.0]), 8, 5, resolution_cap=128, **options)
     assert fixed.row_resolution == () and grown.row_resolution == (128, 16)
     again = load_law(grown.save(tmp_path / "grown.npz"))
     assert again.row_resolution == (128, 16) and np.array_equal(again.eps2_quantiles, grown.eps2_quantiles)
@@ -382,8 +383,8 @@ def test_a_cap_per_gamma_and_reused_points_give_the_same_law_as_a_full_build(tmp
     """One cap per gamma row is stored per (gamma, row); a build that copies the points of an earlier law at the
     same resolution (same grid and seeds) equals a full build bit for bit, and a law with another seed is not
     copied from."""
-    grid = ([0.9, 1.0], [-3.0, -1.0, 0.0], 8, 5)
-    options = {"levels": 5, "bath_modes": 250, "resolution": 16, "short_shares": (0.0, 0.5, 1.0)}
+    grid = (LawGrid([0.9, 1.0], [-3.0, -1.0, 0.0], short_shares=(0.0, 0.5, 1.0)), 8, 5)
+    options = {"levels": 5, "bath_modes": 250, "resolution": 16}
     fixed = build_collision_law(*grid, **options)
     full = build_collision_law(*grid, resolution_cap=(16, 128), **options)
     assert full.row_resolution == ((16, 16, 16), (128, 51, 16))
@@ -395,7 +396,7 @@ def test_a_cap_per_gamma_and_reused_points_give_the_same_law_as_a_full_build(tmp
     assert np.array_equal(reused.eps2_quantiles, full.eps2_quantiles)
     assert np.array_equal(reused.gain_short, full.gain_short)
     assert np.array_equal(full.eps2_quantiles[0, 0], fixed.eps2_quantiles[0, 0])
-    other = build_collision_law(grid[0], grid[1], grid[2], 6, **options)
+    other = build_collision_law(grid[0], grid[1], 6, **options)
     solved.clear()
     build_collision_law(*grid, resolution_cap=(16, 128), reuse=other,
                         progress=lambda done, todo: solved.append(todo), **options)

@@ -14,6 +14,7 @@ from wavecontact.gas import (
     FixedRestitution,
     GasSimulation,
     RodGas,
+    StoppingRules,
     UniformLengths,
     VibrationSolve,
     VibrationTable,
@@ -319,3 +320,27 @@ def test_a_solve_rule_run_seeded_by_a_spawned_sequence_resumes_bit_for_bit(tmp_p
     resumed.run(200)
     for name, value in _state(straight).items():
         np.testing.assert_array_equal(value, getattr(resumed, name), err_msg=name)
+
+
+def test_stopping_rules_as_one_object_or_as_keywords_are_the_same_run():
+    """``stopping=StoppingRules(...)`` and the same fields as keywords give the same simulation (its stored
+    parameters) and the same history; a rule given both ways, an unknown keyword and a bad value are refused."""
+    gas = random_gas(12, seed=3, packing_fraction=0.3)
+    rule = FixedRestitution(0.5)
+    whole = GasSimulation(gas, rule, seed=1, stopping=StoppingRules(collapse_window=8, energy_floor=0.0,
+                                                                    collapse_gap=1e-5))
+    flat = GasSimulation(gas, rule, seed=1, collapse_window=8, energy_floor=0.0, collapse_gap=1e-5)
+    default = GasSimulation(gas, rule, seed=1)
+    assert whole._parameters() == flat._parameters() != default._parameters()
+    assert whole.stopping == flat.stopping == StoppingRules(8, 1e-3, 0.0, 1e-5, False)
+    a, b = whole.run(400), flat.run(400)
+    assert a.status == b.status and a.collisions == b.collisions
+    np.testing.assert_array_equal(whole.v, flat.v)
+    with pytest.raises(InvalidParameterError, match="energy_floor: give it in stopping=StoppingRules"):
+        GasSimulation(gas, rule, stopping=StoppingRules(), energy_floor=0.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'collapse_windows'"):
+        GasSimulation(gas, rule, collapse_windows=8)
+    with pytest.raises(InvalidParameterError, match="collapse_window must be a power of two"):
+        StoppingRules(collapse_window=12)
+    with pytest.raises(InvalidParameterError, match="energy_floor must lie in"):
+        GasSimulation(gas, rule, energy_floor=1.5)

@@ -14,7 +14,14 @@ import pytest
 
 from wavecontact.errors import InvalidParameterError
 from wavecontact.io import checkpoint as ckpt
-from wavecontact.io.run_controller import LOCK_NAME, OutputLock, RunController, claim_folder, write_summary
+from wavecontact.io.run_controller import (
+    LOCK_NAME,
+    OutputLock,
+    RunController,
+    RunSettings,
+    claim_folder,
+    write_summary,
+)
 
 
 def tamper(path, change):
@@ -179,3 +186,19 @@ def test_no_hand_written_replace_outside_atomic_write():
                 if '.replace("Infinity"' in text:
                     offenders.append(path)
     assert not offenders
+
+
+def test_run_settings_gather_the_flat_keywords_into_one_object():
+    """The one path from ``f(..., out=..., executor=...)`` to ``RunSettings``: the fields are taken out of the
+    keywords (the rest stay: solver options), the same object as given whole; both ways at once is refused."""
+    keywords = {"out": "runs/a", "batch_size": 7, "rtol": 1e-6}
+    settings = RunSettings.gather(None, keywords)
+    assert settings == RunSettings(out="runs/a", batch_size=7) and keywords == {"rtol": 1e-6}
+    assert RunSettings.gather(None, {}) == RunSettings()
+    whole = RunSettings(progress=True)
+    keywords = {"rtol": 1e-6}
+    assert RunSettings.gather(whole, keywords) is whole and keywords == {"rtol": 1e-6}
+    with pytest.raises(InvalidParameterError, match="^overwrite: give it in run=RunSettings"):
+        RunSettings.gather(whole, {"overwrite": True})
+    with pytest.raises(InvalidParameterError, match="run must be a RunSettings, got dict"):
+        RunSettings.gather({"out": "x"}, {})

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from wavecontact.errors import InvalidParameterError, WavecontactError
+from wavecontact.io.run_controller import RunSettings
 from wavecontact.restitution_table import RestitutionTable
 from wavecontact.studies.markov import (
     MarkovSpec,
@@ -424,3 +425,16 @@ def test_a_truncated_bath_lowers_the_stationary_mean_by_many_standard_errors():
     assert summary["mean_energy"] < 1.0 - 5.0 * summary["mean_energy_standard_error"]
     assert summary["fraction_below_bath_temperature"] > 1.0 - math.exp(-1.0) + 3.0 * summary[
         "fraction_below_bath_temperature_standard_error"]
+
+
+def test_run_settings_whole_or_as_keywords_give_the_same_chains(tmp_path):
+    """``run=RunSettings(...)`` and its fields as keywords are one path: the same chains and the same stored run;
+    the MarkovSpec fields among the keywords describe the chains (a wrong one is refused by name)."""
+    common = {"rule": "glauber", "chains": 3, "steps": 40, "seed": 8, "initial_energy": 2.0}
+    flat = markov_chains(GAMMA, out=tmp_path / "a", batch_size=2, **common)
+    whole = markov_chains(GAMMA, run=RunSettings(out=tmp_path / "b", batch_size=2), **common)
+    assert whole.spec == flat.spec and whole.spec.batch_size == 2 and whole.spec.initial_energy == 2.0
+    np.testing.assert_array_equal(whole.energy, flat.energy)
+    assert (tmp_path / "a" / "markov.json").read_text() == (tmp_path / "b" / "markov.json").read_text()
+    with pytest.raises(InvalidParameterError, match="bath must be one of"):
+        markov_chains(GAMMA, bath="warm", **common)

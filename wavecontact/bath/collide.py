@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..scene import two_rods
+from ..scene import two_rods, validate_gamma_kappa
 from .model import ThermalBath, seed_sequence
 
 __all__ = ["thermal_scene"]
@@ -18,8 +18,8 @@ def thermal_scene(gamma, kappa, bath: ThermalBath, seed, *, contact="exponential
     rod's vibrational energy gain ``extra['vibration_energy_gain']`` where the
     solver gives one (its ``vibration_energy_gain``, :mod:`wavecontact.solvers.base`).
     """
-    cold = two_rods(gamma, kappa, contact=contact)
-    lengths = tuple(rod.length for rod in cold.rods)
+    g, _k = validate_gamma_kappa(gamma, kappa)
+    lengths = (0.5 * (1.0 + g), 0.5 * (1.0 + g) / g)  # two_rods' rods (l = 1), built once below
     vibrations = bath.draw(lengths, seed_sequence(seed))
     scene = two_rods(gamma, kappa, contact=contact, vibrations=vibrations)
     scene.metadata["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,

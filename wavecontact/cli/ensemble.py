@@ -69,6 +69,7 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
+    from ..io.run_controller import RunSettings
     from ..studies.ensemble import EnsembleSpec, ensemble
 
     temperature = _temperature(args.temperature)
@@ -85,9 +86,10 @@ def run(args) -> int:
               thermal_samples_cost(args.samples, args.kappa, args.bath_modes, args.solver, args.gamma, options),
               "use fewer --samples or --bath-modes")
     with executor_from(args.workers, args.scheduler) as executor:
+        settings = RunSettings(executor=executor, batch_size=args.batch_size, out=args.out,
+                               progress=args.progress and not args.json, overwrite=args.overwrite)
         result = ensemble(args.gamma, args.kappa, temperature, args.samples, args.seed, solver=args.solver,
-                          bath_modes=args.bath_modes, executor=executor, batch_size=args.batch_size, out=args.out,
-                          progress=args.progress and not args.json, overwrite=args.overwrite, **options)
+                          bath_modes=args.bath_modes, run=settings, **options)
     summary = result.summary()
     written = []
     if args.out:

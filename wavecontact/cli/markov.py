@@ -68,6 +68,7 @@ def add_parser(subparsers):
 
 def run(args) -> int:
     from ..errors import InvalidParameterError
+    from ..io.run_controller import RunSettings
     from ..studies.markov import MarkovSpec, markov_chains
 
     if args.burn_in is not None and args.burn_in > args.steps - 2:
@@ -96,8 +97,9 @@ def run(args) -> int:
         result = markov_chains(
             args.gamma, kappa=args.kappa, rule=args.rule, chains=args.chains, steps=args.steps, seed=args.seed,
             bath=args.bath, modes_per_rod=args.modes_per_rod, initial_energy=args.initial_energy,
-            bath_modes=args.bath_modes, solver=solver, table=args.table, executor=executor,
-            progress=None if args.progress else False, out=args.out, overwrite=args.overwrite,
+            bath_modes=args.bath_modes, solver=solver, table=args.table,
+            run=RunSettings(executor=executor, progress=None if args.progress else False, out=args.out,
+                            overwrite=args.overwrite),
         )
     summary = result.summary(args.burn_in)
     written = []

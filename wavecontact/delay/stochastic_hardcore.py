@@ -59,8 +59,7 @@ def parabola_peak(f_older, f_old, value):
 
 
 @kernel
-def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_values, q2_slopes, reach,
-                       max_points, w, c1, c2):
+def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, rod2_table, reach, max_points, w, c1, c2):
     """Run the recursion; returns ``(points, status)``.
 
     Parameters
@@ -77,8 +76,9 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
         Time of node 0 (before the earliest possible contact).
     q1_table : ndarray (n1,)
         ``q_1`` at ``t0 + j h`` (one period).
-    q2_period, q2_values, q2_slopes : float, ndarray, ndarray
-        Rod 2's periodic table of ``q_2`` and ``q_2'``, origin ``t0``.
+    rod2_table : tuple (float, ndarray, ndarray)
+        Rod 2's periodic table ``(period, values, slopes)`` of ``q_2`` and ``q_2'``, origin ``t0``
+        (:attr:`GridRun.rod2_table`).
     reach : float
         Upper bound of ``q_1 + q_2`` on the grid (table maxima plus the
         interpolant's overshoot bound).
@@ -87,6 +87,7 @@ def max_plus_recursion(h, n1, gamma2, tau_free, t0, q1_table, q2_period, q2_valu
     w, c1, c2 : ndarray
         Work arrays (filled with ``w`` and the comb sums).
     """
+    q2_period, q2_values, q2_slopes = rod2_table
     d2 = gamma2 / h
     settle = n1 + int(d2) + 2
     running = 0.0
@@ -217,7 +218,7 @@ def run_grid(gamma: float, vibrations, modes: int, tau_free: float, points_per_p
         w = np.empty(capacity)
         c1 = np.empty(capacity)
         c2 = np.empty(capacity)
-        count, status = max_plus_recursion(h, n1, g2, tau_free, t0, q1, p2, q2, s2, reach, capacity, w, c1, c2)
+        count, status = max_plus_recursion(h, n1, g2, tau_free, t0, q1, (p2, q2, s2), reach, capacity, w, c1, c2)
         if status == STATUS_OK:
             return GridRun(h, n1, t0, count, w, c1, c2, q1, (p2, q2, s2))
         if capacity >= max_points:

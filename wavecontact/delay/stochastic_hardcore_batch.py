@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 import threading
+from typing import NamedTuple
 
 import numpy as np
 
@@ -56,8 +57,8 @@ from .._jit import kernel
 from ..errors import InvalidParameterError, SolverFailure, require_integer
 from .stochastic_hardcore import parabola_peak
 
-__all__ = ["DEFAULT_POINTS_PER_PERIOD", "HardCoreGrid", "cached_grid", "hard_core_restitution", "hard_core_restitutions",
-           "max_plus_batch"]
+__all__ = ["DEFAULT_POINTS_PER_PERIOD", "GridSteps", "HardCoreGrid", "SampleTables", "cached_grid", "hard_core_restitution",
+           "hard_core_restitutions", "max_plus_batch"]
 
 DEFAULT_POINTS_PER_PERIOD = 8
 _TRANSLATIONAL_ENERGY = 0.25  # E_tr in the paper's units (mu = 1/2, V = 1)
@@ -66,6 +67,28 @@ CHUNK = 64  # grid nodes stepped at once where the noise cannot lift f above w
 BLOCK = 32  # samples whose tables are made together (about 1.5 MB at nu_max = 250)
 STATUS_OK = 0
 STATUS_FULL = 1
+
+
+class GridSteps(NamedTuple):
+    """The constants of one grid that the recursion kernels read (:class:`HardCoreGrid` makes them)."""
+
+    h: float  # grid step (time, in l / c)
+    n1: int  # grid points per Gamma_1: rod 1's memory lies n1 nodes back
+    j2: int  # whole grid steps in Gamma_2
+    f2: float  # Gamma_2 / h - j2, in [0, 1)
+    r2: float  # rod 2's table index per grid step
+
+
+class SampleTables(NamedTuple):
+    """Per sample (one row each): the noise tables, their bounds and the start node (:meth:`HardCoreGrid.tables`)."""
+
+    q1: np.ndarray  # rod 1's noise on the grid, (samples, n1)
+    q2v: np.ndarray  # rod 2's Hermite table: values ...
+    q2s: np.ndarray  # ... and slopes per table index, (samples, n2)
+    cell2: np.ndarray  # rod 2's upper bound on each table cell, (samples, n2)
+    block2: np.ndarray  # ... and on each block of CELLS_PER_BLOCK cells
+    reach2: np.ndarray  # the largest of rod 2's cell bounds, (samples,)
+    starts: np.ndarray  # the node that stands for the nominal contact time, (samples,)
 
 
 @kernel(inline="always")
@@ -82,13 +105,16 @@ def _rod2(x, values, slopes, mask):
 
 
 @kernel(inline="always")
-def _quiet_chunk(a1, a2, q1, k, end, n1, j2, f2, g2, m, h, offset, running, top2, zeros):
+def _quiet_chunk(grid, a1, a2, q1, k, end, m, offset, running, top2, zeros):
     """Nodes ``k .. end - 1`` at once if none can rise (``f <= w`` by rod 2's bound ``top2``): then store
     ``A_i = w + C_i`` and return False; else store nothing and return True.
 
     A chunk lies wholly before node ``n_1`` (rod 1's memory is empty) or wholly after it, and
     likewise for node ``j_2 + 1``; ``zeros`` (at least ``end - k`` zeros) stands for an empty memory.
+    ``grid``: the :class:`GridSteps`.
     """
+    h, n1, j2, f2, _r2 = grid
+    g2 = 1.0 - f2
     length = end - k
     old1 = a1[k - n1:end - n1] if k >= n1 else zeros[:length]
     before2 = a2[k - j2 - 1:end - j2 - 1] if k > j2 else zeros[:length]
@@ -108,8 +134,14 @@ def _quiet_chunk(a1, a2, q1, k, end, n1, j2, f2, g2, m, h, offset, running, top2
 
 
 @kernel
-def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, m, capacity, a1, a2):
-    """One sample; returns ``(w_final, nodes, status)`` (see the module docstring for the names)."""
+def _max_plus_one(grid, row, reach2, m, capacity, a1, a2):
+    """One sample; returns ``(w_final, nodes, status)`` (see the module docstring for the names).
+
+    ``grid``: the :class:`GridSteps`; ``row``: this sample's ``(q1, q2v, q2s, cell2, block2)`` of the
+    :class:`SampleTables`; ``m``: its start node; ``a1, a2``: work arrays of ``capacity`` nodes.
+    """
+    h, n1, j2, f2, r2 = grid
+    q1, q2v, q2s, cell2, block2 = row
     n2 = q2v.shape[0]
     mask = n2 - 1
     shift = n2 * (m // n2 + 2)  # whole table periods that make rod 2's read position positive
@@ -167,7 +199,7 @@ def _max_plus_one(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, m, cap
                 while b0 != b1:
                     b0 = b0 + 1 if b0 + 1 < blocks else 0
                     top2 = max(top2, block2[b0])
-                hit = _quiet_chunk(a1, a2, q1, k, end, n1, j2, f2, g2, m, h, i1 - k, running, top2, zeros)
+                hit = _quiet_chunk(grid, a1, a2, q1, k, end, m, i1 - k, running, top2, zeros)
                 if not hit:
                     i1 += end - k
                     if i1 == n1:
@@ -314,22 +346,44 @@ def _certified_stop(h, n1, j2, f2, q1, reach2, m, last, w, a1, a2):
 
 
 @kernel
-def max_plus_batch(h, n1, j2, f2, q1, q2v, q2s, cell2, block2, r2, reach2, starts, capacity, a1, a2, w_final, nodes,
-                   status):
-    """Run :func:`_max_plus_one` for every row (sample) of the tables; fills ``w_final``, ``nodes``, ``status``."""
+def max_plus_batch(grid, tables, capacity, work, out):
+    """Run :func:`_max_plus_one` for every row (sample) of the tables.
+
+    Parameters
+    ----------
+    grid : GridSteps
+        The grid's constants.
+    tables : SampleTables
+        One row per sample.
+    capacity : int
+        Nodes of each work array.
+    work : tuple of ndarray
+        ``(a1, a2)``, the work arrays ``A_i = w + C_i`` (at least ``capacity`` nodes each).
+    out : tuple of ndarray
+        ``(w_final, nodes, status)``, one entry per sample, filled here.
+    """
+    q1, q2v, q2s, cell2, block2, reach2, starts = tables
+    a1, a2 = work
+    w_final, nodes, status = out
     for s in range(q1.shape[0]):
-        w, count, flag = _max_plus_one(h, n1, j2, f2, q1[s], q2v[s], q2s[s], cell2[s], block2[s], r2, reach2[s],
-                                       starts[s], capacity,
-                                       a1, a2)
+        w, count, flag = _max_plus_one(grid, (q1[s], q2v[s], q2s[s], cell2[s], block2[s]), reach2[s], starts[s],
+                                       capacity, a1, a2)
         w_final[s] = w
         nodes[s] = count
         status[s] = flag
 
 
 @kernel
-def _noise_coefficients(normals, temperatures, energy, length1, length2, omega1, omega2, sign1, sign2, a1, b1, a2, b2):
+def _noise_coefficients(normals, temperatures, energy, rod1, rod2, out):
     """The noise coefficients of every sample, in the arithmetic of ``ThermalBath.draw`` and
-    ``BathRealisation.noise_coefficients(1.0)`` (so the same numbers)."""
+    ``BathRealisation.noise_coefficients(1.0)`` (so the same numbers).
+
+    ``rod_i = (length, omega, sign)``: the rod's length, its modes' angular frequencies and the signs of
+    their shapes at the contact end; ``out = (a1, b1, a2, b2)``, filled here.
+    """
+    length1, omega1, sign1 = rod1
+    length2, omega2, sign2 = rod2
+    a1, b1, a2, b2 = out
     for s in range(normals.shape[0]):
         root1 = math.sqrt(temperatures[s, 0] * energy / length1)
         root2 = math.sqrt(temperatures[s, 1] * energy / length2)
@@ -432,6 +486,7 @@ class HardCoreGrid:
         self.n2 = table_points(self.modes, max(2, int(points_per_period) // 2) if rod2_points is None
                                else int(rod2_points))
         self.r2 = self.h * self.n2 / self.periods[1]  # rod 2's table index per grid step
+        self.steps = GridSteps(self.h, self.n1, self.j2, self.f2, self.r2)
         self.max_points = int(max_points)
         nu = np.arange(1, self.modes + 1)
         self._omega = tuple(math.pi * nu / length for length in self.lengths)  # m_i = l_i, c = 1
@@ -447,8 +502,8 @@ class HardCoreGrid:
         count = normals.shape[0]
         out = [_work(f"coefficients {name}", (max(count, BLOCK), self.modes))[:count] for name in ("a1", "b1", "a2", "b2")]
         _noise_coefficients(np.ascontiguousarray(normals), np.ascontiguousarray(temperatures, dtype=float),
-                            _TRANSLATIONAL_ENERGY, self.lengths[0], self.lengths[1], self._omega[0], self._omega[1],
-                            self._signs[0], self._signs[1], *out)
+                            _TRANSLATIONAL_ENERGY, (self.lengths[0], self._omega[0], self._signs[0]),
+                            (self.lengths[1], self._omega[1], self._signs[1]), tuple(out))
         return out
 
     def tables(self, a1, b1, a2, b2):
@@ -499,6 +554,7 @@ class HardCoreGrid:
 
     def _block(self, coefficients, nodes):
         q1, q2v, q2s, cell2, block2, reach2, _reach, starts = self.tables(*coefficients)
+        tables = SampleTables(q1, q2v, q2s, cell2, block2, reach2, starts)
         count = q1.shape[0]
         w = np.empty(count)
         status = np.empty(count, dtype=np.int64)
@@ -506,8 +562,7 @@ class HardCoreGrid:
         # this thread's work arrays (a grid is shared by every thread that samples it, and the kernel
         # runs without the GIL); the capacity only decides which samples are rerun alone below
         a1, a2 = _work("a1", (capacity,), grow=True), _work("a2", (capacity,), grow=True)
-        max_plus_batch(self.h, self.n1, self.j2, self.f2, q1, q2v, q2s, cell2, block2, self.r2, reach2, starts,
-                       a1.size, a1, a2, w, nodes, status)
+        max_plus_batch(self.steps, tables, a1.size, (a1, a2), (w, nodes, status))
         for s in np.flatnonzero(status != STATUS_OK):
             # a long sample: run it alone with larger work arrays (same arithmetic, same result)
             size = a1.size
@@ -517,8 +572,8 @@ class HardCoreGrid:
                 size = min(self.max_points, 4 * size)
                 big = (np.empty(size), np.empty(size))
                 one = slice(s, s + 1)
-                max_plus_batch(self.h, self.n1, self.j2, self.f2, q1[one], q2v[one], q2s[one], cell2[one], block2[one], self.r2,
-                               reach2[one], starts[one], size, big[0], big[1], w[one], nodes[one], status[one])
+                max_plus_batch(self.steps, SampleTables(*(table[one] for table in tables)), size, big,
+                               (w[one], nodes[one], status[one]))
         return w - 1.0
 
 

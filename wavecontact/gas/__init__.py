@@ -17,7 +17,7 @@ from .hardcore_collision import hard_core_collision
 from .model import AlternatingLengths, EqualLengths, RodGas, UniformLengths, random_gas
 from .rod_table import DEFAULT_TABLE_FILE, collision_draw, contact_draw, hard_core_draw, rod_table
 from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable
-from .simulation import GasResult, GasSimulation
+from .simulation import GasResult, GasSimulation, StoppingRules
 
 __all__ = [
     "DEFAULT_TABLE_FILE",
@@ -28,6 +28,7 @@ __all__ = [
     "GasResult",
     "GasSimulation",
     "RodGas",
+    "StoppingRules",
     "UniformLengths",
     "VibrationLaw",
     "VibrationSolve",

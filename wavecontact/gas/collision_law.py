@@ -52,7 +52,7 @@ from ..errors import InvalidParameterError, require_integer
 from ..io.files import atomic_write
 
 __all__ = ["DEFAULT_LAW_FILE", "DEFAULT_SOFT_LAW_FILE", "LAW_ARRAYS", "LOG_X_MIN", "REGENERATE", "REGENERATE_SOFT",
-           "CollisionLaw", "blend_draw", "build_collision_law", "default_law", "default_soft_law", "kappa_variable",
+           "CollisionLaw", "LawGrid", "blend_draw", "build_collision_law", "default_law", "default_soft_law", "kappa_variable",
            "law_from_arrays", "load_law", "merge_kappa_rows", "parser", "row_resolutions", "soft_corrections", "solve_collision"]
 
 SCHEMA_NAME = "wavecontact.collision_law"
@@ -496,10 +496,31 @@ def _reusable(old, kappas, gammas, log_xs, shares, probability, samples, seed, b
                                                                                  int(bath_modes))
 
 
-def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), short_shares=(0.5,), levels=41,
-                        bath_modes=250, resolution=8, resolution_cap=None, executor=None, reuse=None,
-                        progress=None):
-    """Tabulate the collision law (one ensemble per ``(kappa, gamma, log10 x, s)`` point).
+@dataclass(frozen=True)
+class LawGrid:
+    """The points of a collision law to build: every ``(kappa, gamma, log10 x, s)`` of these axes.
+
+    Parameters
+    ----------
+    gammas : sequence of float
+        Length ratios in (0, 1].
+    log_xs : sequence of float
+        ``log10 x``, ``x = E_tr / (E_tr + T_pair)`` (0: cold).
+    kappas : sequence of float
+        Contact softness rows (``inf``: the hard core).
+    short_shares : sequence of float
+        The short rod's share ``s = T_s / (T_s + T_l)`` of the bath temperature.
+    """
+
+    gammas: tuple
+    log_xs: tuple
+    kappas: tuple = (math.inf,)
+    short_shares: tuple = (0.5,)
+
+
+def build_collision_law(grid: LawGrid, samples, seed, *, levels=41, bath_modes=250, resolution=8, resolution_cap=None,
+                        executor=None, reuse=None, progress=None):
+    """Tabulate the collision law (one ensemble per ``(kappa, gamma, log10 x, s)`` point of ``grid``).
 
     Point ``a`` (row-major over ``kappas`` x ``gammas`` x ``log_xs`` x ``short_shares``) uses child ``a`` of
     ``SeedSequence(seed).spawn(points)``, and its sample ``i`` child ``i`` of that.  Cold points (``x = 1``)
@@ -512,7 +533,8 @@ def build_collision_law(gammas, log_xs, samples, seed, *, kappas=(math.inf,), sh
     seeds at the same resolution give the same solves, so the result equals a full build; a law on another
     grid or seed is not used).  ``progress``: called with ``(points done, points to solve)``.
     """
-    kappas, gammas, log_xs, shares = (np.asarray(a, float) for a in (kappas, gammas, log_xs, short_shares))
+    kappas, gammas, log_xs, shares = (np.asarray(a, float) for a in (grid.kappas, grid.gammas, grid.log_xs,
+                                                                     grid.short_shares))
     caps = _caps_per_gamma(resolution_cap, gammas, resolution)
     per_point = {(g, lx): r for g, cap in zip(gammas.tolist(), caps or (None,) * gammas.size)
                  for lx, r in zip(log_xs.tolist(), row_resolutions(log_xs, resolution, cap))}
@@ -631,9 +653,9 @@ def main(argv=None):
     if missing:
         p.error("building a law needs " + ", ".join("--" + name.replace("_", "-") for name in missing))
     start, cpu = time.perf_counter(), time.process_time()
-    options = {"kappas": sorted(args.kappa), "short_shares": sorted(args.share), "levels": args.levels,
-               "bath_modes": args.bath_modes, "resolution": args.resolution, "resolution_cap": args.resolution_cap}
-    log_xs = sorted(args.log_x)
+    options = {"levels": args.levels, "bath_modes": args.bath_modes, "resolution": args.resolution,
+               "resolution_cap": args.resolution_cap}
+    grid = LawGrid(args.gamma, sorted(args.log_x), sorted(args.kappa), sorted(args.share))
     if args.reuse is not None:
         options["reuse"] = load_law(args.reuse)
 
@@ -644,9 +666,9 @@ def main(argv=None):
     options["progress"] = progress
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:
-            law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, executor=pool, **options)
+            law = build_collision_law(grid, args.samples, args.seed, executor=pool, **options)
     else:
-        law = build_collision_law(args.gamma, log_xs, args.samples, args.seed, **options)
+        law = build_collision_law(grid, args.samples, args.seed, **options)
     law.save(args.out)
     import resource
 

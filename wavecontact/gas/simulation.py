@@ -18,14 +18,14 @@ import numpy as np
 
 from ..errors import CheckpointError, InvalidParameterError, require_integer, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
-from ..io.run_controller import RunController
+from ..io.run_controller import KeywordGroup, RunController
 from ..restitution_table import RestitutionTable
 from . import kernels
 from .collision_law import LAW_ARRAYS, law_from_arrays
 from .model import RodGas
 from .rules import FixedRestitution, VibrationLaw, VibrationSolve, VibrationTable, rule_from_description
 
-__all__ = ["CHECKPOINT_NAME", "MAX_COLLISIONS", "GasResult", "GasSimulation", "run_gas"]
+__all__ = ["CHECKPOINT_NAME", "MAX_COLLISIONS", "GasResult", "GasSimulation", "StoppingRules", "run_gas"]
 
 MAX_COLLISIONS = 10**11
 MAX_RECORDS = 10**7  # history rows one run may add (6 floats each)
@@ -177,6 +177,57 @@ class GasResult:
         return directory
 
 
+@dataclass(frozen=True)
+class StoppingRules(KeywordGroup):
+    """When a gas run stops before its collisions are done (docs/gas.md, "Stopping rules").
+
+    :class:`GasSimulation` also takes these fields one by one as keywords
+    (``GasSimulation(gas, rule, energy_floor=0.0)``), the same as ``stopping=StoppingRules(energy_floor=0.0)``.
+
+    Parameters
+    ----------
+    collapse_window, collapse_factor, collapse_gap : int, float, float
+        (``collapse_window`` a power of two.)  Inelastic collapse: infinitely many collisions in a
+        finite time, seen in floating point as collisions that accelerate (the last ``collapse_window``
+        took less than ``collapse_factor`` times as long as the ``collapse_window`` before them) until all
+        of the last ``collapse_window`` fall within the rounding of the clock (``2^-50 t``), in a cluster
+        of at least three bodies (rods, or a wall) around the colliding pair whose gaps all lie below
+        ``collapse_gap`` times the mean free spacing (the free length over the number of gaps).  A
+        collapse whose cluster's velocities round to equal first (no events left on a ring) counts too.
+        Acceleration without such a cluster goes on (a false alarm), unless the relative motion was lost
+        in the rounding (a pair's relative velocity within 4 ulps of its speed, or centres so far out that
+        their rounding reaches the gap floor): then the gas froze numerically (status ``frozen``).
+    energy_floor : float
+        Stop (status ``cooled``) once the kinetic energy in the centre-of-mass frame falls below this
+        fraction of its initial value: velocities then differ by less than their rounding (0: never).
+    continue_after_collapse : bool
+        Do not stop at a detected collapse: note it (:attr:`GasResult.collapse`), switch the detector
+        off and go on, to see what happens next.
+    """
+
+    collapse_window: int = 16
+    collapse_factor: float = 1e-3
+    energy_floor: float = 1e-20
+    collapse_gap: float = 1e-6
+    continue_after_collapse: bool = False
+
+    def __post_init__(self):
+        window = require_integer("collapse_window", self.collapse_window, 2, 2**20)
+        if window & (window - 1):
+            raise InvalidParameterError(f"collapse_window must be a power of two, got {window}")
+        object.__setattr__(self, "collapse_window", window)
+        object.__setattr__(self, "collapse_factor", require_positive("collapse_factor", self.collapse_factor))
+        gap = require_positive("collapse_gap", self.collapse_gap)
+        if not gap < 1.0:
+            raise InvalidParameterError(f"collapse_gap must lie in (0, 1) (of the mean free spacing), got "
+                                        f"{self.collapse_gap!r}")
+        object.__setattr__(self, "collapse_gap", gap)
+        object.__setattr__(self, "continue_after_collapse", bool(self.continue_after_collapse))
+        floor = float(self.energy_floor)
+        if not 0.0 <= floor < 1.0:
+            raise InvalidParameterError(f"energy_floor must lie in [0, 1), got {self.energy_floor!r}")
+        object.__setattr__(self, "energy_floor", floor)
+
 
 class GasSimulation:
     """An event-driven rod gas with a collision rule; run it in pieces, checkpoint, resume.
@@ -209,30 +260,15 @@ class GasSimulation:
         Frames kept (later ones are dropped).
     frame_rods : int
         At most this many rods (evenly chosen) in each frame.
-    collapse_window, collapse_factor, collapse_gap : int, float, float
-        (``collapse_window`` a power of two.)  Inelastic collapse (docs/gas.md, "Stopping rules"):
-        infinitely many collisions in a finite time, seen in floating point as collisions that
-        accelerate (the last ``collapse_window`` took less than ``collapse_factor`` times as long as the
-        ``collapse_window`` before them) until all of the last ``collapse_window`` fall within the rounding
-        of the clock (``2^-50 t``), in a cluster of at least three bodies (rods, or a wall) around the
-        colliding pair whose gaps all lie below ``collapse_gap`` times the mean free spacing (the free
-        length over the number of gaps).  A collapse whose cluster's velocities round to equal first (no
-        events left on a ring) counts too.  Acceleration without such a cluster goes on (a false alarm),
-        unless the relative motion was lost in the rounding (a pair's relative velocity within 4 ulps of its
-        speed, or centres so far out that their rounding reaches the gap floor): then the gas froze
-        numerically (status ``frozen``).
-    continue_after_collapse : bool
-        Do not stop at a detected collapse: note it (:attr:`GasResult.collapse`), switch the detector
-        off and go on, to see what happens next.
-    energy_floor : float
-        Stop (status ``cooled``) once the kinetic energy in the centre-of-mass
-        frame falls below this fraction of its initial value: velocities then
-        differ by less than their rounding (0: never).
+    stopping : StoppingRules, optional
+        Inelastic collapse and cooling (default ``StoppingRules()``).
+    **rules
+        The fields of :class:`StoppingRules` one by one (``collapse_window``, ``collapse_factor``,
+        ``collapse_gap``, ``continue_after_collapse``, ``energy_floor``), instead of ``stopping``.
     """
 
     def __init__(self, gas: RodGas, rule, *, damping=None, contact_stiffness=None, seed=0, record_every=1000,
-                 frame_every=1, max_frames=400, frame_rods=2000, collapse_window=16, collapse_factor=1e-3,
-                 energy_floor=1e-20, collapse_gap=1e-6, continue_after_collapse=False):
+                 frame_every=1, max_frames=400, frame_rods=2000, stopping: StoppingRules | None = None, **rules):
         if not isinstance(gas, RodGas):
             raise InvalidParameterError("gas must be a RodGas (see wavecontact.gas.random_gas)")
         if not isinstance(rule, (FixedRestitution, VibrationLaw, VibrationTable, VibrationSolve)):
@@ -255,18 +291,17 @@ class GasSimulation:
         self.frame_every = require_integer("frame_every", frame_every, 1, MAX_COLLISIONS)
         self.max_frames = require_integer("max_frames", max_frames, 0, 100_000)
         self.frame_rods = require_integer("frame_rods", frame_rods, 1, 100_000)
-        window = require_integer("collapse_window", collapse_window, 2, 2**20)
-        if window & (window - 1):
-            raise InvalidParameterError(f"collapse_window must be a power of two, got {window}")
-        self.collapse_factor = require_positive("collapse_factor", collapse_factor)
-        self.collapse_gap = require_positive("collapse_gap", collapse_gap)
-        if not self.collapse_gap < 1.0:
-            raise InvalidParameterError(f"collapse_gap must lie in (0, 1) (of the mean free spacing), got {collapse_gap!r}")
-        self.continue_after_collapse = bool(continue_after_collapse)
+        rules = dict(rules)
+        stopping = StoppingRules.gather(stopping, rules, "stopping")
+        if rules:
+            raise TypeError(f"GasSimulation() got an unexpected keyword argument {next(iter(rules))!r}")
+        self.stopping = stopping
+        window = stopping.collapse_window
+        self.collapse_factor = stopping.collapse_factor
+        self.collapse_gap = stopping.collapse_gap
+        self.continue_after_collapse = stopping.continue_after_collapse
         self.collapse_detected = None  # where the detector fired (a dict, see GasResult.collapse)
-        self.energy_floor = float(energy_floor)
-        if not 0.0 <= self.energy_floor < 1.0:
-            raise InvalidParameterError(f"energy_floor must lie in [0, 1), got {energy_floor!r}")
+        self.energy_floor = stopping.energy_floor
         sequence = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
         self.seed_entropy = sequence.entropy
         self.seed_spawn_key = tuple(sequence.spawn_key)
@@ -716,9 +751,9 @@ class GasSimulation:
         sim = cls(gas, rule, damping=params["damping"], contact_stiffness=params["contact_stiffness"], seed=seed,
                   record_every=params["record_every"], frame_every=params["frame_every"],
                   max_frames=params["max_frames"], frame_rods=params["frame_rods"],
-                  collapse_window=params["collapse_window"], collapse_factor=params["collapse_factor"],
-                  energy_floor=params["energy_floor"], collapse_gap=params.get("collapse_gap", 1e-6),
-                  continue_after_collapse=params.get("continue_after_collapse", False))
+                  stopping=StoppingRules(params["collapse_window"], params["collapse_factor"], params["energy_floor"],
+                                         params.get("collapse_gap", 1e-6),
+                                         params.get("continue_after_collapse", False)))
         sim.collapse_detected = params.get("collapse_detected")
         if sim.collapse_detected is not None:
             sim.collapse[kernels.COLLAPSE_FACTOR] = 0.0

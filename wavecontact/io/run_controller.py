@@ -40,13 +40,15 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 from ..errors import InvalidParameterError, require_integer
 from ..progress import Progress
 from .files import atomic_write, to_jsonable
 
-__all__ = ["LOCK_NAME", "BatchStore", "OutputLock", "RunController", "StopRequest", "claim_folder", "write_summary"]
+__all__ = ["LOCK_NAME", "BatchStore", "KeywordGroup", "OutputLock", "RunController", "RunSettings", "StopRequest",
+           "claim_folder", "write_summary"]
 
 LOCK_NAME = ".wavecontact.lock"
 
@@ -274,8 +276,6 @@ class RunController:
         Checkpoint whenever the work done crosses a multiple of ``every`` units.
     seconds : float or None
         Checkpoint when this much wall time has passed since the last one.
-    initial : int
-        Units already done (a resumed run).
     progress : bool or None
         Show a tqdm bar on stderr (None: when stderr is a terminal).
     log : callable or None
@@ -287,21 +287,21 @@ class RunController:
     """
 
     def __init__(self, total: int, description: str, unit: str = "it", *, out_dir=None, save: Callable | None = None,
-                 every: int | None = None, seconds: float | None = None, initial: int = 0,
-                 progress: bool | None = False, log: Callable[[str], None] | None = None,
+                 every: int | None = None, seconds: float | None = None, progress: bool | None = False,
+                 log: Callable[[str], None] | None = None,
                  describe_resume: Callable[[int], str] | None = None, option: str = "--out"):
         if every is not None:
             require_integer("checkpoint cadence", every, 1)
         if seconds is not None and not float(seconds) > 0:
             raise InvalidParameterError(f"checkpoint interval must be > 0 seconds, got {seconds!r}")
         self.total = int(total)
-        self.done = int(initial)
+        self.done = 0  # a resumed run says how much it holds with resumed()
         self.every = None if every is None else int(every)
         self.seconds = None if seconds is None else float(seconds)
         self.save = save
         self.log = log
         self.unit = unit
-        self.last_checkpoint = self.done if self.done else None
+        self.last_checkpoint = None
         self._describe_resume = describe_resume
         self._description = description
         self._progress = progress
@@ -418,6 +418,72 @@ class RunController:
 # ----------------------------------------------------------------------------
 # Storage of a batched run (ensembles, Markov chains)
 # ----------------------------------------------------------------------------
+
+
+class KeywordGroup:
+    """A frozen dataclass of settings that a function also takes as flat keywords (its fields one by one).
+
+    :meth:`gather` is the one path from either spelling to the object: ``f(..., group=Group(a=1))``
+    and ``f(..., a=1)`` give the same ``Group``.
+    """
+
+    @classmethod
+    def gather(cls, given, keywords: dict, name: str = "run"):
+        """``given`` (None: the defaults) with the fields given one by one in ``keywords``, which loses them.
+
+        Parameters
+        ----------
+        given : instance of this class or None
+            The object passed as ``name=``.
+        keywords : dict
+            The function's other keywords; this class's fields are taken out of it.
+        name : str
+            The function's keyword for the object (for messages).
+
+        Raises
+        ------
+        InvalidParameterError
+            ``given`` is not an instance of this class, or a field is given both ways.
+        """
+        taken = {f.name: keywords.pop(f.name) for f in fields(cls) if f.name in keywords}
+        if given is None:
+            return cls(**taken)
+        if not isinstance(given, cls):
+            raise InvalidParameterError(f"{name} must be a {cls.__name__}, got {type(given).__name__}")
+        if taken:
+            raise InvalidParameterError(f"{', '.join(taken)}: give it in {name}={cls.__name__}(...) or as a keyword, "
+                                        "not both")
+        return given
+
+
+@dataclass(frozen=True)
+class RunSettings(KeywordGroup):
+    """How a batched study runs, apart from what it computes (:func:`~wavecontact.studies.ensemble.ensemble`,
+    :func:`~wavecontact.studies.markov.markov_chains`); none of it changes a result.
+
+    The studies also take these fields one by one as keywords (``ensemble(..., executor=pool, out="runs")``):
+    :meth:`~KeywordGroup.gather` turns them into this object, the one path both spellings take.
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor, dask.distributed.Client or None
+        Where batches run; None runs them here, one after the other.
+    batch_size : int or None
+        Units of work (samples, chains) per task; None: the study's default.
+    out : path-like or None
+        Folder for the run's description and its finished batches, locked against a second run while
+        this one writes; the same call again resumes from the batches there.  None: nothing is written.
+    progress : bool or None
+        Show a progress bar (tqdm) on stderr; None: when stderr is a terminal.
+    overwrite : bool
+        Replace another run's description and batches found in ``out``.
+    """
+
+    executor: object = None
+    batch_size: int | None = None
+    out: object = None
+    progress: bool | None = False
+    overwrite: bool = False
 
 
 class BatchStore:

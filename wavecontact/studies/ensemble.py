@@ -23,7 +23,7 @@ import numpy as np
 from ..bath.model import ThermalBath
 from ..errors import AccuracyError, InvalidParameterError, WavecontactError, require_integer
 from ..io.files import atomic_write
-from ..io.run_controller import BatchStore, RunController, write_summary
+from ..io.run_controller import BatchStore, RunController, RunSettings, write_summary
 from ..scene import validate_gamma_kappa
 from ..solvers import get_solver, solvers_with
 from ..solvers.base import ENERGY_SPLIT, HARD_CORE_THERMAL, THERMAL_BATCH
@@ -501,9 +501,8 @@ def _executor_for(executor):
     return executor
 
 
-def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", bath_modes=250, executor=None,
-             batch_size=256, out=None, progress=False, energy_split=False, tolerance=None, overwrite=False,
-             **options) -> EnsembleResult:
+def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", bath_modes=250, energy_split=False,
+             tolerance=None, run: RunSettings | None = None, **options) -> EnsembleResult:
     """Collide ``samples`` independent realisations of the thermal bath.
 
     Parameters
@@ -521,17 +520,6 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         Solver of each collision (a name of :func:`wavecontact.solvers.solver_names`).
     bath_modes : int
         ``nu_max`` (default 250).
-    executor : concurrent.futures.Executor, dask.distributed.Client or None
-        Where batches run; ``None`` runs them here, one after the other.
-    batch_size : int
-        Samples per task.
-    out : path or None
-        Directory for the description and the finished batches (resume), locked against a second
-        run while this one writes; a folder holding another ensemble is refused (unless ``overwrite``),
-        a batch whose values no run can produce is refused (:class:`~wavecontact.errors.CheckpointError`).
-        SIGINT or SIGTERM end the run after the batch in progress; every finished batch is on disk.
-    progress : bool
-        Show a progress bar (tqdm) on stderr.
     energy_split : bool
         Keep each rod's vibrational gain per sample (finite kappa only).
     tolerance : float or None
@@ -539,10 +527,17 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         bias plus two of its standard errors); a larger one raises
         :class:`~wavecontact.errors.AccuracyError` with a ``hard_core_resolution``
         that should meet it (the samples are kept on ``out`` all the same).
-    overwrite : bool
-        Replace another ensemble's description and batches found in ``out``.
+    run : RunSettings, optional
+        How the ensemble runs: ``executor`` (where batches run; None: here, one after the other),
+        ``batch_size`` (samples per task, default 256), ``out`` (folder for the description and the
+        finished batches, locked against a second run while this one writes; a folder holding another
+        ensemble is refused unless ``overwrite``, a batch whose values no run can produce is refused with
+        :class:`~wavecontact.errors.CheckpointError`; SIGINT or SIGTERM end the run after the batch in
+        progress, every finished batch is on disk), ``progress`` (a tqdm bar on stderr), ``overwrite``.
     **options
-        Solver options (e.g. ``rtol=1e-6``; ``hard_core_resolution`` for ``kappa = inf``).
+        Solver options (e.g. ``rtol=1e-6``; ``hard_core_resolution`` for ``kappa = inf``), and the
+        fields of ``run`` given one by one (``executor=pool, out="runs"``;
+        :meth:`~wavecontact.io.run_controller.KeywordGroup.gather`).
 
     Returns
     -------
@@ -550,32 +545,34 @@ def ensemble(gamma, kappa, bath_temperature, samples, seed, *, solver="delay", b
         With the hard-core mode, its ``grid_bias`` states the grid's bias of the mean
         (every ``samples // 64``-th sample rerun on a grid twice as fine).
     """
-    spec = EnsembleSpec(gamma, kappa, bath_temperature, samples, seed, bath_modes, solver, dict(options), batch_size,
-                        energy_split)
+    options = dict(options)
+    run = RunSettings.gather(run, options)
+    spec = EnsembleSpec(gamma, kappa, bath_temperature, samples, seed, bath_modes, solver, options,
+                        256 if run.batch_size is None else run.batch_size, energy_split)
     if tolerance is not None:
         if not _hard_core(spec):
             raise InvalidParameterError("tolerance (the grid bias of the mean) applies to the hard-core mode "
                                         "(kappa = inf) only; finite kappa takes rtol")
         if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0.0 < tolerance < math.inf:
             raise InvalidParameterError(f"tolerance must be a number in (0, inf), got {tolerance!r}")
-    if out is not None:
+    if run.out is not None:
         from ..io.files import check_output_directory
 
-        check_output_directory("out", out)  # a file there is refused by name, not a FileExistsError
+        check_output_directory("out", run.out)  # a file there is refused by name, not a FileExistsError
     fields = asdict(spec)
-    store = None if out is None else _store(out, spec)
-    pool = _executor_for(executor)
-    with RunController(spec.samples, "ensemble", unit="sample", out_dir=out, progress=bool(progress)) as run:
-        done = {} if store is None else store.open(spec.batches(), overwrite=overwrite)
+    store = None if run.out is None else _store(run.out, spec)
+    pool = _executor_for(run.executor)
+    with RunController(spec.samples, "ensemble", unit="sample", out_dir=run.out, progress=bool(run.progress)) as bar:
+        done = {} if store is None else store.open(spec.batches(), overwrite=run.overwrite)
         todo = [(a, b) for a, b in spec.batches() if a not in done]
-        run.resumed(spec.samples - sum(b - a for a, b in todo))
+        bar.resumed(spec.samples - sum(b - a for a, b in todo))
 
         def finish(start, values, gains, errors):
             done[start] = (values, gains, errors)
             if store is not None:
                 store.save(start, start + values.size,
                            {"restitution": values, "vibration_energy_gain": gains, "error_estimate": errors})
-            run.advance(values.size)
+            bar.advance(values.size)
 
         try:
             run_batches(pool, run_batch, fields, todo, lambda out: finish(*out))

@@ -8,6 +8,7 @@ Dask cluster, in any order.
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 
@@ -15,11 +16,13 @@ import numpy as np
 
 from ..errors import require_integer
 from ..gas import GasSimulation, random_gas
-from ..gas.model import DEFAULT_LENGTHS
 
 __all__ = ["GasEnsemble", "gas_ensemble", "run_member"]
 
 MAX_REALISATIONS = 100_000
+# the keywords of random_gas that describe the gas (besides rods and seed), with its defaults
+GAS_KEYWORDS = {name: parameter.default for name, parameter in inspect.signature(random_gas).parameters.items()
+                if name not in ("rods", "seed")}
 
 
 def run_member(spec: dict, sequence: np.random.SeedSequence):
@@ -56,16 +59,15 @@ class GasEnsemble:
         }
 
 
-def gas_ensemble(realisations, *, rods, collisions, rule, seed, lengths=DEFAULT_LENGTHS, packing_fraction=0.1,
-                 temperature=1.0, bath_temperature=0.0, boundary="ring", damping=None, record_every=None,
-                 max_frames=0, max_time=math.inf, executor=None) -> GasEnsemble:
+def gas_ensemble(realisations, *, rods, collisions, rule, seed, damping=None, record_every=None, max_frames=0,
+                 max_time=math.inf, executor=None, **gas) -> GasEnsemble:
     """Run ``realisations`` independent gases.
 
     Parameters
     ----------
     realisations : int
         Number of runs (1 ... 100,000).
-    rods, collisions, rule, lengths, packing_fraction, temperature, bath_temperature, boundary, damping
+    rods, collisions, rule, damping
         As for :func:`wavecontact.gas.random_gas` and :class:`wavecontact.gas.GasSimulation`.
     seed : int
         Root seed of the ensemble.
@@ -78,13 +80,19 @@ def gas_ensemble(realisations, *, rods, collisions, rule, seed, lengths=DEFAULT_
     executor : object with ``submit(fn, *args)``, optional
         A ``concurrent.futures.Executor`` or a ``dask.distributed.Client``;
         None runs serially here.
+    **gas
+        The gas of every realisation: the other keywords of :func:`wavecontact.gas.random_gas`
+        (``lengths``, ``packing_fraction``, ``temperature``, ``bath_temperature``, ``boundary``; its
+        defaults where not given).
     """
+    unknown = sorted(set(gas) - set(GAS_KEYWORDS))
+    if unknown:
+        raise TypeError(f"gas_ensemble() got an unexpected keyword argument {unknown[0]!r}")
     require_integer("realisations", realisations, 1, MAX_REALISATIONS)
     require_integer("seed", seed, 0)
     spec = {
-        "rods": rods, "collisions": collisions, "rule": rule, "lengths": lengths,
-        "packing_fraction": packing_fraction, "temperature": temperature, "bath_temperature": bath_temperature,
-        "boundary": boundary, "damping": damping, "max_frames": max_frames, "max_time": max_time,
+        "rods": rods, "collisions": collisions, "rule": rule, **GAS_KEYWORDS, **gas,
+        "damping": damping, "max_frames": max_frames, "max_time": max_time,
         "record_every": record_every if record_every is not None else max(1, int(collisions) // 200),
     }
     # check the whole specification once, here, before anything is shipped to workers

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
+from dataclasses import fields as dataclass_fields
 from pathlib import Path
 
 import numpy as np
@@ -546,61 +547,65 @@ def _store(out, spec: MarkovSpec):
                       _check_chains(spec), "a Markov run")
 
 
-def markov_chains(gamma, *, kappa=math.inf, rule="solve", chains=1, steps=10_000, seed=0, bath="fixed",
-                  modes_per_rod=250, initial_energy=1.0, bath_modes=250, solver="delay", table=None,
-                  executor=None, batch_size=None, progress=False, out=None, overwrite=False,
-                  **options) -> MarkovResult:
+# the keywords of markov_chains that describe the run (the other fields: gamma, the solver options, the batches)
+_SPEC_KEYWORDS = tuple(f.name for f in dataclass_fields(MarkovSpec) if f.name not in ("gamma", "options", "batch_size"))
+
+
+def markov_chains(gamma, *, run=None, **settings) -> MarkovResult:
     """Run ``chains`` independent Markov chains of ``steps`` collisions (see module docstring).
 
     Parameters
     ----------
-    gamma, kappa, rule, chains, steps, seed, bath, modes_per_rod, initial_energy, bath_modes, solver, table
-        See :class:`MarkovSpec`.
-    executor : concurrent.futures.Executor, dask.distributed.Client or None
-        Where batches of chains run (as for :func:`wavecontact.studies.ensemble.ensemble`);
-        ``None`` runs them here.
-    batch_size : int or None
-        Chains per task (results do not depend on it); ``None``: all chains in one
-        task when ``executor`` is None, else about 16 tasks.
-    progress : bool or None
-        Show a progress bar over chains on stderr (``None``: when stderr is a terminal).
-    out : path or None
-        Folder for the run's description (``markov.json``) and each finished batch of chains
-        (``chains_*.npz``), locked against a second run while this one writes: the same call
-        again skips the batches on disk (an interrupt loses only the batches in progress; a batch
-        is all its chains' steps).  A folder holding another Markov run is refused unless ``overwrite``;
-        a stored batch whose values no run can produce is refused.
-    overwrite : bool
-        Replace another Markov run's description and batches found in ``out``.
-    **options
-        Solver options of the ``solve`` rule.
+    gamma : float
+        Length ratio ``l1 / l2`` in (0, 1].
+    run : RunSettings, optional
+        How the chains run (:class:`~wavecontact.io.run_controller.RunSettings`): ``executor`` (where
+        batches of chains run, as for :func:`wavecontact.studies.ensemble.ensemble`; None: here),
+        ``batch_size`` (chains per task, results do not depend on it; None: all chains in one task
+        without an executor, else about 16 tasks), ``progress`` (a bar over chains on stderr; None: when
+        stderr is a terminal), ``out`` (folder for the run's description ``markov.json`` and each
+        finished batch of chains ``chains_*.npz``, locked against a second run while this one writes:
+        the same call again skips the batches on disk, an interrupt loses only the batches in progress,
+        a batch is all its chains' steps; a folder holding another Markov run is refused unless
+        ``overwrite``, a stored batch whose values no run can produce is refused) and ``overwrite``.
+    **settings
+        What the chains compute: the fields of :class:`MarkovSpec` (``kappa``, ``rule``, ``chains``,
+        ``steps``, ``seed``, ``bath``, ``modes_per_rod``, ``initial_energy``, ``bath_modes``, ``solver``,
+        ``table``; its defaults where not given); the fields of ``run`` given one by one
+        (``executor=pool, out="runs"``, :meth:`~wavecontact.io.run_controller.KeywordGroup.gather`); any
+        other keyword is a solver option of the ``solve`` rule (``hard_core_resolution=16``).
 
     Returns
     -------
     MarkovResult
     """
-    from ..io.run_controller import RunController
+    from ..io.run_controller import RunController, RunSettings
     from .ensemble import _executor_for, run_batches
 
+    options = dict(settings)
+    run = RunSettings.gather(run, options)
+    described = {name: options.pop(name) for name in _SPEC_KEYWORDS if name in options}
+    batch_size = run.batch_size
     if batch_size is None:
-        batch_size = chains if executor is None else max(1, math.ceil(chains / 16))
-    spec = MarkovSpec(gamma, kappa, rule, chains, steps, seed, bath, modes_per_rod, initial_energy, bath_modes,
-                      solver, dict(options), table, min(int(batch_size), 100_000) if isinstance(batch_size, int) else batch_size)
+        chains = described.get("chains", 1)
+        batch_size = chains if run.executor is None else max(1, math.ceil(chains / 16))
+    spec = MarkovSpec(gamma, **described, options=options,
+                      batch_size=min(int(batch_size), 100_000) if isinstance(batch_size, int) else batch_size)
     _load_table(spec)  # a bad table file fails here, before any task is sent
     fields = asdict(spec)
-    store = None if out is None else _store(out, spec)
-    pool = _executor_for(executor)
-    with RunController(spec.chains, "markov", unit="chain", out_dir=out, progress=progress) as run:
-        done = {} if store is None else {a: (a, *v) for a, v in store.open(spec.batches(), overwrite).items()}
+    store = None if run.out is None else _store(run.out, spec)
+    pool = _executor_for(run.executor)
+    with RunController(spec.chains, "markov", unit="chain", out_dir=run.out, progress=run.progress) as bar:
+        done = {} if store is None else {a: (a, *v) for a, v in store.open(spec.batches(), run.overwrite).items()}
         todo = [(a, b) for a, b in spec.batches() if a not in done]
-        run.resumed(spec.chains - sum(b - a for a, b in todo))
+        bar.resumed(spec.chains - sum(b - a for a, b in todo))
 
         def collect(result):
             done[result[0]] = result
             if store is not None:
                 store.save(result[0], result[0] + result[1].shape[0],
                            {"energy": result[1], "temperature": result[2], "eps2": result[3]})
-            run.advance(result[1].shape[0])
+            bar.advance(result[1].shape[0])
 
         try:
             run_batches(pool, run_chains, fields, todo, collect)
