@@ -198,7 +198,6 @@ OVER_THE_LIMIT = {
     "modal/collocation.py:run_collision": 39,
     "modal/kernels.py:_bounds": 20,
     "modal/kernels.py:run_episode": 35,
-    "modal/solver.py:_collide": 15,
     "studies/ensemble.py:ensemble": 15,
     "studies/gas.py:gas_ensemble": 15,
     "studies/markov.py:markov_chains": 18,
