@@ -47,3 +47,18 @@ def test_against_refuses_an_unknown_revision():
                            "scene", "--repeats", "1"], check=False, cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert done.returncode != 0
     assert "no-such-revision-xyz" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_case_doing_more_work_now_is_shown_as_such_and_does_not_set_the_exit_status():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("against", ROOT / "benchmarks" / "against.py")
+    against = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(against)
+    row = {"case": "collide-fem", "old_s": 0.0075, "new_s": 0.015, "ratio": 2.0, "spread": 0.1, "slower": True}
+    assert against.regressions([row]) == ["collide-fem"]  # equal work (the default): a regression
+    assert against.table_row(row, "abc").endswith("| SLOWER | equal |")
+    more = {**row, "work": "more"}
+    assert against.regressions([more]) == []
+    assert "| SLOWER | more now: an error estimate, none at abc |" in against.table_row(more, "abc")
+    assert against.regressions([more, {**row, "case": "gas"}]) == ["gas"]
