@@ -62,10 +62,9 @@ def _force_at(times, starts, records):
     inside = (index >= 0) & (times <= starts[-1] + records[-1, 1])
     index = np.clip(index, 0, starts.size - 1)
     x = np.clip((times - starts[index]) / records[index, 1], 0.0, 1.0)
-    coefficients = records[index, 3:]
     force = np.zeros_like(times)
-    for j in range(coefficients.shape[1] - 1, -1, -1):
-        force = force * x + coefficients[:, j]
+    for j in range(records.shape[1] - 1, 2, -1):  # Horner, one coefficient column gathered at a time
+        force = force * x + records[:, j].take(index)
     return np.where(inside, force, 0.0)
 
 
