@@ -125,6 +125,9 @@ print(json.dumps({"cpu_s": cpu / repetitions, "wall_s": wall / repetitions, "est
 
 
 
+#: the block of docs/performance.md that ``--update-docs`` writes
+DOCS_BLOCK = "against-old-commit"
+
 #: A case is flagged when its median ratio new/old minus the spread exceeds this.
 SLOWER_THAN = 1.10
 
@@ -229,9 +232,24 @@ def main(argv=None) -> int:
     parser.add_argument("--keep", metavar="DIR", help="check REV out into DIR and leave it there (an existing DIR is "
                         "reused as it is, with its warm numba cache)")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON after the table")
+    parser.add_argument("--update-docs", action="store_true", help="also write what it printed into the block "
+                        f"{DOCS_BLOCK!r} of docs/performance.md (the comparison with an older commit)")
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error("--repeats must be at least 1")
+    if args.update_docs:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        from docs_block import captured_stdout, write_block
+
+        with captured_stdout() as tee:
+            status = _compare_and_print(args)
+        write_block("performance.md", DOCS_BLOCK, tee.copy.getvalue())
+        return status
+    return _compare_and_print(args)
+
+
+def _compare_and_print(args) -> int:
+    """Run the comparison ``args`` ask for and print its table; the exit status."""
     names = args.only or list(CASES)
     load = os.getloadavg()
     with tempfile.TemporaryDirectory(prefix="wavecontact-rev-") as tmp:

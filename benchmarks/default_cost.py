@@ -25,6 +25,10 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+#: the block of docs/performance.md that ``--update-docs`` writes
+DOCS_BLOCK = "default-cost"
 
 
 def _cpu(calls: dict, repeats: int) -> dict:
@@ -58,7 +62,7 @@ def fem_rows(repeats: int) -> list:
         kept[f"time loop at {elements} elements"] = lambda s=setup: run_collision(s)
     kept["whole call, kept meshes"] = lambda: collide(0.6, 100.0, solver="fem", elements=800)
     new["whole call, new meshes"] = lambda: collide(0.6 + 1e-9 * next(fresh), 100.0, solver="fem", elements=800)
-    kept["6684575's default (one run at 800 elements, no estimate), kept mesh"] = \
+    kept["the call 6684575 made (one run at 800 elements, no estimate), today's code, kept mesh"] = \
         lambda: collide(0.6, 100.0, solver="fem", elements=800, estimate_error=False)
     rows = [*_cpu(kept, repeats).items(), *_cpu(new, repeats).items()]
     reuse.clear()
@@ -87,14 +91,29 @@ def modal_rows(repeats: int) -> list:
         ("error estimate's run (tolerance 1e-4, restitution alone)", parts["estimating"]),
         ("rest of the call (options, cost check, result)", parts["whole"] - parts["bookkept"] - parts["estimating"]),
         ("whole call", parts["whole"]),
-        ("6684575's default (static correction, tolerance 1e-2, no estimate)", parts["before"]),
+        ("the call 6684575 made (static correction, tolerance 1e-2, no estimate), today's code", parts["before"]),
     ]
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=30, help="timed calls per part (default 30)")
+    parser.add_argument("--update-docs", action="store_true",
+                        help=f"also write the tables into the block {DOCS_BLOCK!r} of docs/performance.md")
     args = parser.parse_args(argv)
+    if args.update_docs:
+        from docs_block import captured_stdout, write_block
+
+        with captured_stdout() as tee:
+            _print_tables(args)
+        write_block("performance.md", DOCS_BLOCK, tee.copy.getvalue())
+        return 0
+    _print_tables(args)
+    return 0
+
+
+def _print_tables(args) -> None:
+    """Measure and print the two tables."""
     load = os.getloadavg()[0]
     print(f"`python benchmarks/default_cost.py --repeats {args.repeats}`: load average {load:.1f} at the start, "
           f"{os.cpu_count()} cores; CPU ms, median over calls.\n")
@@ -105,7 +124,6 @@ def main(argv=None) -> int:
             print(f"| {part} | {1e3 * seconds:.2f} |")
         print()
     print(f"load average {os.getloadavg()[0]:.1f} at the end.")
-    return 0
 
 
 if __name__ == "__main__":
