@@ -36,6 +36,7 @@ repository root of the newer tree.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import os
 import statistics
@@ -117,11 +118,22 @@ with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.St
     for _ in range(repetitions):
         eval(code, space)
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-# whether the result carries an error estimate (None: the statement returns no collision result)
-estimate = getattr(value, "error_estimate", None) if hasattr(value, "restitution") else None
-estimated = None if not hasattr(value, "restitution") else estimate is not None and estimate == estimate
-print(json.dumps({"cpu_s": cpu / repetitions, "wall_s": wall / repetitions, "estimated": estimated}))
+print(json.dumps({"cpu_s": cpu / repetitions, "wall_s": wall / repetitions, "estimated": estimated(value)}))
 """
+
+def estimated(value):
+    """Whether a statement's value is one collision's result carrying an error estimate (True), one without
+    (False: None at trees before the estimate, NaN with ``estimate_error=False``) or no single result (None).
+    The child runs this same function (its source is prepended to the child's)."""
+    import math
+
+    estimate = getattr(value, "error_estimate", None)
+    if not hasattr(value, "restitution") or not (estimate is None or isinstance(estimate, (int, float))):
+        return None
+    return estimate is not None and not math.isnan(estimate)
+
+
+_CHILD = inspect.getsource(estimated) + _CHILD
 
 
 
