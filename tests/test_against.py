@@ -47,3 +47,41 @@ def test_against_refuses_an_unknown_revision():
                            "scene", "--repeats", "1"], check=False, cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert done.returncode != 0
     assert "no-such-revision-xyz" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_case_doing_more_work_now_is_shown_as_such_and_does_not_set_the_exit_status():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("against", ROOT / "benchmarks" / "against.py")
+    against = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(against)
+    row = {"case": "collide-fem", "old_s": 0.0075, "new_s": 0.015, "ratio": 2.0, "spread": 0.1, "slower": True}
+    assert against.regressions([row]) == ["collide-fem"]  # equal work (the default): a regression
+    assert against.table_row(row, "abc").endswith("| SLOWER | equal |")
+    more = {**row, "work": "more"}
+    assert against.regressions([more]) == []
+    assert "| SLOWER | more now: an error estimate, none at abc |" in against.table_row(more, "abc")
+    assert against.regressions([more, {**row, "case": "gas"}]) == ["gas"]
+
+
+def test_a_result_carries_an_estimate_or_not_or_is_no_single_result():
+    # an ensemble's arrays are no single result (None); a collision result with a finite estimate is True,
+    # with None (older trees) or NaN (estimate_error=False) False; a value without a restitution is None
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location("against", ROOT / "benchmarks" / "against.py")
+    against = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(against)
+
+    class Result:
+        def __init__(self, restitution, estimate):
+            self.restitution, self.error_estimate = restitution, estimate
+
+    assert against.estimated(Result(np.zeros(2), np.zeros(2))) is None
+    assert against.estimated(Result(0.5, 1e-9)) is True
+    assert against.estimated(Result(0.5, None)) is False
+    assert against.estimated(Result(0.5, float("nan"))) is False
+    assert against.estimated(3) is None
+    assert "def estimated(value)" in against._CHILD  # the child runs the same function

@@ -101,3 +101,32 @@ def test_a_velocity_too_small_to_square_is_refused_not_solved():
     with pytest.raises(InvalidParameterError, match=r"velocities\[0\] must lie in 0 or a magnitude"):
         Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(1.6e-223, 0.0), contact=Hard())
     assert Scene(rods=(Rod(1.0), Rod(1.0)), velocities=(-1e-30, 0.0), contact=Hard()).velocities == (-1e-30, 0.0)
+
+
+@pytest.mark.parametrize(("gamma", "kappa", "contact"), [
+    (0.6, 100.0, "exponential"), (1.0, 0.01, "exponential"), (1e-6, 1e7, "exponential"), (0.3, math.inf, "exponential"),
+    (0.6, 20.0, "penalty"), (0.6, math.inf, "penalty"), (0.6, 20.0, "hard"), (0.6173, 4000.0, Exponential(4000.0))])
+def test_two_rods_builds_what_the_checking_constructors_build(gamma, kappa, contact):
+    """two_rods validates its numbers once and builds the cold scene without the Scene's and the Rods' checks:
+    the result must be the scene that Scene(...) and Rod(...) build and normalize from the same numbers."""
+    scene = two_rods(gamma, kappa, contact=contact)
+    rods = tuple(Rod(rod.length) for rod in scene.rods)
+    checked = Scene(rods=rods, velocities=scene.velocities, contact=scene.contact, metadata=dict(scene.metadata))
+    assert scene == checked and type(scene) is Scene
+    for name in ("rods", "velocities", "contact", "gaps", "ring_circumference", "initial_displacement",
+                 "initial_velocity", "metadata", "vibrations", "walls"):
+        assert getattr(scene, name) == getattr(checked, name), name
+        assert type(getattr(scene, name)) is type(getattr(checked, name)), name
+    for rod, twin in zip(scene.rods, checked.rods):
+        assert [type(getattr(rod, n)) for n in ("length", "density", "youngs_modulus", "area")] == [float] * 4
+        assert rod == twin
+    assert all(type(v) is float for v in scene.velocities)
+    assert not scene.is_line_scene and not scene.is_ring and scene.is_cold
+
+
+@pytest.mark.parametrize(("gamma", "message"), [(1e-31, "rod length"), (6e-31, r"velocities\[1\]")])
+def test_two_rods_keeps_the_magnitude_checks_it_does_once(gamma, message):
+    # gamma below about 1e-30 makes the long rod too long, then the short rod's speed too small to square
+    with pytest.raises(InvalidParameterError, match=message):
+        two_rods(gamma, 100.0)
+    assert two_rods(2e-30, 100.0).velocities[1] == pytest.approx(-2e-30)

@@ -17,11 +17,12 @@ from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from ..scene import Scene
 from . import kernels, lattice, layout
-from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
+from .discretization import RodDiscretization, matched_nodes, uniform_nodes
 from .explicit_step import elastic_acceleration, prepare_mass
 from .interleaved_step import LANE_TOLERANCE
+from .reuse import discretized_rods
 from .schemes import choose_scheme, gap_treatment, wants_lattice_mesh
-from .stability import banded_mass, check_time_step, stable_step
+from .stability import banded_mass, check_time_step
 
 __all__ = ["POTENTIAL_TOLERANCE", "FemSetup", "build_setup", "run_collision"]
 
@@ -199,11 +200,8 @@ def build_setup(
         matched = False
         travel = None
     remainder = ("left", "right") if matched else (None, None)
-    rods = (
-        discretize_rod(left, vertices[0], order, mass, remainder[0]),
-        discretize_rod(right, vertices[1], order, mass, remainder[1]),
-    )
-    limit = stable_step(rods)
+    # the meshes the solver builds itself are kept for the next solves (the error estimate's, a sweep's)
+    rods, limit = discretized_rods((left, right), vertices, order, mass, remainder, reuse=nodes is None)
     if dt is None:
         if courant is None:
             exact = matched and order == 1 and mass == "lumped"

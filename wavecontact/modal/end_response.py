@@ -14,6 +14,8 @@ module holds the parameters it needs and the energy the force leaves in the omit
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["ENDS_SIZE", "end_parameters", "forced_energy"]
@@ -46,16 +48,23 @@ def end_parameters(rod_a, rod_b, t_start, gap_0, rate_0, energy_0, tail_complian
     ], dtype=float)
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss_legendre(points: int) -> tuple:
+    """Nodes and weights of the ``points``-point Gauss-Legendre rule on [-1, 1] (read-only arrays)."""
+    nodes, weights = np.polynomial.legendre.leggauss(points)
+    nodes.flags.writeable = weights.flags.writeable = False
+    return nodes, weights
+
+
 def _force_at(times, starts, records):
     """Force of the recorded step polynomials at ``times`` (zero outside the record)."""
     index = np.searchsorted(starts, times, side="right") - 1
     inside = (index >= 0) & (times <= starts[-1] + records[-1, 1])
     index = np.clip(index, 0, starts.size - 1)
     x = np.clip((times - starts[index]) / records[index, 1], 0.0, 1.0)
-    coefficients = records[index, 3:]
     force = np.zeros_like(times)
-    for j in range(coefficients.shape[1] - 1, -1, -1):
-        force = force * x + coefficients[:, j]
+    for j in range(records.shape[1] - 1, 2, -1):  # Horner, one coefficient column gathered at a time
+        force = force * x + records[:, j].take(index)
     return np.where(inside, force, 0.0)
 
 
@@ -83,12 +92,14 @@ def forced_energy(records, rod, points=6) -> float:
     if records.shape[0] == 0:
         return 0.0
     points = max(points, records.shape[1] - 3)
-    nodes, weights = np.polynomial.legendre.leggauss(points)
+    nodes, weights = _gauss_legendre(points)
     starts = records[:, 0]
     bounds = np.append(starts, starts[-1] + records[-1, 1])
     trip = 2.0 * rod.length / rod.wave_speed
     lags = int((bounds[-1] - bounds[0]) // trip)
-    total = 0.0
+    # every lag's quadrature points first, then the force at all of them (and at the shifted ones) in one
+    # evaluation: elementwise, the same numbers as one evaluation per lag
+    pieces = []  # (weight of the lag, quadrature weights, times, shift)
     for n in range(lags + 1):
         shift = n * trip
         edges = np.union1d(bounds, bounds[(bounds - shift > bounds[0]) & (bounds - shift < bounds[-1])] - shift)
@@ -97,7 +108,16 @@ def forced_energy(records, rod, points=6) -> float:
             continue
         left, width = edges[:-1], np.diff(edges)
         times = (left[:, None] + width[:, None] * 0.5 * (nodes + 1.0)).ravel()
-        quadrature = (width[:, None] * 0.5 * weights).ravel()
-        product = _force_at(times, starts, records) * _force_at(times + shift, starts, records)
-        total += (1.0 if n == 0 else 2.0) * float(np.sum(quadrature * product))
+        pieces.append((1.0 if n == 0 else 2.0, (width[:, None] * 0.5 * weights).ravel(), times, shift))
+    if not pieces:
+        return 0.0
+    sizes = [times.size for _, _, times, _ in pieces]
+    force = _force_at(np.concatenate([times for _, _, times, _ in pieces]
+                                     + [times + shift for _, _, times, shift in pieces]), starts, records)
+    at, later = 0, sum(sizes)  # offsets of a lag's points and of its shifted points in ``force``
+    total = 0.0
+    for (factor, quadrature, _, _), size in zip(pieces, sizes):
+        product = force[at:at + size] * force[later + at:later + at + size]
+        total += factor * float(np.sum(quadrature * product))
+        at += size
     return total / rod.impedance

@@ -339,7 +339,7 @@ class ModalSolver(SolverBase):
         return {"none": 1.0, "static": 3.0}.get(correction)
 
     def _collide(self, scene: Scene, options: ModalOptions) -> CollisionFields:
-        return _collide(scene, **options.as_dict())
+        return _collide(scene, options)
 
     def comparison_methods(self, kappa: float) -> list:
         """Each correction for the omitted modes at 25 and 100 modes."""
@@ -385,7 +385,7 @@ class ModalSolver(SolverBase):
             scene.initial_velocity is not None
         exponent_step = _EXPONENT_STEP / 2.0 if warm else _EXPONENT_STEP
         try:
-            run = _collide(scene, **finer.as_dict(), exponent_step=exponent_step)
+            run = _collide(scene, finer, exponent_step, omitted_energy=False)  # its restitution alone
         except SolverFailure as failure:
             return math.nan, f"none (the run at a tenth of the collocation tolerance failed: {failure})", []
         change = abs(float(run.restitution) - float(fields.restitution))
@@ -477,10 +477,15 @@ def _check_splitting_law(scene: Scene, why: str) -> None:
         raise SolverFailure(message, Outcome.NOT_CONVERGED) if why else UnsupportedSceneError(message)
 
 
-def _collide(scene: Scene, *, modes, static_correction, correction, mode_source, fe_elements, fe_order,
-             step_accuracy, step_reach, step_order, step_method, collocation_stages, collocation_tolerance,
-             history, exponent_step=_EXPONENT_STEP) -> CollisionFields:
-    """One collision of two rods on a line with the modal expansion.
+def _collide(scene: Scene, options: ModalOptions, exponent_step: float = _EXPONENT_STEP,
+             omitted_energy: bool = True) -> CollisionFields:
+    """One collision of two rods on a line with the modal expansion (``options``: :class:`ModalOptions`).
+
+    ``exponent_step``: the collocation's largest change of ``alpha_eff * gap`` per step;
+    ``omitted_energy``: with the end-response correction, compute the energy the force left in the
+    omitted modes (from the force history, about as costly as the run itself; it enters
+    ``energy_drift`` only); False leaves ``energy_drift`` NaN (a run made for its restitution alone:
+    the error estimate's).
 
     ``work``: ``modes``, ``steps``, ``step_method`` (and ``rejected_steps``,
     ``stages`` for collocation, ``free_flights`` for splitting); ``extra``:
@@ -490,6 +495,11 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
     (what the force left in the modes above ``modes``, from its history;
     ``energy_drift`` includes it).
     """
+    modes, static_correction, correction = options.modes, options.static_correction, options.correction
+    mode_source, fe_elements, fe_order = options.mode_source, options.fe_elements, options.fe_order
+    step_accuracy, step_reach, step_order = options.step_accuracy, options.step_reach, options.step_order
+    step_method, collocation_stages = options.step_method, options.collocation_stages
+    collocation_tolerance, history = options.collocation_tolerance, options.history
     correction = _resolve_correction(correction, static_correction, mode_source, step_method)
     if collocation_tolerance is None:
         collocation_tolerance = _DEFAULT_TOLERANCE[correction]
@@ -501,13 +511,13 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
     e_tr_before = 0.5 * float(np.sum(system.mass * system.U**2))
     buffer = np.empty((4096 if history else 0, 3))
     chunks = []
-    omitted_energy = None
+    bookkeeping, omitted_energy = omitted_energy, None
     if step_method == "collocation":
         try:
             tail, work, (steps, free_q, free_v) = _run_collocation(system, collocation_stages,
                                                                    collocation_tolerance, buffer, chunks,
                                                                    exponent_step)
-            if system.exact_ends:
+            if system.exact_ends and bookkeeping:
                 omitted_energy = _omitted_mode_energy(system, steps, free_q, free_v)
         except SolverFailure as failure:
             # the collocation's Newton solve can stall on a stiff contact seen by few modes; the
@@ -541,7 +551,8 @@ def _collide(scene: Scene, *, modes, static_correction, correction, mode_source,
         time=times,
         relative_velocity=velocity,
         contact_force=force if history else None,
-        energy_drift=abs(energy_after - energy_before) / energy_before,
+        energy_drift=abs(energy_after - energy_before) / energy_before
+        if bookkeeping or not system.exact_ends else math.nan,
         momentum_drift=abs(system.momentum() - momentum_before) / (reduced_mass * abs(w_before)),
         work={"modes": int(system.rod_modes[0].count), "mode_source": mode_source, "step_method": step_method,
               **({} if system.rod_modes[0].count == modes else {"modes_requested": int(modes)}), **work},
