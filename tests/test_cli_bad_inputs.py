@@ -151,6 +151,11 @@ def folder(tmp_path, monkeypatch):
     (tmp_path / "fifodir").mkdir()
     os.mkfifo(tmp_path / "fifodir" / "checkpoint.npz")
     monkeypatch.chdir(tmp_path)
+    # the closed scheduler port is refused after the connect timeout: 0.5 s here instead of 3 s (four cases);
+    # the real timeout is tested in test_cli_endings (test_a_scheduler_at_a_closed_port_is_given_up_...)
+    from wavecontact.cli import executors
+
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 0.5)
     import importlib
 
     modules = [importlib.import_module(module) for module, _ in WORK]  # all imported before any is patched

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import pytest
+from cli_in_process import run_in_process
 
 from wavecontact.cli import main
 from wavecontact.result import CollisionResult
@@ -68,12 +69,21 @@ def test_save_writes_histories(tmp_path):
         ["collide", "--gamma", "0.6", "--kappa", "10", "--plot", "figure.txt"],
     ],
 )
-def test_invalid_arguments_exit_nonzero_with_one_line(args):
-    done = run_cli(*args)
+def test_invalid_arguments_exit_nonzero_with_one_line(args, capsys):
+    done = run_in_process(capsys, *args)
     assert done.returncode != 0
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "error" in lines[0]
     assert "Traceback" not in done.stderr
+
+
+def test_a_refused_argument_ends_the_process_with_status_2_and_one_line():
+    """The console entry itself (the cases above run ``main`` in this process)."""
+    done = run_cli("collide", "--gamma", "1.5", "--kappa", "10")
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "error" in lines[0] and "--gamma" in lines[0]
+    assert "Traceback" not in done.stderr and done.stdout == ""
 
 
 def test_text_reports_the_solve_and_the_kernel_preparation_apart():

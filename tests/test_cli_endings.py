@@ -6,6 +6,7 @@ worker process, a lost Dask scheduler or cluster: each ends with one line on std
 
 import asyncio
 import concurrent.futures
+import os
 import signal
 import subprocess
 import sys
@@ -151,14 +152,13 @@ def test_the_entry_points_behind_the_commands_refuse_bad_paths_by_name(tmp_path)
 
 def test_ctrl_c_at_a_terminal_stops_the_worker_processes_too_in_one_line():
     """A terminal's Ctrl-C reaches the whole process group: the workers stay silent, the run ends at once."""
-    import os
-
     command = [sys.executable, "-m", "wavecontact", "ensemble", "--gamma", "0.6", "--kappa", "100", "--temperature",
                "1", "--samples", "100000", "--batch-size", "64", "--seed", "0", "--bath-modes", "100", "--workers", "2"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                start_new_session=True)
     try:
-        time.sleep(12.0)
+        workers = _wait_for_children(process, 2, timeout=120)
+        time.sleep(2.0)  # the workers have set their signal handlers and are inside their first batch
         os.killpg(process.pid, signal.SIGINT)
         stopped = time.monotonic()
         _out, err = process.communicate(timeout=120)
@@ -169,3 +169,52 @@ def test_ctrl_c_at_a_terminal_stops_the_worker_processes_too_in_one_line():
     err = "".join(line for line in err.splitlines(keepends=True) if "compiling numba kernels" not in line)
     assert process.returncode == 130 and err == "wavecontact: interrupted\n", err
     assert time.monotonic() - stopped < 30
+    deadline = time.monotonic() + 30
+    while workers and time.monotonic() < deadline:
+        workers = [pid for pid in workers if _alive(pid)]
+        time.sleep(0.05)
+    assert not workers, f"worker processes {workers} outlived the command"
+
+
+def _state(pid):
+    """The state letter of process ``pid`` from /proc ('Z' zombie), or None if there is no such process."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().rpartition(")")[2].split()[0]
+    except OSError:
+        return None
+
+
+def _alive(pid):
+    return _state(pid) not in (None, "Z", "X")
+
+
+def _children(pid):
+    """Process ids whose parent is ``pid`` (from /proc: Linux)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as stat:
+                    fields = stat.read().rpartition(")")[2].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                found.append(int(entry))
+    return found
+
+
+def _wait_for_children(process, count, timeout):
+    """Wait until ``process`` has forked ``count`` live children (its worker pool) and return their ids.
+
+    Without /proc (not Linux) wait a fixed 12 s instead and return no ids."""
+    if not os.path.isdir("/proc/self"):
+        time.sleep(12.0)
+        return []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and process.poll() is None:
+        children = [pid for pid in _children(process.pid) if _alive(pid)]
+        if len(children) >= count:
+            return children
+        time.sleep(0.05)
+    raise AssertionError(f"the command did not start {count} worker processes within {timeout} s")

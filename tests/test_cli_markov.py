@@ -2,10 +2,9 @@
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
+from cli_in_process import run_in_process
 
 from wavecontact.cli import main
 from wavecontact.studies.markov import load_result
@@ -35,10 +34,9 @@ def test_out_and_plot_write_files_that_read_back(tmp_path, capsys):
     assert math.isinf(result.spec.kappa)
 
 
-def test_bad_arguments_end_with_one_line_and_status_2():
+def test_bad_arguments_end_with_one_line_and_status_2(capsys):
     for args in (["--rule", "table"], ["--steps", "0"], ["--gamma", "1.5"], ["--plot", "/nonexistent/x.png"],
                  ["--rule", "glauber", "--table", "t.npz"]):
-        done = subprocess.run([sys.executable, "-m", "wavecontact", "markov", "--gamma", "0.6", *args],
-                              capture_output=True, text=True, timeout=120, check=False)
+        done = run_in_process(capsys, "markov", "--gamma", "0.6", *args)
         assert done.returncode == 2, (args, done.stderr)
         assert len(done.stderr.strip().splitlines()) == 1, done.stderr

@@ -8,6 +8,7 @@ from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
 import pytest
+from cli_in_process import run_in_process
 
 import wavecontact
 from wavecontact import InvalidParameterError
@@ -134,8 +135,8 @@ def test_statistics_have_their_definitions():
     assert np.all(lo <= density) and np.all(density <= hi)
 
 
-def test_cli_json_and_refusals(tmp_path, capsys):
-    from wavecontact.cli import main
+def test_cli_json_and_refusals(tmp_path, capsys, monkeypatch):
+    from wavecontact.cli import executors, main
 
     args = ["ensemble", "--gamma", "0.6173", "--kappa", "inf", "--temperature", "0.5", "--samples", "10", "--seed",
             "4", "--bath-modes", "20", "--json", "--out", str(tmp_path / "e"), "--plot", str(tmp_path / "law.png")]
@@ -149,9 +150,11 @@ def test_cli_json_and_refusals(tmp_path, capsys):
     with np.load(tmp_path / "e" / "samples.npz", allow_pickle=False) as data:
         assert np.array_equal(data["restitution"], direct.restitution)
         assert np.all(np.isnan(data["error_estimate"]))  # the hard-core grid states no per-sample estimate
-    # a separate process: the refusal is one line on stderr with exit status 2
-    bad = subprocess.run([sys.executable, "-m", "wavecontact", *args[:-5], "--scheduler", "tcp://127.0.0.1:9"],
-                         capture_output=True, text=True, check=False)
+    # the refusal is one line on stderr with exit status 2 (in this process, with a 0.5 s connect timeout
+    # instead of 3 s: the real timeout and a refusal through a real process are tested in test_cli_endings
+    # and test_cli_collide)
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 0.5)
+    bad = run_in_process(capsys, *args[:-5], "--scheduler", "tcp://127.0.0.1:9")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "scheduler" in bad.stderr
 
 
