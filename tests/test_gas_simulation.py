@@ -344,3 +344,27 @@ def test_stopping_rules_as_one_object_or_as_keywords_are_the_same_run():
         StoppingRules(collapse_window=12)
     with pytest.raises(InvalidParameterError, match="energy_floor must lie in"):
         GasSimulation(gas, rule, energy_floor=1.5)
+
+
+def test_every_rule_calls_the_event_loop_with_the_same_argument_types(monkeypatch):
+    """One compilation of the event loop serves every rule: numba specialises on array flags (read-only or
+    not) and layout, so rules whose tables differ only in those would each compile the whole loop again."""
+    numba = pytest.importorskip("numba")
+    from wavecontact.gas import VibrationLaw, default_law, default_soft_law, kernels
+
+    seen = {}
+    original = kernels.run_events
+
+    def recording(*args):
+        seen.setdefault(current, set()).add(tuple(str(numba.typeof(a)) for a in args))
+        return original(*args)
+
+    monkeypatch.setattr(kernels, "run_events", recording)
+    rules = {"fixed": (FixedRestitution(0.9), None), "table": (VibrationTable(TABLE), None),
+             "law": (VibrationLaw(default_law()), None),
+             "soft law": (VibrationLaw(default_law(), default_soft_law()), 50.0)}
+    for current, (rule, stiffness) in rules.items():
+        gas = random_gas(20, seed=3, bath_temperature=0.1)
+        GasSimulation(gas, rule, seed=1, contact_stiffness=stiffness, record_every=50).run(50)
+    assert set(seen) == set(rules)
+    assert len(set().union(*seen.values())) == 1, {name: sorted(types) for name, types in seen.items()}

@@ -512,10 +512,10 @@ class GasSimulation:
 
     def _run_chunks(self, target, max_time, controller) -> GasResult:
         rule = self.rule
-        table = rule.kernel_arrays()
+        table = _read_only(rule.kernel_arrays())
         probability = table[2]
         soft_law = self.contact_stiffness is not None and rule.code == kernels.RULE_LAW
-        soft = rule.soft_arrays() if soft_law else kernels.empty_soft_law()
+        soft = _read_only(rule.soft_arrays() if soft_law else kernels.empty_soft_law())
         stiffness = self.contact_stiffness if soft_law else 0.0
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
@@ -912,3 +912,19 @@ def run_gas(new_simulation, collisions: int, out_dir=None, *, resume: bool = Fal
                 write_outputs(sim, result)
             sim.save_checkpoint(path, (first, target, True))  # after the outputs it records are durable
     return sim, result
+
+
+def _read_only(arrays: tuple) -> tuple:
+    """Read-only C-contiguous views of the rule's table arrays, whatever flags the rule's own arrays carry.
+
+    numba compiles one specialisation of :func:`~wavecontact.gas.kernels.run_events` per combination of
+    writable and read-only arguments: a stored law's arrays are read-only, the placeholders of
+    :func:`~wavecontact.gas.kernels.empty_table` are not, so without one convention every rule compiled the
+    whole event loop again (four compilations of the same code in one process).  The values are untouched.
+    """
+    views = []
+    for array in arrays:
+        view = np.ascontiguousarray(array).view()
+        view.flags.writeable = False
+        views.append(view)
+    return tuple(views)
