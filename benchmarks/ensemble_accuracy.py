@@ -111,8 +111,8 @@ def step_claims(gamma, temperature, seed, options):
     out = []
 
     def g(s, last):
-        return kernels._exponent(s, KAPPA, a0, t, w, d1, d2, last, delays, weights, t_significant, empty, empty,
-                                 empty, tables.periods, tables.values, tables.slopes, False, comb, 0)[0]
+        return kernels._exponent(s, KAPPA, a0, (t, w, d1, d2), last, delays, weights, t_significant, None,
+                                 (tables.periods, tables.values, tables.slopes), comb, None)[0]
 
     def log_integral(t0, t1, last):
         values = np.array([g(t0 + (t1 - t0) * x, last) for x in fine_x])

@@ -179,10 +179,6 @@ MOST_PARAMETERS = 12
 #: the functions still above it, each with its count: an entry may only fall (lower it, or remove it once
 #: the function takes at most MOST_PARAMETERS); no function may join the list
 OVER_THE_LIMIT = {
-    "delay/kernels.py:_exponent": 19,
-    "delay/kernels.py:_method_of_steps": 23,
-    "delay/kernels.py:integrate_delay_equation": 23,
-    "delay/kernels.py:no_later_contact": 15,
     "delay/stochastic_hardcore.py:max_plus_recursion": 14,
     "delay/stochastic_hardcore_batch.py:_max_plus_one": 15,
     "delay/stochastic_hardcore_batch.py:_noise_coefficients": 13,

@@ -135,4 +135,4 @@ def test_a_cold_solve_compiles_none_of_the_noise_or_comb_code(tmp_path):
     record = json.loads(done.stdout.splitlines()[-1])
     assert record["noise_kernels"] == dict.fromkeys(record["noise_kernels"], 0)
     (signature,) = record["integrator"]
-    assert signature.count("none") == 9  # the series (3 arrays), the tables (5) and direct_copies
+    assert signature.count("none") == 3  # the series, the tables and direct_copies

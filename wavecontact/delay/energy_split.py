@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import kernel
-from .kernels import hermite5_on, locate_from, table_value
+from .kernels import hermite5_on, hermite5_slope_on, locate_from, table_value
 
 __all__ = ["vibration_energy_gain"]
 
@@ -97,8 +97,7 @@ def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nod
                     while s - n * delays[i] > t[0]:
                         u = s - n * delays[i]
                         hints[i, n] = locate_from(t, last, u, hints[i, n])
-                        _v, ds, _cc = hermite5_on(t, w, d1, d2, hints[i, n], u)
-                        memory_slope += ds
+                        memory_slope += hermite5_slope_on(t, w, d1, d2, hints[i, n], u)
                         n += 1
                     noise_slope = 0.0
                     if tables is not None:
