@@ -102,7 +102,6 @@ def step_claims(gamma, temperature, seed, options):
                                                         tables, options["quadrature"])
     delays = np.array([1.0 + gamma, 1.0 + 1.0 / gamma])
     weights = np.ones(2)
-    empty = np.zeros(0)
     comb = np.zeros((6, t.size))
     significant = np.nonzero(d1 > 1e-18 * KAPPA)[0]
     t_significant = t[max(significant[0] - 1, 0)]

@@ -58,26 +58,24 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
     ndarray (2,)
         ``Delta E_1, Delta E_2`` (``E_tr = 1/4``).
     """
-    if periods.shape[0] != 2:  # a cold bath: numba compiles the kernel without the tables' code
-        periods = tables = table_slopes = None
-    return _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide)
+    noise = None if periods.shape[0] != 2 else (periods, tables, table_slopes)  # None: a cold bath
+    # the nodes advance through the history, so each delayed copy's step is found by walking on from
+    # where it was last (locate_from: the same step as hermite5's binary search, without the search)
+    copies = int((t[-1] - t[0]) / min(delays[0], delays[1])) + 2
+    hints = np.zeros((2, copies), dtype=np.int64)
+    gain = np.zeros(2)
+    _energy_gain(kappa, (t, w, d1, d2), delays, noise, (nodes, weights), subdivide, gain, hints)
+    return gain
 
 
 @kernel
-def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
-    """:func:`vibration_energy_gain` with ``tables`` None for a cold bath."""
+def _energy_gain(kappa, history, delays, noise, rule, subdivide, gain, hints):
+    """:func:`vibration_energy_gain` into ``gain`` (zeros), with ``noise`` None for a cold bath (numba then
+    compiles the kernel without the tables' code); ``hints`` (zeros) are the steps last found for each rod's
+    delayed copies.  The arrays come from the caller: numba's ``np.empty`` is a compilation of its own."""
+    t, w, d1, d2 = history
+    nodes, weights = rule
     last = t.shape[0] - 1
-    # np.empty and loops, not np.zeros: each of numba's array helpers is a compilation of its own
-    gain = np.empty(2)
-    gain[0] = 0.0
-    gain[1] = 0.0
-    # the nodes advance through the history, so each delayed copy's step is found by walking on from
-    # where it was last (locate_from: the same step as hermite5's binary search, without the search)
-    copies = int((t[last] - t[0]) / min(delays[0], delays[1])) + 2
-    hints = np.empty((2, copies), dtype=np.int64)
-    for n in range(copies):
-        hints[0, n] = 0
-        hints[1, n] = 0
     here = 0
     for j in range(last):
         for part in range(subdivide):
@@ -100,11 +98,11 @@ def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nod
                         memory_slope += hermite5_slope_on(t, w, d1, d2, hints[i, n], u)
                         n += 1
                     noise_slope = 0.0
-                    if tables is not None:
+                    if noise is not None:
+                        periods, tables, table_slopes = noise
                         _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
                     end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
                     gain[i] += weights[m] * (b - a) * slope * end_slope
     scale = 2.0 * kappa * kappa
     for i in range(2):  # not gain / scale: an array expression compiles a ufunc loop, a second of compilation
         gain[i] /= scale
-    return gain

@@ -520,13 +520,15 @@ def _method_of_steps(kappa, a0, delays, weights, rtol, series, noise_tables, sto
     """:func:`integrate_delay_equation` with None for each absent part of the noise and for
     ``direct_copies = 0`` (each combination of present parts compiles on its own, without the others' code).
 
-    ``history`` is the buffers ``(t, w, d1, d2, comb)`` and ``state`` the step's state (indices ``_LAST``...):
+    ``rule`` ends with a scratch array as long as its nodes (no array is allocated here: numba's
+    ``np.empty`` is a compilation of its own), ``history`` is the buffers ``(t, w, d1, d2, comb)`` and
+    ``state`` the step's state (indices ``_LAST``...):
     a fresh start if ``state[_LAST] < 0``, else where a call returned ``_STATUS_FULL``, the buffers full, which
     the caller doubles (in Python: the growth compiled here was a third of a second of compilation).
     Returns ``status, error_estimate, rejected, evaluations, last``.
     """
     t_end_min, t_limit, settle_time, max_steps = stop
-    nodes, weights_k, weights_g = rule
+    nodes, weights_k, weights_g, gx = rule  # gx: scratch, g at the nodes
     if noise_tables is not None:
         periods, tables, table_slopes, block_max, curvature_blocks, noise_excursion = noise_tables
     t, w, d1, d2, comb = history  # comb: column k <= last is read once written; 0 is zero
@@ -571,7 +573,6 @@ def _method_of_steps(kappa, a0, delays, weights, rtol, series, noise_tables, sto
         rejected = np.int64(state[_REJECTED])
         evaluations = np.int64(state[_EVALUATIONS])
     status = STATUS_OK
-    gx = np.empty(nodes.shape[0])
     series_rate = kappa
     if series is not None:
         freq, cos_amp, sin_amp = series
@@ -815,6 +816,7 @@ def integrate_delay_equation(kappa, a0, delays, weights, rtol, series, noise_tab
     history = (np.empty(capacity), np.empty(capacity), np.empty(capacity), np.empty(capacity),
                np.empty((3 * delays.shape[0], capacity)))
     state = np.full(_EVALUATIONS + 1, -1.0)
+    rule = (*rule, np.empty(rule[0].shape[0]))
     while True:
         status, error, rejected, evaluations, last = _method_of_steps(
             kappa, a0, delays, weights, rtol, series, noise_tables, stop, rule, direct_copies, history, state)
