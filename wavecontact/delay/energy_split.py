@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import kernel
-from .kernels import hermite5_on, hermite5_slope_on, locate_from, table_value
+from .kernels import hermite5_on, locate_from, table_value
 
 __all__ = ["vibration_energy_gain"]
 
@@ -76,33 +76,45 @@ def _energy_gain(kappa, history, delays, noise, rule, subdivide, gain, hints):
     t, w, d1, d2 = history
     nodes, weights = rule
     last = t.shape[0] - 1
-    here = 0
     for j in range(last):
         for part in range(subdivide):
             a = t[j] + (t[j + 1] - t[j]) * part / subdivide
             b = t[j] + (t[j + 1] - t[j]) * (part + 1) / subdivide
             for m in range(nodes.shape[0]):
                 s = a + (b - a) * nodes[m]
-                value, slope = 0.0, 0.0
-                if s > t[0]:
-                    here = locate_from(t, last, s, here)
-                    value, slope, _c = hermite5_on(t, w, d1, d2, here, s)
-                if slope == 0.0:
-                    continue
-                for i in range(2):
-                    memory_slope = 0.0
-                    n = 1
-                    while s - n * delays[i] > t[0]:
-                        u = s - n * delays[i]
+                # the points u = s - n Gamma_i in turn, through one inlined interpolation (each inlined copy
+                # compiles on its own): n = 0, s itself (its step hint in the unused slot (0, 0)), then each
+                # rod's delayed copies n >= 1, after which that rod's term is added
+                value = 0.0
+                slope = 0.0
+                memory_slope = 0.0
+                i = 0
+                n = 0
+                while i < 2:
+                    u = s - n * delays[i]
+                    if u > t[0]:
                         hints[i, n] = locate_from(t, last, u, hints[i, n])
-                        memory_slope += hermite5_slope_on(t, w, d1, d2, hints[i, n], u)
+                        v, ds, _c = hermite5_on(t, w, d1, d2, hints[i, n], u)
+                        if n > 0:
+                            memory_slope += ds
+                        elif ds == 0.0:
+                            break  # no force at s
+                        else:
+                            value = v
+                            slope = ds
                         n += 1
+                        continue
+                    if n == 0:
+                        break  # s at or before the start: no force
                     noise_slope = 0.0
                     if noise is not None:
                         periods, tables, table_slopes = noise
                         _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
                     end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
                     gain[i] += weights[m] * (b - a) * slope * end_slope
+                    i += 1
+                    n = 1
+                    memory_slope = 0.0
     scale = 2.0 * kappa * kappa
     for i in range(2):  # not gain / scale: an array expression compiles a ufunc loop, a second of compilation
         gain[i] /= scale

@@ -174,29 +174,6 @@ def hermite5_on(t, w, d1, d2, lo, s):
     return value, slope, curvature
 
 
-@kernel(inline="always")
-def hermite5_slope_on(t, w, d1, d2, lo, s):
-    """The slope alone of :func:`hermite5_on` (the same arithmetic, so the same number): a third of its
-    code, for callers that need no value or curvature (each inlined copy is compiled on its own)."""
-    h = t[lo + 1] - t[lo]
-    x = (s - t[lo]) / h
-    x = min(x, 1.0)
-    x2 = x * x
-    x3 = x2 * x
-    x4 = x3 * x
-    dy = w[lo + 1] - w[lo]
-    a0 = h * d1[lo]
-    a1 = h * d1[lo + 1]
-    b0 = h * h * d2[lo]
-    b1 = h * h * d2[lo + 1]
-    dh3 = 30.0 * x2 - 60.0 * x3 + 30.0 * x4
-    dh1 = 1.0 - 18.0 * x2 + 32.0 * x3 - 15.0 * x4
-    dh2 = x - 4.5 * x2 + 6.0 * x3 - 2.5 * x4
-    dh4 = -12.0 * x2 + 28.0 * x3 - 15.0 * x4
-    dh5 = 1.5 * x2 - 4.0 * x3 + 2.5 * x4
-    return (dy * dh3 + a0 * dh1 + b0 * dh2 + a1 * dh4 + b1 * dh5) / h
-
-
 @kernel
 def table_value(s, period, values, slopes):
     """Value and slope at ``s`` of a periodic table (cubic Hermite between its nodes).
