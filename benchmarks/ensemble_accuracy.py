@@ -110,7 +110,7 @@ def step_claims(gamma, temperature, seed, options):
     out = []
 
     def g(s, last):
-        return kernels._exponent(s, KAPPA, a0, (t, w, d1, d2), last, delays, weights, t_significant, None,
+        return kernels._exponent((s, KAPPA, a0, t_significant), t, w, d1, d2, last, delays, weights, None,
                                  (tables.periods, tables.values, tables.slopes), comb, None)[0]
 
     def log_integral(t0, t1, last):

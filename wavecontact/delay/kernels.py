@@ -376,16 +376,15 @@ def noise_value(s, series, noise_tables):
 
 
 @kernel(inline="always")
-def memory_sum(history, last, s, delays, weights, t_significant, comb, direct_copies):
+def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, direct_copies):
     """``S(s) = sum_i beta_i sum_n W(s - n Gamma_i)``, ``S'(s)`` and ``S''(s)``.
 
     Delayed times before ``t_significant`` (where ``W`` is still below
     round-off) are skipped.  With ``direct_copies = K`` (an int; None: every copy on its own) the copies older
     than ``K`` round trips are taken at once from the stored comb sums
     ``C_i(v) = sum_{m>=1} W(v - m Gamma_i)`` (rows ``3i, 3i+1, 3i+2`` of
-    ``comb``: value, slope, curvature) as ``C_i(s - K Gamma_i)``.  ``history`` is ``(t, w, d1, d2)``.
+    ``comb``: value, slope, curvature) as ``C_i(s - K Gamma_i)``.
     """
-    t, w, d1, d2 = history
     total = 0.0
     slope = 0.0
     curvature = 0.0
@@ -395,17 +394,18 @@ def memory_sum(history, last, s, delays, weights, t_significant, comb, direct_co
         rod_slope = 0.0
         rod_curvature = 0.0
         n = 1
-        summed = False  # the older copies came at once from the comb sums
-        while not summed:
+        while True:
             u = s - n * gamma_i
             if u <= t_significant:
                 break
-            # one inlined interpolation for both cases (each inlined copy costs compile time)
-            values, slopes, curvatures, at = w, d1, d2, u
             if direct_copies is not None and n > direct_copies:
-                values, slopes, curvatures, at = comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], u + gamma_i
-                summed = True
-            value, derivative, second = hermite5(t, values, slopes, curvatures, last, at)
+                value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
+                                                     u + gamma_i)
+                rod_total += value
+                rod_slope += derivative
+                rod_curvature += second
+                break
+            value, derivative, second = hermite5(t, w, d1, d2, last, u)
             rod_total += value
             rod_slope += derivative
             rod_curvature += second
@@ -437,17 +437,20 @@ def _series_curvature(s, series):
 
 
 @kernel
-def _exponent(s, kappa, a0, history, last, delays, weights, t_significant, series, noise_tables, comb,
-              direct_copies):
-    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; ``history`` is ``(t, w, d1, d2)``, the
-    other arguments those of :func:`integrate_delay_equation`.
+def _exponent(point, t, w, d1, d2, last, delays, weights, series, noise_tables, comb, direct_copies):
+    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; ``point`` is ``(s, kappa, a0,
+    t_significant)``, the other arguments those of :func:`integrate_delay_equation`.
+
+    Only scalars are grouped: a tuple holding arrays would count their references at every call
+    (measured: cold solves 8 % slower).
 
     Not inlined: the integrator calls it from two places, and one compiled copy takes seconds less to
     compile than two inlined ones (the derivatives, which only the step's end needs, cost a few additions:
     :func:`hermite5_on` computes them anyway).
     """
-    memory, memory_slope, memory_curvature = memory_sum(history, last, s, delays, weights, t_significant, comb,
-                                                        direct_copies)
+    s, kappa, a0, t_significant = point
+    memory, memory_slope, memory_curvature = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant,
+                                                        comb, direct_copies)
     q, dq = noise_value(s, series, noise_tables)
     gpp = math.nan
     if noise_tables is None:
@@ -613,7 +616,7 @@ def _method_of_steps(kappa, a0, delays, weights, rtol, series, noise_tables, sto
             break
 
         t1 = t0 + h
-        g1, gp1, gpp1 = _exponent(t1, kappa, a0, (t, w, d1, d2), last, delays, weights, t_significant, series,
+        g1, gp1, gpp1 = _exponent((t1, kappa, a0, t_significant), t, w, d1, d2, last, delays, weights, series,
                                   noise_tables, comb, direct_copies)
         a = (g1 - g_now) / h
         # nodes of the transformed rule: e^{a s} ds becomes uniform
@@ -645,7 +648,7 @@ def _method_of_steps(kappa, a0, delays, weights, rtol, series, noise_tables, sto
                     s = math.log1p(x * em) / a
                 else:
                     s = h * x
-                gs = _exponent(t0 + s, kappa, a0, (t, w, d1, d2), last, delays, weights, t_significant, series,
+                gs = _exponent((t0 + s, kappa, a0, t_significant), t, w, d1, d2, last, delays, weights, series,
                                noise_tables, comb, direct_copies)[0]
                 evaluations += 1
             if z > _LINEAR_THRESHOLD:
@@ -800,9 +803,9 @@ def integrate_delay_equation(kappa, a0, delays, weights, rtol, series, noise_tab
         if status != _STATUS_FULL:
             break
         history = tuple(_doubled(buffer, last + 1) for buffer in history)
-    size = last + 1
-    t, w, d1, d2 = (buffer[:size].copy() for buffer in history[:4])
-    return t, w, d1, d2, status, error, rejected, evaluations
+    size = last + 1  # views of the buffers, at most twice as long as the history
+    return history[0][:size], history[1][:size], history[2][:size], history[3][:size], status, error, rejected, \
+        evaluations
 
 
 def _doubled(buffer, size):
