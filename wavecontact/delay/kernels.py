@@ -399,8 +399,7 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, dire
             if u <= t_significant:
                 break
             if direct_copies is not None and n > direct_copies:
-                value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
-                                                     u + gamma_i)
+                value, derivative, second = _comb_sum(t, comb, 3 * i, last, u + gamma_i)
                 rod_total += value
                 rod_slope += derivative
                 rod_curvature += second
@@ -414,6 +413,16 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, dire
         slope += weights[i] * rod_slope
         curvature += weights[i] * rod_curvature
     return total, slope, curvature
+
+
+@kernel
+def _comb_sum(t, comb, row, last, s):
+    """``C_i(s)`` and its two derivatives from the comb sums' rows ``row, row + 1, row + 2`` (:func:`hermite5`).
+
+    Called, not inlined, by :func:`memory_sum`: numba inlines before it drops the comb code of a
+    specialisation without comb sums, so an inlined copy here cost every cold solve's compilation.
+    """
+    return hermite5(t, comb[row], comb[row + 1], comb[row + 2], last, s)
 
 
 @kernel
