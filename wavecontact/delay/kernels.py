@@ -88,6 +88,7 @@ STATUS_TIME_LIMIT = 4
 _STATUS_FULL = -1
 # the integrator's state between two calls (an index into its ``state`` array each); a negative
 # last index means a fresh start
+_FIRST_CAPACITY = 1024  # the history's first buffers (steps)
 _LAST, _STEP, _G_NOW, _T_SIGNIFICANT, _T_ACTIVE, _ERROR_SUM, _REJECTED, _EVALUATIONS = range(8)
 
 # max |H5 - H4| / (h^2 |c1_pred - c1|) on [0, 1]: the quintic basis x^3 (1-x)^2 / 2 at x = 3/5.
@@ -801,7 +802,7 @@ def integrate_delay_equation(kappa, a0, delays, weights, rtol, series, noise_tab
     if noise_tables[0].shape[0] == 0:
         noise_tables = None
     direct_copies = direct_copies if direct_copies > 0 else None
-    capacity = 1024
+    capacity = _FIRST_CAPACITY
     history = (np.empty(capacity), np.empty(capacity), np.empty(capacity), np.empty(capacity),
                np.empty((3 * delays.shape[0], capacity)))
     state = np.full(_EVALUATIONS + 1, -1.0)
