@@ -86,9 +86,9 @@ STATUS_STEP_UNDERFLOW = 3
 STATUS_TIME_LIMIT = 4
 # internal: the history's buffers are full (integrate_delay_equation doubles them and resumes)
 _STATUS_FULL = -1
+_FIRST_CAPACITY = 1024  # the history's first buffers (steps)
 # the integrator's state between two calls (an index into its ``state`` array each); a negative
 # last index means a fresh start
-_FIRST_CAPACITY = 1024  # the history's first buffers (steps)
 _LAST, _STEP, _G_NOW, _T_SIGNIFICANT, _T_ACTIVE, _ERROR_SUM, _REJECTED, _EVALUATIONS = range(8)
 
 # max |H5 - H4| / (h^2 |c1_pred - c1|) on [0, 1]: the quintic basis x^3 (1-x)^2 / 2 at x = 3/5.
