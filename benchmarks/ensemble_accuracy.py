@@ -102,7 +102,6 @@ def step_claims(gamma, temperature, seed, options):
                                                         tables, options["quadrature"])
     delays = np.array([1.0 + gamma, 1.0 + 1.0 / gamma])
     weights = np.ones(2)
-    empty = np.zeros(0)
     comb = np.zeros((6, t.size))
     significant = np.nonzero(d1 > 1e-18 * KAPPA)[0]
     t_significant = t[max(significant[0] - 1, 0)]
@@ -111,8 +110,8 @@ def step_claims(gamma, temperature, seed, options):
     out = []
 
     def g(s, last):
-        return kernels._exponent(s, KAPPA, a0, t, w, d1, d2, last, delays, weights, t_significant, empty, empty,
-                                 empty, tables.periods, tables.values, tables.slopes, False, comb, 0)[0]
+        return kernels._exponent((s, KAPPA, a0, t_significant), t, w, d1, d2, last, delays, weights, None,
+                                 (tables.periods, tables.values, tables.slopes), comb, None)[0]
 
     def log_integral(t0, t1, last):
         values = np.array([g(t0 + (t1 - t0) * x, last) for x in fine_x])

@@ -179,10 +179,6 @@ MOST_PARAMETERS = 12
 #: the functions still above it, each with its count: an entry may only fall (lower it, or remove it once
 #: the function takes at most MOST_PARAMETERS); no function may join the list
 OVER_THE_LIMIT = {
-    "delay/kernels.py:_exponent": 19,
-    "delay/kernels.py:_method_of_steps": 23,
-    "delay/kernels.py:integrate_delay_equation": 23,
-    "delay/kernels.py:no_later_contact": 15,
     "fem/multibody_kernel.py:_push": 13,
     "fem/multibody_kernel.py:advance_line": 24,
     "modal/collocation.py:_fill_level": 16,

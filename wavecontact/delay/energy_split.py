@@ -58,54 +58,63 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
     ndarray (2,)
         ``Delta E_1, Delta E_2`` (``E_tr = 1/4``).
     """
-    if periods.shape[0] != 2:  # a cold bath: numba compiles the kernel without the tables' code
-        periods = tables = table_slopes = None
-    return _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide)
+    noise = None if periods.shape[0] != 2 else (periods, tables, table_slopes)  # None: a cold bath
+    # the nodes advance through the history, so each delayed copy's step is found by walking on from
+    # where it was last (locate_from: the same step as hermite5's binary search, without the search)
+    copies = int((t[-1] - t[0]) / min(delays[0], delays[1])) + 2
+    hints = np.zeros((2, copies), dtype=np.int64)
+    gain = np.zeros(2)
+    _energy_gain(kappa, (t, w, d1, d2), delays, noise, (nodes, weights), subdivide, gain, hints)
+    return gain
 
 
 @kernel
-def _energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_slopes, nodes, weights, subdivide):
-    """:func:`vibration_energy_gain` with ``tables`` None for a cold bath."""
+def _energy_gain(kappa, history, delays, noise, rule, subdivide, gain, hints):
+    """:func:`vibration_energy_gain` into ``gain`` (zeros), with ``noise`` None for a cold bath (numba then
+    compiles the kernel without the tables' code); ``hints`` (zeros) are the steps last found for each rod's
+    delayed copies.  The arrays come from the caller: numba's ``np.empty`` is a compilation of its own."""
+    t, w, d1, d2 = history
+    nodes, weights = rule
     last = t.shape[0] - 1
-    # np.empty and loops, not np.zeros: each of numba's array helpers is a compilation of its own
-    gain = np.empty(2)
-    gain[0] = 0.0
-    gain[1] = 0.0
-    # the nodes advance through the history, so each delayed copy's step is found by walking on from
-    # where it was last (locate_from: the same step as hermite5's binary search, without the search)
-    copies = int((t[last] - t[0]) / min(delays[0], delays[1])) + 2
-    hints = np.empty((2, copies), dtype=np.int64)
-    for n in range(copies):
-        hints[0, n] = 0
-        hints[1, n] = 0
-    here = 0
     for j in range(last):
         for part in range(subdivide):
             a = t[j] + (t[j + 1] - t[j]) * part / subdivide
             b = t[j] + (t[j + 1] - t[j]) * (part + 1) / subdivide
             for m in range(nodes.shape[0]):
                 s = a + (b - a) * nodes[m]
-                value, slope = 0.0, 0.0
-                if s > t[0]:
-                    here = locate_from(t, last, s, here)
-                    value, slope, _c = hermite5_on(t, w, d1, d2, here, s)
-                if slope == 0.0:
-                    continue
-                for i in range(2):
-                    memory_slope = 0.0
-                    n = 1
-                    while s - n * delays[i] > t[0]:
-                        u = s - n * delays[i]
+                # the points u = s - n Gamma_i in turn, through one inlined interpolation (each inlined copy
+                # compiles on its own): n = 0, s itself (its step hint in the unused slot (0, 0)), then each
+                # rod's delayed copies n >= 1, after which that rod's term is added
+                value = 0.0
+                slope = 0.0
+                memory_slope = 0.0
+                i = 0
+                n = 0
+                while i < 2:
+                    u = s - n * delays[i]
+                    if u > t[0]:
                         hints[i, n] = locate_from(t, last, u, hints[i, n])
-                        _v, ds, _cc = hermite5_on(t, w, d1, d2, hints[i, n], u)
-                        memory_slope += ds
+                        v, ds, _c = hermite5_on(t, w, d1, d2, hints[i, n], u)
+                        if n > 0:
+                            memory_slope += ds
+                        elif ds == 0.0:
+                            break  # no force at s
+                        else:
+                            value = v
+                            slope = ds
                         n += 1
+                        continue
+                    if n == 0:
+                        break  # s at or before the start: no force
                     noise_slope = 0.0
-                    if tables is not None:
+                    if noise is not None:
+                        periods, tables, table_slopes = noise
                         _q, noise_slope = table_value(s, periods[i], tables[i], table_slopes[i])
                     end_slope = 0.5 * slope + memory_slope - value / delays[i] - noise_slope
                     gain[i] += weights[m] * (b - a) * slope * end_slope
+                    i += 1
+                    n = 1
+                    memory_slope = 0.0
     scale = 2.0 * kappa * kappa
     for i in range(2):  # not gain / scale: an array expression compiles a ufunc loop, a second of compilation
         gain[i] /= scale
-    return gain

@@ -163,11 +163,11 @@ def hard_core_history(delays, weights=(1.0, 1.0), tau_free: float = 0.0, max_win
             f"the hard-core recursion would need about {needed:.3g} windows (limit max_windows = {max_windows}); "
             "the impedance and transit-time ratios are too extreme: use solver='fem'"
         )
-    knots_t, knots_w, status = max_plus_history(delays, weights, float(tau_free), int(max_windows), _MERGE,
-                                                _ROUNDOFF)
+    knots_t, knots_w, count, status = max_plus_history(delays, weights, float(tau_free), int(max_windows), _MERGE,
+                                                       _ROUNDOFF)
     if status != STATUS_OK:
         raise SolverFailure("hard-core recursion did not settle; raise max_windows")
-    return knots_t, knots_w
+    return knots_t[:count].copy(), knots_w[:count].copy()
 
 
 def contact_intervals(knots_t, knots_w, delays, weights=(1.0, 1.0), tau_free: float = 0.0, gap_tolerance=1e-9):

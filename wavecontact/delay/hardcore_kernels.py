@@ -49,7 +49,7 @@ def _rod_sum(kt, kw, n, s, gamma_i):
     return total
 
 
-@kernel
+@kernel(inline="always")
 def _bracket(kt, kw, n, s, delays, weights, tau_free):
     total = s - tau_free
     for i in range(delays.shape[0]):
@@ -214,7 +214,10 @@ def _restart_time(kt, kw, n, delays, weights, tau_free, start, window, merge):
 
 @kernel
 def max_plus_history(delays, weights, tau_free, max_windows, merge, roundoff):
-    """Kinks ``(kt, kw)`` of the cold hard-core ``w`` and a status (0: settled).
+    """Kinks ``(kt, kw)[:n]`` of the cold hard-core ``w``, ``n`` and a status (0: settled).
+
+    The kinks are returned in their buffers (longer than ``n``), for the caller to cut: a copy of a
+    slice here compiles numba's array copy.
 
     Parameters
     ----------
@@ -269,6 +272,6 @@ def max_plus_history(delays, weights, tau_free, max_windows, merge, roundoff):
         if last_rise < start - window:  # nothing rose in this window: is the contact over?
             again = _restart_time(kt, kw, n, delays, weights, tau_free, start, window, merge)
             if math.isnan(again):
-                return kt[:n].copy(), kw[:n].copy(), STATUS_OK
+                return kt, kw, n, STATUS_OK
             start = max(start, again)
-    return kt[:n].copy(), kw[:n].copy(), STATUS_MAX_WINDOWS
+    return kt, kw, n, STATUS_MAX_WINDOWS

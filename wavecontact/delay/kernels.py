@@ -84,6 +84,12 @@ STATUS_MAX_STEPS = 1
 STATUS_NONFINITE = 2
 STATUS_STEP_UNDERFLOW = 3
 STATUS_TIME_LIMIT = 4
+# internal: the history's buffers are full (integrate_delay_equation doubles them and resumes)
+_STATUS_FULL = -1
+_FIRST_CAPACITY = 1024  # the history's first buffers (steps)
+# the integrator's state between two calls (an index into its ``state`` array each); a negative
+# last index means a fresh start
+_LAST, _STEP, _G_NOW, _T_SIGNIFICANT, _T_ACTIVE, _ERROR_SUM, _REJECTED, _EVALUATIONS = range(8)
 
 # max |H5 - H4| / (h^2 |c1_pred - c1|) on [0, 1]: the quintic basis x^3 (1-x)^2 / 2 at x = 3/5.
 _QUARTIC_GAP = 0.01728
@@ -278,8 +284,7 @@ def noise_curvature_bound(t0, t1, periods, tables, curvature_blocks):
 
 
 @kernel
-def no_later_contact(t0, w_final, kappa, a0, t, w, d1, d2, last, delays, weights, periods, tables, block_max,
-                     negligible):
+def no_later_contact(t0, w_final, kappa, a0, history, last, delays, weights, noise_tables, negligible):
     """True if, with ``W`` held at ``w_final`` from ``t0`` on, ``W'`` stays below ``e^negligible`` for good.
 
     A certificate for stopping with tabulated noise, where a contact may come back long after the
@@ -290,8 +295,11 @@ def no_later_contact(t0, w_final, kappa, a0, t, w, d1, d2, last, delays, weights
     ``Q_i``; ``S_i`` never decreases), which bounds ``g - W`` for every later time once
     ``drift < 0``.  Rows whose period is not their rod's round trip get no certificate, nor do
     rods that separate at less than ``SLOW_SEPARATION`` of the approach speed (``-drift / kappa``
-    is epsilon for one material): True, the caller's own rule decides.
+    is epsilon for one material): True, the caller's own rule decides.  ``history`` is ``(t, w, d1, d2)``
+    and ``noise_tables`` the tuple of :func:`integrate_delay_equation`.
     """
+    t, w, d1, d2 = history
+    periods, tables, _slopes, block_max, _curvature, _excursion = noise_tables
     if periods.shape[0] != delays.shape[0]:
         return True
     drift = kappa
@@ -344,21 +352,23 @@ def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_
 
 
 @kernel(inline="always")
-def noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes):
+def noise_value(s, series, noise_tables):
     """``Q(s)`` and ``Q'(s)``: a Fourier series (Eq. 17) plus periodic tables (one row per rod).
 
-    ``freq`` (with its amplitudes) or ``tables`` (with ``periods`` and ``table_slopes``) None: no such
-    term, and numba compiles none of its code (see :func:`integrate_delay_equation`).
+    ``series`` (``freq, cos_amp, sin_amp``) or ``noise_tables`` (see :func:`integrate_delay_equation`) None:
+    no such term, and numba compiles none of its code.
     """
     q = 0.0
     dq = 0.0
-    if freq is not None:
+    if series is not None:
+        freq, cos_amp, sin_amp = series
         for j in range(freq.shape[0]):
             c = math.cos(freq[j] * s)
             sn = math.sin(freq[j] * s)
             q += cos_amp[j] * c + sin_amp[j] * sn
             dq += freq[j] * (sin_amp[j] * c - cos_amp[j] * sn)
-    if tables is not None:
+    if noise_tables is not None:
+        periods, tables, table_slopes = noise_tables[0], noise_tables[1], noise_tables[2]
         for i in range(periods.shape[0]):
             value, slope = table_value(s, periods[i], tables[i], table_slopes[i])
             q += value
@@ -390,8 +400,7 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, dire
             if u <= t_significant:
                 break
             if direct_copies is not None and n > direct_copies:
-                value, derivative, second = hermite5(t, comb[3 * i], comb[3 * i + 1], comb[3 * i + 2], last,
-                                                     u + gamma_i)
+                value, derivative, second = _comb_sum(t, comb, 3 * i, last, u + gamma_i)
                 rod_total += value
                 rod_slope += derivative
                 rod_curvature += second
@@ -408,6 +417,16 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, dire
 
 
 @kernel
+def _comb_sum(t, comb, row, last, s):
+    """``C_i(s)`` and its two derivatives from the comb sums' rows ``row, row + 1, row + 2`` (:func:`hermite5`).
+
+    Called, not inlined, by :func:`memory_sum`: numba inlines before it drops the comb code of a
+    specialisation without comb sums, so an inlined copy here cost every cold solve's compilation.
+    """
+    return hermite5(t, comb[row], comb[row + 1], comb[row + 2], last, s)
+
+
+@kernel
 def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
     """``C_i(s) = W(s - Gamma_i) + C_i(s - Gamma_i)`` with its two derivatives."""
     u = s - gamma_i
@@ -417,30 +436,35 @@ def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
 
 
 @kernel(inline="always")
-def _series_curvature(s, freq, cos_amp, sin_amp):
+def _series_curvature(s, series):
     """``Q''(s)`` of the Fourier series (Eq. 17)."""
     ddq = 0.0
-    if freq is not None:
+    if series is not None:
+        freq, cos_amp, sin_amp = series
         for j in range(freq.shape[0]):
             ddq -= freq[j] * freq[j] * (cos_amp[j] * math.cos(freq[j] * s) + sin_amp[j] * math.sin(freq[j] * s))
     return ddq
 
 
 @kernel
-def _exponent(s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-              tables, table_slopes, comb, direct_copies):
-    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``.
+def _exponent(point, t, w, d1, d2, last, delays, weights, series, noise_tables, comb, direct_copies):
+    """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; ``point`` is ``(s, kappa, a0,
+    t_significant)``, the other arguments those of :func:`integrate_delay_equation`.
+
+    Only scalars are grouped: a tuple holding arrays would count their references at every call
+    (measured: cold solves 8 % slower).
 
     Not inlined: the integrator calls it from two places, and one compiled copy takes seconds less to
     compile than two inlined ones (the derivatives, which only the step's end needs, cost a few additions:
     :func:`hermite5_on` computes them anyway).
     """
+    s, kappa, a0, t_significant = point
     memory, memory_slope, memory_curvature = memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant,
                                                         comb, direct_copies)
-    q, dq = noise_value(s, freq, cos_amp, sin_amp, periods, tables, table_slopes)
+    q, dq = noise_value(s, series, noise_tables)
     gpp = math.nan
-    if tables is None:
-        gpp = _series_curvature(s, freq, cos_amp, sin_amp) - memory_curvature
+    if noise_tables is None:
+        gpp = _series_curvature(s, series) - memory_curvature
     return kappa * s - a0 - memory + q, kappa - memory_slope + dq, gpp
 
 
@@ -481,42 +505,24 @@ def _logaddexp(x, y):
 
 
 @kernel
-def _method_of_steps(
-    kappa,
-    a0,
-    delays,
-    weights,
-    rtol,
-    freq,
-    cos_amp,
-    sin_amp,
-    periods,
-    tables,
-    table_slopes,
-    block_max,
-    noise_rate,
-    noise_excursion,
-    curvature_blocks,
-    t_end_min,
-    t_limit,
-    settle_time,
-    max_steps,
-    nodes,
-    weights_k,
-    weights_g,
-    direct_copies,
-):
+def _method_of_steps(kappa, a0, delays, weights, rtol, series, noise_tables, stop, rule, direct_copies, history,
+                     state):
     """:func:`integrate_delay_equation` with None for each absent part of the noise and for
-    ``direct_copies = 0`` (each combination of present parts compiles on its own, without the others' code)."""
-    capacity = 1024
-    t = np.empty(capacity)
-    w = np.empty(capacity)
-    d1 = np.empty(capacity)
-    d2 = np.empty(capacity)
-    # np.empty and loops, not np.zeros and slices: each of numba's array helpers is a compilation of its own
-    comb = np.empty((3 * delays.shape[0], capacity))  # column k <= last is read once written; 0 is zero
-    for row in range(comb.shape[0]):
-        comb[row, 0] = 0.0
+    ``direct_copies = 0`` (each combination of present parts compiles on its own, without the others' code).
+
+    ``rule`` ends with a scratch array as long as its nodes (no array is allocated here: numba's
+    ``np.empty`` is a compilation of its own), ``history`` is the buffers ``(t, w, d1, d2, comb)`` and
+    ``state`` the step's state (indices ``_LAST``...):
+    a fresh start if ``state[_LAST] < 0``, else where a call returned ``_STATUS_FULL``, the buffers full, which
+    the caller doubles (in Python: the growth compiled here was a third of a second of compilation).
+    Returns ``status, error_estimate, rejected, evaluations, last``.
+    """
+    t_end_min, t_limit, settle_time, max_steps = stop
+    nodes, weights_k, weights_g, gx = rule  # gx: scratch, g at the nodes
+    if noise_tables is not None:
+        periods, tables, table_slopes, block_max, curvature_blocks, noise_excursion = noise_tables
+    t, w, d1, d2, comb = history  # comb: column k <= last is read once written; 0 is zero
+    capacity = t.shape[0]
     scale = max(kappa, 1e-300)
     tol = rtol * scale * 0.05
     negligible = math.log(max(rtol * 1e-4 * min(scale, 1.0) * scale, 1e-300))
@@ -526,34 +532,48 @@ def _method_of_steps(
         gamma_min = min(gamma_min, delays[i])
     h_max = 0.95 * gamma_min
 
-    t[0] = 0.0
-    w[0] = 0.0
-    # int64 from the start: a literal 0 would be typed as the value 0 until the loop's increments widen
-    # it, and numba compiles every kernel called with it for both types
-    last = np.int64(0)
-    # g and g' at tau = 0 as _exponent gives them: no delayed copy is back yet, so its memory terms are
-    # exactly 0 (written out here rather than a third inlined copy of _exponent, seconds of compilation)
-    q_start, dq_start = noise_value(0.0, freq, cos_amp, sin_amp, periods, tables, table_slopes)
-    g_now = kappa * 0.0 - a0 - 0.0 + q_start
-    gp_now = kappa - 0.0 + dq_start
-    d1[0] = math.exp(g_now)
-    d2[0] = d1[0] * (gp_now - d1[0])
-    h = min(h_max, 1.0 / scale)
-    t_significant = math.inf
-    t_active = -math.inf
-    error_sum = 0.0
-    rejected = 0
-    evaluations = 1
+    if state[_LAST] < 0.0:
+        t[0] = 0.0
+        w[0] = 0.0
+        for row in range(comb.shape[0]):  # a loop, not a slice: each of numba's array helpers compiles apart
+            comb[row, 0] = 0.0
+        # int64 from the start: a literal 0 would be typed as the value 0 until the loop's increments widen
+        # it, and numba compiles every kernel called with it for both types
+        last = np.int64(0)
+        # g and g' at tau = 0 as _exponent gives them: no delayed copy is back yet, so its memory terms are
+        # exactly 0 (written out here rather than a third inlined copy of _exponent, seconds of compilation)
+        q_start, dq_start = noise_value(0.0, series, noise_tables)
+        g_now = kappa * 0.0 - a0 - 0.0 + q_start
+        gp_now = kappa - 0.0 + dq_start
+        d1[0] = math.exp(g_now)
+        d2[0] = d1[0] * (gp_now - d1[0])
+        h = min(h_max, 1.0 / scale)
+        t_significant = math.inf
+        t_active = -math.inf
+        error_sum = 0.0
+        rejected = np.int64(0)
+        evaluations = np.int64(1)
+    else:  # resumed in larger buffers: the state as it was
+        last = np.int64(state[_LAST])
+        h = state[_STEP]
+        g_now = state[_G_NOW]
+        t_significant = state[_T_SIGNIFICANT]
+        t_active = state[_T_ACTIVE]
+        error_sum = state[_ERROR_SUM]
+        rejected = np.int64(state[_REJECTED])
+        evaluations = np.int64(state[_EVALUATIONS])
     status = STATUS_OK
-    gx = np.empty(nodes.shape[0])
     series_rate = kappa
-    if freq is not None:
+    if series is not None:
+        freq, cos_amp, sin_amp = series
         for j in range(freq.shape[0]):
             series_rate += abs(freq[j]) * (abs(cos_amp[j]) + abs(sin_amp[j]))
-    exponent_rate = series_rate + noise_rate
-    tabulated = tables is not None
+    tabulated = noise_tables is not None
 
     while True:
+        if last + 1 >= capacity:
+            status = _STATUS_FULL
+            break
         t0 = t[last]
         if last + 1 >= max_steps:
             status = STATUS_MAX_STEPS
@@ -563,7 +583,7 @@ def _method_of_steps(
             break
         # W' stays below `negligible` for at least h_free: E = g - W rises no faster than kappa + max|Q'|
         h_wanted = h
-        if tables is not None:
+        if noise_tables is not None:
             # with tables: no faster than kappa plus the local rise of the tabulated noise; the proposed
             # step is free or it is not (a free step is the proposed one in either branch below)
             distance = negligible - (g_now - w[last])
@@ -575,7 +595,7 @@ def _method_of_steps(
                 free = span_is_free(t0, h, distance, series_rate, periods, tables, table_slopes, block_max, q0)
             h_free = h if free else 0.0
         else:
-            h_free = (negligible - (g_now - w[last])) / exponent_rate
+            h_free = (negligible - (g_now - w[last])) / series_rate
             free = not h_free < h
         # do not stride over more than two stored steps around any delayed time
         if t_significant < math.inf and not free:
@@ -596,7 +616,7 @@ def _method_of_steps(
             free = h_free > h
         if free:
             h = min(h_wanted, h_free)
-        elif tables is not None and noise_excursion > 0.0:
+        elif noise_tables is not None and noise_excursion > 0.0:
             curvature = noise_curvature_bound(t0, t0 + h, periods, tables, curvature_blocks)
             if curvature > 0.0:
                 h = min(h, math.sqrt(8.0 * noise_excursion / curvature))
@@ -606,10 +626,8 @@ def _method_of_steps(
             break
 
         t1 = t0 + h
-        g1, gp1, gpp1 = _exponent(
-            t1, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp, periods,
-            tables, table_slopes, comb, direct_copies,
-        )
+        g1, gp1, gpp1 = _exponent((t1, kappa, a0, t_significant), t, w, d1, d2, last, delays, weights, series,
+                                  noise_tables, comb, direct_copies)
         a = (g1 - g_now) / h
         # nodes of the transformed rule: e^{a s} ds becomes uniform
         z = a * h
@@ -640,10 +658,8 @@ def _method_of_steps(
                     s = math.log1p(x * em) / a
                 else:
                     s = h * x
-                gs = _exponent(
-                    t0 + s, kappa, a0, t, w, d1, d2, last, delays, weights, t_significant, freq, cos_amp, sin_amp,
-                    periods, tables, table_slopes, comb, direct_copies,
-                )[0]
+                gs = _exponent((t0 + s, kappa, a0, t_significant), t, w, d1, d2, last, delays, weights, series,
+                               noise_tables, comb, direct_copies)[0]
                 evaluations += 1
             if z > _LINEAR_THRESHOLD:
                 gx[j] = gs - g1 - a * (s - h)
@@ -684,24 +700,6 @@ def _method_of_steps(
             continue
 
         # accept
-        if last + 1 >= capacity:
-            capacity *= 2
-            t_new = np.empty(capacity)
-            w_new = np.empty(capacity)
-            d1_new = np.empty(capacity)
-            d2_new = np.empty(capacity)
-            comb_new = np.empty((comb.shape[0], capacity))
-            # element by element: a slice assignment would compile numba's shape check and its error
-            # message (string formatting), seconds of compilation for a copy
-            for k in range(last + 1):
-                t_new[k] = t[k]
-                w_new[k] = w[k]
-                d1_new[k] = d1[k]
-                d2_new[k] = d2[k]
-                for row in range(comb.shape[0]):
-                    comb_new[row, k] = comb[row, k]
-            t, w, d1, d2 = t_new, w_new, d1_new, d2_new
-            comb = comb_new
         if direct_copies is not None:
             for i in range(delays.shape[0]):
                 value, slope, curvature = comb_values(t, w, d1, d2, last, t1, delays[i], comb, 3 * i)
@@ -723,33 +721,23 @@ def _method_of_steps(
         h *= max(0.2, factor)
         # with tabulated noise a contact may come back later than one memory period: stop on a certificate
         settled = t1 >= t_end_min and t_active > -math.inf and t1 - t_active >= settle_time
-        if settled and (tables is None or no_later_contact(t1, w1, kappa, a0, t, w, d1, d2, last, delays, weights,
-                                                          periods, tables, block_max, negligible)):
+        if settled and (noise_tables is None or no_later_contact(t1, w1, kappa, a0, (t, w, d1, d2), last, delays,
+                                                                weights, noise_tables, negligible)):
             break
 
+    state[_LAST] = last
+    state[_STEP] = h
+    state[_G_NOW] = g_now
+    state[_T_SIGNIFICANT] = t_significant
+    state[_T_ACTIVE] = t_active
+    state[_ERROR_SUM] = error_sum
+    state[_REJECTED] = rejected
+    state[_EVALUATIONS] = evaluations
     tail = d1[last] * settle_time
-    t_out = np.empty(last + 1)
-    w_out = np.empty(last + 1)
-    d1_out = np.empty(last + 1)
-    d2_out = np.empty(last + 1)
-    for k in range(last + 1):
-        t_out[k] = t[k]
-        w_out[k] = w[k]
-        d1_out[k] = d1[k]
-        d2_out[k] = d2[k]
-    return (
-        t_out,
-        w_out,
-        d1_out,
-        d2_out,
-        status,
-        (error_sum + tail) / scale,
-        rejected,
-        evaluations,
-    )
+    return status, (error_sum + tail) / scale, rejected, evaluations, last
 
 
-def integrate_delay_equation(kappa, a0, delays, weights, rtol, freq, cos_amp, sin_amp, periods, tables, table_slopes, block_max, noise_rate, noise_excursion, curvature_blocks, t_end_min, t_limit, settle_time, max_steps, nodes, weights_k, weights_g, direct_copies):
+def integrate_delay_equation(kappa, a0, delays, weights, rtol, series, noise_tables, stop, rule, direct_copies):
     """Integrate Eq. 16 from ``tau = 0`` until ``W`` has settled.
 
     Parameters
@@ -762,37 +750,27 @@ def integrate_delay_equation(kappa, a0, delays, weights, rtol, freq, cos_amp, si
         ``(beta_1, beta_2)``, the echo weights ``2 Z_s / Z_i`` (1 for one material).
     rtol : float
         Target absolute accuracy of ``W / kappa`` (hence of epsilon).
-    freq, cos_amp, sin_amp : ndarray
-        Fourier series of the noise ``Q`` (empty for a cold bath).
-    periods, tables, table_slopes : ndarray
-        Further noise terms as periodic tables, shapes ``(R,)``, ``(R, n)``,
-        ``(R, n)`` (``R = 0``: none); see :func:`table_value`.
-    block_max : ndarray
-        Upper bounds of the tables over blocks of cells, ``(R, n / B)``
-        (:func:`wavecontact.bath.noise.block_maxima`): with tables, a step is
-        taken as force-free only where these bounds show the force negligible
-        all along it (:func:`free_span`).
-    noise_rate : float
-        An upper bound of ``|Q'|`` from the tables (0 without tables; unused
-        with tables, whose local bounds are sharper).
-    noise_excursion, curvature_blocks : float, ndarray
-        Wherever the force may become appreciable, a step is short enough that
-        the tabulated ``Q`` departs from its secant by at most ``noise_excursion``
-        units of the exponent (``max|Q''| h^2 / 8``, ``|Q''|`` bounded on the step
-        by the per-block bounds ``curvature_blocks``, shape ``(R, n / C)``;
-        :func:`noise_curvature_bound`), so that no narrow rise of the noise slips
-        between the quadrature nodes of a step that looked force-free (0: no limit).
-    t_end_min : float
-        Never stop before this time.
-    t_limit : float
-        Give up (status 4) past this time.
-    settle_time : float
-        Stop once ``W'`` has stayed negligible for this long.
-    max_steps : int
-        Give up (status 1) after this many accepted steps.
-    nodes, weights_k, weights_g : ndarray
-        Quadrature rule on [0, 1] (Kronrod nodes, Kronrod and embedded weights; one of
-        :data:`QUADRATURE_RULES`).  Nodes at 0 and 1 take ``g`` from the step's ends.
+    series : tuple of ndarray
+        ``(freq, cos_amp, sin_amp)``: Fourier series of the noise ``Q`` (empty arrays for a cold bath).
+    noise_tables : tuple
+        ``(periods, tables, table_slopes, block_max, curvature_blocks, noise_excursion)``: further noise
+        terms as periodic tables, shapes ``(R,)``, ``(R, n)``, ``(R, n)`` (``R = 0``: none; see
+        :func:`table_value`); upper bounds of the tables over blocks of cells, ``(R, n / B)``
+        (:func:`wavecontact.bath.noise.block_maxima`): with tables, a step is taken as force-free only
+        where these bounds show the force negligible all along it (:func:`span_is_free`).  Wherever the
+        force may become appreciable, a step is short enough that the tabulated ``Q`` departs from its
+        secant by at most ``noise_excursion`` (float) units of the exponent (``max|Q''| h^2 / 8``,
+        ``|Q''|`` bounded on the step by the per-block bounds ``curvature_blocks``, shape ``(R, n / C)``;
+        :func:`noise_curvature_bound`), so that no narrow rise of the noise slips between the
+        quadrature nodes of a step that looked force-free (0: no limit).
+    stop : tuple
+        ``(t_end_min, t_limit, settle_time, max_steps)``: never stop before ``t_end_min``; give up
+        (status 4) past ``t_limit``; stop once ``W'`` has stayed negligible for ``settle_time``; give up
+        (status 1) after ``max_steps`` (int) accepted steps.
+    rule : tuple of ndarray
+        ``(nodes, weights_k, weights_g)``: quadrature rule on [0, 1] (Kronrod nodes, Kronrod and
+        embedded weights; one of :data:`QUADRATURE_RULES`).  Nodes at 0 and 1 take ``g`` from the
+        step's ends.
     direct_copies : int
         0: every delayed copy of ``W`` is interpolated on its own.  ``K > 0``:
         copies older than ``K`` round trips come from running comb sums, one
@@ -816,9 +794,32 @@ def integrate_delay_equation(kappa, a0, delays, weights, rtol, freq, cos_amp, si
     tables, ``direct_copies = 0``) as None, and numba compiles a separate, smaller specialisation
     for each combination without the code of the absent parts: a cold collision compiles neither
     the noise tables' bounds nor the comb sums.  The arithmetic of what remains is the same.
+    Without tables a step is force-free while ``g - W`` stays below the negligible level at the rate
+    ``kappa + sum_j |freq_j| (|cos_j| + |sin_j|)``.
     """
-    if freq.shape[0] == 0:
-        freq = cos_amp = sin_amp = None
-    if periods.shape[0] == 0:
-        periods = tables = table_slopes = block_max = curvature_blocks = None
-    return _method_of_steps(kappa, a0, delays, weights, rtol, freq, cos_amp, sin_amp, periods, tables, table_slopes, block_max, noise_rate, noise_excursion, curvature_blocks, t_end_min, t_limit, settle_time, max_steps, nodes, weights_k, weights_g, direct_copies if direct_copies > 0 else None)
+    if series[0].shape[0] == 0:
+        series = None
+    if noise_tables[0].shape[0] == 0:
+        noise_tables = None
+    direct_copies = direct_copies if direct_copies > 0 else None
+    capacity = _FIRST_CAPACITY
+    history = (np.empty(capacity), np.empty(capacity), np.empty(capacity), np.empty(capacity),
+               np.empty((3 * delays.shape[0], capacity)))
+    state = np.full(_EVALUATIONS + 1, -1.0)
+    rule = (*rule, np.empty(rule[0].shape[0]))
+    while True:
+        status, error, rejected, evaluations, last = _method_of_steps(
+            kappa, a0, delays, weights, rtol, series, noise_tables, stop, rule, direct_copies, history, state)
+        if status != _STATUS_FULL:
+            break
+        history = tuple(_doubled(buffer, last + 1) for buffer in history)
+    size = last + 1  # views of the buffers, at most twice as long as the history
+    return history[0][:size], history[1][:size], history[2][:size], history[3][:size], status, error, rejected, \
+        evaluations
+
+
+def _doubled(buffer, size):
+    """A buffer twice as long (last axis) holding the first ``size`` entries of ``buffer``."""
+    grown = np.empty(buffer.shape[:-1] + (2 * buffer.shape[-1],))
+    grown[..., :size] = buffer[..., :size]
+    return grown

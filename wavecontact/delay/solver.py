@@ -183,11 +183,9 @@ def _integrate(gamma, kappa, rtol, a0, end_time, noise, max_steps, impedance_rat
     ratio = min(delays) / max(delays)
     t_limit = t_end_min + 50.0 * settle + 50.0 * (abs(math.log(rtol)) + a0) / (kappa * min(ratio, 0.5))
     t, w, d1, d2, status, error, rejected, evaluations = kernels.integrate_delay_equation(
-        float(kappa), float(a0), delays, weights, rtol, noise.freq, noise.cos_amp, noise.sin_amp,
-        tables.periods, tables.values, tables.slopes, tables.block_max, float(tables.slope_bound),
-        NOISE_EXCURSION, tables.curvature_blocks,
-        float(t_end_min), float(t_limit), settle, max_steps,
-        *kernels.QUADRATURE_RULES[quadrature],
+        float(kappa), float(a0), delays, weights, rtol, (noise.freq, noise.cos_amp, noise.sin_amp),
+        (tables.periods, tables.values, tables.slopes, tables.block_max, tables.curvature_blocks, NOISE_EXCURSION),
+        (float(t_end_min), float(t_limit), settle, max_steps), kernels.QUADRATURE_RULES[quadrature],
         DIRECT_COPIES if kappa <= COMB_BELOW_KAPPA else 0,
     )
     if status != kernels.STATUS_OK:
