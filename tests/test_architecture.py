@@ -186,7 +186,6 @@ OVER_THE_LIMIT = {
     "modal/collocation.py:run_collision": 39,
     "modal/kernels.py:_bounds": 20,
     "modal/kernels.py:run_episode": 35,
-    "studies/ring.py:run_ring": 16,
 }
 
 

@@ -560,3 +560,17 @@ def test_load_npz_refuses_garbage_and_impossible_rows_in_one_line(tmp_path):
     np.save(tmp_path / "other.npy", np.zeros(3))
     with pytest.raises(InvalidParameterError, match="not a ring run"):
         RingRun.load_npz(tmp_path / "other.npy")
+
+
+def test_run_settings_as_one_object_or_as_keywords_are_the_same_run(tmp_path):
+    from wavecontact.studies.ring import RingRunSettings
+
+    flat = run_ring(0.6173, 200.0, 6, 12, out_dir=tmp_path / "a", checkpoint_every=5, progress=False)
+    grouped = run_ring(0.6173, 200.0, 6, 12, settings=RingRunSettings(out_dir=tmp_path / "b", checkpoint_every=5,
+                                                                       progress=False))
+    np.testing.assert_array_equal(flat.restitution, grouped.restitution)
+    assert (tmp_path / "b" / "checkpoint.npz").exists()
+    with pytest.raises(InvalidParameterError, match="not both"):
+        run_ring(0.6173, 200.0, 6, 12, settings=RingRunSettings(progress=False), progress=False)
+    with pytest.raises(TypeError, match="out_dri"):
+        run_ring(0.6173, 200.0, 6, 12, out_dri=tmp_path, progress=False)

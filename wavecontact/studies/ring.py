@@ -33,7 +33,7 @@ from ..analytic import equilibrium_translational_energy
 from ..errors import CheckpointError, InvalidParameterError, require_integer, require_positive
 from ..io.checkpoint import read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
-from ..io.run_controller import RunController
+from ..io.run_controller import KeywordGroup, RunController
 from ..limits import Limits, check_study_cost, ring_cost
 from ..result import to_jsonable
 from ..scene import two_rods_on_a_ring
@@ -46,6 +46,7 @@ __all__ = [
     "DATA_CSV_NAME",
     "DATA_NPZ_NAME",
     "RingRun",
+    "RingRunSettings",
     "run_ring",
 ]
 
@@ -392,24 +393,63 @@ def _accuracy(choice: RingChoice, checks, resumed_from: int, log) -> dict:
     return accuracy
 
 
+@dataclass(frozen=True)
+class RingRunSettings(KeywordGroup):
+    """How a ring run runs and where it writes (:func:`run_ring`); none of it changes a result.
+
+    :func:`run_ring` also takes these fields one by one as keywords (``run_ring(..., out_dir="ring",
+    progress=False)``); :meth:`~wavecontact.io.run_controller.KeywordGroup.gather` turns them into this object.
+
+    Parameters
+    ----------
+    out_dir : path, optional
+        Directory for the checkpoint (``checkpoint.npz``) and the data
+        (``ring.npz``, ``ring.csv``), locked against a second run while this
+        one writes (:class:`~wavecontact.io.run_controller.OutputLock`).  If it
+        holds a checkpoint of the same run, the run resumes from there; a
+        checkpoint of another run (unless ``overwrite``), of another build of
+        the kernels, or one that fails its checksum or holds values no run can
+        produce is refused (:class:`~wavecontact.errors.CheckpointError`).
+        ``None``: nothing is written.
+    checkpoint_every : int
+        Write a checkpoint whenever the collision count reaches a multiple of this (and at the end).
+    progress : bool
+        Show a progress bar on stderr.
+    callback : callable, optional
+        ``callback(index, record)`` after every collision (0-based index,
+        a :class:`~wavecontact.result.CollisionRecord`).  An exception raised
+        there (e.g. ``KeyboardInterrupt``) ends the run; the last checkpoint
+        stays valid.
+    log : callable, optional
+        Receives one-line messages (e.g. that a checkpoint was resumed).
+    overwrite : bool
+        Replace a checkpoint of another run found in ``out_dir`` instead of refusing it.
+    checkpoint_seconds : float or None
+        Also write a checkpoint when this much wall time (s) has passed since the last one.
+    """
+
+    out_dir: object = None
+    checkpoint_every: int = 100
+    progress: bool = True
+    overwrite: bool = False
+    checkpoint_seconds: float | None = 600.0
+    callback: Callable | None = None
+    log: Callable[[str], None] | None = None
+
+
 def run_ring(
     gamma: float,
     kappa: float,
     modes: int | None = None,
     collisions: int | None = None,
-    out_dir=None,
-    checkpoint_every: int = 100,
-    progress: bool = True,
     *,
     tolerance=None,
     circumference: float | None = None,
     solver: str = "modal",
     solver_options: dict | None = None,
     simulation_factory: Callable | None = None,
-    callback: Callable | None = None,
-    log: Callable[[str], None] | None = None,
-    overwrite: bool = False,
-    checkpoint_seconds: float | None = 600.0,
+    settings: RingRunSettings | None = None,
+    **keywords,
 ) -> RingRun:
     """Run ``collisions`` successive collisions of two rods on a ring.
 
@@ -424,19 +464,6 @@ def run_ring(
         (:func:`wavecontact.solvers.auto_ring.choose_modes`).
     collisions : int
         Total number of collisions wanted (including any already in a checkpoint); required.
-    out_dir : path, optional
-        Directory for the checkpoint (``checkpoint.npz``) and the data
-        (``ring.npz``, ``ring.csv``), locked against a second run while this
-        one writes (:class:`~wavecontact.io.run_controller.OutputLock`).  If it
-        holds a checkpoint of the same run, the run resumes from there; a
-        checkpoint of another run (unless ``overwrite``), of another build of
-        the kernels, or one that fails its checksum or holds values no run can
-        produce is refused (:class:`~wavecontact.errors.CheckpointError`).
-        ``None``: nothing is written.
-    checkpoint_every : int
-        Write a checkpoint whenever the collision count reaches a multiple of this (and at the end).
-    progress : bool
-        Show a progress bar on stderr.
     tolerance : float, RingChoice or None
         Tolerance on the per-collision restitution error (absolute, on each ``eps_j``), or a
         :class:`~wavecontact.solvers.auto_ring.RingChoice` made already.  Given (or ``modes`` None, which takes
@@ -454,17 +481,12 @@ def run_ring(
     simulation_factory : callable, optional
         ``factory(scene, options) -> RepeatedCollisions`` instead of the
         solver's ``simulate`` (a stand-in with a known answer, in tests).
-    callback : callable, optional
-        ``callback(index, record)`` after every collision (0-based index,
-        a :class:`~wavecontact.result.CollisionRecord`).  An exception raised
-        there (e.g. ``KeyboardInterrupt``) ends the run; the last checkpoint
-        stays valid.
-    log : callable, optional
-        Receives one-line messages (e.g. that a checkpoint was resumed).
-    overwrite : bool
-        Replace a checkpoint of another run found in ``out_dir`` instead of refusing it.
-    checkpoint_seconds : float or None
-        Also write a checkpoint when this much wall time (s) has passed since the last one.
+    settings : RingRunSettings, optional
+        How the run runs and where it writes (:class:`RingRunSettings`: ``out_dir``, ``checkpoint_every``,
+        ``checkpoint_seconds``, ``progress``, ``overwrite``, ``callback``, ``log``); none of it changes a result.
+    **keywords
+        The fields of :class:`RingRunSettings` one by one (``out_dir=..., progress=False``), the same as
+        ``settings=RingRunSettings(...)`` (:meth:`~wavecontact.io.run_controller.KeywordGroup.gather`).
 
     Returns
     -------
@@ -475,6 +497,13 @@ def run_ring(
     SIGINT or SIGTERM end the run after the collision in progress, with a checkpoint of it
     (:class:`~wavecontact.io.run_controller.RunController`); a retry of the same call resumes there.
     """
+    run_settings = RingRunSettings.gather(settings, keywords, "settings")
+    if keywords:
+        raise TypeError(f"run_ring() got an unexpected keyword argument {next(iter(keywords))!r}")
+    out_dir, checkpoint_every, checkpoint_seconds = (run_settings.out_dir, run_settings.checkpoint_every,
+                                                     run_settings.checkpoint_seconds)
+    progress, overwrite, callback, log = (run_settings.progress, run_settings.overwrite, run_settings.callback,
+                                          run_settings.log)
     if collisions is None:
         raise InvalidParameterError("collisions must be given (the number of collisions of the run)")
     g, k, _n, m, every = _validate(gamma, kappa, 1 if modes is None else modes, collisions, checkpoint_every)
