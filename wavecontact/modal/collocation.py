@@ -92,9 +92,12 @@ def _phi(x, count, inverse_factorial, re, im):
 
 
 @kernel(error_model="numpy")
-def _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv,
-                node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled):
-    """Tables of one ladder step ``h``: node rotations, exact polynomial-force integrals, gap response."""
+def _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables):
+    """Tables of one ladder step ``h``: node rotations, exact polynomial-force integrals, gap response.
+
+    ``tables`` is :meth:`CollocationTables.arrays` (``h_top`` and the ladder are not read here).
+    """
+    nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled = tables[2:13]
     s = nodes.size
     re = np.empty(s + 1)
     im = np.empty(s + 1)
@@ -182,9 +185,13 @@ def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
 
 
 @kernel(error_model="numpy")
-def _newton_forces(free_gap, response, law, alpha, strength, stiffness, compliance, force_scale, forces,
-                   residual, stiff, delta, matrix, counters):
-    """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged."""
+def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, counters):
+    """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged.
+
+    ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``work = (residual, stiff, delta, matrix)``.
+    """
+    law, alpha, strength, stiffness, compliance = contact_law
+    residual, stiff, delta, matrix = work
     s = forces.size
     for _ in range(60):
         counters[4] += 1
@@ -217,14 +224,19 @@ def _newton_forces(free_gap, response, law, alpha, strength, stiffness, complian
 
 @kernel(error_model="numpy")
 def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance, force_scale, forces,
-                      residual, delta, matrix, counters):
+                      work, counters, quick_newton):
     """Newton for the exponential law, possibly in series with a compliance ``C >= 0``, in ``v_i = log F_i``.
 
     The node equations ``v_i + alpha C exp(v_i) = log(alpha B) - alpha r_i`` with
     ``r_i = r_free,i + sum_m R_im exp(v_m)`` need one exponential per node and iteration (with
     ``C > 0`` a force-based Newton solves a Lambert-W equation inside every evaluation; with
     ``C = 0`` the logarithm keeps a stiff exponential from overflowing).
+    ``work = (residual, delta, matrix)``.  ``quick_newton``: start from the force-free solution where the
+    forces barely move the gaps, and stop after the update that leaves, by Newton's quadratic convergence,
+    a change below the tolerance for the next one (saves the confirming iteration); otherwise start from
+    ``predicted`` and stop after an update itself below the tolerance.
     """
+    residual, delta, matrix = work
     s = forces.size
     v = residual  # reuse the work arrays: v in `residual`, the right-hand side in `delta`
     rhs = np.empty(s)
@@ -239,6 +251,22 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             x = log_alpha_b + math.log(alpha * k_ii) - alpha * free_gap[i]
             u = x if x < 0.0 else math.log1p(x)
             v[i] = u - math.log(alpha * k_ii)
+    if quick_newton:
+        # where the forces barely move the gaps, the force-free solution v_i = log(alpha B) - alpha r_free,i is
+        # within `weak` of the solution (an extrapolated light touch can be many e-folds off, and the capped
+        # climb from below takes an iteration per two e-folds)
+        largest = -math.inf
+        reach = compliance
+        for i in range(s):
+            largest = max(largest, log_alpha_b - alpha * free_gap[i])
+            row = 0.0
+            for m in range(s):
+                row += abs(response[i, m])
+            reach = max(reach, compliance + row)
+        if largest < 700.0 and alpha * reach * math.exp(largest) <= 1e-3:
+            for i in range(s):
+                v[i] = log_alpha_b - alpha * free_gap[i]
+    last_update = math.inf  # the largest |change of v| of the iteration before
     for _ in range(60):
         counters[4] += 1
         biggest = 0.0
@@ -256,14 +284,25 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             matrix[i, i] += 1.0 + y
         _solve_small(matrix, rhs, delta)
         change = 0.0
+        update = 0.0
         capped = False
         for i in range(s):
             step = min(delta[i], 2.0)  # a convex exponential: never overshoot upwards
             capped = capped or delta[i] > 2.0
             v[i] += step
             change = max(change, abs(step) * forces[i])
+            update = max(update, abs(step))
         if not math.isfinite(change):
             return False
+        if quick_newton and 0.0 < last_update < math.inf and update <= 10.0 * last_update * last_update:
+            # quadratic convergence seen (|dv_k| <= K |dv_{k-1}|^2 with K <= 10): the update just made leaves
+            # an error of about the next one, K |dv_k|^2 of the forces
+            remaining = update / (last_update * last_update) * update * update * biggest
+            if remaining <= 1e-13 * (force_scale + biggest) and not capped:
+                for i in range(s):
+                    forces[i] = math.exp(v[i])
+                return True
+        last_update = update
         # a capped step is still climbing: its force may be tiny now, yet far too small for its gap (a node
         # driven deep into overlap within one step would otherwise pass with a negligible force)
         if change <= 1e-13 * (force_scale + biggest) and not capped:
@@ -422,11 +461,14 @@ def _echo_force(t, ends, records, count):
 
 
 @kernel(error_model="numpy")
-def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
-                  contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
-                  node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled, free_rungs,
-                  ends, free_q, free_v, records, clock, counters, history, max_steps):
+def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
+
+    The arguments are tuples: ``modes = (q, v, omega, coupling)``, ``rigid = (X, U, mass, half)``,
+    ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``control = (contact_range, force_scale,
+    tolerance, exponent_step, max_steps, quick_newton)``, ``tables =`` :meth:`CollocationTables.arrays`
+    ``(h_top, ladder_ratio, nodes, vinv, node_cos, ..., filled, free_rungs)``, ``exact_ends = (ends, free_q,
+    free_v, records)``, ``output = (clock, counters, history)``; their entries are:
 
     Parameters
     ----------
@@ -482,7 +524,19 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing.
     max_steps : int
         Return (status 0) after this many accepted steps.
+    quick_newton : bool
+        Newton on the node forces (exponential law) stops once its quadratic convergence puts the next
+        change below the tolerance, one iteration earlier than waiting for that change (results differ
+        in the last bits; the ring's collisions).
     """
+    q, v, omega, coupling = modes
+    X, U, mass, half = rigid
+    law, alpha, strength, stiffness, compliance = contact_law
+    contact_range, force_scale, tolerance, exponent_step, max_steps, quick_newton = control
+    h_top, ladder_ratio, nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, \
+        filled, free_rungs = tables
+    ends, free_q, free_v, records = exact_ends
+    clock, counters, history = output
     s = nodes.size
     n_levels = filled.size
     n_modes = q.size
@@ -587,8 +641,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         amplitudes_now = True
         for trial in range(free_rungs):
             if filled[trial] == 0:
-                _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid, nodes,
-                            vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
+                _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid, tables)
                 counters[3] += 1
             h_trial = h_top * math.exp(-trial * log_ratio)
             allowed = rigid_gap + sq - free_gap_lowest
@@ -610,8 +663,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             return STATUS_STEP_UNDERFLOW
         h = h_top * math.exp(-level * log_ratio)
         if filled[level] == 0:
-            _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv, node_cos, node_sin,
-                        end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
+            _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables)
             counters[3] += 1
         # free gap at the nodes (no force over the step) and its response to the node forces
         if exact:
@@ -678,7 +730,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         # the s node forces
         if law == LAW_EXPONENTIAL:
             converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
-                                          force_scale, forces, residual, delta, matrix, counters)
+                                          force_scale, forces, (residual, delta, matrix), counters, quick_newton)
         elif hard:
             converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
                                     active, matrix, delta, counters)
@@ -688,8 +740,8 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
                 converged = _solve_hard(free_gap, step_response, predicted, gap_floor, forces, active, matrix,
                                         delta, counters)
         else:
-            converged = _newton_forces(free_gap, step_response, law, alpha, strength, stiffness, compliance,
-                                       force_scale, forces, residual, stiff, delta, matrix, counters)
+            converged = _newton_forces(free_gap, step_response, contact_law, force_scale, forces,
+                                       (residual, stiff, delta, matrix), counters)
         if not converged:
             level += 4
             continue
@@ -841,8 +893,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             while allowed > 0.0 and trial < free_rungs and trial <= level:
                 if filled[trial] == 0:
                     _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid,
-                                nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response,
-                                filled)
+                                tables)
                     counters[3] += 1
                 h_trial = h_top * math.exp(-trial * log_ratio)
                 if _free_fall(h_trial, q, v, omega, coupling, free_work, end_cos[trial], end_sin[trial], rigid_rate,
