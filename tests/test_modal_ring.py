@@ -239,7 +239,10 @@ def test_collocation_collisions_agree_with_a_fine_splitting():
         coarse = abs(results["split"].restitution - results["collocation"].restitution)
         fine = abs(results["split/8"].restitution - results["collocation"].restitution)
         assert results["collocation"].pair == results["split/8"].pair
-        assert fine < 3e-8
+        # the splitting's own error at the finer step, from its second order (Richardson): 1/63 of the change
+        # from the coarse step; the collocation must lie within it (plus 3e-9), whatever the warm state
+        split_error = abs(results["split"].restitution - results["split/8"].restitution) / 63.0
+        assert fine < 2.0 * split_error + 3e-9, (fine, split_error)
         assert fine < coarse / 10 or coarse < 3e-9  # second order: 64x smaller for a step 8x smaller
         np.testing.assert_allclose(results["collocation"].modal_energies, results["split/8"].modal_energies,
-                                   atol=1e-8 * ring.total_energy)
+                                   atol=max(1e-8, 4.0 * split_error) * ring.total_energy)
