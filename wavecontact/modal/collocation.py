@@ -466,7 +466,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
 
     The arguments are tuples: ``modes = (q, v, omega, coupling)``, ``rigid = (X, U, mass, half)``,
     ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``control = (contact_range, force_scale,
-    tolerance, exponent_step, max_steps, quick_newton)``, ``tables =`` :meth:`CollocationTables.arrays`
+    tolerance, exponent_step, max_steps, quick_newton, onset_efolds)``, ``tables =`` :meth:`CollocationTables.arrays`
     ``(h_top, ladder_ratio, nodes, vinv, node_cos, ..., filled, free_rungs)``, ``exact_ends = (ends, free_q,
     free_v, records)``, ``output = (clock, counters, history)``; their entries are:
 
@@ -528,11 +528,14 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         Newton on the node forces (exponential law) stops once its quadratic convergence puts the next
         change below the tolerance, one iteration earlier than waiting for that change (results differ
         in the last bits; the ring's collisions).
+    onset_efolds : float
+        Exponential law: the step changes ``alpha_eff * gap`` by at most ``exponent_step`` once the force
+        is within this many e-folds of ``force_scale`` (30: the single collisions), by that much more below.
     """
     q, v, omega, coupling = modes
     X, U, mass, half = rigid
     law, alpha, strength, stiffness, compliance = contact_law
-    contact_range, force_scale, tolerance, exponent_step, max_steps, quick_newton = control
+    contact_range, force_scale, tolerance, exponent_step, max_steps, quick_newton, onset_efolds = control
     h_top, ladder_ratio, nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, \
         filled, free_rungs = tables
     ends, free_q, free_v, records = exact_ends
@@ -871,7 +874,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         if law == LAW_EXPONENTIAL and force_now > 0.0:
             softening = 1.0 + alpha * compliance * force_now
             rate = alpha / softening * abs(rigid_rate + sv)
-            room = exponent_step + max(0.0, -math.log(force_now / force_scale) - 30.0)
+            room = exponent_step + max(0.0, -math.log(force_now / force_scale) - onset_efolds)
             if rate * h_wanted > room:
                 h_wanted = room / rate
         if warm:
@@ -889,18 +892,20 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 amplitudes_now = True
             h_free = 0.0
             allowed = rigid_gap + sq - free_gap_lowest
-            trial = max(0, level - 2)  # twice this step, then the rungs down to it
-            while allowed > 0.0 and trial < free_rungs and trial <= level:
+            # the longest of twice this step and the rungs down to it whose fall stays within `allowed`; the
+            # bound on the fall grows with the step, so try the shortest first: where it fails all fail
+            trial = min(level, free_rungs - 1)
+            while allowed > 0.0 and trial >= max(0, level - 2):
                 if filled[trial] == 0:
                     _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid,
                                 tables)
                     counters[3] += 1
                 h_trial = h_top * math.exp(-trial * log_ratio)
                 if _free_fall(h_trial, q, v, omega, coupling, free_work, end_cos[trial], end_sin[trial], rigid_rate,
-                              allowed) <= allowed:
-                    h_free = h_trial
+                              allowed) > allowed:
                     break
-                trial += 1
+                h_free = h_trial
+                trial -= 1
             h_wanted = max(min(h_wanted, h_sample), h_free)
         elif h_wanted > h_sample:
             h_wanted = h_sample

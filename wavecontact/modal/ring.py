@@ -236,6 +236,9 @@ COLLOCATION_TOLERANCE = 1e-2
 # Newton on the node forces stops once its quadratic convergence puts the next change below round-off (one
 # iteration fewer than confirming it; the results differ in the last bits): False is the rule before
 QUICK_NEWTON = True
+# the step changes alpha_eff * gap by at most EXPONENT_STEP once the force is within this many e-folds of the
+# collision's force scale, by that much more below (30: the rule before)
+ONSET_EFOLDS = 20.0
 
 
 class _CollocationPair:
@@ -285,7 +288,7 @@ class _CollocationPair:
             (int(system.law_code), float(system.alpha), float(system.strength), float(system.stiffness),
              self.compliance),
             (float(system.contact_range), float(force_scale), float(tolerance), float(EXPONENT_STEP), 1 << 62,
-             bool(QUICK_NEWTON)),
+             bool(QUICK_NEWTON), float(ONSET_EFOLDS)),
             self.tables.arrays(), (self.ends, self.free, self.free, self.records),
             (system.clock, self.counters, self.history),
         )

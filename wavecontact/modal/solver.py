@@ -255,7 +255,7 @@ def _run_collocation(system, stages, tolerance, buffer, chunks, exponent_step=_E
             (int(system.law_code), float(system.alpha), float(system.strength), float(system.stiffness),
              float(system.pair_compliance[0])),
             (float(system.contact_range), float(system.force_scale), float(tolerance), float(exponent_step),
-             100_000_000, False),
+             100_000_000, False, 30.0),
             tables.arrays(), (ends, free_q, free_v, records), (system.clock, counters, buffer),
         )
         system.check_status(status)
