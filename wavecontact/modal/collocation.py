@@ -231,15 +231,14 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
     ``r_i = r_free,i + sum_m R_im exp(v_m)`` need one exponential per node and iteration (with
     ``C > 0`` a force-based Newton solves a Lambert-W equation inside every evaluation; with
     ``C = 0`` the logarithm keeps a stiff exponential from overflowing).
-    ``work = (residual, delta, matrix)``.  ``quick_newton``: start from the force-free solution where the
+    ``work = (residual, delta, matrix, rhs)``.  ``quick_newton``: start from the force-free solution where the
     forces barely move the gaps, and stop after the update that leaves, by Newton's quadratic convergence,
     a change below the tolerance for the next one (saves the confirming iteration); otherwise start from
     ``predicted`` and stop after an update itself below the tolerance.
     """
-    residual, delta, matrix = work
+    residual, delta, matrix, rhs = work
     s = forces.size
-    v = residual  # reuse the work arrays: v in `residual`, the right-hand side in `delta`
-    rhs = np.empty(s)
+    v = residual  # reuse the work arrays: v in `residual`
     log_alpha_b = math.log(alpha * strength)
     for i in range(s):
         if predicted[i] > 1e-300:
@@ -525,9 +524,11 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     max_steps : int
         Return (status 0) after this many accepted steps.
     quick_newton : bool
-        Newton on the node forces (exponential law) stops once its quadratic convergence puts the next
-        change below the tolerance, one iteration earlier than waiting for that change (results differ
-        in the last bits; the ring's collisions).
+        The ring's quicker rules (results differ in the last bits): Newton on the node forces
+        (exponential law) starts from the force-free solution where the forces barely move the gaps and
+        stops once its quadratic convergence puts the next change below the tolerance (one iteration
+        earlier than waiting for that change); a step whose node forces are all below ``1e-30``
+        of ``force_scale`` rotates the modes without their load.
     onset_efolds : float
         Exponential law: the step changes ``alpha_eff * gap`` by at most ``exponent_step`` once the force
         is within this many e-folds of ``force_scale`` (30: the single collisions), by that much more below.
@@ -565,6 +566,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     stiff = np.empty(s)
     residual = np.empty(s)
     delta = np.empty(s)
+    rhs = np.empty(s)
     matrix = np.empty((s, s))
     coefficients = np.empty(s)
     previous = np.zeros(s)
@@ -733,7 +735,8 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         # the s node forces
         if law == LAW_EXPONENTIAL:
             converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
-                                          force_scale, forces, (residual, delta, matrix), counters, quick_newton)
+                                          force_scale, forces, (residual, delta, matrix, rhs), counters,
+                                          quick_newton)
         elif hard:
             converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
                                     active, matrix, delta, counters)
@@ -772,7 +775,11 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         for j in range(n_modes):
             load_q[j] = 0.0
             load_v[j] = 0.0
+        negligible = quick_newton
         for k in range(s):
+            negligible = negligible and abs(forces[k]) <= 1e-30 * force_scale
+        # (quick rules) node forces below 1e-30 of the force scale move no mode by more than round-off: no load
+        for k in range(0 if negligible else s):
             a_k = coefficients[k]
             row_s = end_s[level, k]
             row_c = end_c[level, k]
