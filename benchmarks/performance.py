@@ -447,10 +447,9 @@ def section_ring(collisions, realisations, command):
         profile_ring.run_ring(profile_ring.GAMMA, profile_ring.KAPPA, profile_ring.MODES, 3, progress=False,
                               solver_options={"step_method": profile_ring.VARIANTS[method][0]})
     counts = {"collocation": realisations, "collocation, before": realisations}
-    labels = {"collocation": ("exponential collocation, quick Newton, two-e-fold step rule from 20 e-folds below the "
-                              "force scale (default)"),
+    labels = {"collocation": "exponential collocation, quick Newton (default)",
               "collocation, before": ("exponential collocation, long steps where the force is negligible "
-                                      "(before: QUICK_NEWTON = False, ONSET_EFOLDS = 30)")}
+                                      "(before: QUICK_NEWTON = False)")}
     whole = "whole command (run + statistics + figures)"
     runs = {method: [] for method in methods}
     for r in range(realisations):  # alternately, so that a change of load hits both collocation rules

@@ -237,8 +237,9 @@ COLLOCATION_TOLERANCE = 1e-2
 # iteration fewer than confirming it; the results differ in the last bits): False is the rule before
 QUICK_NEWTON = True
 # the step changes alpha_eff * gap by at most EXPONENT_STEP once the force is within this many e-folds of the
-# collision's force scale, by that much more below (30: the rule before)
-ONSET_EFOLDS = 20.0
+# collision's force scale, by that much more below; 20 or 25 took 7 % or no less time and left a few collisions
+# 5-20 times less accurate than 30 on a set of 99 thermalised states (another set: more accurate; see docs/ring.md)
+ONSET_EFOLDS = 30.0
 
 
 class _CollocationPair:
