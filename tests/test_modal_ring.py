@@ -247,3 +247,34 @@ def test_collocation_collisions_agree_with_a_fine_splitting():
         assert errors[1] < errors[0] / 10 or errors[0] < 3e-9, errors  # ... and 64x for 8x
         np.testing.assert_allclose(results["collocation"].modal_energies, results["split/32"].modal_energies,
                                    atol=1e-8 * ring.total_energy)
+
+
+def test_quick_newton_solves_the_same_collisions_with_fewer_iterations(monkeypatch, long_run):
+    """The ring's quick Newton rules (force-free start where the forces barely move the gaps, stop on
+    quadratic convergence, no load for negligible forces) against the rules before from the same warm
+    states: the same restitution within the collocation's own error (3e-8; the step sequences may differ
+    once a step's size rounds differently: 7e-9 on one of these states), fewer Newton iterations per step."""
+    import wavecontact.modal.ring as ring_module
+
+    ring, _ = long_run
+    walker = _ring(GAMMA, 1000, 20)
+    walker.set_state(ring.get_state())
+    states = []
+    for _ in range(5):
+        states.append(walker.get_state())
+        walker.next_collision()
+    results = {}
+    for quick in (False, True):
+        monkeypatch.setattr(ring_module, "QUICK_NEWTON", quick)
+        restitutions, iterations, steps = [], 0, 0
+        for state in states:
+            other = _ring(GAMMA, 1000, 20)
+            other.set_state(state)
+            record = other.next_collision()
+            restitutions.append(record.restitution)
+            pair = other._pairs[record.pair]
+            iterations += int(pair.counters[4])
+            steps += int(pair.counters[0])
+        results[quick] = (np.array(restitutions), iterations / steps)
+    np.testing.assert_allclose(results[True][0], results[False][0], rtol=0.0, atol=3e-8)
+    assert results[True][1] < 0.75 * results[False][1], (results[True][1], results[False][1])
