@@ -442,14 +442,14 @@ def section_ring(collisions, realisations, command):
     run plus its statistics and figures, per integrator (``benchmarks/profile_ring.py`` measures and splits them)."""
     import profile_ring
 
-    methods = ("collocation", "collocation, sampled", "splitting")
+    methods = ("collocation", "collocation, before")
     for method in methods:  # compile or load the kernels before timing
         profile_ring.run_ring(profile_ring.GAMMA, profile_ring.KAPPA, profile_ring.MODES, 3, progress=False,
                               solver_options={"step_method": profile_ring.VARIANTS[method][0]})
-    counts = {"collocation": realisations, "collocation, sampled": realisations, "splitting": 1}
-    labels = {"collocation": "exponential collocation, long steps where the force is negligible (default)",
-              "collocation, sampled": "exponential collocation, every step sampled (before)",
-              "splitting": "kick-rotate-kick splitting (before that)"}
+    counts = {"collocation": realisations, "collocation, before": realisations}
+    labels = {"collocation": "exponential collocation, quick Newton (default)",
+              "collocation, before": ("exponential collocation, long steps where the force is negligible "
+                                      "(before: QUICK_NEWTON = False)")}
     whole = "whole command (run + statistics + figures)"
     runs = {method: [] for method in methods}
     for r in range(realisations):  # alternately, so that a change of load hits both collocation rules

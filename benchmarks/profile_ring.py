@@ -5,10 +5,11 @@
 Runs ``run_ring(0.6173, 4000, modes=75, ...)`` (what ``wavecontact ring --gamma 0.6173 --kappa 4000
 --modes 75 --collisions M --out DIR`` runs, checkpoints in a temporary directory every 100
 collisions, then the statistics and the three figures) once per realisation and integrator:
-the exponential collocation with every step at most ``TOP_STEP_PHASE`` (``collocation, sampled``:
-``wavecontact.modal.ring.FREE_STEP_RUNGS = 0``, the ring's rule before) and with longer steps where
-the force provably stays negligible (``collocation``, the default now); ``--methods splitting ...``
-adds the kick-rotate-kick splitting (``step_method='splitting'``).
+the exponential collocation with the rules before the quick ones (``collocation, before``:
+``wavecontact.modal.ring.QUICK_NEWTON = False``) and with them (``collocation``, the
+default now); ``--methods collocation, sampled`` adds the rule before that (every step at most
+``TOP_STEP_PHASE``, ``FREE_STEP_RUNGS = 0``) and ``splitting`` the kick-rotate-kick splitting
+(``step_method='splitting'``).
 Realisations differ in the ring circumference (1.5 % steps, as in ``wavecontact equipartition``).
 All times are CPU seconds of this process (``time.process_time``): other jobs on a shared machine
 stretch the wall time, not these. The numba kernels are compiled (or loaded) before timing.
@@ -35,6 +36,7 @@ Prints four Markdown tables:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import tempfile
@@ -59,10 +61,28 @@ from wavecontact.studies.ring import RingRun, run_ring
 GAMMA = 0.6173
 KAPPA = 4000.0
 MODES = 75
-# label -> (step_method, FREE_STEP_RUNGS)
-VARIANTS = {"splitting": ("splitting", 0), "collocation, sampled": ("collocation", 0),
-            "collocation": ("collocation", ring_module.FREE_STEP_RUNGS)}
-METHODS = ("collocation, sampled", "collocation")
+# the ring's collocation rules before the quick ones (QUICK_NEWTON of wavecontact.modal.ring; ONSET_EFOLDS as then)
+BEFORE_QUICK = {"QUICK_NEWTON": False, "ONSET_EFOLDS": 30.0}
+# label -> (step_method, the settings of wavecontact.modal.ring it runs with)
+VARIANTS = {"splitting": ("splitting", {"FREE_STEP_RUNGS": 0}),
+            "collocation, sampled": ("collocation", {"FREE_STEP_RUNGS": 0, **BEFORE_QUICK}),
+            "collocation, before": ("collocation", BEFORE_QUICK),
+            "collocation": ("collocation", {})}
+METHODS = ("collocation, before", "collocation")
+
+
+@contextlib.contextmanager
+def rules(method: str):
+    """Run with the settings of the variant ``method`` in :mod:`wavecontact.modal.ring` (restored after)."""
+    settings = VARIANTS[method][1]
+    kept = {name: getattr(ring_module, name) for name in settings}
+    for name, value in settings.items():
+        setattr(ring_module, name, value)
+    try:
+        yield
+    finally:
+        for name, value in kept.items():
+            setattr(ring_module, name, value)
 STEP_IN_CIRCUMFERENCE = 0.015
 FLIGHT_SAMPLE = 10  # the free flight is replayed before every so many collisions
 CORRECTION_SAMPLE = 50  # the static correction's cost is measured on every so many collisions
@@ -78,15 +98,10 @@ def circumference(realisation: int) -> float:
 
 def simulation(method: str, length: float, **options):
     """A ring simulation of the variant ``method`` (a key of :data:`VARIANTS`)."""
-    step_method, rungs = VARIANTS[method]
     engine = get_solver("modal")
-    kept = ring_module.FREE_STEP_RUNGS
-    ring_module.FREE_STEP_RUNGS = rungs  # read when the collocation tables are made
-    try:
+    with rules(method):  # FREE_STEP_RUNGS is read when the collocation tables are made
         return engine.simulate(two_rods_on_a_ring(GAMMA, KAPPA, length),
-                               engine.options({"modes": MODES, "step_method": step_method, **options}))
-    finally:
-        ring_module.FREE_STEP_RUNGS = kept
+                               engine.options({"modes": MODES, "step_method": VARIANTS[method][0], **options}))
 
 
 def without_compliance(sim):
@@ -181,7 +196,7 @@ def profile_run(method: str, realisation: int, collisions: int) -> dict:
     RingRun.save_npz = files_clock.wrap(saved[1])
     RingRun.save_csv = files_clock.wrap(saved[2])
     try:
-        with tempfile.TemporaryDirectory() as out:
+        with tempfile.TemporaryDirectory() as out, rules(method):
             started = time.process_time()
             run = run_ring(GAMMA, KAPPA, MODES, collisions, out_dir=out, progress=False,
                            circumference=circumference(realisation), simulation_factory=factory,
@@ -268,15 +283,16 @@ def accuracy_table(collisions: int, every: int) -> list[str]:
 
     def restitutions(method, **options):
         values = []
-        for state in states:
-            sim = simulation(method, circumference(0), **options)
-            sim.set_state(state)
-            values.append(sim.next_collision().restitution)
+        with rules(method):
+            for state in states:
+                sim = simulation(method, circumference(0), **options)
+                sim.set_state(state)
+                values.append(sim.next_collision().restitution)
         return np.array(values)
 
     phase = ring_module.TOP_STEP_PHASE
     ring_module.TOP_STEP_PHASE = phase / 4.0
-    try:  # every step sampled (no long steps), a quarter of the sampling step
+    try:  # every step sampled (no long steps), a quarter of the sampling step, the rules before the quick ones
         reference = restitutions("collocation, sampled", collocation_tolerance=REFERENCE_TOLERANCE)
     finally:
         ring_module.TOP_STEP_PHASE = phase
@@ -286,8 +302,9 @@ def accuracy_table(collisions: int, every: int) -> list[str]:
              "| integrator | median | 90 % | 99 % | max | collisions above 1e-6 |", "|---|---:|---:|---:|---:|---:|"]
     for label, method, options in (
         ("splitting, default step", "splitting", {}),
-        ("collocation, every step sampled (the ring before)", "collocation, sampled", {}),
-        ("collocation, long steps where the force is negligible (the ring now)", "collocation", {}),
+        ("collocation, every step sampled (the ring two changes ago)", "collocation, sampled", {}),
+        ("collocation, long steps where the force is negligible (the ring before)", "collocation, before", {}),
+        ("collocation, quick Newton (the ring now)", "collocation", {}),
     ):
         error = np.abs(restitutions(method, **options) - reference)
         q50, q90, q99 = np.quantile(error, [0.5, 0.9, 0.99])
@@ -319,8 +336,24 @@ def statistics_table(results: dict) -> list[str]:
             numbers = np.array([np.nan if v is None else float(v) for v in values])
             text = ", ".join("n/a" if v is None else f"{float(v):.3g}" for v in values)
             cells.append(f"{text} ({np.nanmean(numbers):.3g} +- {np.nanstd(numbers, ddof=1):.2g})")
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    return lines
+        lines.append(f"| {name} | " + " | ".join(cells) + " | " + _agreement(results, get) + " |")
+    lines[2] += " same distribution? |"
+    lines[3] += "---|"
+    return [*lines, "", ("Same distribution? (criterion fixed before the runs): the means of the first and the last "
+                         "integrator over their realisations differ by at most twice their combined standard error "
+                         "sqrt((s_1^2 + s_2^2) / n).")]
+
+
+def _agreement(results: dict, get) -> str:
+    """Whether the first and the last integrator's means agree within twice their combined standard error."""
+    first, last = (np.array([np.nan if get(r["stats"]) is None else float(get(r["stats"])) for r in results[m]])
+                   for m in (next(iter(results)), list(results)[-1]))
+    first, last = first[np.isfinite(first)], last[np.isfinite(last)]
+    if first.size < 2 or last.size < 2:
+        return "n/a"
+    difference = abs(first.mean() - last.mean())
+    bound = 2.0 * np.sqrt(first.var(ddof=1) / first.size + last.var(ddof=1) / last.size)
+    return f"{'yes' if difference <= bound else 'NO'} ({difference:.2g} vs {bound:.2g})"
 
 
 def main(argv=None):

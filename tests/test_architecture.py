@@ -181,11 +181,6 @@ MOST_PARAMETERS = 12
 OVER_THE_LIMIT = {
     "fem/multibody_kernel.py:_push": 13,
     "fem/multibody_kernel.py:advance_line": 24,
-    "modal/collocation.py:_fill_level": 16,
-    "modal/collocation.py:_newton_forces": 14,
-    "modal/collocation.py:run_collision": 39,
-    "modal/kernels.py:_bounds": 20,
-    "modal/kernels.py:run_episode": 35,
 }
 
 

@@ -92,9 +92,12 @@ def _phi(x, count, inverse_factorial, re, im):
 
 
 @kernel(error_model="numpy")
-def _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv,
-                node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled):
-    """Tables of one ladder step ``h``: node rotations, exact polynomial-force integrals, gap response."""
+def _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables):
+    """Tables of one ladder step ``h``: node rotations, exact polynomial-force integrals, gap response.
+
+    ``tables`` is :meth:`CollocationTables.arrays` (``h_top`` and the ladder are not read here).
+    """
+    nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled = tables[2:13]
     s = nodes.size
     re = np.empty(s + 1)
     im = np.empty(s + 1)
@@ -182,9 +185,13 @@ def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
 
 
 @kernel(error_model="numpy")
-def _newton_forces(free_gap, response, law, alpha, strength, stiffness, compliance, force_scale, forces,
-                   residual, stiff, delta, matrix, counters):
-    """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged."""
+def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, counters):
+    """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged.
+
+    ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``work = (residual, stiff, delta, matrix)``.
+    """
+    law, alpha, strength, stiffness, compliance = contact_law
+    residual, stiff, delta, matrix = work
     s = forces.size
     for _ in range(60):
         counters[4] += 1
@@ -217,17 +224,21 @@ def _newton_forces(free_gap, response, law, alpha, strength, stiffness, complian
 
 @kernel(error_model="numpy")
 def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance, force_scale, forces,
-                      residual, delta, matrix, counters):
+                      work, counters, quick_newton):
     """Newton for the exponential law, possibly in series with a compliance ``C >= 0``, in ``v_i = log F_i``.
 
     The node equations ``v_i + alpha C exp(v_i) = log(alpha B) - alpha r_i`` with
     ``r_i = r_free,i + sum_m R_im exp(v_m)`` need one exponential per node and iteration (with
     ``C > 0`` a force-based Newton solves a Lambert-W equation inside every evaluation; with
     ``C = 0`` the logarithm keeps a stiff exponential from overflowing).
+    ``work = (residual, delta, matrix, rhs)``.  ``quick_newton``: start from the force-free solution where the
+    forces barely move the gaps, and stop after the update that leaves, by Newton's quadratic convergence,
+    a change below the tolerance for the next one (saves the confirming iteration); otherwise start from
+    ``predicted`` and stop after an update itself below the tolerance.
     """
+    residual, delta, matrix, rhs = work
     s = forces.size
-    v = residual  # reuse the work arrays: v in `residual`, the right-hand side in `delta`
-    rhs = np.empty(s)
+    v = residual  # reuse the work arrays: v in `residual`
     log_alpha_b = math.log(alpha * strength)
     for i in range(s):
         if predicted[i] > 1e-300:
@@ -239,6 +250,22 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             x = log_alpha_b + math.log(alpha * k_ii) - alpha * free_gap[i]
             u = x if x < 0.0 else math.log1p(x)
             v[i] = u - math.log(alpha * k_ii)
+    if quick_newton:
+        # where the forces barely move the gaps, the force-free solution v_i = log(alpha B) - alpha r_free,i is
+        # within `weak` of the solution (an extrapolated light touch can be many e-folds off, and the capped
+        # climb from below takes an iteration per two e-folds)
+        largest = -math.inf
+        reach = compliance
+        for i in range(s):
+            largest = max(largest, log_alpha_b - alpha * free_gap[i])
+            row = 0.0
+            for m in range(s):
+                row += abs(response[i, m])
+            reach = max(reach, compliance + row)
+        if largest < 700.0 and alpha * reach * math.exp(largest) <= 1e-3:
+            for i in range(s):
+                v[i] = log_alpha_b - alpha * free_gap[i]
+    last_update = math.inf  # the largest |change of v| of the iteration before
     for _ in range(60):
         counters[4] += 1
         biggest = 0.0
@@ -256,14 +283,25 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             matrix[i, i] += 1.0 + y
         _solve_small(matrix, rhs, delta)
         change = 0.0
+        update = 0.0
         capped = False
         for i in range(s):
             step = min(delta[i], 2.0)  # a convex exponential: never overshoot upwards
             capped = capped or delta[i] > 2.0
             v[i] += step
             change = max(change, abs(step) * forces[i])
+            update = max(update, abs(step))
         if not math.isfinite(change):
             return False
+        if quick_newton and 0.0 < last_update < math.inf and update <= 10.0 * last_update * last_update:
+            # quadratic convergence seen (|dv_k| <= K |dv_{k-1}|^2 with K <= 10): the update just made leaves
+            # an error of about the next one, K |dv_k|^2 of the forces
+            remaining = update / (last_update * last_update) * update * update * biggest
+            if remaining <= 1e-13 * (force_scale + biggest) and not capped:
+                for i in range(s):
+                    forces[i] = math.exp(v[i])
+                return True
+        last_update = update
         # a capped step is still climbing: its force may be tiny now, yet far too small for its gap (a node
         # driven deep into overlap within one step would otherwise pass with a negligible force)
         if change <= 1e-13 * (force_scale + biggest) and not capped:
@@ -422,11 +460,14 @@ def _echo_force(t, ends, records, count):
 
 
 @kernel(error_model="numpy")
-def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alpha, strength, stiffness,
-                  contact_range, force_scale, tolerance, exponent_step, h_top, ladder_ratio, nodes, vinv,
-                  node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled, free_rungs,
-                  ends, free_q, free_v, records, clock, counters, history, max_steps):
+def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
+
+    The arguments are tuples: ``modes = (q, v, omega, coupling)``, ``rigid = (X, U, mass, half)``,
+    ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``control = (contact_range, force_scale,
+    tolerance, exponent_step, max_steps, quick_newton, onset_efolds)``, ``tables =`` :meth:`CollocationTables.arrays`
+    ``(h_top, ladder_ratio, nodes, vinv, node_cos, ..., filled, free_rungs)``, ``exact_ends = (ends, free_q,
+    free_v, records)``, ``output = (clock, counters, history)``; their entries are:
 
     Parameters
     ----------
@@ -482,7 +523,24 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing.
     max_steps : int
         Return (status 0) after this many accepted steps.
+    quick_newton : bool
+        The ring's quicker rules (results differ in the last bits): Newton on the node forces
+        (exponential law) starts from the force-free solution where the forces barely move the gaps and
+        stops once its quadratic convergence puts the next change below the tolerance (one iteration
+        earlier than waiting for that change); a step whose node forces are all below ``1e-30``
+        of ``force_scale`` rotates the modes without their load.
+    onset_efolds : float
+        Exponential law: the step changes ``alpha_eff * gap`` by at most ``exponent_step`` once the force
+        is within this many e-folds of ``force_scale`` (30: the single collisions), by that much more below.
     """
+    q, v, omega, coupling = modes
+    X, U, mass, half = rigid
+    law, alpha, strength, stiffness, compliance = contact_law
+    contact_range, force_scale, tolerance, exponent_step, max_steps, quick_newton, onset_efolds = control
+    h_top, ladder_ratio, nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, \
+        filled, free_rungs = tables
+    ends, free_q, free_v, records = exact_ends
+    clock, counters, history = output
     s = nodes.size
     n_levels = filled.size
     n_modes = q.size
@@ -508,6 +566,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
     stiff = np.empty(s)
     residual = np.empty(s)
     delta = np.empty(s)
+    rhs = np.empty(s)
     matrix = np.empty((s, s))
     coefficients = np.empty(s)
     previous = np.zeros(s)
@@ -587,8 +646,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         amplitudes_now = True
         for trial in range(free_rungs):
             if filled[trial] == 0:
-                _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid, nodes,
-                            vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
+                _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid, tables)
                 counters[3] += 1
             h_trial = h_top * math.exp(-trial * log_ratio)
             allowed = rigid_gap + sq - free_gap_lowest
@@ -610,8 +668,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
             return STATUS_STEP_UNDERFLOW
         h = h_top * math.exp(-level * log_ratio)
         if filled[level] == 0:
-            _fill_level(level, h, omega, coupling, inverse_mass_rigid, nodes, vinv, node_cos, node_sin,
-                        end_cos, end_sin, end_wsin, end_s, end_c, response, filled)
+            _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables)
             counters[3] += 1
         # free gap at the nodes (no force over the step) and its response to the node forces
         if exact:
@@ -678,7 +735,8 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         # the s node forces
         if law == LAW_EXPONENTIAL:
             converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
-                                          force_scale, forces, residual, delta, matrix, counters)
+                                          force_scale, forces, (residual, delta, matrix, rhs), counters,
+                                          quick_newton)
         elif hard:
             converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
                                     active, matrix, delta, counters)
@@ -688,8 +746,8 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
                 converged = _solve_hard(free_gap, step_response, predicted, gap_floor, forces, active, matrix,
                                         delta, counters)
         else:
-            converged = _newton_forces(free_gap, step_response, law, alpha, strength, stiffness, compliance,
-                                       force_scale, forces, residual, stiff, delta, matrix, counters)
+            converged = _newton_forces(free_gap, step_response, contact_law, force_scale, forces,
+                                       (residual, stiff, delta, matrix), counters)
         if not converged:
             level += 4
             continue
@@ -717,7 +775,11 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         for j in range(n_modes):
             load_q[j] = 0.0
             load_v[j] = 0.0
+        negligible = quick_newton
         for k in range(s):
+            negligible = negligible and abs(forces[k]) <= 1e-30 * force_scale
+        # (quick rules) node forces below 1e-30 of the force scale move no mode by more than round-off: no load
+        for k in range(0 if negligible else s):
             a_k = coefficients[k]
             row_s = end_s[level, k]
             row_c = end_c[level, k]
@@ -819,7 +881,7 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
         if law == LAW_EXPONENTIAL and force_now > 0.0:
             softening = 1.0 + alpha * compliance * force_now
             rate = alpha / softening * abs(rigid_rate + sv)
-            room = exponent_step + max(0.0, -math.log(force_now / force_scale) - 30.0)
+            room = exponent_step + max(0.0, -math.log(force_now / force_scale) - onset_efolds)
             if rate * h_wanted > room:
                 h_wanted = room / rate
         if warm:
@@ -837,19 +899,20 @@ def run_collision(q, v, omega, coupling, X, U, mass, half, compliance, law, alph
                 amplitudes_now = True
             h_free = 0.0
             allowed = rigid_gap + sq - free_gap_lowest
-            trial = max(0, level - 2)  # twice this step, then the rungs down to it
-            while allowed > 0.0 and trial < free_rungs and trial <= level:
+            # the longest of twice this step and the rungs down to it whose fall stays within `allowed`; the
+            # bound on the fall grows with the step, so try the shortest first: where it fails all fail
+            trial = min(level, free_rungs - 1)
+            while allowed > 0.0 and trial >= max(0, level - 2):
                 if filled[trial] == 0:
                     _fill_level(trial, h_top * math.exp(-trial * log_ratio), omega, coupling, inverse_mass_rigid,
-                                nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response,
-                                filled)
+                                tables)
                     counters[3] += 1
                 h_trial = h_top * math.exp(-trial * log_ratio)
                 if _free_fall(h_trial, q, v, omega, coupling, free_work, end_cos[trial], end_sin[trial], rigid_rate,
-                              allowed) <= allowed:
-                    h_free = h_trial
+                              allowed) > allowed:
                     break
-                trial += 1
+                h_free = h_trial
+                trial -= 1
             h_wanted = max(min(h_wanted, h_sample), h_free)
         elif h_wanted > h_sample:
             h_wanted = h_sample

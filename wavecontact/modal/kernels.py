@@ -126,14 +126,17 @@ def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
 
 
 @kernel(error_model="numpy")
-def _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
-            rigid_gap, rigid_rate, reach, speed_bound, accel_bound, amp_left, amp_right):
+def _bounds(modes, inverse_omega, bodies, pairs, bounds, amp_left, amp_right):
     """Rigorous bounds on the modal end motion under free flight.
 
-    ``reach[k]`` bounds |modal displacement| of the pair's two ends,
-    ``speed_bound[k]`` bounds |d gap / dt| and ``accel_bound[k]`` bounds
-    |d^2 gap / dt^2|.
+    ``modes``, ``bodies`` and ``pairs`` as in :func:`run_episode`; ``bounds = (rigid_gap, rigid_rate, reach,
+    speed_bound, accel_bound)`` (filled): ``reach[k]`` bounds |modal displacement| of the pair's two ends,
+    ``speed_bound[k]`` bounds |d gap / dt| and ``accel_bound[k]`` bounds |d^2 gap / dt^2|.
     """
+    q, v, omega, left, right, rod_first = modes
+    X, U, _, half = bodies
+    pair_a, pair_b, pair_offset = pairs[0], pairs[1], pairs[2]
+    rigid_gap, rigid_rate, reach, speed_bound, accel_bound = bounds
     for i in range(rod_first.size - 1):
         al = 0.0
         ar = 0.0
@@ -218,14 +221,15 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
 
 
 @kernel(error_model="numpy")
-def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
-                pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass,
-                law, alpha, strength, stiffness, contact_range,
-                step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight,
-                cos_table, sin_table, omega_sin_table, clock, episode, counters, history, max_steps):
+def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_steps):
     """Integrate until the current collision (episode) is over.
 
-    All arrays are modified in place where they hold state.
+    All arrays are modified in place where they hold state.  The arguments are tuples:
+    ``modes = (q, v, omega, left, right, rod_first)``, ``bodies = (X, U, mass, half)``,
+    ``pairs = (pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass)``,
+    ``contact_law = (law, alpha, strength, stiffness, contact_range)``, ``control = (step_accuracy,
+    step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight)``, ``tables = (cos_table,
+    sin_table, omega_sin_table)``, ``output = (clock, episode, counters, history)``; their entries are:
 
     Parameters
     ----------
@@ -274,6 +278,13 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     int
         A status code (STATUS_*).
     """
+    q, v, omega, left, right, rod_first = modes
+    X, U, mass, half = bodies
+    pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass = pairs
+    law, alpha, strength, stiffness, contact_range = contact_law
+    step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight = control
+    cos_table, sin_table, omega_sin_table = tables
+    clock, episode, counters, history = output
     n_rods = X.size
     n_pairs = pair_a.size
     n_levels = cos_table.shape[1]
@@ -301,6 +312,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
     reach = np.empty(n_pairs)
     speed_bound = np.empty(n_pairs)
     accel_bound = np.empty(n_pairs)
+    bounds = (rigid_gap, rigid_rate, reach, speed_bound, accel_bound)
     log_ratio = math.log(ladder_ratio)
     recording = history.shape[0] > 0
     steps_here = 0
@@ -333,8 +345,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
         candidate = -1
         if all_far:
             _flush(v, left, right, rod_first, pending)
-            _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b, pair_offset,
-                    rigid_gap, rigid_rate, reach, speed_bound, accel_bound, amp_left, amp_right)
+            _bounds(modes, inverse_omega, bodies, pairs, bounds, amp_left, amp_right)
             ep = episode[0]
             if ep >= 0 and rigid_rate[ep] > 0.0 and rigid_gap[ep] - reach[ep] > contact_range:
                 return STATUS_SEPARATED
@@ -416,9 +427,7 @@ def run_episode(q, v, omega, left, right, rod_first, X, U, mass, half,
                     # speed over the step (the momentary rate may vanish at a turning point)
                     if not bounds_ready:
                         _flush(v, left, right, rod_first, pending)
-                        _bounds(q, v, omega, inverse_omega, left, right, rod_first, X, U, half, pair_a, pair_b,
-                                pair_offset, rigid_gap, rigid_rate, reach, speed_bound, accel_bound,
-                                amp_left, amp_right)
+                        _bounds(modes, inverse_omega, bodies, pairs, bounds, amp_left, amp_right)
                         bounds_ready = True
                     # largest dt with alpha_eff (|dr/dt| dt + accel_bound dt^2 / 2) <= reach + excess:
                     # the momentary rate plus a rigorous bound on how fast it can change

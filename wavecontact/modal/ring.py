@@ -233,6 +233,13 @@ FREE_STEP_RUNGS = 10
 EXPONENT_STEP = 2.0
 # collocation tolerance of the ring's collisions (static correction; see docs/ring.md)
 COLLOCATION_TOLERANCE = 1e-2
+# Newton on the node forces stops once its quadratic convergence puts the next change below round-off (one
+# iteration fewer than confirming it; the results differ in the last bits): False is the rule before
+QUICK_NEWTON = True
+# the step changes alpha_eff * gap by at most EXPONENT_STEP once the force is within this many e-folds of the
+# collision's force scale, by that much more below; 20 or 25 took 7 % or no less time and left a few collisions
+# 5-20 times less accurate than 30 on a set of 99 thermalised states (another set: more accurate; see docs/ring.md)
+ONSET_EFOLDS = 30.0
 
 
 class _CollocationPair:
@@ -278,10 +285,13 @@ class _CollocationPair:
         # relative to the first collision's force would leave the slow ones under-resolved
         force_scale = max(self.reduced_mass * abs(self.U[1] - self.U[0]), 1e-9 * system.force_scale)
         status = collocation.run_collision(
-            system.q, system.v, system.omega, self.coupling, self.X, self.U, self.mass, self.half,
-            self.compliance, system.law_code, system.alpha, system.strength, system.stiffness,
-            system.contact_range, force_scale, tolerance, EXPONENT_STEP, *self.tables.arrays(),
-            self.ends, self.free, self.free, self.records, system.clock, self.counters, self.history, 1 << 62,
+            (system.q, system.v, system.omega, self.coupling), (self.X, self.U, self.mass, self.half),
+            (int(system.law_code), float(system.alpha), float(system.strength), float(system.stiffness),
+             self.compliance),
+            (float(system.contact_range), float(force_scale), float(tolerance), float(EXPONENT_STEP), 1 << 62,
+             bool(QUICK_NEWTON), float(ONSET_EFOLDS)),
+            self.tables.arrays(), (self.ends, self.free, self.free, self.records),
+            (system.clock, self.counters, self.history),
         )
         system.check_status(status)
         if status != kernels.STATUS_SEPARATED:

@@ -251,10 +251,12 @@ def _run_collocation(system, stages, tolerance, buffer, chunks, exponent_step=_E
         records = np.empty((0, 3 + stages))
     while True:
         status = collocation.run_collision(
-            system.q, system.v, system.omega, coupling, system.X, system.U, system.mass, system.half,
-            float(system.pair_compliance[0]), system.law_code, system.alpha, system.strength, system.stiffness,
-            system.contact_range, system.force_scale, float(tolerance), float(exponent_step), *tables.arrays(),
-            ends, free_q, free_v, records, system.clock, counters, buffer, 100_000_000,
+            (system.q, system.v, system.omega, coupling), (system.X, system.U, system.mass, system.half),
+            (int(system.law_code), float(system.alpha), float(system.strength), float(system.stiffness),
+             float(system.pair_compliance[0])),
+            (float(system.contact_range), float(system.force_scale), float(tolerance), float(exponent_step),
+             100_000_000, False, 30.0),
+            tables.arrays(), (ends, free_q, free_v, records), (system.clock, counters, buffer),
         )
         system.check_status(status)
         if status == kernels.STATUS_BUFFER_FULL:

@@ -189,12 +189,13 @@ class ModalSystem:
         if history is None:
             history = np.empty((0, 3))
         return kernels.run_episode(
-            self.q, self.v, self.omega, self.left, self.right, self.rod_first, self.X, self.U,
-            self.mass, self.half, self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance,
-            self.pair_inverse_mass, self.law_code, self.alpha, self.strength, self.stiffness,
-            self.contact_range, self.control.accuracy, self.control.reach, self.force_scale,
-            self.dt_top, self.control.ladder_ratio, self.sub_index, self.sub_weight, *self.rotation_tables(),
-            self.clock, self.episode, self.counters, history, int(max_steps),
+            (self.q, self.v, self.omega, self.left, self.right, self.rod_first), (self.X, self.U, self.mass, self.half),
+            (self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance, self.pair_inverse_mass),
+            (int(self.law_code), float(self.alpha), float(self.strength), float(self.stiffness),
+             float(self.contact_range)),
+            (float(self.control.accuracy), float(self.control.reach), float(self.force_scale), float(self.dt_top),
+             float(self.control.ladder_ratio), self.sub_index, self.sub_weight),
+            self.rotation_tables(), (self.clock, self.episode, self.counters, history), int(max_steps),
         )
 
     @staticmethod
