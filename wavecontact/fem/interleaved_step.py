@@ -549,7 +549,7 @@ def _backward_update(u, v, y, backward, constants, n, dt):
 def step_tridiagonal(table, dt):
     """One leapfrog step ``v += dt M^-1 (-K u)``, ``u += dt v`` of a P1 consistent rod held in the rows
     ``L_U``, ``L_V`` of its table (interleaved layout)."""
-    step_tridiagonal_loaded(table, dt, -1, 0.0)
+    step_tridiagonal_loaded(table, dt, np.int64(-1), 0.0)  # not a literal -1: no specialisation of its own
 
 
 @kernel(fastmath=False)
@@ -700,7 +700,7 @@ def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, coun
 def step_condensed(table, dt):
     """One leapfrog step of a P2 consistent rod held in the rows ``L_U``, ``L_V`` of its table (interleaved
     layout, :func:`pack_nodes`): midpoints condensed, the vertex system solved in chunks."""
-    step_condensed_loaded(table, dt, -1, 0.0)
+    step_condensed_loaded(table, dt, np.int64(-1), 0.0)  # not a literal -1: no specialisation of its own
 
 
 @kernel(fastmath=False)

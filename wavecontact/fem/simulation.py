@@ -18,7 +18,7 @@ from ..result import Outcome
 from ..scene import Scene
 from . import kernels, lattice, layout
 from .discretization import RodDiscretization, discretize_rod, matched_nodes, uniform_nodes
-from .explicit_step import elastic_acceleration, prepare_mass
+from .explicit_step import prepare_mass, rod_acceleration
 from .interleaved_step import LANE_TOLERANCE
 from .schemes import choose_scheme, gap_treatment, wants_lattice_mesh
 from .stability import banded_mass, check_time_step, stable_step
@@ -366,7 +366,7 @@ class _Run:
         self.a = []
         for d, u, (kind, table) in zip(setup.rods, self.u, self.mass_solves):
             a = np.zeros(d.n_nodes)
-            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
+            rod_acceleration(u, d.stiffness_bands, kind, table, a)
             self.a.append(a)
         masses = [float(d.lumped_mass.sum()) for d in setup.rods]
         self.masses = masses
@@ -527,7 +527,7 @@ class _Run:
         out = []
         for d, u, v, (kind, table) in zip(self.setup.rods, self.u, self.v, self.mass_solves):
             a = np.zeros_like(u)
-            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
+            rod_acceleration(u, d.stiffness_bands, kind, table, a)
             out.append(v + 0.5 * self.setup.dt * a)
         return out
 
