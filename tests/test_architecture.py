@@ -188,8 +188,6 @@ OVER_THE_LIMIT = {
     "delay/stochastic_hardcore_batch.py:_noise_coefficients": 13,
     "delay/stochastic_hardcore_batch.py:_quiet_chunk": 15,
     "delay/stochastic_hardcore_batch.py:max_plus_batch": 18,
-    "fem/multibody_kernel.py:_push": 13,
-    "fem/multibody_kernel.py:advance_line": 24,
     "gas/collision_law.py:build_collision_law": 13,
     "gas/simulation.py:GasSimulation.__init__": 15,
     "io/run_controller.py:RunController.__init__": 13,

@@ -738,8 +738,9 @@ def step_rod(u, v, a, bands, kind, table, dt):
 
 @kernel(fastmath=False)
 def step_flat(u, v, a, bands, kind, table, dt):
-    """:func:`step_rod` in the flat layout (the table's interleaved rows unused): the step of the two-rod time
-    loop, which runs the interleaved layout itself, so that it does not compile the packing here."""
+    """:func:`step_rod` in the flat layout (the table's interleaved rows unused): the step of the time loops
+    (two rods, many bodies), which run the interleaved layout themselves, so that they do not compile the
+    packing here."""
     if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
         _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
         return

@@ -148,7 +148,7 @@ def _leapfrog_p1(u, v, bands, inverse_mass, dt):
     u[n - 1] = current + dt * v[n - 1]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, inline="always")
 def _synchronize(u, v, a, sync, bands, kind, table, dt):
     """Velocity at the time of ``u`` from the half-step velocity ``v``: ``v + dt/2 a(u)``."""
     elastic_acceleration(u, bands, kind, table, a)
@@ -355,7 +355,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     return STATUS_RUNNING, max_steps, samples
 
 
-@kernel
+@kernel(inline="always")
 def _step(u, v, a, bands, kind, table, rows, dt, where, load):
     """One rod's elastic step in its layout (``rows`` > 0: the interleaved one, on the table's copy, with
     ``load`` on its scaled right-hand side at ``where``, an end node's position; -1: none)."""
@@ -367,7 +367,7 @@ def _step(u, v, a, bands, kind, table, rows, dt, where, load):
         step_tridiagonal_loaded(table, dt, where, load)
 
 
-@kernel
+@kernel(inline="always")
 def _layout(u, v, table, rows, order):
     """The arrays the time loop steps: ``u, v`` themselves, or (``rows`` > 0) their interleaved copies."""
     if rows == 0:
@@ -377,7 +377,7 @@ def _layout(u, v, table, rows, order):
     return table[L_U], table[L_V]
 
 
-@kernel
+@kernel(inline="always")
 def _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2):
     """Copy the interleaved state of the rods that run in that layout back to their flat arrays."""
     if rows1:
