@@ -581,11 +581,10 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
         or for :data:`RULE_LAW` the hard-core collision law's (:meth:`CollisionLaw.kernel_arrays`:
         ``log10 x`` grid, short-rod-share grid, levels, eps^2 quantiles and short-rod gains per level,
         ``(G, X, S, P)``).
-    soft : tuple of 7 ndarray or None
+    soft : tuple of 7 ndarray
         ``(kappa, gamma, log_x, share, probability, quantiles, gains)``: the soft (finite-kappa) collision
         law, its kappa rows, grids, levels, and its corrections to the hard-core law, arrays
-        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`); None (:func:`empty_soft_law`) when unused,
-        which compiles the loop without the soft law's branch (then ``stiffness`` is not read).
+        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`; :func:`empty_soft_law` when unused).
     draws : tuple of 2 ndarray
         ``(uniforms, pending)``: levels in [0, 1), one per collision of the table and law rules; ``(flag,
         eps2, share)`` supplied by the caller for the external rule (shape (3,)).
@@ -728,8 +727,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             below, ir, wr, i_s, ws = _law_point(log_x, short_share, table_ratio, share_grid)
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, i_s, ws,
                                   probability, uniform_levels, quantiles, share, np.bool_(True))
-            # soft None (no soft law, stiffness 0): numba drops this branch, _soft_draw is not compiled
-            if soft is not None and stiffness > 0.0:
+            if stiffness > 0.0:
                 kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
                 eps2, s, softer, below_soft, floored = _soft_draw(
                     uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft)
@@ -894,9 +892,6 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
     return STATUS_DONE, -1, done
 
 
-_NO_SOFT_LAW = None  # the soft argument of run_events when the rule has no soft law
-
-
 def _read_only(arrays):
     """``arrays`` made read-only, as the collision laws' arrays are: a placeholder of the same numba types as
     the arrays it stands beside compiles no second copy of the kernels that read both."""
@@ -913,5 +908,7 @@ def empty_table():
 
 
 def empty_soft_law():
-    """No soft law (stiffness 0): None, so that :func:`run_events` compiles without its soft branch."""
-    return _NO_SOFT_LAW
+    """Placeholder soft-law arrays ``(kappa, gamma, log_x, share, levels, quantiles, gains)`` (stiffness 0;
+    read-only)."""
+    return _read_only((np.array([10.0]), np.array([1.0]), np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]),
+                       np.ones((1, 1, 1, 1, 2)), np.zeros((1, 1, 1, 1, 2))))
