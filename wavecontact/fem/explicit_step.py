@@ -44,7 +44,8 @@ import numpy as np
 from .._jit import kernel
 from . import interleaved_step as lanes
 
-__all__ = ["MASS_CONDENSED", "MASS_LUMPED", "MASS_TRIDIAGONAL", "mass_acceleration", "prepare_mass", "step_rod"]
+__all__ = ["MASS_CONDENSED", "MASS_LUMPED", "MASS_TRIDIAGONAL", "mass_acceleration", "prepare_mass", "rod_acceleration",
+           "step_flat", "step_rod"]
 
 MASS_LUMPED = 0
 MASS_TRIDIAGONAL = 1  # P1 consistent
@@ -345,8 +346,8 @@ def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
     n = u.size
     older = u[0]
     old = u[1]
-    force0 = _pentadiagonal_force(u, bands, 0, n)
-    force1 = _pentadiagonal_force(u, bands, 1, n)
+    force0 = _pentadiagonal_force(u, bands, np.int64(0), n)  # not literals: no specialisation for each
+    force1 = _pentadiagonal_force(u, bands, np.int64(1), n)
     velocity = v[0] + dt * (force0 * inverse[0])
     v[0] = velocity
     u[0] = older + dt * velocity
@@ -699,6 +700,16 @@ def _condensed_step(u, v, table, dt):
     u[2 * elements] += dt * velocity
 
 
+def rod_acceleration(u, bands, kind, table, out):
+    """:func:`elastic_acceleration` called from Python: a lumped mass compiles its stencil alone, not the
+    solves of the consistent masses (the exact lattice's runs need no other kernel of this module)."""
+    if kind == MASS_LUMPED:
+        _stiffness_forces(u, bands, out)
+        out *= table[0, : out.size]  # the same products as mass_acceleration's loop
+    else:
+        elastic_acceleration(u, bands, kind, table, out)
+
+
 @kernel(fastmath=False)
 def elastic_acceleration(u, bands, kind, table, out):
     """``out = M^-1 (-K u)`` (length/time^2)."""
@@ -708,28 +719,33 @@ def elastic_acceleration(u, bands, kind, table, out):
 
 @kernel(fastmath=False)
 def step_rod(u, v, a, bands, kind, table, dt):
-    """One leapfrog step of a free rod: ``v += dt M^-1 (-K u)``, ``u += dt v`` (``a``: scratch)."""
+    """One leapfrog step of a free rod: ``v += dt M^-1 (-K u)``, ``u += dt v`` (``a``: scratch), in the
+    interleaved layout when ``table`` holds one (packed and unpacked around the step), else :func:`step_flat`."""
+    if kind != MASS_LUMPED and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
+        rows = int(table[lanes.L_SHAPE, 0])
+        order = bands.shape[0] - 1
+        lanes.pack_nodes(u, table[lanes.L_U], rows, order)
+        lanes.pack_nodes(v, table[lanes.L_V], rows, order)
+        if kind == MASS_CONDENSED:
+            lanes.step_condensed(table, dt)
+        else:
+            lanes.step_tridiagonal(table, dt)
+        lanes.unpack_nodes(table[lanes.L_U], u, rows, order)
+        lanes.unpack_nodes(table[lanes.L_V], v, rows, order)
+        return
+    step_flat(u, v, a, bands, kind, table, dt)
+
+
+@kernel(fastmath=False)
+def step_flat(u, v, a, bands, kind, table, dt):
+    """:func:`step_rod` in the flat layout (the table's interleaved rows unused): the step of the time loops
+    (two rods, many bodies), which run the interleaved layout themselves, so that they do not compile the
+    packing here."""
     if kind == MASS_LUMPED and bands.shape[0] == 3 and u.size >= 5:
         _leapfrog_pentadiagonal(u, v, bands, table[0], dt)
         return
-    if kind == MASS_CONDENSED and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
-        rows = int(table[lanes.L_SHAPE, 0])
-        lanes.pack_nodes(u, table[lanes.L_U], rows, 2)
-        lanes.pack_nodes(v, table[lanes.L_V], rows, 2)
-        lanes.step_condensed(table, dt)
-        lanes.unpack_nodes(table[lanes.L_U], u, rows, 2)
-        lanes.unpack_nodes(table[lanes.L_V], v, rows, 2)
-        return
     if kind == MASS_CONDENSED:
         _condensed_step(u, v, table, dt)
-        return
-    if kind == MASS_TRIDIAGONAL and table[lanes.L_SHAPE, 0] > 0.0:  # the interleaved layout
-        rows = int(table[lanes.L_SHAPE, 0])
-        lanes.pack_nodes(u, table[lanes.L_U], rows, 1)
-        lanes.pack_nodes(v, table[lanes.L_V], rows, 1)
-        lanes.step_tridiagonal(table, dt)
-        lanes.unpack_nodes(table[lanes.L_U], u, rows, 1)
-        lanes.unpack_nodes(table[lanes.L_V], v, rows, 1)
         return
     if kind == MASS_TRIDIAGONAL:  # the solve's scaling in the stencil pass
         _scaled_tridiagonal_forces(u, bands[1], table[T_SCALE], a)

@@ -366,23 +366,26 @@ def condensed_lane_rows(coefficients: dict, scale: np.ndarray, forward: np.ndarr
 
 
 @kernel(fastmath=False)
-def pack(x, packed, n):
-    """``packed[i LANES + c] = x[c n + i]`` for the ``x.size`` unknowns (the padding untouched)."""
+def pack(x, first, stride, packed, start, n):
+    """``packed[start + i LANES + c] = y[c n + i]`` for the unknowns ``y = x[first::stride]`` (the padding
+    untouched; indices, not a strided view, so that one compilation serves every stride)."""
+    count = (x.size - first + stride - 1) // stride
     for c in range(LANES):
         for i in range(n):
             k = c * n + i
-            if k < x.size:
-                packed[i * LANES + c] = x[k]
+            if k < count:
+                packed[start + i * LANES + c] = x[first + stride * k]
 
 
 @kernel(fastmath=False)
-def unpack(packed, x, n):
+def unpack(packed, start, x, first, stride, n):
     """The inverse of :func:`pack`."""
+    count = (x.size - first + stride - 1) // stride
     for c in range(LANES):
         for i in range(n):
             k = c * n + i
-            if k < x.size:
-                x[k] = packed[i * LANES + c]
+            if k < count:
+                x[first + stride * k] = packed[start + i * LANES + c]
 
 
 @kernel(fastmath=False)
@@ -549,7 +552,7 @@ def _backward_update(u, v, y, backward, constants, n, dt):
 def step_tridiagonal(table, dt):
     """One leapfrog step ``v += dt M^-1 (-K u)``, ``u += dt v`` of a P1 consistent rod held in the rows
     ``L_U``, ``L_V`` of its table (interleaved layout)."""
-    step_tridiagonal_loaded(table, dt, -1, 0.0)
+    step_tridiagonal_loaded(table, dt, np.int64(-1), 0.0)  # not a literal -1: no specialisation of its own
 
 
 @kernel(fastmath=False)
@@ -581,21 +584,18 @@ def step_tridiagonal_loaded(table, dt, where, load):
 def pack_nodes(x, packed, n, order):
     """:func:`pack` of a rod's nodes into a table row from ``ORIGIN`` (P1: all; P2: the vertices, even nodes),
     P2's midpoints from :func:`midpoint_origin` (the ghost rows untouched)."""
-    if order == 1:
-        pack(x, packed[ORIGIN:], n)
-        return
-    pack(x[0::2], packed[ORIGIN:], n)
-    pack(x[1::2], packed[midpoint_origin(n):], n)
+    # np.int64: literal arguments would compile pack once more for each
+    pack(x, np.int64(0), order, packed, np.int64(ORIGIN), n)
+    if order == 2:
+        pack(x, np.int64(1), order, packed, midpoint_origin(n), n)
 
 
 @kernel(fastmath=False)
 def unpack_nodes(packed, x, n, order):
     """The inverse of :func:`pack_nodes`."""
-    if order == 1:
-        unpack(packed[ORIGIN:], x, n)
-        return
-    unpack(packed[ORIGIN:], x[0::2], n)
-    unpack(packed[midpoint_origin(n):], x[1::2], n)
+    unpack(packed, np.int64(ORIGIN), x, np.int64(0), order, n)
+    if order == 2:
+        unpack(packed, midpoint_origin(n), x, np.int64(1), order, n)
 
 
 @kernel(fastmath=False)
@@ -700,7 +700,7 @@ def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, coun
 def step_condensed(table, dt):
     """One leapfrog step of a P2 consistent rod held in the rows ``L_U``, ``L_V`` of its table (interleaved
     layout, :func:`pack_nodes`): midpoints condensed, the vertex system solved in chunks."""
-    step_condensed_loaded(table, dt, -1, 0.0)
+    step_condensed_loaded(table, dt, np.int64(-1), 0.0)  # not a literal -1: no specialisation of its own
 
 
 @kernel(fastmath=False)

@@ -34,7 +34,7 @@ from .contact_flows import (
     contact_potential,
     interface_gap,
 )
-from .explicit_step import MASS_CONDENSED, MASS_LUMPED, T_CHAIN_INVERSE, elastic_acceleration, step_rod
+from .explicit_step import MASS_CONDENSED, MASS_LUMPED, T_CHAIN_INVERSE, elastic_acceleration, step_flat
 from .interleaved_step import (
     L_SHAPE,
     L_U,
@@ -148,7 +148,7 @@ def _leapfrog_p1(u, v, bands, inverse_mass, dt):
     u[n - 1] = current + dt * v[n - 1]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, inline="always")
 def _synchronize(u, v, a, sync, bands, kind, table, dt):
     """Velocity at the time of ``u`` from the half-step velocity ``v``: ``v + dt/2 a(u)``."""
     elastic_acceleration(u, bands, kind, table, a)
@@ -251,7 +251,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     mass2 = 0.0
     for i in range(u2.size):
         mass2 += weights2[i]
-    samples = 0
+    samples = np.int64(0)  # np.int64: a literal argument would compile a callee once more for it alone
     # large consistent masses run in the interleaved layout (interleaved_step.py): U, V below are then the
     # packed copies in their tables, the flat u, v are refreshed for the energy checks and at the end
     rows1 = int(table1[L_SHAPE, 0])
@@ -261,7 +261,7 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     U1, V1 = _layout(u1, v1, table1, rows1, order1)
     U2, V2 = _layout(u2, v2, table2, rows2, order2)
     end1 = node_position(last, rows1, order1) if rows1 else last
-    start2 = node_position(0, rows2, order2) if rows2 else 0
+    start2 = node_position(np.int64(0), rows2, order2) if rows2 else 0
     where1 = np.empty(column1.size, np.int64)
     for k in range(column1.size):
         where1[k] = node_position(c1_start + k, rows1, order1) if rows1 else c1_start + k
@@ -355,19 +355,19 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     return STATUS_RUNNING, max_steps, samples
 
 
-@kernel
+@kernel(inline="always")
 def _step(u, v, a, bands, kind, table, rows, dt, where, load):
     """One rod's elastic step in its layout (``rows`` > 0: the interleaved one, on the table's copy, with
     ``load`` on its scaled right-hand side at ``where``, an end node's position; -1: none)."""
     if rows == 0:
-        step_rod(u, v, a, bands, kind, table, dt)
+        step_flat(u, v, a, bands, kind, table, dt)
     elif kind == MASS_CONDENSED:
         step_condensed_loaded(table, dt, where, load)
     else:
         step_tridiagonal_loaded(table, dt, where, load)
 
 
-@kernel
+@kernel(inline="always")
 def _layout(u, v, table, rows, order):
     """The arrays the time loop steps: ``u, v`` themselves, or (``rows`` > 0) their interleaved copies."""
     if rows == 0:
@@ -377,7 +377,7 @@ def _layout(u, v, table, rows, order):
     return table[L_U], table[L_V]
 
 
-@kernel
+@kernel(inline="always")
 def _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2):
     """Copy the interleaved state of the rods that run in that layout back to their flat arrays."""
     if rows1:

@@ -332,7 +332,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
     mass2 = 0.0
     for i in range(u2.size):
         mass2 += weights2[i]
-    samples = 0
+    samples = np.int64(0)  # np.int64: a literal argument would compile a callee once more for it alone
     rates = np.zeros(5)
     status = STATUS_RUNNING
     done = max_steps
@@ -340,7 +340,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
     for step in range(max_steps):
         r_now = offset + contact2[0] - contact1[0]
         # incoming characteristics: mean rate over [t - dt, t + dt], then the single step ahead
-        arriving2 = _node(f2, g2, mask2, n, 1) - contact2[1]
+        arriving2 = _node(f2, g2, mask2, n, np.int64(1)) - contact2[1]
         arriving1 = _node(f1, g1, mask1, n, last1 - 1) - contact1[1]
         incoming = 2.0 * (arriving2 - arriving1) / dt - state[S_INCOMING]
         rates[0] = state[S_INCOMING_EARLIER]
@@ -361,7 +361,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
         state[S_INCOMING_EARLIER] = state[S_INCOMING]
         state[S_INCOMING] = incoming
         end1 = _contact_end_value(contact1, _node(f1, g1, mask1, n, last1 - 1), coefficient1)
-        start2 = _contact_end_value(contact2, _node(f2, g2, mask2, n, 1), coefficient2)
+        start2 = _contact_end_value(contact2, _node(f2, g2, mask2, n, np.int64(1)), coefficient2)
         r_free = offset + start2 - end1
         if varies:
             # far apart the force cannot move the gap by a round-off amount within the step
@@ -388,7 +388,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
         # the waves entering each rod: at the contact end from the new end value, at the far end by reflection
         f1[(last1 + n + 1) & mask1] = end1 - g1[(last1 - n - 1) & mask1]
         if mirror1:
-            far = 2.0 * _node(f1, g1, mask1, n, 1) - _node(f1, g1, mask1, n - 1, 0)
+            far = 2.0 * _node(f1, g1, mask1, n, np.int64(1)) - _node(f1, g1, mask1, n - 1, np.int64(0))
             g1[(-n - 1) & mask1] = far - f1[(n + 1) & mask1]
         else:
             _reflect_at_first(f1, g1, mask1, n, shift1, weight1)
@@ -426,7 +426,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
 
         if (step + 1) % check_every == 0:
             _rebuild(f1, g1, mask1, n, contact1, last1, u1, w1)
-            _rebuild(f2, g2, mask2, n, contact2, 0, u2, w2)
+            _rebuild(f2, g2, mask2, n, contact2, np.int64(0), u2, w2)
             kin1, str1 = _staggered_energies(u1, w1, bands1, weights1, dt)
             kin2, str2 = _staggered_energies(u2, w2, bands2, weights2, dt)
             pot = contact_potential(law, gap, alpha, strength, stiffness)
@@ -450,7 +450,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
                     done = step + 1
                     break
     _rebuild(f1, g1, mask1, n, contact1, last1, u1, w1)
-    _rebuild(f2, g2, mask2, n, contact2, 0, u2, w2)
+    _rebuild(f2, g2, mask2, n, contact2, np.int64(0), u2, w2)
     return status, done, samples
 
 

@@ -187,9 +187,10 @@ def _start(scene, setup: LineSetup) -> dict:
 
 def _advance(setup: LineSetup, loop: dict, steps: int):
     """Up to ``steps`` steps of the loop; ``(status, steps done)``."""
-    return mk.advance_line(*loop["args_rods"], loop["ru"], loop["rv"], loop["rinv"], setup.body_kind, setup.body_slot,
-                           loop["contacts"], setup.columns, loop["where"], loop["records"], loop["values"],
-                           loop["targets"], loop["ends"], loop["control"], loop["state"], steps)
+    links = (loop["contacts"], setup.columns, loop["where"], loop["records"], loop["values"], loop["targets"],
+             loop["ends"])
+    return mk.advance_line(loop["args_rods"], (loop["ru"], loop["rv"], loop["rinv"]),
+                           (setup.body_kind, setup.body_slot), links, loop["control"], loop["state"], steps)
 
 
 def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", dt=None, courant=None,

@@ -5,7 +5,7 @@ displacements) for every body at once:
 
 1. the soft contact forces (exponential, penalty, any law of
    :func:`wavecontact.contact_kernels.law_force`) at the current gaps;
-2. each rod's free elastic step (:func:`~wavecontact.fem.explicit_step.step_rod`,
+2. each rod's free elastic step (:func:`~wavecontact.fem.explicit_step.step_flat`,
    the two-rod solver's per-rod step: P1/P2, lumped/consistent), each rigid
    body's free flight;
 3. the soft forces as kicks spread along ``M^-1 e_end`` of each facing end
@@ -43,7 +43,7 @@ import math
 
 from .._jit import kernel
 from ..contact_kernels import law_force
-from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_rod
+from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_flat
 from .interleaved_step import L_SHAPE, pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
 from .kernels import _leapfrog_p1
 
@@ -109,12 +109,17 @@ def _velocity(kind, slot, node, vs, rv):
 
 
 @kernel
-def _push(kind, slot, start, length, columns, where, us, vs, ru, rv, rinv, kick, shift):
-    """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements
-    (``where``: the entries' positions in the arrays the loop steps)."""
+def _push(kind, slot, start, length, spread, stepped, rigid, kick, shift):
+    """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements.
+
+    ``spread``: ``(columns, where)``, the ``M^-1 e_end`` entries and their positions in the arrays the loop
+    steps, ``stepped``: those arrays ``(us, vs)``, ``rigid``: ``(ru, rv, rinv)`` (see :func:`advance_line`).
+    """
+    columns, where = spread
+    ru, rv, rinv = rigid
     if kind == SIDE_ROD:
-        u = us[slot]
-        v = vs[slot]
+        u = stepped[0][slot]
+        v = stepped[1][slot]
         for j in range(length):
             c = columns[start + j]
             k = where[start + j]
@@ -126,12 +131,13 @@ def _push(kind, slot, start, length, columns, where, us, vs, ru, rv, rinv, kick,
 
 
 @kernel
-def _exchange(contacts, c, columns, where, us, vs, ru, rv, rinv, impulse, dt):
-    """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes."""
+def _exchange(contacts, c, spread, stepped, rigid, impulse, dt):
+    """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes (the
+    tuples of :func:`_push`)."""
     _push(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_COL_B]),
-          int(contacts[c, C_LEN_B]), columns, where, us, vs, ru, rv, rinv, impulse, impulse * dt)
+          int(contacts[c, C_LEN_B]), spread, stepped, rigid, impulse, impulse * dt)
     _push(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_COL_A]),
-          int(contacts[c, C_LEN_A]), columns, where, us, vs, ru, rv, rinv, -impulse, -impulse * dt)
+          int(contacts[c, C_LEN_A]), spread, stepped, rigid, -impulse, -impulse * dt)
 
 
 @kernel
@@ -220,9 +226,12 @@ def _flat(flat_u, flat_v, us, vs, tables, bands, n_rods):
 
 
 @kernel
-def advance_line(flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights, ru, rv, rinv, body_kind, body_slot,
-                 contacts, columns, where, records, values, targets, ends, control, state, max_steps):
+def advance_line(rods, rigid, line, links, control, state, max_steps):
     """Run up to ``max_steps`` steps; return ``(status, steps done)``.
+
+    The arrays come in four tuples: ``rods = (flat_u, flat_v, us, vs, scratch, bands, kinds, tables,
+    weights)``, ``rigid = (ru, rv, rinv)``, ``line = (body_kind, body_slot)`` and ``links = (contacts,
+    columns, where, records, values, targets, ends)``.
 
     Parameters
     ----------
@@ -251,6 +260,12 @@ def advance_line(flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights,
     control, state : arrays
         ``K_*`` and ``S_*`` entries.
     """
+    flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights = rods
+    ru, rv = rigid[0], rigid[1]
+    body_kind, body_slot = line
+    contacts, columns, where, records, values, targets, ends = links
+    stepped = (us, vs)
+    spread = (columns, where)
     dt = control[K_DT]
     period = control[K_PERIOD]
     check_every = int(control[K_CHECK_EVERY])
@@ -291,7 +306,7 @@ def advance_line(flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights,
                 else:
                     step_tridiagonal(table, dt)
             else:
-                step_rod(us[b], vs[b], scratch[b], bands[b], kinds[b], table, dt)
+                step_flat(us[b], vs[b], scratch[b], bands[b], kinds[b], table, dt)
         for r in range(n_rigid):
             ru[r] += dt * rv[r]
         # 3. soft forces as kicks
@@ -300,7 +315,7 @@ def advance_line(flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights,
             if contacts[c, C_HARD] == HARD_NONE:
                 force = values[c]
                 if force != 0.0:
-                    _exchange(contacts, c, columns, where, us, vs, ru, rv, rinv, force * dt, dt)
+                    _exchange(contacts, c, spread, stepped, rigid, force * dt, dt)
                 acting = force > contacts[c, C_THRESHOLD]
                 acting_any = acting_any or acting
                 _record(records, c, force * dt, acting, time)
@@ -351,7 +366,7 @@ def advance_line(flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights,
                     wanted = max(wanted, 0.0)
                     change = wanted - values[c]
                     if change != 0.0:
-                        _exchange(contacts, c, columns, where, us, vs, ru, rv, rinv, change, dt)
+                        _exchange(contacts, c, spread, stepped, rigid, change, dt)
                         values[c] = wanted
                         # converged once no impulse changes by more than round-off (1e-12 of speed / W)
                         moved = moved or abs(change) > 0.01 * contacts[c, C_THRESHOLD]

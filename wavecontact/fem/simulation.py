@@ -18,7 +18,7 @@ from ..result import Outcome
 from ..scene import Scene
 from . import kernels, lattice, layout
 from .discretization import RodDiscretization, matched_nodes, uniform_nodes
-from .explicit_step import elastic_acceleration, prepare_mass
+from .explicit_step import prepare_mass, rod_acceleration
 from .interleaved_step import LANE_TOLERANCE
 from .reuse import discretized_rods
 from .schemes import choose_scheme, gap_treatment, wants_lattice_mesh
@@ -364,7 +364,7 @@ class _Run:
         self.a = []
         for d, u, (kind, table) in zip(setup.rods, self.u, self.mass_solves):
             a = np.zeros(d.n_nodes)
-            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
+            rod_acceleration(u, d.stiffness_bands, kind, table, a)
             self.a.append(a)
         masses = [float(d.lumped_mass.sum()) for d in setup.rods]
         self.masses = masses
@@ -525,7 +525,7 @@ class _Run:
         out = []
         for d, u, v, (kind, table) in zip(self.setup.rods, self.u, self.v, self.mass_solves):
             a = np.zeros_like(u)
-            elastic_acceleration(u, d.stiffness_bands, kind, table, a)
+            rod_acceleration(u, d.stiffness_bands, kind, table, a)
             out.append(v + 0.5 * self.setup.dt * a)
         return out
 

@@ -394,7 +394,9 @@ def _soft_draw(u, gamma, kappa, log_x, short_share, eps2_hard, gain_hard, soft):
     rows = soft_kappa.size
     ig, wg = _lookup(soft_gamma, gamma)
     below, ix, wx, i_s, ws = _law_point(log_x, short_share, soft_log_x, soft_share)
-    uniform = False  # the level by a branch-free search (soft draws are a minority; no exactness test)
+    # the level by a branch-free search (soft draws are a minority; no exactness test); np.bool_ and np.int64 here
+    # and below: literal arguments would compile the callee once more for them alone
+    uniform = np.bool_(False)
     softer = False
     if kappa <= soft_kappa[0]:
         r = 0
@@ -415,12 +417,12 @@ def _soft_draw(u, gamma, kappa, log_x, short_share, eps2_hard, gain_hard, soft):
             weight_hi = (z_lo - z) / (z_lo - z_hi)
             weight_lo = 1.0 - weight_hi
     d_eps, d_gain = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_d_eps2[r],
-                                soft_d_gain[r], True)
+                                soft_d_gain[r], np.bool_(True))
     d_eps *= weight_lo
     d_gain *= weight_lo
     if weight_hi > 0.0:
         e1, g1 = _table_draw(u, ig, wg, ix, wx, i_s, ws, soft_probability, uniform, soft_d_eps2[r + 1],
-                             soft_d_gain[r + 1], True)
+                             soft_d_gain[r + 1], np.bool_(True))
         d_eps += weight_hi * e1
         d_gain += weight_hi * g1
     eps2 = eps2_hard + d_eps
@@ -648,7 +650,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             count = counters[COLLISIONS]
             if ring and collapse[COLLAPSE_FACTOR] > 0.0 and _accelerating(window, count, 1.0, math.inf):
                 now = scalars[T_NOW]
-                first, last, members = collapse_cluster(-1, now, x, v, local_time, reach, ring, box,
+                first, last, members = collapse_cluster(np.int64(-1), now, x, v, local_time, reach, ring, box,
                                                         collapse[COLLAPSE_GAP])
                 if members >= collapse[COLLAPSE_RODS]:
                     # the positions must resolve the floor (a rod far out on its unwrapped path cannot)
@@ -712,8 +714,8 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             if ir < 0:
                 counters[OFF_TABLE] += 1
                 return STATUS_OFF_TABLE, k, done
-            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, 0, 0.0,
-                                  probability, uniform_levels, quantiles, share, False)
+            eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, np.int64(0), 0.0,
+                                  probability, uniform_levels, quantiles, share, np.bool_(False))
         elif code == RULE_LAW:
             # the law in x = E_tr / (E_tr + T_pair) and s = T_short / (T_short + T_long): every pair lies in
             # (0, 1] x [0, 1]; below the last x row that row's law is used (counted); the gain comes in units of
@@ -724,7 +726,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             short_share = temperature[short] / t_sum if t_sum > 0.0 else 0.5
             below, ir, wr, i_s, ws = _law_point(log_x, short_share, table_ratio, share_grid)
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, i_s, ws,
-                                  probability, uniform_levels, quantiles, share, True)
+                                  probability, uniform_levels, quantiles, share, np.bool_(True))
             if stiffness > 0.0:
                 kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
                 eps2, s, softer, below_soft, floored = _soft_draw(
@@ -878,7 +880,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
                 # speed has lost it in the rounding: frozen too.
                 if max(abs(x_i), abs(x_j)) * collapse[FROZEN_POSITION] >= collapse[COLLAPSE_GAP]:
                     return STATUS_FROZEN, k, done
-                _, _, members = collapse_cluster(k, t, x, v, local_time, reach, ring, box, collapse[COLLAPSE_GAP])
+                _, _, members = collapse_cluster(np.int64(k), t, x, v, local_time, reach, ring, box, collapse[COLLAPSE_GAP])
                 if members >= collapse[COLLAPSE_RODS]:
                     return STATUS_COLLAPSE, k, done
                 if abs(approach) <= collapse[FROZEN_SPEED] * max(abs(vi), abs(vj)):
@@ -890,12 +892,23 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
     return STATUS_DONE, -1, done
 
 
+def _read_only(arrays):
+    """``arrays`` made read-only, as the collision laws' arrays are: a placeholder of the same numba types as
+    the arrays it stands beside compiles no second copy of the kernels that read both."""
+    for array in arrays:
+        array.setflags(write=False)
+    return arrays
+
+
 def empty_table():
-    """Placeholder ``(ratio, share grid, levels, quantiles, share)`` for rules that use none (one point, two levels)."""
-    return (np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]), np.ones((1, 1, 1, 2)), np.zeros((1, 1, 1, 1)))
+    """Placeholder ``(ratio, share grid, levels, quantiles, share)`` for rules that use none (one point, two levels;
+    read-only)."""
+    return _read_only((np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]), np.ones((1, 1, 1, 2)),
+                       np.zeros((1, 1, 1, 1))))
 
 
 def empty_soft_law():
-    """Placeholder soft-law arrays ``(kappa, gamma, log_x, share, levels, quantiles, gains)`` (stiffness 0)."""
-    return (np.array([10.0]), np.array([1.0]), np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]),
-            np.ones((1, 1, 1, 1, 2)), np.zeros((1, 1, 1, 1, 2)))
+    """Placeholder soft-law arrays ``(kappa, gamma, log_x, share, levels, quantiles, gains)`` (stiffness 0;
+    read-only)."""
+    return _read_only((np.array([10.0]), np.array([1.0]), np.zeros(1), np.array([0.5]), np.array([0.0, 1.0]),
+                       np.ones((1, 1, 1, 1, 2)), np.zeros((1, 1, 1, 1, 2))))
