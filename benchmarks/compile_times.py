@@ -195,10 +195,19 @@ def merged_rows(block: str, fresh: str, header: str) -> str:
     """``block`` with each of its table rows that ``fresh`` measured again replaced (new ones appended), and
     ``header`` (the rerun's command and load) added under the block's first line."""
     rows = {line.split(" | ", 1)[0]: line for line in fresh.splitlines() if line.startswith("| `")}
+    remeasured = _only_names(header)
     lines = [rows.pop(line.split(" | ", 1)[0], line) if line.startswith("| `") else line
-             for line in block.strip().splitlines()]
+             for line in block.strip().splitlines()
+             # an older header whose rows were all measured again describes none of the table any more
+             if not (line.startswith("The rows of ") and _only_names(line) <= remeasured)]
     lines[1:1] = [f"The rows of {header}"]
     return "\n".join(lines + list(rows.values()))
+
+
+def _only_names(header: str) -> set:
+    """The case names after ``--only`` in a header line (empty for a line without ``--only``)."""
+    command = header.split("`")[1] if header.count("`") >= 2 else header
+    return set(command.split("--only", 1)[1].split()) if "--only" in command else set()
 
 
 if __name__ == "__main__":

@@ -33,3 +33,18 @@ def test_rerun_rows_replace_their_own_rows_only():
     assert rows == ["| `collide --gamma 0.6 --kappa 100` | 9.29 |", "| `converge --gamma 0.6` | 50.6 |",
                     "| `collide --gamma 0.6 --kappa inf` | 2.79 |", "| `map --kappa inf 100` | 5.38 |"]
     assert script.read_block("performance.md", "compile-times").count("| `collide --gamma 0.6 --kappa 100`") == 1
+
+
+def test_a_header_whose_rows_were_all_measured_again_is_dropped():
+    script = _load()
+    block = ("`python benchmarks/compile_times.py`: load average 1.0 on 2 cores at the start.\n"
+             "The rows of `python benchmarks/compile_times.py --only gas`: load 1.8.\n"
+             "The rows of `python benchmarks/compile_times.py --only converge gas`: load 1.1.\n\n"
+             "| command (`wavecontact ...`) | compile CPU (s) |\n|---|---|\n"
+             "| `gas --rods 50` | 10.4 |\n| `converge --gamma 0.6` | 28.0 |\n")
+    fresh = "| command (`wavecontact ...`) | compile CPU (s) |\n|---|---|\n| `gas --rods 50` | 11.2 |\n"
+    merged = script.merged_rows(block, fresh, "`python benchmarks/compile_times.py --only collide-100 gas`: load 0.7.")
+    headers = [line for line in merged.splitlines() if line.startswith("The rows of")]
+    # the `--only gas` line describes no row any more; the converge row still comes from the older run
+    assert headers == ["The rows of `python benchmarks/compile_times.py --only collide-100 gas`: load 0.7.",
+                       "The rows of `python benchmarks/compile_times.py --only converge gas`: load 1.1."]
