@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from wavecontact import Exponential, Hard, Penalty, Rod, Scene, two_rod_parameters, two_rods
@@ -130,3 +131,27 @@ def test_two_rods_keeps_the_magnitude_checks_it_does_once(gamma, message):
     with pytest.raises(InvalidParameterError, match=message):
         two_rods(gamma, 100.0)
     assert two_rods(2e-30, 100.0).velocities[1] == pytest.approx(-2e-30)
+
+
+def test_a_thermal_scene_checks_gamma_and_kappa_once_and_is_the_scene_two_rods_builds(monkeypatch):
+    """thermal_scene needs the rods' lengths before it draws their vibrations; it must not validate the two
+    numbers a second time on the way, and must build what two_rods builds from the same draw."""
+    from wavecontact import scene as scene_module
+    from wavecontact.bath import ThermalBath
+    from wavecontact.bath import collide as collide_module
+    from wavecontact.bath.collide import thermal_scene
+    from wavecontact.bath.model import seed_sequence
+
+    bath = ThermalBath(1.0, 40)
+    expected = two_rods(0.6, 100.0, vibrations=bath.draw((0.8, 0.8 / 0.6), seed_sequence(3)))
+    calls = []
+    original = scene_module.validate_gamma_kappa
+    counting = lambda *a: calls.append(a) or original(*a)
+    monkeypatch.setattr(scene_module, "validate_gamma_kappa", counting)
+    monkeypatch.setattr(collide_module, "validate_gamma_kappa", counting, raising=False)  # a copy imported there
+    built = thermal_scene(0.6, 100.0, bath, 3)
+    assert calls == [(0.6, 100.0)]
+    assert built.rods == expected.rods and built.gaps == expected.gaps and built.velocities == expected.velocities
+    for name in ("displacement", "velocity_amplitude"):
+        for got, want in zip(getattr(built.vibrations, name), getattr(expected.vibrations, name)):
+            np.testing.assert_array_equal(got, want)

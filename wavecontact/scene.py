@@ -305,13 +305,27 @@ def two_rods(
     Scene
         With ``metadata['two_rods']`` holding the :class:`TwoRodParameters`.
     """
+    g, k, rods = _validated_two_rods(gamma, kappa)
+    return _assemble_two_rods(g, k, rods, contact=contact, gap=gap, initial_displacement=initial_displacement,
+                              initial_velocity=initial_velocity, vibrations=vibrations)
+
+
+def _validated_two_rods(gamma, kappa) -> tuple:
+    """``(gamma, kappa, (rod1, rod2))`` of :func:`two_rods`, checked: the one validation of the two numbers
+    along a solve (the solvers trust ``metadata['two_rods']``; :func:`wavecontact.bath.collide.thermal_scene`
+    needs the rods' lengths before it can draw their vibrations, and checks nothing again)."""
     g, k = validate_gamma_kappa(gamma, kappa)
-    check_kappa(k)  # the one check of kappa's range along a solve (the solvers trust metadata['two_rods'])
+    check_kappa(k)
     l1 = 0.5 * (1.0 + g)
     l2 = 0.5 * (1.0 + g) / g
     # the lengths are the only numbers of the rods that gamma sets: checked here, once (l2 leaves the
     # magnitude range for gamma below about 1e-30), the unit material taken as it is
-    rods = (_unit_rod(require_magnitude("rod length", l1)), _unit_rod(require_magnitude("rod length", l2)))
+    return g, k, (_unit_rod(require_magnitude("rod length", l1)), _unit_rod(require_magnitude("rod length", l2)))
+
+
+def _assemble_two_rods(g: float, k: float, rods: tuple, *, contact="exponential", gap=None,
+                       initial_displacement=None, initial_velocity=None, vibrations=None) -> Scene:
+    """:func:`two_rods` from the values :func:`_validated_two_rods` checked."""
     reduced_mass = 0.5
     if isinstance(contact, ContactLaw):
         law = contact

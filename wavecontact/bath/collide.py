@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..scene import two_rods, validate_gamma_kappa
+from ..scene import _assemble_two_rods, _validated_two_rods
 from .model import ThermalBath, seed_sequence
 
 __all__ = ["thermal_scene"]
@@ -18,10 +18,9 @@ def thermal_scene(gamma, kappa, bath: ThermalBath, seed, *, contact="exponential
     rod's vibrational energy gain ``extra['vibration_energy_gain']`` where the
     solver gives one (its ``vibration_energy_gain``, :mod:`wavecontact.solvers.base`).
     """
-    g, _k = validate_gamma_kappa(gamma, kappa)
-    lengths = (0.5 * (1.0 + g), 0.5 * (1.0 + g) / g)  # two_rods' rods (l = 1), built once below
-    vibrations = bath.draw(lengths, seed_sequence(seed))
-    scene = two_rods(gamma, kappa, contact=contact, vibrations=vibrations)
+    g, k, rods = _validated_two_rods(gamma, kappa)  # checked once, here; two_rods' rods (l = 1)
+    vibrations = bath.draw((rods[0].length, rods[1].length), seed_sequence(seed))
+    scene = _assemble_two_rods(g, k, rods, contact=contact, vibrations=vibrations)
     scene.metadata["bath"] = {"temperature": list(bath.temperature), "modes": bath.modes,
                               "seed": seed if isinstance(seed, int) else repr(seed)}
     return scene
