@@ -69,3 +69,18 @@ def test_the_kept_meshes_are_bounded_and_a_users_mesh_is_not_kept(monkeypatch):
     build_setup(scene, elements=10)
     assert len(reuse._RECENT) == 1
     reuse.clear()
+
+
+def test_solves_on_threads_share_the_kept_meshes_and_give_the_serial_numbers():
+    """A thread pool (or dask's threaded workers) runs FE solves at once: more meshes than are kept, so the
+    table is read, filled and trimmed from several threads; every result must be the serial one."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    calls = [(gamma, kappa) for gamma in (0.3, 0.45, 0.6, 0.75, 0.9) for kappa in (20.0, 100.0)] * 2
+    reuse.clear()
+    serial = [collide(g, k, solver="fem", elements=40).restitution for g, k in calls]
+    reuse.clear()
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(lambda c: collide(c[0], c[1], solver="fem", elements=40).restitution, calls))
+    assert threaded == serial
+    assert len(reuse._RECENT) <= reuse.RECENT

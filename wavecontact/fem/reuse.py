@@ -15,6 +15,7 @@ for every scheme).
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -30,6 +31,8 @@ RECENT = 8
 MOST_NODES = 20_000
 
 _RECENT: OrderedDict = OrderedDict()
+#: solves on threads (a thread pool, dask's threaded workers) share the kept meshes: one at a time in the table
+_LOCK = threading.Lock()
 
 
 def discretized_rods(rods, vertices, order: int, mass: str, remainder, reuse: bool = True) -> tuple:
@@ -44,19 +47,22 @@ def discretized_rods(rods, vertices, order: int, mass: str, remainder, reuse: bo
         return built, stable_step(built)
     key = (order, mass, *((rod, r, np.shape(v), np.asarray(v, dtype=float).tobytes())
                           for rod, v, r in zip(rods, vertices, remainder)))
-    known = _RECENT.get(key)
-    if known is not None:
-        _RECENT.move_to_end(key)
-        return known
+    with _LOCK:
+        known = _RECENT.get(key)
+        if known is not None:
+            _RECENT.move_to_end(key)
+            return known
     built = tuple(discretize_rod(rod, v, order, mass, r) for rod, v, r in zip(rods, vertices, remainder))
     known = (built, stable_step(built))
     if sum(d.n_nodes for d in built) <= MOST_NODES:
-        _RECENT[key] = known
-        while len(_RECENT) > RECENT:
-            _RECENT.popitem(last=False)
+        with _LOCK:
+            _RECENT[key] = known
+            while len(_RECENT) > RECENT:
+                _RECENT.popitem(last=False)
     return known
 
 
 def clear() -> None:
     """Forget every kept mesh."""
-    _RECENT.clear()
+    with _LOCK:
+        _RECENT.clear()
