@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from ..solvers.auto_ring import CHECK_EVERY, DEFAULT_TOLERANCE, ERROR_QUANTILE
+from ..solvers.auto_ring import CHECK_EVERY, DEFAULT_TOLERANCE, ERROR_QUANTILE, choose_modes
 from .common import (
     add_ring_options,
     gamma_value,
@@ -88,7 +88,6 @@ def run(args) -> int:
     from ..errors import InvalidParameterError
     from ..io.run_controller import write_summary
     from ..plotting.ring import plot_ring_figures
-    from ..solvers.auto_ring import choose_modes
     from ..studies.ring import CHECKPOINT_NAME, run_ring
 
     out = Path(args.out)

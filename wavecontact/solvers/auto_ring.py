@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidParameterError, LimitError
+from ..errors import InvalidParameterError, LimitError, require_positive
 from ..limits import Limits, check_study_cost, ring_cost
 
 __all__ = [
@@ -163,6 +163,7 @@ class RingModel:
             modes += 1
         return modes
 
+
 @functools.lru_cache(maxsize=4)
 def load_ring_model(path=None) -> RingModel:
     """The ring model from ``path`` (default :data:`DATA_PATH`), read once per path."""
@@ -203,16 +204,6 @@ class RingChoice:
 
     def as_dict(self) -> dict:
         return asdict(self)
-
-
-def _check_tolerance(tolerance) -> float:
-    try:
-        value = float(tolerance)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"tolerance must be a positive number, got {tolerance!r}") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise InvalidParameterError(f"tolerance must be a positive finite number, got {tolerance!r}")
-    return value
 
 
 def _extrapolation(model: RingModel, gamma: float, kappa: float, modes: int) -> str:
@@ -259,7 +250,7 @@ def choose_modes(gamma: float, kappa: float, collisions: int, *, modes=None, tol
     InvalidParameterError
         Without ``modes``, when the model cannot choose them (no static correction, no calibration).
     """
-    tolerance = DEFAULT_TOLERANCE if tolerance is None else _check_tolerance(tolerance)
+    tolerance = DEFAULT_TOLERANCE if tolerance is None else require_positive("tolerance", tolerance)
     if not static_correction:
         if modes is None:
             raise InvalidParameterError("without the static correction the ring's modes cannot be chosen from a "
@@ -287,11 +278,8 @@ def choose_modes(gamma: float, kappa: float, collisions: int, *, modes=None, tol
                          "modal solver takes; raise the tolerance")
     what = (f"ring: tolerance={tolerance:g} on the per-collision restitution needs N = {needed} modes per rod "
             f"(predicted error {error:.2g}{_cpu_text(cpu, collisions)}{_extrapolation(model, gamma, kappa, needed)})")
-    try:
-        check_study_cost(what, ring_cost(kappa, [needed], collisions), Limits(max_work=max_work),
-                         "raise the tolerance or use fewer collisions")
-    except LimitError as error_:
-        raise LimitError(str(error_)) from None
+    check_study_cost(what, ring_cost(kappa, [needed], collisions), Limits(max_work=max_work),
+                     "raise the tolerance or use fewer collisions")
     reason = (f"N = {needed}: the fewest modes predicted to meet tolerance {tolerance:g} on the per-collision "
               f"restitution ({ERROR_QUANTILE:.0%} of collisions; predicted {error:.2g}, N = {needed - 1} "
               f"predicted {model.predict(gamma, kappa, needed - 1)[0]:.2g})"
