@@ -95,15 +95,21 @@ with open(sys.argv[1], "w") as out:
 """
 
 
+def empty_cache_run(tmp: str, root: Path) -> tuple:
+    """``(env, report, work)`` of a child run in the scratch directory ``tmp``: the package of ``root`` first on
+    its path, numba compiling (never loading) into an empty cache there; its record file and working directory."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "numba-cache"),
+               PYTHONPATH=os.pathsep.join(filter(None, (str(root), os.environ.get("PYTHONPATH")))))
+    env.pop("WAVECONTACT_PURE_PYTHON", None)
+    work = Path(tmp) / "work"
+    work.mkdir()
+    return env, Path(tmp) / "record.json", work
+
+
 def first_run(command: str, root: Path = ROOT, timeout: float = 1800.0) -> dict:
     """Run ``wavecontact COMMAND`` once with an empty numba cache; its compile and whole times (s)."""
     with tempfile.TemporaryDirectory(prefix="wavecontact-compile-") as tmp:
-        env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "numba-cache"),
-                   PYTHONPATH=os.pathsep.join(filter(None, (str(root), os.environ.get("PYTHONPATH")))))
-        env.pop("WAVECONTACT_PURE_PYTHON", None)
-        report = Path(tmp) / "record.json"
-        work = Path(tmp) / "work"
-        work.mkdir()
+        env, report, work = empty_cache_run(tmp, root)
         load = os.getloadavg()[0]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         started = time.perf_counter()
