@@ -71,6 +71,8 @@ def test_api_summaries_do_not_stop_at_the_papers_equation_numbers(monkeypatch):
     _conf().setup(App())
     assert autosummary.extract_summary(doc, settings) == ("The delay equation (Eq. 16) for the velocity, "
                                                           "as in Fig. 5 and Sec. V.")
+    assert autosummary.extract_summary(["Fig. 5: epsilon against kappa. Second."], settings) == (
+        "Fig. 5: epsilon against kappa.")
     assert autosummary.extract_summary(["First, e.g. this. Second."], settings) == "First, e.g. this."
 
 
