@@ -134,8 +134,8 @@ def _check_links(app, exception):
 
 
 # abbreviations that do not end a sentence, besides Sphinx's own ("e.g.", "i.e.", ...): the docstrings cite
-# the paper as "Eq. 16", "Fig. 5", "Sec. V", "App. B" (also first: "Fig. 5: epsilon against kappa."); without these a
-# summary reads "The delay equation (Eq." or just "Fig."
+# the paper as "Eq. 16", "Fig. 5", "Sec. V", "App. B" (also first: "Fig. 5: epsilon against kappa.");
+# without these a summary reads "The delay equation (Eq." or just "Fig."
 CITATION_ABBREVIATIONS = ("Eq.", "Eqs.", "Fig.", "Figs.", "Sec.", "App.", "Ref.")
 
 
