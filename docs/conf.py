@@ -52,13 +52,17 @@ autosummary_imported_members = False
 # listed there, not described again)
 autodoc_default_options = {"members": True, "ignore-module-all": True, "show-inheritance": True}
 autodoc_typehints = "none"  # the numpydoc Parameters sections say the types and units
+# the summary column of autosummary's tables is a docstring's first sentence, cut at the first ". " that
+# is not an abbreviation: see setup() below for the paper's "Eq. 16", "Fig. 5", "Sec. V"
+# the page contents beside an API page list a class's members under the class: "solve()", not "DelaySolver.solve()"
+toc_object_entries_show_parents = "hide"
 numpydoc_show_class_members = False  # autosummary lists them; numpydoc's own table would list them twice
 numpydoc_class_members_toctree = False
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"wavecontact {version}"
 html_theme_options = {
-    "header_links_before_dropdown": 4,
+    "header_links_before_dropdown": 3,  # with 4 the search box wrapped under the links at 1280 px
     "navbar_align": "left",
     "navigation_depth": 2,
     "show_toc_level": 2,
@@ -129,5 +133,14 @@ def _check_links(app, exception):
         logger.warning("broken link in %s", link)
 
 
+# abbreviations that do not end a sentence, besides Sphinx's own ("e.g.", "i.e.", ...): the docstrings cite
+# the paper as "Eq. 16", "Fig. 5", "Sec. V", "App. B" (also first: "Fig. 5: epsilon against kappa.");
+# without these a summary reads "The delay equation (Eq." or just "Fig."
+CITATION_ABBREVIATIONS = ("Eq.", "Eqs.", "Fig.", "Figs.", "Sec.", "App.", "Ref.")
+
+
 def setup(app):
+    from sphinx.ext import autosummary  # here, not at the top: the tests read this file without Sphinx
+
+    autosummary.WELL_KNOWN_ABBREVIATIONS = (*autosummary.WELL_KNOWN_ABBREVIATIONS, *CITATION_ABBREVIATIONS)
     app.connect("build-finished", _check_links)

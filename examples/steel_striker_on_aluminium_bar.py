@@ -96,7 +96,7 @@ def main(out_dir="examples_output"):
         print(f"  {result.solver:<5}: epsilon = {result.restitution:.8f} (delay - this: "
               f"{delay.restitution - result.restitution:+.1e}), peak force {result.contact_force.max() / 1e3:.2f} kN, "
               f"contact {1e6 * result.contact_duration:.1f} us, {1e3 * result.wall_time_s:.0f} ms{first}")
-    plot_xt_diagram(fem, out / "striker_xt.png")
+    plot_xt_diagram(fem, out / "striker_xt.png", units="SI")
 
     speeds = np.geomspace(0.1, 20.0, 25)
     restitution = np.array([wavecontact.solve(impact(v), "delay", rtol=1e-8).restitution for v in speeds])

@@ -93,8 +93,11 @@ SECOND_PASS = ("convergence-kappa-20", "convergence-kappa-inf", "fem-two-materia
                "materials-striker", "example-compare_discretizations_and_solvers", "example-mesh_convergence_study",
                "example-paraview_fields", "example-restitution_map_gamma_kappa")
 # measured by python docs/generate.py --check on a fresh clone (it prints each block's time): the convergence
-# blocks 19.3 + 14.8 s at load 11.5, the rest 2-6 s each (41 s together) at load 4-6; the left-out blocks take
-# 16-810 s each (usage-compare, the ring blocks, fem-default, modal-accuracy, materials-map, the long examples)
+# blocks 19.3 + 14.8 s at load 11.5, the rest 2-6 s each (41 s together) at load 4-6. Re-measured whole on a
+# fresh worktree at load 7-14 (every block up to date): these 14 blocks 242 s together, 133 s of it the first
+# block compiling on an empty numba cache, then 4-23 s each; the left-out blocks 11-55 s each (usage-compare 11,
+# materials-map 19, modal-accuracy 20, the ring blocks 22-43, theory 42, the long examples 48-55), except
+# fem-default 187 s and ring-spread 339 s
 SECOND_PASS_SECONDS = 75  # these 14 tests: 44.8 s wall at load 4 (pytest -m docs_ci, kernels cached)
 
 

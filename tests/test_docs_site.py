@@ -53,6 +53,29 @@ def test_every_markdown_page_is_in_the_site():
     assert pages <= listed, f"pages missing from docs/index.md's toctree: {sorted(pages - listed)}"
 
 
+def test_api_summaries_do_not_stop_at_the_papers_equation_numbers(monkeypatch):
+    """The API tables show each docstring's first sentence; "(Eq. 16)" does not end it once conf.setup ran."""
+    autosummary = pytest.importorskip("sphinx.ext.autosummary", reason="pip install -e '.[docs]' builds the site")
+    from docutils.frontend import get_default_settings
+    from docutils.parsers.rst import Parser
+
+    settings = get_default_settings(Parser)
+    doc = ["The delay equation (Eq. 16) for the velocity, as in Fig. 5 and", "Sec. V. It holds for two rods."]
+    assert autosummary.extract_summary(doc, settings) == "The delay equation (Eq."  # Sphinx alone
+    monkeypatch.setattr(autosummary, "WELL_KNOWN_ABBREVIATIONS", autosummary.WELL_KNOWN_ABBREVIATIONS)
+
+    class App:
+        def connect(self, event, handler):
+            pass
+
+    _conf().setup(App())
+    assert autosummary.extract_summary(doc, settings) == ("The delay equation (Eq. 16) for the velocity, "
+                                                          "as in Fig. 5 and Sec. V.")
+    assert autosummary.extract_summary(["Fig. 5: epsilon against kappa. Second."], settings) == (
+        "Fig. 5: epsilon against kappa.")
+    assert autosummary.extract_summary(["First, e.g. this. Second."], settings) == "First, e.g. this."
+
+
 @pytest.mark.slow
 def test_site_builds_with_warnings_as_errors(tmp_path):
     for module in ("sphinx", "myst_parser", "numpydoc", "pydata_sphinx_theme"):

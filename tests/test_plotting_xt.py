@@ -110,3 +110,21 @@ def test_cli_collide_writes_fields_and_xt_diagram(tmp_path, capsys):
     sizes = [rod["x"].size for rod in back["rods"]]
     assert sizes[0] == 21 and sizes[1] > 21  # N elements on the short rod (P1), more on the long one
     assert back["time"].size > 50
+
+
+@pytest.mark.parametrize("units, length, duration, stress", [
+    ("SI", "[m]", "[s]", "[Pa]"),
+    (None, "(scene length unit)", "(scene time unit)", "[stress unit (E's)]"),
+])
+def test_xt_diagram_of_a_scene_of_materials_shows_no_nan_and_no_paper_units(units, length, duration, stress):
+    """A two-rod scene of materials (gamma and kappa nan, fields in the scene's units, e.g. the steel striker):
+    the title leaves gamma and kappa out and the axes do not claim the paper's l, l/c and rho c V."""
+    paper = xt_figure(hard_impact_result(0.6, elements=20, samples=50)).axes
+    assert "units of l" in paper[0].get_xlabel() and r"\rho c V" in paper[1].get_ylabel()
+    result = dataclasses.replace(hard_impact_result(0.6, elements=20, samples=50), gamma=float("nan"),
+                                 kappa=float("nan"))
+    ax, bar = xt_figure(result, units=units).axes
+    assert "nan" not in ax.get_title() and "0.6" in ax.get_title()  # epsilon = gamma stays
+    assert length in ax.get_xlabel() and "units of l" not in ax.get_xlabel()
+    assert duration in ax.get_ylabel() and "c/l" not in ax.get_ylabel()
+    assert stress in bar.get_ylabel() and "rho" not in bar.get_ylabel()

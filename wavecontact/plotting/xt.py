@@ -27,6 +27,9 @@ _LABEL_BOX = {
     "ec": "none",
     "alpha": 0.75,
 }  # readable on any colour
+# colour-bar units of a scene's fields: SI (``units="SI"``) or the scene's own, unnamed
+_SI = {"stress": "Pa", "velocity": "m/s", "displacement": "m"}
+_SCENE = {"stress": "stress unit (E's)", "velocity": "length/time", "displacement": "length"}
 
 
 def xt_figure(
@@ -66,7 +69,8 @@ def xt_figure(
     title : str or None
         Scene results: a first title line (the scene's summary); the bodies and contacts follow.
     units : str or None
-        Scene results: ``'SI'`` puts m, s and Pa on the axes; None leaves the scene's own units unnamed.
+        Scene results and two-rod scenes of materials: ``'SI'`` puts m, s and Pa on the axes; None
+        leaves the scene's own units unnamed (the paper's two rods are always dimensionless).
 
     Returns
     -------
@@ -145,21 +149,23 @@ def xt_figure(
                 bbox=_LABEL_BOX,
             )
 
-    dimensionless = getattr(result, "gamma", None) is not None
+    # the paper's two rods (gamma given) are dimensionless; a two-rod scene of materials (gamma nan) is in the
+    # scene's units: SI when the caller says so, else named as the scene's own
+    dimensionless = _finite(getattr(result, "gamma", None))
+    length, duration = ((" (units of l)", r" $\tau = t\,c/l$") if dimensionless else
+                        (" [m]", " t [s]") if units == "SI" else (" (scene length unit)", " t (scene time unit)"))
     ax.set_xlabel(
-        "position x"
-        + (" (units of l)" if dimensionless else "")
+        "position x" + length
         + ("  [undeformed rods, contact faces at 0]" if coordinates == "reference" else "  [deformed: x + u]")
     )
-    ax.set_ylabel("time" + (r" $\tau = t\,c/l$" if dimensionless else ""))
+    ax.set_ylabel("time" + duration)
     ax.set_ylim(time[rows][0], time[rows][-1])
-    units = {"stress": r"$\rho c V$", "velocity": "V", "displacement": "l"}
+    unit = ({"stress": r"$\rho c V$", "velocity": "V", "displacement": "l"} if dimensionless
+            else _SI if units == "SI" else _SCENE)[field]
     label = {"stress": "stress (compression < 0)", "velocity": "velocity", "displacement": "displacement"}[
         field
     ]
-    if dimensionless:
-        label += f" [{units[field]}]"
-    fig.colorbar(mesh, ax=ax, label=label, shrink=0.9)
+    fig.colorbar(mesh, ax=ax, label=f"{label} [{unit}]", shrink=0.9)
     ax.set_title(_title(result, field))
     return fig
 
@@ -217,9 +223,9 @@ def _title(result, field: str) -> str:
     parts = []
     gamma = getattr(result, "gamma", None)
     kappa = getattr(result, "kappa", None)
-    if gamma is not None:
+    if _finite(gamma):  # nan for a scene of materials: no gamma and kappa of the paper's rods to show
         parts.append(rf"$\gamma$ = {gamma:g}")
-    if kappa is not None:
+    if kappa is not None and not math.isnan(kappa):
         parts.append(r"$\kappa$ = " + (r"$\infty$" if math.isinf(kappa) else f"{kappa:g}"))
     restitution = getattr(result, "restitution", None)
     if restitution is not None and math.isfinite(restitution):
@@ -227,3 +233,7 @@ def _title(result, field: str) -> str:
     solver = getattr(result, "solver", None)
     head = f"x-t diagram of {field}" + (f" ({solver})" if solver else "")
     return head + ("\n" + ", ".join(parts) if parts else "")
+
+
+def _finite(value) -> bool:
+    return value is not None and math.isfinite(value)

@@ -14,14 +14,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .xt import _LABEL_BOX, _thin
+from .xt import _LABEL_BOX, _SCENE, _SI, _thin
 
 __all__ = ["scene_xt_figure"]
 
 _SYMBOLS = {"stress": r"stress $\sigma = E\,\partial u/\partial x$ (compression < 0)",
             "velocity": r"velocity $v$", "displacement": r"displacement $u$"}
-_SI = {"stress": "Pa", "velocity": "m/s", "displacement": "m"}
-_SCENE = {"stress": "stress unit (E's)", "velocity": "length/time", "displacement": "length"}
 
 
 def scene_xt_figure(result, fields: dict, *, field: str, coordinates: str, cmap: str, rows: np.ndarray,
