@@ -8,7 +8,7 @@ import pytest
 from wavecontact import Rod
 from wavecontact.fem import stability
 from wavecontact.fem.discretization import discretize_rod, matched_nodes, uniform_nodes
-from wavecontact.fem.stability import banded_mass, count_below, largest_eigenvalue
+from wavecontact.fem.stability import banded_mass, count_below, largest_eigenvalue, stable_step
 
 
 def _plain_bisection(disc, rtol=1e-13):
@@ -48,8 +48,37 @@ def test_largest_eigenvalue_equals_plain_bisection_bit_for_bit(name, rod, vertic
     assert largest_eigenvalue(disc) == _plain_bisection(disc)
 
 
+def _matched_pair(gamma, elements, order=1, mass="lumped"):
+    step = gamma / elements
+    return (discretize_rod(Rod(gamma), matched_nodes(gamma, step, False), order, mass, "left"),
+            discretize_rod(Rod(1.0 / gamma), matched_nodes(1.0 / gamma, step, True), order, mass, "right"))
+
+
+@pytest.mark.parametrize("gamma", [0.6, 0.6 + 1e-6, 0.3, 1.0])
+@pytest.mark.parametrize("order, mass", [(1, "lumped"), (1, "consistent"), (2, "lumped")])
+def test_stable_step_equals_plain_bisection_of_every_rod(gamma, order, mass):
+    rods = _matched_pair(gamma, 200, order, mass)
+    assert stable_step(rods) == 2.0 / math.sqrt(max(_plain_bisection(d) for d in rods))
+    assert stable_step(rods[::-1]) == stable_step(rods)
+
+
+def test_dominated_rod_is_not_bisected(monkeypatch):
+    """The long rod's remainder mass puts its lambda_max ~1e-6 below the short rod's: one count settles it."""
+    rods = _matched_pair(0.6, 800)
+    sizes = []
+
+    def counting(stiffness, mass, sigma):
+        sizes.append(stiffness.shape[1])
+        return count_below(stiffness, mass, sigma)
+
+    monkeypatch.setattr(stability, "count_below", counting)
+    stable_step(rods)
+    assert sizes.count(rods[1].n_nodes) == 1 and 0 < sizes.count(rods[0].n_nodes) < 45 / 3
+
+
 def test_most_counts_are_known(monkeypatch):
-    """The bracket is confirmed on the solver's mesh: fewer than a third of the plain bisection's counts."""
+    """The bracket is confirmed on the long rod of the solver's mesh (by inverse iteration: its far end
+    carries the remainder's mass): fewer than a third of the plain bisection's counts."""
     disc = discretize_rod(Rod(1.0 / 0.6), matched_nodes(1.0 / 0.6, 0.6 / 800, True), 1, "lumped", "right")
     counts = []
 
@@ -64,10 +93,11 @@ def test_most_counts_are_known(monkeypatch):
 
 
 def test_unconfirmed_bracket_falls_back_to_every_count(monkeypatch):
-    """A wrong estimate (here 1 % low) is not confirmed by its two counts: every shift is counted."""
+    """Wrong estimates (here 1 % low) are not confirmed by their two counts: every shift is counted."""
     disc = discretize_rod(Rod(1.0), uniform_nodes(1.0, 50), 1, "lumped")
-    estimate = stability._inverse_iteration
-    monkeypatch.setattr(stability, "_inverse_iteration", lambda *args: 0.99 * estimate(*args))
+    for name in ("_inverse_iteration", "_rayleigh_quotient"):
+        estimate = getattr(stability, name)
+        monkeypatch.setattr(stability, name, lambda *args, estimate=estimate: 0.99 * estimate(*args))
     assert stability._known_answers(np.ascontiguousarray(disc.stiffness_bands),
                                     np.ascontiguousarray(banded_mass(disc)), 1e9) == (0.0, math.inf)
     assert largest_eigenvalue(disc) == _plain_bisection(disc)

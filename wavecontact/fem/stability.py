@@ -38,7 +38,7 @@ from .._jit import kernel
 from ..errors import InvalidParameterError
 from .discretization import RodDiscretization
 
-__all__ = ["BRACKET", "COUNT_MARGIN", "STEP_TOLERANCE", "check_time_step", "largest_eigenvalue", "stable_step"]
+__all__ = ["BRACKET", "COUNT_MARGIN", "DOMINATED", "STEP_TOLERANCE", "check_time_step", "largest_eigenvalue", "stable_step"]
 
 # A user step may exceed the computed limit by this relative amount (round-off of the limit).
 STEP_TOLERANCE = 1e-9
@@ -46,6 +46,8 @@ STEP_TOLERANCE = 1e-9
 BRACKET = 1e-12
 #: relative distance outside the confirmed bracket beyond which a count's answer is taken as known
 COUNT_MARGIN = 1e-12
+#: a rod whose eigenvalues all lie this far (relative) below another rod's lambda_max is not bisected
+DOMINATED = 1e-11
 #: steps of inverse iteration from the element bound (within four they reach ~3e-13 on the solver's meshes)
 _ITERATIONS = 5
 
@@ -118,11 +120,20 @@ def _reference_eigenvalue(order: int, mass_kind: str) -> float:
 def largest_eigenvalue(disc: RodDiscretization, rtol: float = 1e-13, upper: float | None = None) -> float:
     """Largest eigenvalue of ``M^-1 K`` for one rod (1/time^2), by inertia bisection from ``upper`` (an upper
     bound; None: the element bound of a uniform rod)."""
-    stiffness = np.ascontiguousarray(disc.stiffness_bands)
-    mass_bands = np.ascontiguousarray(banded_mass(disc))
-    n = disc.n_nodes
+    stiffness, mass_bands = _pencil(disc)
     if upper is None:
         upper = _element_bound(disc) * (1.0 + 1e-9)
+    return _bisection(stiffness, mass_bands, upper, rtol)
+
+
+def _pencil(disc: RodDiscretization) -> tuple:
+    """``(K, M)`` of ``disc`` in contiguous upper band storage."""
+    return np.ascontiguousarray(disc.stiffness_bands), np.ascontiguousarray(banded_mass(disc))
+
+
+def _bisection(stiffness: np.ndarray, mass_bands: np.ndarray, upper: float, rtol: float) -> float:
+    """The bisection of :func:`largest_eigenvalue`, each count outside the known answers made."""
+    n = stiffness.shape[1]
     lower = 0.0
     below, above = _known_answers(stiffness, mass_bands, upper)
     # a confirmed bracket below ``upper`` answers this count too
@@ -140,37 +151,54 @@ def largest_eigenvalue(disc: RodDiscretization, rtol: float = 1e-13, upper: floa
 def _known_answers(stiffness: np.ndarray, mass_bands: np.ndarray, upper: float) -> tuple:
     """``(below, above)``: every Sturm count at a shift up to ``below`` finds fewer than ``n`` eigenvalues
     below it, every count from ``above`` on all ``n`` (1/time^2); ``(0, inf)`` where nothing is known
-    (bands wider than tridiagonal, or the bracket around the inverse iteration's estimate not confirmed)."""
-    nothing = (0.0, math.inf)
-    n = stiffness.shape[1]
+    (bands wider than tridiagonal, or no estimate's bracket confirmed).  The estimates: the Rayleigh
+    quotient of the alternating vector (the top mode of a uniform rod with free ends, exactly), else
+    that of :func:`_inverse_iteration`."""
     if stiffness.shape[0] != 2:
-        return nothing
-    estimate = _inverse_iteration(stiffness, mass_bands, upper)
+        return 0.0, math.inf
+    known = _confirmed(stiffness, mass_bands, _rayleigh_quotient(stiffness, mass_bands, _alternating(stiffness)))
+    if known is None:
+        known = _confirmed(stiffness, mass_bands, _inverse_iteration(stiffness, mass_bands, upper))
+    return (0.0, math.inf) if known is None else known
+
+
+def _confirmed(stiffness: np.ndarray, mass_bands: np.ndarray, estimate: float) -> tuple | None:
+    """The known answers around ``estimate`` where two counts confirm ``lambda_max`` within :data:`BRACKET` of
+    it (the count above first: it fails first for an estimate from below), else None."""
+    n = stiffness.shape[1]
     if not math.isfinite(estimate):
-        return nothing
+        return None
     low, high = estimate * (1.0 - BRACKET), estimate * (1.0 + BRACKET)
-    if not (count_below(stiffness, mass_bands, low) < n <= count_below(stiffness, mass_bands, high)):
-        return nothing
+    if count_below(stiffness, mass_bands, high) < n or count_below(stiffness, mass_bands, low) >= n:
+        return None
     return low * (1.0 - COUNT_MARGIN), high * (1.0 + COUNT_MARGIN)
+
+
+def _alternating(stiffness: np.ndarray) -> np.ndarray:
+    vector = np.ones(stiffness.shape[1])
+    vector[1::2] = -1.0
+    return vector
+
+
+def _rayleigh_quotient(stiffness: np.ndarray, mass_bands: np.ndarray, vector: np.ndarray) -> float:
+    return float(vector @ _band_product(stiffness, vector)) / float(vector @ _band_product(mass_bands, vector))
 
 
 def _inverse_iteration(stiffness: np.ndarray, mass_bands: np.ndarray, shift: float) -> float:
     """Rayleigh quotient (1/time^2) after :data:`_ITERATIONS` steps of inverse iteration with the tridiagonal
     ``shift M - K`` (positive definite: ``shift`` is above the spectrum) from the alternating vector; nan
-    where the factorization fails.  An estimate only: :func:`_known_answers` confirms it by two counts."""
-    n = stiffness.shape[1]
+    where the factorization fails.  An estimate only: :func:`_confirmed` checks it by two counts."""
     diagonal, off_diagonal, info = scipy.linalg.lapack.dpttrf(shift * mass_bands[0] - stiffness[0],
                                                               shift * mass_bands[1, :-1] - stiffness[1, :-1])
     if info != 0:
         return math.nan
-    vector = np.ones(n)
-    vector[1::2] = -1.0
+    vector = _alternating(stiffness)
     for _ in range(_ITERATIONS):
         vector, info = scipy.linalg.lapack.dpttrs(diagonal, off_diagonal, _band_product(mass_bands, vector))
         if info != 0:
             return math.nan
         vector /= math.sqrt(float(vector @ vector))
-    return float(vector @ _band_product(stiffness, vector)) / float(vector @ _band_product(mass_bands, vector))
+    return _rayleigh_quotient(stiffness, mass_bands, vector)
 
 
 def _band_product(bands: np.ndarray, vector: np.ndarray) -> np.ndarray:
@@ -183,8 +211,22 @@ def _band_product(bands: np.ndarray, vector: np.ndarray) -> np.ndarray:
 
 
 def stable_step(discretizations) -> float:
-    """Largest stable central-difference step ``2 / sqrt(lambda_max)`` over all rods (time)."""
-    lam = max(largest_eigenvalue(d) for d in discretizations)
+    """Largest stable central-difference step ``2 / sqrt(lambda_max)`` over all rods (time).
+
+    Only the largest of the rods' ``lambda_max`` matters: a P1 rod whose every eigenvalue one count shows
+    to lie :data:`DOMINATED` below another rod's ``lambda_max`` (the long rod of a matched pair, its far end
+    carrying the remainder's mass, below the short uniform rod) is not bisected, since its bisection would
+    end below that value and leave the maximum as it is.  The rod with the largest Rayleigh quotient of the
+    alternating vector (a lower bound of ``lambda_max``) is bisected first.
+    """
+    pencils = sorted((_pencil(d) + (_element_bound(d),) for d in discretizations),
+                     key=lambda p: -_rayleigh_quotient(p[0], p[1], _alternating(p[0])))
+    lam = -math.inf
+    for stiffness, mass_bands, bound in pencils:
+        n = stiffness.shape[1]
+        if stiffness.shape[0] == 2 and lam > 0.0 and count_below(stiffness, mass_bands, lam * (1.0 - DOMINATED)) >= n:
+            continue
+        lam = max(lam, _bisection(stiffness, mass_bands, bound * (1.0 + 1e-9), 1e-13))
     return 2.0 / math.sqrt(lam)
 
 
