@@ -308,12 +308,14 @@ def _from_line(rod, order: int, mass_kind: str, line, missing, remainder_at) -> 
         at = line.position(end, end)
         consistent[at] = consistent[at] + rod.density * rod.area * missing
     lumped = line.row_sums(consistent)
+    bands = line.upper_bands(stiffness.data)
     if mass_kind == "lumped":
         n = lumped.size
         return _discretization(rod, order, mass_kind, line.x, line.cells, stiffness, None, lumped,
                                sp.csr_matrix((lumped.copy(), np.arange(n, dtype=np.int32),
-                                              np.arange(n + 1, dtype=np.int32)), shape=(n, n)))
-    return _discretization(rod, order, mass_kind, line.x, line.cells, stiffness, line.matrix(consistent), lumped)
+                                              np.arange(n + 1, dtype=np.int32)), shape=(n, n)), bands)
+    return _discretization(rod, order, mass_kind, line.x, line.cells, stiffness, line.matrix(consistent), lumped,
+                           stiffness_bands=bands)
 
 
 def assembled_discretization(rod, order: int, mass_kind: str, basis, inverse, x, stiffness, consistent):
@@ -335,9 +337,10 @@ def _ordered_cells(order: int, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def _discretization(rod, order: int, mass_kind: str, x, cells, stiffness, consistent, lumped=None,
-                    diagonal=None) -> RodDiscretization:
+                    diagonal=None, stiffness_bands=None) -> RodDiscretization:
     """The :class:`RodDiscretization` of assembled matrices and element node indices, left to right (``lumped``:
-    the row sums of ``consistent``, ``diagonal`` the lumped mass matrix, where the caller has them)."""
+    the row sums of ``consistent``, ``diagonal`` the lumped mass matrix, ``stiffness_bands`` the upper bands of
+    ``stiffness``, where the caller has them)."""
     if lumped is None:
         lumped = np.asarray(consistent.sum(axis=1)).ravel()
     if np.any(lumped <= 0.0):  # cannot happen for P1/P2 in 1D; guard for future orders
@@ -354,7 +357,7 @@ def _discretization(rod, order: int, mass_kind: str, x, cells, stiffness, consis
         mass_kind=mass_kind,
         x=x,
         cells=np.ascontiguousarray(cells),
-        stiffness_bands=_bands(stiffness, order),
+        stiffness_bands=_bands(stiffness, order) if stiffness_bands is None else stiffness_bands,
         lumped_mass=lumped,
         mass_cholesky=cholesky,
         stiffness=stiffness,

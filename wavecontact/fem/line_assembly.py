@@ -75,9 +75,32 @@ class LineMatrices:
         return int(start + np.flatnonzero(self.indices[start:self.indptr[row + 1]] == column)[0])
 
     def row_sums(self, values: np.ndarray) -> np.ndarray:
-        """Each row's values summed in their stored order (the reduction ``scipy.sparse`` makes for
-        ``matrix.sum(axis=1)``)."""
-        return np.add.reduceat(values, self.indptr[:-1].astype(np.intp))
+        """Each row's values summed as ``scipy.sparse`` sums them for ``matrix.sum(axis=1)``: numpy's
+        ``add.reduceat`` over the stored order, which adds the first entry to the sum of the others."""
+        if not self.sorted:
+            return np.add.reduceat(values, self.indptr[:-1].astype(np.intp))
+        sums = np.empty(self.x.size)
+        rows = _p1_rows(values)
+        sums[0] = values[0] + values[1]
+        sums[1:-1] = rows[:, 0] + (rows[:, 1] + rows[:, 2])
+        sums[-1] = values[-2] + values[-1]
+        return sums
+
+    def upper_bands(self, values: np.ndarray) -> np.ndarray | None:
+        """P1: ``bands[d, i]`` the entry ``(i, i + d)`` of ``values`` (zero past the end), as
+        ``matrix.diagonal(d)`` reads them; None for P2 (its rows are not in column order)."""
+        if not self.sorted:
+            return None
+        bands = np.zeros((2, self.x.size))
+        rows = _p1_rows(values)
+        bands[0, 0], bands[0, 1:-1], bands[0, -1] = values[0], rows[:, 1], values[-1]
+        bands[1, 0], bands[1, 1:-1] = values[1], rows[:, 2]
+        return bands
+
+
+def _p1_rows(values: np.ndarray) -> np.ndarray:
+    """The interior rows of a P1 line's values, ``(r, r - 1), (r, r), (r, r + 1)`` per row (a view)."""
+    return values[2:-2].reshape(-1, 3)
 
 
 def _element_values(vertices: np.ndarray, order: int) -> tuple:
@@ -89,6 +112,8 @@ def _element_values(vertices: np.ndarray, order: int) -> tuple:
     _points, weights, phis, dphis = _reference(order)
     a = vertices[1:] - vertices[:-1]
     inverse = 1.0 / a
+    if order == 1 and _plain_p1(weights, dphis):
+        return _p1_values(inverse, np.abs(a) * weights[0], phis)
     dx = [np.abs(a) * w for w in weights]
     grads = [[inverse * d for d in dphi[0]] for dphi in dphis]
     stiffness, mass = {}, {}
@@ -97,6 +122,23 @@ def _element_values(vertices: np.ndarray, order: int) -> tuple:
             # the products commute exactly: entry (i, j) equals entry (j, i) bit for bit
             stiffness[j, i] = stiffness[i, j] = _in_order([gj * gi * w for gj, gi, w in zip(grads[j], grads[i], dx)])
             mass[j, i] = mass[i, j] = _in_order([(pj * pi) * w for pj, pi, w in zip(phis[j], phis[i], dx)])
+    return stiffness, mass
+
+
+def _plain_p1(weights, dphis) -> bool:
+    """Whether the P1 rule has equal weights and the derivatives ``-1, +1`` at every point (scikit-fem's)."""
+    return bool(weights[0] == weights[-1] and np.all(dphis[0] == -1.0) and np.all(dphis[1] == 1.0))
+
+
+def _p1_values(inverse: np.ndarray, dx: np.ndarray, phis: list) -> tuple:
+    """:func:`_element_values` of P1 with equal weights (``dx`` at every point) and gradients ``-1 / A`` and
+    ``1 / A``: their products are ``+-(1 / A)^2`` exactly, so every stiffness entry is ``+-`` one sum."""
+    term = (inverse * inverse) * dx
+    diagonal = _in_order([term] * len(phis[0]))
+    stiffness = {(0, 0): diagonal, (1, 1): diagonal, (0, 1): -diagonal, (1, 0): -diagonal}
+    mass = {}
+    for j, i in ((0, 0), (0, 1), (1, 1)):
+        mass[j, i] = mass[i, j] = _in_order([(pj * pi) * dx for pj, pi in zip(phis[j], phis[i])])
     return stiffness, mass
 
 
@@ -136,8 +178,14 @@ def line_matrices(vertices: np.ndarray, order: int) -> LineMatrices | None:
     values = []
     for local in (stiffness, mass):
         data = np.empty(indices.size)
-        for positions, key in placements:
-            data[positions] = _shared_vertices(local) if key is None else local[key]
+        if order == 1:  # the placements below, by slices
+            diagonal, following = _shared_vertices(local), local[0, 1]
+            rows = _p1_rows(data)
+            data[0], data[1], data[-2], data[-1] = diagonal[0], following[0], following[-1], diagonal[-1]
+            rows[:, 0], rows[:, 1], rows[:, 2] = following[:-1], diagonal[1:-1], following[1:]
+        else:
+            for positions, key in placements:
+                data[positions] = _shared_vertices(local) if key is None else local[key]
         values.append(data)
     return LineMatrices(x, cells.copy(), indptr, indices, values[0], values[1], order == 1)
 
