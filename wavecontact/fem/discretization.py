@@ -26,6 +26,7 @@ from skfem.models.poisson import laplace, mass
 
 from ..errors import InvalidParameterError
 from ..scene import Rod
+from .line_assembly import line_matrices
 
 __all__ = [
     "ELEMENT_ORDERS",
@@ -272,36 +273,80 @@ def discretize_rod(
     if mass_kind not in MASS_KINDS:
         raise InvalidParameterError(f"mass must be one of {MASS_KINDS}, got {mass_kind!r}")
     vertices = check_nodes("nodes", vertices, rod.length, remainder_at)
-    mesh = MeshLine(vertices)
-    basis = Basis(mesh, _ELEMENTS[order]())
-    perm, inverse = _left_to_right(basis)
-    stiffness = (laplace.assemble(basis) * (rod.youngs_modulus * rod.area)).tocsr()[perm][:, perm].tocsr()
-    consistent = (mass.assemble(basis) * (rod.density * rod.area)).tocsr()[perm][:, perm].tocsr()
-    x = basis.doflocs[0][perm].copy()
     missing = rod.length - (vertices[-1] - vertices[0])
-    if lump_remainder and missing > 1e-12 * rod.length:
+    remainder = lump_remainder and missing > 1e-12 * rod.length
+    line = line_matrices(vertices, order)
+    if line is not None and (line.sorted or not remainder):
+        return _from_line(rod, order, mass_kind, line, missing if remainder else None, remainder_at)
+    if line is None:  # round-off puts a mapped midpoint out of order: scikit-fem's own numbering
+        mesh = MeshLine(vertices)
+        basis = Basis(mesh, _ELEMENTS[order]())
+        perm, inverse = _left_to_right(basis)
+        stiffness = (laplace.assemble(basis) * (rod.youngs_modulus * rod.area)).tocsr()[perm][:, perm].tocsr()
+        consistent = (mass.assemble(basis) * (rod.density * rod.area)).tocsr()[perm][:, perm].tocsr()
+        x = basis.doflocs[0][perm].copy()
+        cells = _ordered_cells(order, x, inverse[basis.element_dofs.T])
+    else:
+        stiffness = line.matrix(line.stiffness * (rod.youngs_modulus * rod.area))
+        consistent = line.matrix(line.mass * (rod.density * rod.area))
+        x, cells = line.x, line.cells
+    if remainder:
         end = 0 if remainder_at == "left" else x.size - 1
         extra = sp.csr_matrix(([rod.density * rod.area * missing], ([end], [end])), shape=consistent.shape)
         consistent = (consistent + extra).tocsr()
-    return assembled_discretization(rod, order, mass_kind, basis, inverse, x, stiffness, consistent)
+    return _discretization(rod, order, mass_kind, x, cells, stiffness, consistent)
+
+
+def _from_line(rod, order: int, mass_kind: str, line, missing, remainder_at) -> RodDiscretization:
+    """The :class:`RodDiscretization` of an assembled line, the arrays written directly as scikit-fem's and
+    scipy's operations leave them: the mass of the ``missing`` piece (None: none) added to the end node's
+    entry (scipy's sum of two matrices with increasing indices in each row), the row sums in stored order."""
+    stiffness = line.matrix(line.stiffness * (rod.youngs_modulus * rod.area))
+    consistent = line.mass * (rod.density * rod.area)
+    if missing is not None:
+        end = 0 if remainder_at == "left" else line.x.size - 1
+        at = line.position(end, end)
+        consistent[at] = consistent[at] + rod.density * rod.area * missing
+    lumped = line.row_sums(consistent)
+    bands = line.upper_bands(stiffness.data)
+    if mass_kind == "lumped":
+        n = lumped.size
+        return _discretization(rod, order, mass_kind, line.x, line.cells, stiffness, None, lumped,
+                               sp.csr_matrix((lumped.copy(), np.arange(n, dtype=np.int32),
+                                              np.arange(n + 1, dtype=np.int32)), shape=(n, n)), bands)
+    return _discretization(rod, order, mass_kind, line.x, line.cells, stiffness, line.matrix(consistent), lumped,
+                           stiffness_bands=bands)
 
 
 def assembled_discretization(rod, order: int, mass_kind: str, basis, inverse, x, stiffness, consistent):
     """The :class:`RodDiscretization` of assembled matrices in the left-to-right numbering (``inverse``: that
     numbering of scikit-fem's degrees of freedom; ``x`` the node coordinates in it)."""
-    cells = inverse[basis.element_dofs.T]
+    return _discretization(rod, order, mass_kind, x, _ordered_cells(order, x, inverse[basis.element_dofs.T]),
+                           stiffness, consistent)
+
+
+def _ordered_cells(order: int, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Element node indices (left vertex, right vertex, then the midpoint for P2), elements left to right."""
     if order == 2:
         # scikit-fem's local order is (vertex, vertex, midpoint); make vertices left, right.
         left_first = x[cells[:, 0]] < x[cells[:, 1]]
         cells[~left_first, :2] = cells[~left_first, 1::-1]
     else:
         cells = np.sort(cells, axis=1)
-    cells = cells[np.argsort(x[cells[:, 0]])]
-    lumped = np.asarray(consistent.sum(axis=1)).ravel()
+    return cells[np.argsort(x[cells[:, 0]])]
+
+
+def _discretization(rod, order: int, mass_kind: str, x, cells, stiffness, consistent, lumped=None,
+                    diagonal=None, stiffness_bands=None) -> RodDiscretization:
+    """The :class:`RodDiscretization` of assembled matrices and element node indices, left to right (``lumped``:
+    the row sums of ``consistent``, ``diagonal`` the lumped mass matrix, ``stiffness_bands`` the upper bands of
+    ``stiffness``, where the caller has them)."""
+    if lumped is None:
+        lumped = np.asarray(consistent.sum(axis=1)).ravel()
     if np.any(lumped <= 0.0):  # cannot happen for P1/P2 in 1D; guard for future orders
         raise InvalidParameterError(f"row-sum lumping of order {order} gives non-positive masses")
     if mass_kind == "lumped":
-        mass_matrix = sp.diags(lumped).tocsr()
+        mass_matrix = sp.diags(lumped).tocsr() if diagonal is None else diagonal
         cholesky = None
     else:
         mass_matrix = consistent
@@ -312,7 +357,7 @@ def assembled_discretization(rod, order: int, mass_kind: str, basis, inverse, x,
         mass_kind=mass_kind,
         x=x,
         cells=np.ascontiguousarray(cells),
-        stiffness_bands=_bands(stiffness, order),
+        stiffness_bands=_bands(stiffness, order) if stiffness_bands is None else stiffness_bands,
         lumped_mass=lumped,
         mass_cholesky=cholesky,
         stiffness=stiffness,
