@@ -55,7 +55,7 @@ def _clean(err: str) -> None:
 # (argv builder from the folder, JSON on stdout?, files expected below the folder)
 RUNS = {
     "ring": (lambda d: ["ring", "--gamma", "0.6", "--kappa", "400", "--modes", "4", "--collisions", "8",
-                        "--out", str(d / "r"), "--json"], True, 8),
+                        "--out", str(d / "r"), "--json"], True, 9),
     "equipartition": (lambda d: ["equipartition", "--gamma", "0.6", "--kappa", "400", "--modes", "2", "3",
                                  "--collisions", "5", "--realisations", "1", "--out", str(d / "e"), "--json"], True, 3),
     "markov": (lambda d: ["markov", "--gamma", "0.6", "--rule", "glauber", "--steps", "100", "--out", str(d / "m"),

@@ -131,3 +131,75 @@ def test_output_paths_are_checked_before_work(tmp_path):
     with pytest.raises(InvalidParameterError, match="not a directory"):
         check_output_file("--plot", tmp_path / "file" / "x.png", (".png",))
     assert check_output_file("--plot", tmp_path / "new" / "x.png", (".png",)).name == "x.png"
+
+
+# ----------------------------------------------------------------------------
+# Rows in chunk files (RowChunks)
+# ----------------------------------------------------------------------------
+
+
+def _rows(start, stop):
+    """Rows ``start <= j < stop`` of a made-up run: row j holds j (so any lost or repeated row shows)."""
+    j = np.arange(start, stop)
+    return {"j": j.astype(float), "pair": (j % 2).astype(np.int8), "block": np.repeat(j[:, None], 3, axis=1) * 0.5}
+
+
+def _save(chunks, count, heads):
+    chunks.save(count, _rows, lambda table: heads.append({k: v.copy() for k, v in table.items()}))
+
+
+def test_row_chunks_write_each_row_a_logarithmic_number_of_times_and_read_back_every_row(tmp_path, monkeypatch):
+    written = []  # rows per chunk written
+    original = ckpt._write
+    monkeypatch.setattr(ckpt, "_write", lambda path, *a: (written.append(a[-1]["j"].size), original(path, *a))[1])
+    chunks = ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION)
+    heads, every, saves = [], 7, 64
+    for k in range(1, saves + 1):
+        _save(chunks, every * k, heads)
+        files = sorted(p.name for p in tmp_path.glob("c.rows-*.npz"))
+        assert len(files) == k.bit_count()  # the chunks are the binary digits of the checkpoint count
+        assert files == sorted(chunks.path(a, b).name for a, b, _c in chunks.chunks)
+    # every checkpoint writes the rows since the last one plus merged ones: at most log2(saves) + 1 times each row
+    assert sum(written) <= (np.log2(saves) + 1) * every * saves
+    assert sum(written) < every * saves * (saves + 1) / 2 / 5  # rewriting every row each time: the square
+    loaded = ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION).load(heads[-1])
+    for name, value in _rows(0, every * saves).items():
+        np.testing.assert_array_equal(loaded[name], value)
+        assert loaded[name].dtype == value.dtype
+
+
+def test_row_chunks_an_earlier_checkpoint_still_reads_and_stale_chunks_are_discarded(tmp_path):
+    chunks = ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION)
+    heads = []
+    for count in (5, 10, 15):
+        _save(chunks, count, heads)
+    # a write interrupted after its chunk, before its checkpoint: the last checkpoint's table still reads
+    (tmp_path / "c.rows-000000010-000000020.npz").write_bytes(b"half")
+    resumed = ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION)
+    np.testing.assert_array_equal(resumed.load(heads[-1])["j"], np.arange(15.0))
+    resumed.discard_unlisted()
+    assert sorted(p.name for p in tmp_path.glob("c.rows-*")) == ["c.rows-000000000-000000010.npz",
+                                                                  "c.rows-000000010-000000015.npz"]
+    _save(resumed, 20, heads)  # merges [10, 15) and [15, 20), then [0, 10) and [10, 20)
+    assert [p.name for p in tmp_path.glob("c.rows-*")] == ["c.rows-000000000-000000020.npz"]
+
+
+def test_row_chunks_refuse_a_missing_or_foreign_chunk_and_a_table_with_gaps(tmp_path):
+    chunks = ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION)
+    heads = []
+    for count in (4, 6):
+        _save(chunks, count, heads)
+    table = heads[-1]
+    other = ckpt.RowChunks(tmp_path / "other" / "c.npz", SCHEMA, VERSION)
+    other.save(4, lambda a, b: {name: v + 1 for name, v in _rows(a, b).items()}, lambda t: None)
+    (tmp_path / "other" / "c.rows-000000000-000000004.npz").replace(tmp_path / "c.rows-000000000-000000004.npz")
+    with pytest.raises(CheckpointError, match="not the one it lists") as info:
+        ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION).load(table)
+    assert "\n" not in str(info.value)
+    (tmp_path / "c.rows-000000000-000000004.npz").unlink()
+    with pytest.raises(CheckpointError, match="c.rows-000000000-000000004.npz is missing"):
+        ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION).load(table)
+    with pytest.raises(ValueError, match="gaps"):
+        ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION).load({**table, "chunks/start": np.array([0, 5])})
+    with pytest.raises(ValueError, match="malformed"):
+        ckpt.RowChunks(tmp_path / "c.npz", SCHEMA, VERSION).load({**table, "chunks/stop": np.array([4.0, 6.0])})

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -248,6 +249,33 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path):
     _assert_same_run(RingRun.load_npz(tmp_path / "straight" / "ring.npz"),
                      RingRun.load_npz(tmp_path / "broken" / "ring.npz"))
     assert (tmp_path / "straight" / "ring.csv").read_text() == (tmp_path / "broken" / "ring.csv").read_text()
+
+
+def test_a_run_stopped_between_its_rows_and_its_checkpoint_resumes_to_the_same_result(tmp_path, monkeypatch):
+    """The rows new since the last checkpoint go to a chunk file first, then the checkpoint that lists
+    them: a stop in between leaves the previous checkpoint, which resumes bit for bit; the stray chunk
+    is discarded and the folder ends with only the chunks the final checkpoint lists."""
+    reference = _toy_run(collisions=100)
+    original, calls = ring_study.write_checkpoint, []
+
+    def stopped_third(*args, **kwargs):
+        calls.append(args[0])
+        if len(calls) == 3:
+            raise KeyboardInterrupt  # the rows of collisions 21-30 are written, their checkpoint is not
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(ring_study, "write_checkpoint", stopped_third)
+    with pytest.raises(KeyboardInterrupt):
+        _toy_run(tmp_path, collisions=100, checkpoint_every=10)
+    monkeypatch.setattr(ring_study, "write_checkpoint", original)
+    assert (tmp_path / "checkpoint.rows-000000020-000000030.npz").exists()
+    resumed = _toy_run(tmp_path, collisions=100, checkpoint_every=10)
+    assert resumed.resumed_from == 20
+    _assert_same_run(reference, resumed)
+    with np.load(tmp_path / ring_study.CHECKPOINT_NAME) as head:
+        listed = {f"checkpoint.rows-{a:09d}-{b:09d}.npz" for a, b in zip(head["chunks/start"], head["chunks/stop"])}
+    assert {p.name for p in tmp_path.glob("checkpoint.rows-*")} == listed
+    assert len(listed) <= 1 + math.log2(10)
 
 
 def test_finished_run_can_be_extended(tmp_path):
@@ -526,6 +554,29 @@ _RING_TAMPERING = {
 }
 
 
+_ROW_CHANGES = {name for name in _RING_TAMPERING if "rows" in name or name in (
+    "pair out of range", "NaN modal energy", "negative energy")}
+
+
+def _tamper_rows(checkpoint, change):
+    """Apply ``change`` to the rows (as ``run/NAME``) in the checkpoint's one chunk file, and list that file's new
+    checksum in the checkpoint: a crafted run whose every checksum holds."""
+    from test_io_run_controller import tamper
+
+    (chunk,) = checkpoint.parent.glob(f"{checkpoint.stem}.rows-*.npz")
+
+    def rows(arrays):
+        prefixed = {f"run/{name}": value for name, value in arrays.items()}
+        change(prefixed)
+        arrays.clear()
+        arrays.update({name[len("run/"):]: value for name, value in prefixed.items()})
+
+    tamper(chunk, rows)
+    with np.load(chunk, allow_pickle=False) as data:
+        checksum = json.loads(str(data["__checkpoint__"]))["checksum"]
+    tamper(checkpoint, lambda arrays: arrays.__setitem__("chunks/checksum", np.array([checksum])))
+
+
 @pytest.mark.parametrize("change", list(_RING_TAMPERING), ids=list(_RING_TAMPERING))
 def test_a_crafted_ring_checkpoint_is_refused_in_one_line(tmp_path, change):
     from test_io_run_controller import tamper
@@ -538,7 +589,10 @@ def test_a_crafted_ring_checkpoint_is_refused_in_one_line(tmp_path, change):
             super().set_state(state)
 
     _toy_run(tmp_path, collisions=20, checkpoint_every=10)
-    tamper(tmp_path / ring_study.CHECKPOINT_NAME, _RING_TAMPERING[change])
+    if change in _ROW_CHANGES:
+        _tamper_rows(tmp_path / ring_study.CHECKPOINT_NAME, _RING_TAMPERING[change])
+    else:
+        tamper(tmp_path / ring_study.CHECKPOINT_NAME, _RING_TAMPERING[change])
     if change == "state at another collision":
         tamper(tmp_path / ring_study.CHECKPOINT_NAME, lambda a: a.__setitem__("state/collisions", np.asarray(3)))
     with pytest.raises(CheckpointError) as info:

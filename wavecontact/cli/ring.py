@@ -11,6 +11,7 @@ from pathlib import Path
 from ..solvers.auto_ring import CHECK_EVERY, DEFAULT_TOLERANCE, ERROR_QUANTILE, choose_modes
 from .common import (
     add_ring_options,
+    files_summary,
     gamma_value,
     kappa_value,
     nonnegative_int,
@@ -131,7 +132,8 @@ def run(args) -> int:
     write_summary(out / SUMMARY_NAME, summary)
     _write_spectrum(out / SPECTRUM_NAME, stats.mean_relative_spectrum)
     figures = plot_ring_figures(ring_run, out, stats)
-    files = report_written([out / CHECKPOINT_NAME, out / "ring.npz", out / "ring.csv", out / SUMMARY_NAME,
+    rows = files_summary(out, f"{Path(CHECKPOINT_NAME).stem}.rows-*.npz")  # the checkpoint's rows (RowChunks)
+    files = report_written([out / CHECKPOINT_NAME, rows, out / "ring.npz", out / "ring.csv", out / SUMMARY_NAME,
                             out / SPECTRUM_NAME, *figures])
     if args.json:
         print(json.dumps({**summary, "files_written": files}))

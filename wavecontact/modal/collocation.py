@@ -692,7 +692,30 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                     step_response[i, m] = response[level, i, m]
             mode_q = q
             mode_v = v
-        if warm or not exact:
+        if (warm or not exact) and s == 6:
+            # the six stages (the default) in one pass over the modes: six independent sums, each node's in its
+            # order (the same arithmetic as the passes below)
+            c0, c1, c2, c3, c4, c5 = (node_cos[level, 0], node_cos[level, 1], node_cos[level, 2], node_cos[level, 3],
+                                      node_cos[level, 4], node_cos[level, 5])
+            s0, s1, s2, s3, s4, s5 = (node_sin[level, 0], node_sin[level, 1], node_sin[level, 2], node_sin[level, 3],
+                                      node_sin[level, 4], node_sin[level, 5])
+            total0 = total1 = total2 = total3 = total4 = total5 = 0.0
+            for j in range(n_modes):
+                a = coupling[j] * mode_q[j]
+                b = coupling[j] * mode_v[j]
+                total0 += c0[j] * a + s0[j] * b
+                total1 += c1[j] * a + s1[j] * b
+                total2 += c2[j] * a + s2[j] * b
+                total3 += c3[j] * a + s3[j] * b
+                total4 += c4[j] * a + s4[j] * b
+                total5 += c5[j] * a + s5[j] * b
+            free_gap[0] += total0
+            free_gap[1] += total1
+            free_gap[2] += total2
+            free_gap[3] += total3
+            free_gap[4] += total4
+            free_gap[5] += total5
+        elif warm or not exact:
             for j in range(n_modes):
                 cq[j] = coupling[j] * mode_q[j]
                 cv[j] = coupling[j] * mode_v[j]
@@ -772,20 +795,35 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             for m in range(s):
                 total += vinv[k, m] * forces[m]
             coefficients[k] = total
-        for j in range(n_modes):
-            load_q[j] = 0.0
-            load_v[j] = 0.0
         negligible = quick_newton
         for k in range(s):
             negligible = negligible and abs(forces[k]) <= 1e-30 * force_scale
         # (quick rules) node forces below 1e-30 of the force scale move no mode by more than round-off: no load
-        for k in range(0 if negligible else s):
-            a_k = coefficients[k]
-            row_s = end_s[level, k]
-            row_c = end_c[level, k]
+        if s == 6 and not negligible:
+            # the six stages (the default) in one pass over the modes: the same sum for each mode, term by term
+            # in the same order as the loop below, without reading and writing the loads six times
+            a0, a1, a2, a3, a4, a5 = (coefficients[0], coefficients[1], coefficients[2], coefficients[3],
+                                      coefficients[4], coefficients[5])
+            sin0, sin1, sin2, sin3, sin4, sin5 = (end_s[level, 0], end_s[level, 1], end_s[level, 2], end_s[level, 3],
+                                                  end_s[level, 4], end_s[level, 5])
+            cos0, cos1, cos2, cos3, cos4, cos5 = (end_c[level, 0], end_c[level, 1], end_c[level, 2], end_c[level, 3],
+                                                  end_c[level, 4], end_c[level, 5])
             for j in range(n_modes):
-                load_q[j] += a_k * row_s[j]
-                load_v[j] += a_k * row_c[j]
+                load_q[j] = (0.0 + a0 * sin0[j] + a1 * sin1[j] + a2 * sin2[j] + a3 * sin3[j] + a4 * sin4[j]
+                             + a5 * sin5[j])
+                load_v[j] = (0.0 + a0 * cos0[j] + a1 * cos1[j] + a2 * cos2[j] + a3 * cos3[j] + a4 * cos4[j]
+                             + a5 * cos5[j])
+        else:
+            for j in range(n_modes):
+                load_q[j] = 0.0
+                load_v[j] = 0.0
+            for k in range(0 if negligible else s):
+                a_k = coefficients[k]
+                row_s = end_s[level, k]
+                row_c = end_c[level, k]
+                for j in range(n_modes):
+                    load_q[j] += a_k * row_s[j]
+                    load_v[j] += a_k * row_c[j]
         sq = 0.0
         sv = 0.0
         e_cos = end_cos[level]

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..analytic import equilibrium_translational_energy
 from ..errors import CheckpointError, InvalidParameterError, require_integer, require_positive
-from ..io.checkpoint import read_checkpoint, write_checkpoint
+from ..io.checkpoint import RowChunks, read_checkpoint, write_checkpoint
 from ..io.files import atomic_write, check_output_directory
 from ..io.run_controller import KeywordGroup, RunController
 from ..limits import Limits, check_study_cost, ring_cost
@@ -54,7 +54,7 @@ CHECKPOINT_NAME = "checkpoint.npz"
 DATA_NPZ_NAME = "ring.npz"
 DATA_CSV_NAME = "ring.csv"
 _CHECKPOINT_SCHEMA = "wavecontact.ring"
-_CHECKPOINT_VERSION = 2
+_CHECKPOINT_VERSION = 3  # 3: the rows in chunk files (RowChunks), 2: in the checkpoint
 _PAIR_NAMES = ("near", "far")
 
 
@@ -172,8 +172,8 @@ class RingRun:
             payload[key] = np.asarray(value)
         payload["metadata_json"] = np.asarray(json.dumps(self.metadata))
 
-        def write(handle):
-            np.savez_compressed(handle, **payload)
+        def write(handle):  # not compressed: the modal energies, most of the bytes, do not compress (5.3 MB of 5.5)
+            np.savez(handle, **payload)
 
         return atomic_write(Path(path), write, binary=True)
 
@@ -241,50 +241,58 @@ class RingRun:
 
 
 class _Recorder:
-    """Per-collision rows accumulated in lists (cheap appends)."""
+    """Per-collision rows in NumPy arrays that grow by doubling (cheap appends, cheap slices)."""
 
-    def __init__(self, modes: int):
+    def __init__(self, modes: int, capacity: int = 256):
         self.modes = modes
-        self.columns = {name: [] for name in RingRun._ARRAYS}
+        self.count = 0
+        self.buffers = {name: self._empty(name, capacity) for name in RingRun._ARRAYS}
+
+    def _empty(self, name: str, rows: int) -> np.ndarray:
+        if name == "modal_energies":
+            return np.empty((rows, 2, self.modes))
+        return np.empty(rows, dtype=np.int8 if name == "pair" else float)
 
     def __len__(self):
-        return len(self.columns["time"])
+        return self.count
 
     def add(self, record):
         energies = np.asarray(record.modal_energies, dtype=float)
         if energies.shape != (2, self.modes):
             raise ValueError(f"simulation returned modal energies of shape {energies.shape}, expected (2, {self.modes})")
-        c = self.columns
-        c["time"].append(float(record.time))
-        c["pair"].append(int(record.pair))
-        c["translational_energy"].append(float(record.translational_energy_before))
-        c["translational_energy_after"].append(float(record.translational_energy_after))
-        c["restitution"].append(float(record.restitution))
-        c["modal_energies"].append(energies.copy())
-        c["bath_energy"].append(float(record.bath_energy))
-        c["total_energy"].append(float(record.total_energy))
+        j = self.count
+        b = self.buffers
+        if j == b["time"].shape[0]:
+            for name, values in b.items():
+                grown = self._empty(name, 2 * j)
+                grown[:j] = values
+                b[name] = grown
+        b["time"][j] = float(record.time)
+        b["pair"][j] = int(record.pair)
+        b["translational_energy"][j] = float(record.translational_energy_before)
+        b["translational_energy_after"][j] = float(record.translational_energy_after)
+        b["restitution"][j] = float(record.restitution)
+        b["modal_energies"][j] = energies
+        b["bath_energy"][j] = float(record.bath_energy)
+        b["total_energy"][j] = float(record.total_energy)
+        self.count = j + 1
+
+    def rows(self, start: int, stop: int) -> dict:
+        """Copies of rows ``start <= j < stop``."""
+        return {name: values[start:stop].copy() for name, values in self.buffers.items()}
 
     def arrays(self) -> dict:
-        c = self.columns
-        out = {}
-        for name in RingRun._ARRAYS:
-            if name == "modal_energies":
-                out[name] = np.array(c[name], dtype=float).reshape(len(self), 2, self.modes)
-            elif name == "pair":
-                out[name] = np.array(c[name], dtype=np.int8)
-            else:
-                out[name] = np.array(c[name], dtype=float)
-        return out
+        return self.rows(0, self.count)
 
     def load(self, arrays: dict, count: int):
         for name in RingRun._ARRAYS:
             values = np.asarray(arrays[name])[:count]
-            if name == "modal_energies":
-                if values.shape[1:] != (2, self.modes):
-                    raise InvalidParameterError(f"checkpoint modal energies have shape {values.shape}")
-                self.columns[name] = [np.array(v) for v in values]
-            else:
-                self.columns[name] = values.tolist()
+            if name == "modal_energies" and values.shape[1:] != (2, self.modes):
+                raise InvalidParameterError(f"checkpoint modal energies have shape {values.shape}")
+            buffer = self._empty(name, max(count, 1))
+            buffer[:count] = values
+            self.buffers[name] = buffer
+        self.count = count
 
 
 def _validate(gamma, kappa, modes, collisions, checkpoint_every):
@@ -341,19 +349,25 @@ def _check_state(state: dict, stored: int) -> None:
             f"the state is at collision {int(np.asarray(state['collisions']))} but the rows end at {stored}")
 
 
-def _write_checkpoint(path: Path, parameters: dict, simulation, recorder: _Recorder, wall_time: float):
-    arrays = {f"state/{k}": np.asarray(v) for k, v in simulation.get_state().items()}
-    arrays.update({f"run/{k}": v for k, v in recorder.arrays().items()})
-    arrays["wall_time_s"] = np.asarray(float(wall_time))
-    write_checkpoint(path, _CHECKPOINT_SCHEMA, _CHECKPOINT_VERSION, parameters, arrays)
+def _write_checkpoint(path: Path, parameters: dict, simulation, recorder: _Recorder, wall_time: float,
+                      chunks: RowChunks):
+    """The simulation's state and the chunk table in ``path``; the rows new since the last checkpoint in a chunk."""
+    state = {f"state/{k}": np.asarray(v) for k, v in simulation.get_state().items()}
+
+    def write(table):
+        arrays = {**state, **table, "wall_time_s": np.asarray(float(wall_time))}
+        write_checkpoint(path, _CHECKPOINT_SCHEMA, _CHECKPOINT_VERSION, parameters, arrays)
+
+    chunks.save(len(recorder), recorder.rows, write)
 
 
-def _resume(checkpoint: Path, arrays: dict, simulation, recorder: _Recorder) -> tuple:
-    """Load a checkpoint's ``arrays`` into ``simulation`` and ``recorder``; return ``(collisions stored, wall time
-    before)``.  Its values are checked as strictly as user input, whatever its checksum says."""
+def _resume(checkpoint: Path, arrays: dict, simulation, recorder: _Recorder, chunks: RowChunks) -> tuple:
+    """Load a checkpoint's ``arrays`` and the rows it lists into ``simulation`` and ``recorder``; return
+    ``(collisions stored, wall time before)``.  Its values are checked as strictly as user input, whatever its
+    checksums say."""
     try:
         state = {key[len("state/"):]: value for key, value in arrays.items() if key.startswith("state/")}
-        rows = {key[len("run/"):]: value for key, value in arrays.items() if key.startswith("run/")}
+        rows = chunks.load(arrays)
         stored = check_rows(rows, recorder.modes)
         _check_state(state, stored)
         wall_before = float(arrays["wall_time_s"])
@@ -361,6 +375,8 @@ def _resume(checkpoint: Path, arrays: dict, simulation, recorder: _Recorder) -> 
             raise InvalidParameterError("wall_time_s must be a finite number >= 0")
         simulation.set_state(state)
         recorder.load(rows, stored)
+    except CheckpointError:
+        raise
     except (KeyError, ValueError, IndexError, TypeError, InvalidParameterError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise CheckpointError(
@@ -403,7 +419,8 @@ class RingRunSettings(KeywordGroup):
     Parameters
     ----------
     out_dir : path, optional
-        Directory for the checkpoint (``checkpoint.npz``) and the data
+        Directory for the checkpoint (``checkpoint.npz``, its rows in a few
+        ``checkpoint.rows-START-STOP.npz``: :class:`~wavecontact.io.checkpoint.RowChunks`) and the data
         (``ring.npz``, ``ring.csv``), locked against a second run while this
         one writes (:class:`~wavecontact.io.run_controller.OutputLock`).  If it
         holds a checkpoint of the same run, the run resumes from there; a
@@ -412,7 +429,8 @@ class RingRunSettings(KeywordGroup):
         produce is refused (:class:`~wavecontact.errors.CheckpointError`).
         ``None``: nothing is written.
     checkpoint_every : int
-        Write a checkpoint whenever the collision count reaches a multiple of this (and at the end).
+        Write a checkpoint whenever the collision count reaches a multiple of this (and at the end); each
+        writes the state and the rows since the last one (with a few earlier rows merged into one chunk).
     progress : bool
         Show a progress bar on stderr.
     callback : callable, optional
@@ -520,10 +538,11 @@ def run_ring(
     parameters = {"gamma": g, "kappa": k, "circumference": scene.ring_circumference, "solver": solver,
                   "options": {key: value for key, value in options.as_dict().items()}}
     parameters = json.loads(json.dumps(to_jsonable(parameters), default=repr))
-    checkpoint = None
+    checkpoint = chunks = None
     if out_dir is not None:
         out_dir = check_output_directory("out_dir", out_dir)
         checkpoint = out_dir / CHECKPOINT_NAME
+        chunks = RowChunks(checkpoint, _CHECKPOINT_SCHEMA, _CHECKPOINT_VERSION)
     simulation = (simulation_factory or engine.simulate)(scene, options)
     checks = None
     if choice is not None and simulation_factory is None:
@@ -533,7 +552,7 @@ def run_ring(
     resumed_from = 0
 
     def save():
-        _write_checkpoint(checkpoint, parameters, simulation, recorder, wall_before + run.elapsed)
+        _write_checkpoint(checkpoint, parameters, simulation, recorder, wall_before + run.elapsed, chunks)
 
     run = RunController(m, "ring", unit="collision", out_dir=out_dir, save=save if checkpoint else None,
                         every=every, seconds=checkpoint_seconds, progress=progress, log=log, option="out_dir")
@@ -546,7 +565,9 @@ def run_ring(
                     raise
                 checkpoint.unlink()
             else:
-                resumed_from, wall_before = _resume(checkpoint, arrays, simulation, recorder)
+                resumed_from, wall_before = _resume(checkpoint, arrays, simulation, recorder, chunks)
+        if chunks is not None:
+            chunks.discard_unlisted()  # chunks of a write interrupted before its checkpoint, or of a replaced run
         if resumed_from:
             run.resumed(resumed_from)
             if log is not None:
@@ -566,7 +587,7 @@ def run_ring(
             run.advance()
         wall = wall_before + run.elapsed
 
-        arrays = {name: values[:m] for name, values in recorder.arrays().items()}
+        arrays = recorder.rows(0, min(len(recorder), m))
         result = RingRun(
             gamma=g,
             kappa=k,
