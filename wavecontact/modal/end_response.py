@@ -18,6 +18,8 @@ import functools
 
 import numpy as np
 
+from .._jit import kernel
+
 __all__ = ["ENDS_SIZE", "end_parameters", "forced_energy"]
 
 # (zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap now)
@@ -56,16 +58,145 @@ def _gauss_legendre(points: int) -> tuple:
     return nodes, weights
 
 
-def _force_at(times, starts, records):
-    """Force of the recorded step polynomials at ``times`` (zero outside the record)."""
-    index = np.searchsorted(starts, times, side="right") - 1
-    inside = (index >= 0) & (times <= starts[-1] + records[-1, 1])
-    index = np.clip(index, 0, starts.size - 1)
-    x = np.clip((times - starts[index]) / records[index, 1], 0.0, 1.0)
-    force = np.zeros_like(times)
-    for j in range(records.shape[1] - 1, 2, -1):  # Horner, one coefficient column gathered at a time
-        force = force * x + records[:, j].take(index)
-    return np.where(inside, force, 0.0)
+@kernel(error_model="numpy")
+def _block_sum(values, start, count):
+    """numpy's sum of at most 128 terms: fewer than 8 in turn, else in eight interleaved partial sums."""
+    if count < 8:
+        total = 0.0
+        for i in range(count):
+            total += values[start + i]
+        return total
+    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
+    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
+    i = 8
+    while i < count - count % 8:
+        r0 += values[start + i]
+        r1 += values[start + i + 1]
+        r2 += values[start + i + 2]
+        r3 += values[start + i + 3]
+        r4 += values[start + i + 4]
+        r5 += values[start + i + 5]
+        r6 += values[start + i + 6]
+        r7 += values[start + i + 7]
+        i += 8
+    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < count:
+        total += values[start + i]
+        i += 1
+    return total
+
+
+@kernel(error_model="numpy")
+def _pairwise_sum(values, count):
+    """``numpy.sum(values[:count])`` in numpy's own pairwise order (the same bits): blocks of at most 128
+    terms (:func:`_block_sum`), a longer run split in two halves (the first a multiple of 8) summed apart.
+
+    The halving is walked with an explicit stack (numba's cache does not take recursive functions).
+    """
+    if count <= 128:
+        return _block_sum(values, 0, count)
+    task_start = np.empty(128, dtype=np.int64)
+    task_count = np.empty(128, dtype=np.int64)  # -1: add the two sums on top of the value stack
+    sums = np.empty(64)
+    tasks = 1
+    task_start[0] = 0
+    task_count[0] = count
+    held = 0
+    while tasks > 0:
+        tasks -= 1
+        start, size = task_start[tasks], task_count[tasks]
+        if size < 0:
+            held -= 1
+            sums[held - 1] = sums[held - 1] + sums[held]
+        elif size <= 128:
+            sums[held] = _block_sum(values, start, size)
+            held += 1
+        else:
+            half = size // 2
+            half -= half % 8
+            # popped in reverse: the first half, the second, then their sum
+            task_start[tasks], task_count[tasks] = 0, -1
+            task_start[tasks + 1], task_count[tasks + 1] = start + half, size - half
+            task_start[tasks + 2], task_count[tasks + 2] = start, half
+            tasks += 3
+    return sums[0]
+
+
+@kernel(error_model="numpy")
+def _force_at(t, records, step, end):
+    """Force of the recorded step polynomials at ``t`` (zero outside the record) and the index of the
+    last step that begins at or before ``t`` (searched from ``step``, the previous one's)."""
+    count = records.shape[0]
+    while step + 1 < count and records[step + 1, 0] <= t:
+        step += 1
+    while step >= 0 and records[step, 0] > t:
+        step -= 1
+    if step < 0 or t > end:
+        return 0.0, max(step, 0)
+    x = min(max((t - records[step, 0]) / records[step, 1], 0.0), 1.0)
+    force = 0.0
+    for j in range(records.shape[1] - 1, 2, -1):  # Horner
+        force = force * x + records[step, j]
+    return force, step
+
+
+@kernel(error_model="numpy")
+def _autocorrelation_sum(records, trip, lags, nodes, weights):
+    """``R(0) + 2 sum_{n=1}^{lags} R(n T)`` of the recorded force (see :func:`forced_energy`).
+
+    Each lag is integrated over the union of the step boundaries and the shifted ones, Gauss-Legendre on
+    every piece; the terms of a lag are summed in numpy's pairwise order, so the value is the same, bit
+    for bit, as the same sums written with numpy's ``union1d`` and ``sum``.
+    """
+    count = records.shape[0]
+    points = nodes.size
+    bounds = np.empty(count + 1)
+    for k in range(count):
+        bounds[k] = records[k, 0]
+    bounds[count] = records[count - 1, 0] + records[count - 1, 1]
+    first, end = bounds[0], bounds[count]
+    edges = np.empty(2 * (count + 1))
+    terms = np.empty(edges.size * points)
+    total = 0.0
+    for n in range(lags + 1):
+        shift = n * trip
+        # the sorted union (equal values once) of the bounds and of the shifted bounds inside (first, end),
+        # kept up to end - shift
+        size = 0
+        i = 0
+        j = 0
+        while j <= count and not (bounds[j] - shift > first):
+            j += 1
+        while i <= count or (j <= count and bounds[j] - shift < end):
+            take_shifted = j <= count and bounds[j] - shift < end and (i > count or bounds[j] - shift < bounds[i])
+            value = bounds[j] - shift if take_shifted else bounds[i]
+            if take_shifted:
+                j += 1
+            else:
+                if j <= count and bounds[j] - shift == value:
+                    j += 1  # the same value in both lists
+                i += 1
+            if value > end - shift:
+                break
+            if size == 0 or value != edges[size - 1]:
+                edges[size] = value
+                size += 1
+        if size < 2:
+            continue
+        used = 0
+        step_now = 0
+        step_later = 0
+        for piece in range(size - 1):
+            left = edges[piece]
+            half = (edges[piece + 1] - left) * 0.5
+            for m in range(points):
+                t = left + half * (nodes[m] + 1.0)
+                now, step_now = _force_at(t, records, step_now, end)
+                later, step_later = _force_at(t + shift, records, step_later, end)
+                terms[used] = half * weights[m] * (now * later)
+                used += 1
+        total += (1.0 if n == 0 else 2.0) * (0.0 + _pairwise_sum(terms, used))
+    return total
 
 
 def forced_energy(records, rod, points=6) -> float:
@@ -93,31 +224,7 @@ def forced_energy(records, rod, points=6) -> float:
         return 0.0
     points = max(points, records.shape[1] - 3)
     nodes, weights = _gauss_legendre(points)
-    starts = records[:, 0]
-    bounds = np.append(starts, starts[-1] + records[-1, 1])
     trip = 2.0 * rod.length / rod.wave_speed
-    lags = int((bounds[-1] - bounds[0]) // trip)
-    # every lag's quadrature points first, then the force at all of them (and at the shifted ones) in one
-    # evaluation: elementwise, the same numbers as one evaluation per lag
-    pieces = []  # (weight of the lag, quadrature weights, times, shift)
-    for n in range(lags + 1):
-        shift = n * trip
-        edges = np.union1d(bounds, bounds[(bounds - shift > bounds[0]) & (bounds - shift < bounds[-1])] - shift)
-        edges = edges[edges <= bounds[-1] - shift]
-        if edges.size < 2:
-            continue
-        left, width = edges[:-1], np.diff(edges)
-        times = (left[:, None] + width[:, None] * 0.5 * (nodes + 1.0)).ravel()
-        pieces.append((1.0 if n == 0 else 2.0, (width[:, None] * 0.5 * weights).ravel(), times, shift))
-    if not pieces:
-        return 0.0
-    sizes = [times.size for _, _, times, _ in pieces]
-    force = _force_at(np.concatenate([times for _, _, times, _ in pieces]
-                                     + [times + shift for _, _, times, shift in pieces]), starts, records)
-    at, later = 0, sum(sizes)  # offsets of a lag's points and of its shifted points in ``force``
-    total = 0.0
-    for (factor, quadrature, _, _), size in zip(pieces, sizes):
-        product = force[at:at + size] * force[later + at:later + at + size]
-        total += factor * float(np.sum(quadrature * product))
-        at += size
-    return total / rod.impedance
+    end = records[-1, 0] + records[-1, 1]
+    lags = int((end - records[0, 0]) // trip)
+    return _autocorrelation_sum(np.ascontiguousarray(records, dtype=float), trip, lags, nodes, weights) / rod.impedance
