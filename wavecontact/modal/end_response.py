@@ -20,7 +20,7 @@ import numpy as np
 
 from .._jit import kernel
 
-__all__ = ["ENDS_SIZE", "end_parameters", "forced_energy"]
+__all__ = ["ENDS_SIZE", "end_parameters", "forced_energies", "forced_energy"]
 
 # (zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap now)
 ENDS_SIZE = 11
@@ -141,8 +141,9 @@ def _force_at(t, records, step, end):
 
 
 @kernel(error_model="numpy")
-def _autocorrelation_sum(records, trip, lags, nodes, weights):
-    """``R(0) + 2 sum_{n=1}^{lags} R(n T)`` of the recorded force (see :func:`forced_energy`).
+def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
+    """``total`` plus ``R(0)`` (if ``first_lag`` is 0) plus ``2 sum_{n=max(1, first_lag)}^{lags} R(n T)`` of the
+    recorded force, the lags added to ``total`` in turn (see :func:`forced_energy`).
 
     Each lag is integrated over the union of the step boundaries and the shifted ones, Gauss-Legendre on
     every piece; the terms of a lag are summed in numpy's pairwise order, so the value is the same, bit
@@ -157,8 +158,7 @@ def _autocorrelation_sum(records, trip, lags, nodes, weights):
     first, end = bounds[0], bounds[count]
     edges = np.empty(2 * (count + 1))
     terms = np.empty(edges.size * points)
-    total = 0.0
-    for n in range(lags + 1):
+    for n in range(first_lag, lags + 1):
         shift = n * trip
         # the sorted union (equal values once) of the bounds and of the shifted bounds inside (first, end),
         # kept up to end - shift
@@ -192,7 +192,9 @@ def _autocorrelation_sum(records, trip, lags, nodes, weights):
             for m in range(points):
                 t = left + half * (nodes[m] + 1.0)
                 now, step_now = _force_at(t, records, step_now, end)
-                later, step_later = _force_at(t + shift, records, step_later, end)
+                later = now  # lag 0: t + 0.0 is t
+                if n > 0:
+                    later, step_later = _force_at(t + shift, records, step_later, end)
                 terms[used] = half * weights[m] * (now * later)
                 used += 1
         total += (1.0 if n == 0 else 2.0) * (0.0 + _pairwise_sum(terms, used))
@@ -220,11 +222,22 @@ def forced_energy(records, rod, points=6) -> float:
     float
         Energy (energy units); subtract ``I^2 / (2 m)`` for the vibration alone.
     """
+    return forced_energies(records, (rod,), points)[0]
+
+
+def forced_energies(records, rods, points=6) -> list:
+    """:func:`forced_energy` of each rod in ``rods`` pushed by the same recorded force (the lag-0 term, the
+    same for every rod, computed once; the same values, bit for bit)."""
     if records.shape[0] == 0:
-        return 0.0
+        return [0.0 for _ in rods]
     points = max(points, records.shape[1] - 3)
     nodes, weights = _gauss_legendre(points)
-    trip = 2.0 * rod.length / rod.wave_speed
+    records = np.ascontiguousarray(records, dtype=float)
     end = records[-1, 0] + records[-1, 1]
-    lags = int((end - records[0, 0]) // trip)
-    return _autocorrelation_sum(np.ascontiguousarray(records, dtype=float), trip, lags, nodes, weights) / rod.impedance
+    zero_lag = _autocorrelation_sum(records, 1.0, 0, 0, nodes, weights, 0.0)
+    energies = []
+    for rod in rods:
+        trip = 2.0 * rod.length / rod.wave_speed
+        lags = int((end - records[0, 0]) // trip)
+        energies.append(_autocorrelation_sum(records, trip, 1, lags, nodes, weights, zero_lag) / rod.impedance)
+    return energies
