@@ -59,97 +59,19 @@ def _gauss_legendre(points: int) -> tuple:
 
 
 @kernel(error_model="numpy")
-def _block_sum(values, start, count):
-    """numpy's sum of at most 128 terms: fewer than 8 in turn, else in eight interleaved partial sums."""
-    if count < 8:
-        total = 0.0
-        for i in range(count):
-            total += values[start + i]
-        return total
-    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
-    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
-    i = 8
-    while i < count - count % 8:
-        r0 += values[start + i]
-        r1 += values[start + i + 1]
-        r2 += values[start + i + 2]
-        r3 += values[start + i + 3]
-        r4 += values[start + i + 4]
-        r5 += values[start + i + 5]
-        r6 += values[start + i + 6]
-        r7 += values[start + i + 7]
-        i += 8
-    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < count:
-        total += values[start + i]
-        i += 1
-    return total
-
-
-@kernel(error_model="numpy")
-def _pairwise_sum(values, count):
-    """``numpy.sum(values[:count])`` in numpy's own pairwise order (the same bits): blocks of at most 128
-    terms (:func:`_block_sum`), a longer run split in two halves (the first a multiple of 8) summed apart.
-
-    The halving is walked with an explicit stack (numba's cache does not take recursive functions).
-    """
-    if count <= 128:
-        return _block_sum(values, 0, count)
-    task_start = np.empty(128, dtype=np.int64)
-    task_count = np.empty(128, dtype=np.int64)  # -1: add the two sums on top of the value stack
-    sums = np.empty(64)
-    tasks = 1
-    task_start[0] = 0
-    task_count[0] = count
-    held = 0
-    while tasks > 0:
-        tasks -= 1
-        start, size = task_start[tasks], task_count[tasks]
-        if size < 0:
-            held -= 1
-            sums[held - 1] = sums[held - 1] + sums[held]
-        elif size <= 128:
-            sums[held] = _block_sum(values, start, size)
-            held += 1
-        else:
-            half = size // 2
-            half -= half % 8
-            # popped in reverse: the first half, the second, then their sum
-            task_start[tasks], task_count[tasks] = 0, -1
-            task_start[tasks + 1], task_count[tasks + 1] = start + half, size - half
-            task_start[tasks + 2], task_count[tasks + 2] = start, half
-            tasks += 3
-    return sums[0]
-
-
-@kernel(error_model="numpy")
-def _force_at(t, records, step, end):
-    """Force of the recorded step polynomials at ``t`` (zero outside the record) and the index of the
-    last step that begins at or before ``t`` (searched from ``step``, the previous one's)."""
-    count = records.shape[0]
-    while step + 1 < count and records[step + 1, 0] <= t:
-        step += 1
-    while step >= 0 and records[step, 0] > t:
-        step -= 1
-    if step < 0 or t > end:
-        return 0.0, max(step, 0)
-    x = min(max((t - records[step, 0]) / records[step, 1], 0.0), 1.0)
-    force = 0.0
-    for j in range(records.shape[1] - 1, 2, -1):  # Horner
-        force = force * x + records[step, j]
-    return force, step
-
-
-@kernel(error_model="numpy")
 def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
     """``total`` plus ``R(0)`` (if ``first_lag`` is 0) plus ``2 sum_{n=max(1, first_lag)}^{lags} R(n T)`` of the
     recorded force, the lags added to ``total`` in turn (see :func:`forced_energy`).
 
     Each lag is integrated over the union of the step boundaries and the shifted ones, Gauss-Legendre on
-    every piece; the terms of a lag are summed in numpy's pairwise order, so the value is the same, bit
-    for bit, as the same sums written with numpy's ``union1d`` and ``sum``.
+    every piece; the terms of a lag are summed in numpy's pairwise order (fewer than 8 terms in turn, up
+    to 128 in eight interleaved partial sums, a longer run split in halves, the first a multiple of 8,
+    walked here with an explicit stack), so the value is the same, bit for bit, as the same sums written
+    with numpy's ``union1d`` and ``sum``.  One function (its helpers written out inside it): each compiled
+    function costs its own second or so on an empty cache.
     """
     count = records.shape[0]
+    columns = records.shape[1]
     points = nodes.size
     bounds = np.empty(count + 1)
     for k in range(count):
@@ -158,6 +80,9 @@ def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
     first, end = bounds[0], bounds[count]
     edges = np.empty(2 * (count + 1))
     terms = np.empty(edges.size * points)
+    task_start = np.empty(128, dtype=np.int64)
+    task_count = np.empty(128, dtype=np.int64)  # -1: add the two sums on top of the value stack
+    sums = np.empty(64)
     for n in range(first_lag, lags + 1):
         shift = n * trip
         # the sorted union (equal values once) of the bounds and of the shifted bounds inside (first, end),
@@ -184,20 +109,83 @@ def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
         if size < 2:
             continue
         used = 0
-        step_now = 0
+        step_now = 0  # last step that begins at or before the point (numpy's searchsorted, side right, - 1)
         step_later = 0
         for piece in range(size - 1):
             left = edges[piece]
             half = (edges[piece + 1] - left) * 0.5
             for m in range(points):
                 t = left + half * (nodes[m] + 1.0)
-                now, step_now = _force_at(t, records, step_now, end)
+                # the force at t and at t + shift: zero outside the record, else the step's polynomial (Horner)
+                while step_now + 1 < count and records[step_now + 1, 0] <= t:
+                    step_now += 1
+                while step_now > 0 and records[step_now, 0] > t:
+                    step_now -= 1
+                now = 0.0
+                if records[step_now, 0] <= t <= end:
+                    x = min(max((t - records[step_now, 0]) / records[step_now, 1], 0.0), 1.0)
+                    for c in range(columns - 1, 2, -1):
+                        now = now * x + records[step_now, c]
                 later = now  # lag 0: t + 0.0 is t
                 if n > 0:
-                    later, step_later = _force_at(t + shift, records, step_later, end)
+                    t_later = t + shift
+                    while step_later + 1 < count and records[step_later + 1, 0] <= t_later:
+                        step_later += 1
+                    while step_later > 0 and records[step_later, 0] > t_later:
+                        step_later -= 1
+                    later = 0.0
+                    if records[step_later, 0] <= t_later <= end:
+                        x = min(max((t_later - records[step_later, 0]) / records[step_later, 1], 0.0), 1.0)
+                        for c in range(columns - 1, 2, -1):
+                            later = later * x + records[step_later, c]
                 terms[used] = half * weights[m] * (now * later)
                 used += 1
-        total += (1.0 if n == 0 else 2.0) * (0.0 + _pairwise_sum(terms, used))
+        # numpy's pairwise sum of terms[:used]
+        tasks = 1
+        task_start[0] = 0
+        task_count[0] = used
+        held = 0
+        while tasks > 0:
+            tasks -= 1
+            start, length = task_start[tasks], task_count[tasks]
+            if length < 0:
+                held -= 1
+                sums[held - 1] = sums[held - 1] + sums[held]
+            elif length > 128:
+                middle = length // 2
+                middle -= middle % 8
+                # popped in reverse: the first half, the second, then their sum
+                task_start[tasks], task_count[tasks] = 0, -1
+                task_start[tasks + 1], task_count[tasks + 1] = start + middle, length - middle
+                task_start[tasks + 2], task_count[tasks + 2] = start, middle
+                tasks += 3
+            elif length < 8:
+                block = 0.0
+                for k in range(length):
+                    block += terms[start + k]
+                sums[held] = block
+                held += 1
+            else:
+                r0, r1, r2, r3 = terms[start], terms[start + 1], terms[start + 2], terms[start + 3]
+                r4, r5, r6, r7 = terms[start + 4], terms[start + 5], terms[start + 6], terms[start + 7]
+                k = 8
+                while k < length - length % 8:
+                    r0 += terms[start + k]
+                    r1 += terms[start + k + 1]
+                    r2 += terms[start + k + 2]
+                    r3 += terms[start + k + 3]
+                    r4 += terms[start + k + 4]
+                    r5 += terms[start + k + 5]
+                    r6 += terms[start + k + 6]
+                    r7 += terms[start + k + 7]
+                    k += 8
+                block = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+                while k < length:
+                    block += terms[start + k]
+                    k += 1
+                sums[held] = block
+                held += 1
+        total += (1.0 if n == 0 else 2.0) * (0.0 + sums[0])
     return total
 
 
