@@ -83,6 +83,8 @@ def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
     task_start = np.empty(128, dtype=np.int64)
     task_count = np.empty(128, dtype=np.int64)  # -1: add the two sums on top of the value stack
     sums = np.empty(64)
+    steps = np.zeros(2, dtype=np.int64)
+    forces = np.empty(2)
     for n in range(first_lag, lags + 1):
         shift = n * trip
         # the sorted union (equal values once) of the bounds and of the shifted bounds inside (first, end),
@@ -109,35 +111,30 @@ def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
         if size < 2:
             continue
         used = 0
-        step_now = 0  # last step that begins at or before the point (numpy's searchsorted, side right, - 1)
-        step_later = 0
+        steps[:] = 0  # last step that begins at or before t and t + shift (numpy's searchsorted, right, - 1)
         for piece in range(size - 1):
             left = edges[piece]
             half = (edges[piece + 1] - left) * 0.5
             for m in range(points):
                 t = left + half * (nodes[m] + 1.0)
-                # the force at t and at t + shift: zero outside the record, else the step's polynomial (Horner)
-                while step_now + 1 < count and records[step_now + 1, 0] <= t:
-                    step_now += 1
-                while step_now > 0 and records[step_now, 0] > t:
-                    step_now -= 1
-                now = 0.0
-                if records[step_now, 0] <= t <= end:
-                    x = min(max((t - records[step_now, 0]) / records[step_now, 1], 0.0), 1.0)
-                    for c in range(columns - 1, 2, -1):
-                        now = now * x + records[step_now, c]
-                later = now  # lag 0: t + 0.0 is t
-                if n > 0:
-                    t_later = t + shift
-                    while step_later + 1 < count and records[step_later + 1, 0] <= t_later:
-                        step_later += 1
-                    while step_later > 0 and records[step_later, 0] > t_later:
-                        step_later -= 1
-                    later = 0.0
-                    if records[step_later, 0] <= t_later <= end:
-                        x = min(max((t_later - records[step_later, 0]) / records[step_later, 1], 0.0), 1.0)
+                # the force at t and (other lags) at t + shift: zero outside the record, else the step's
+                # polynomial (Horner); lag 0 needs t alone (t + 0.0 is t)
+                for which in range(1 if n == 0 else 2):
+                    at = t if which == 0 else t + shift
+                    step = steps[which]
+                    while step + 1 < count and records[step + 1, 0] <= at:
+                        step += 1
+                    while step > 0 and records[step, 0] > at:
+                        step -= 1
+                    steps[which] = step
+                    value = 0.0
+                    if records[step, 0] <= at <= end:
+                        x = min(max((at - records[step, 0]) / records[step, 1], 0.0), 1.0)
                         for c in range(columns - 1, 2, -1):
-                            later = later * x + records[step_later, c]
+                            value = value * x + records[step, c]
+                    forces[which] = value
+                now = forces[0]
+                later = now if n == 0 else forces[1]
                 terms[used] = half * weights[m] * (now * later)
                 used += 1
         # numpy's pairwise sum of terms[:used]
