@@ -18,7 +18,9 @@ import functools
 
 import numpy as np
 
-__all__ = ["ENDS_SIZE", "end_parameters", "forced_energy"]
+from .._jit import kernel
+
+__all__ = ["ENDS_SIZE", "end_parameters", "forced_energies", "forced_energy"]
 
 # (zeta, w_a, w_b, T_a, T_b, t_start, gap_0, rate_0, energy_0, tail_compliance, gap now)
 ENDS_SIZE = 11
@@ -56,16 +58,132 @@ def _gauss_legendre(points: int) -> tuple:
     return nodes, weights
 
 
-def _force_at(times, starts, records):
-    """Force of the recorded step polynomials at ``times`` (zero outside the record)."""
-    index = np.searchsorted(starts, times, side="right") - 1
-    inside = (index >= 0) & (times <= starts[-1] + records[-1, 1])
-    index = np.clip(index, 0, starts.size - 1)
-    x = np.clip((times - starts[index]) / records[index, 1], 0.0, 1.0)
-    force = np.zeros_like(times)
-    for j in range(records.shape[1] - 1, 2, -1):  # Horner, one coefficient column gathered at a time
-        force = force * x + records[:, j].take(index)
-    return np.where(inside, force, 0.0)
+@kernel(error_model="numpy")
+def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
+    """``total`` plus ``R(0)`` (if ``first_lag`` is 0) plus ``2 sum_{n=max(1, first_lag)}^{lags} R(n T)`` of the
+    recorded force, the lags added to ``total`` in turn (see :func:`forced_energy`).
+
+    Each lag is integrated over the union of the step boundaries and the shifted ones, Gauss-Legendre on
+    every piece; the terms of a lag are summed in numpy's pairwise order (fewer than 8 terms in turn, up
+    to 128 in eight interleaved partial sums, a longer run split in halves, the first a multiple of 8,
+    walked here with an explicit stack), so the value is the same, bit for bit, as the same sums written
+    with numpy's ``union1d`` and ``sum``.  One function (its helpers written out inside it): each compiled
+    function costs its own second or so on an empty cache.
+    """
+    count = records.shape[0]
+    columns = records.shape[1]
+    points = nodes.size
+    bounds = np.empty(count + 1)
+    for k in range(count):
+        bounds[k] = records[k, 0]
+    bounds[count] = records[count - 1, 0] + records[count - 1, 1]
+    first, end = bounds[0], bounds[count]
+    edges = np.empty(2 * (count + 1))
+    terms = np.empty(edges.size * points)
+    task_start = np.empty(128, dtype=np.int64)
+    task_count = np.empty(128, dtype=np.int64)  # -1: add the two sums on top of the value stack
+    sums = np.empty(64)
+    steps = np.zeros(2, dtype=np.int64)
+    forces = np.empty(2)
+    for n in range(first_lag, lags + 1):
+        shift = n * trip
+        # the sorted union (equal values once) of the bounds and of the shifted bounds inside (first, end),
+        # kept up to end - shift
+        size = 0
+        i = 0
+        j = 0
+        while j <= count and not (bounds[j] - shift > first):
+            j += 1
+        while i <= count or (j <= count and bounds[j] - shift < end):
+            take_shifted = j <= count and bounds[j] - shift < end and (i > count or bounds[j] - shift < bounds[i])
+            value = bounds[j] - shift if take_shifted else bounds[i]
+            if take_shifted:
+                j += 1
+            else:
+                if j <= count and bounds[j] - shift == value:
+                    j += 1  # the same value in both lists
+                i += 1
+            if value > end - shift:
+                break
+            if size == 0 or value != edges[size - 1]:
+                edges[size] = value
+                size += 1
+        if size < 2:
+            continue
+        used = 0
+        steps[:] = 0  # last step that begins at or before t and t + shift (numpy's searchsorted, right, - 1)
+        for piece in range(size - 1):
+            left = edges[piece]
+            half = (edges[piece + 1] - left) * 0.5
+            for m in range(points):
+                t = left + half * (nodes[m] + 1.0)
+                # the force at t and (other lags) at t + shift: zero outside the record, else the step's
+                # polynomial (Horner); lag 0 needs t alone (t + 0.0 is t)
+                for which in range(1 if n == 0 else 2):
+                    at = t if which == 0 else t + shift
+                    step = steps[which]
+                    while step + 1 < count and records[step + 1, 0] <= at:
+                        step += 1
+                    while step > 0 and records[step, 0] > at:
+                        step -= 1
+                    steps[which] = step
+                    value = 0.0
+                    if records[step, 0] <= at <= end:
+                        x = min(max((at - records[step, 0]) / records[step, 1], 0.0), 1.0)
+                        for c in range(columns - 1, 2, -1):
+                            value = value * x + records[step, c]
+                    forces[which] = value
+                now = forces[0]
+                later = now if n == 0 else forces[1]
+                terms[used] = half * weights[m] * (now * later)
+                used += 1
+        # numpy's pairwise sum of terms[:used]
+        tasks = 1
+        task_start[0] = 0
+        task_count[0] = used
+        held = 0
+        while tasks > 0:
+            tasks -= 1
+            start, length = task_start[tasks], task_count[tasks]
+            if length < 0:
+                held -= 1
+                sums[held - 1] = sums[held - 1] + sums[held]
+            elif length > 128:
+                middle = length // 2
+                middle -= middle % 8
+                # popped in reverse: the first half, the second, then their sum
+                task_start[tasks], task_count[tasks] = 0, -1
+                task_start[tasks + 1], task_count[tasks + 1] = start + middle, length - middle
+                task_start[tasks + 2], task_count[tasks + 2] = start, middle
+                tasks += 3
+            elif length < 8:
+                block = 0.0
+                for k in range(length):
+                    block += terms[start + k]
+                sums[held] = block
+                held += 1
+            else:
+                r0, r1, r2, r3 = terms[start], terms[start + 1], terms[start + 2], terms[start + 3]
+                r4, r5, r6, r7 = terms[start + 4], terms[start + 5], terms[start + 6], terms[start + 7]
+                k = 8
+                while k < length - length % 8:
+                    r0 += terms[start + k]
+                    r1 += terms[start + k + 1]
+                    r2 += terms[start + k + 2]
+                    r3 += terms[start + k + 3]
+                    r4 += terms[start + k + 4]
+                    r5 += terms[start + k + 5]
+                    r6 += terms[start + k + 6]
+                    r7 += terms[start + k + 7]
+                    k += 8
+                block = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+                while k < length:
+                    block += terms[start + k]
+                    k += 1
+                sums[held] = block
+                held += 1
+        total += (1.0 if n == 0 else 2.0) * (0.0 + sums[0])
+    return total
 
 
 def forced_energy(records, rod, points=6) -> float:
@@ -89,35 +207,22 @@ def forced_energy(records, rod, points=6) -> float:
     float
         Energy (energy units); subtract ``I^2 / (2 m)`` for the vibration alone.
     """
+    return forced_energies(records, (rod,), points)[0]
+
+
+def forced_energies(records, rods, points=6) -> list:
+    """:func:`forced_energy` of each rod in ``rods`` pushed by the same recorded force (the lag-0 term, the
+    same for every rod, computed once; the same values, bit for bit)."""
     if records.shape[0] == 0:
-        return 0.0
+        return [0.0 for _ in rods]
     points = max(points, records.shape[1] - 3)
     nodes, weights = _gauss_legendre(points)
-    starts = records[:, 0]
-    bounds = np.append(starts, starts[-1] + records[-1, 1])
-    trip = 2.0 * rod.length / rod.wave_speed
-    lags = int((bounds[-1] - bounds[0]) // trip)
-    # every lag's quadrature points first, then the force at all of them (and at the shifted ones) in one
-    # evaluation: elementwise, the same numbers as one evaluation per lag
-    pieces = []  # (weight of the lag, quadrature weights, times, shift)
-    for n in range(lags + 1):
-        shift = n * trip
-        edges = np.union1d(bounds, bounds[(bounds - shift > bounds[0]) & (bounds - shift < bounds[-1])] - shift)
-        edges = edges[edges <= bounds[-1] - shift]
-        if edges.size < 2:
-            continue
-        left, width = edges[:-1], np.diff(edges)
-        times = (left[:, None] + width[:, None] * 0.5 * (nodes + 1.0)).ravel()
-        pieces.append((1.0 if n == 0 else 2.0, (width[:, None] * 0.5 * weights).ravel(), times, shift))
-    if not pieces:
-        return 0.0
-    sizes = [times.size for _, _, times, _ in pieces]
-    force = _force_at(np.concatenate([times for _, _, times, _ in pieces]
-                                     + [times + shift for _, _, times, shift in pieces]), starts, records)
-    at, later = 0, sum(sizes)  # offsets of a lag's points and of its shifted points in ``force``
-    total = 0.0
-    for (factor, quadrature, _, _), size in zip(pieces, sizes):
-        product = force[at:at + size] * force[later + at:later + at + size]
-        total += factor * float(np.sum(quadrature * product))
-        at += size
-    return total / rod.impedance
+    records = np.ascontiguousarray(records, dtype=float)
+    end = records[-1, 0] + records[-1, 1]
+    zero_lag = _autocorrelation_sum(records, 1.0, 0, 0, nodes, weights, 0.0)
+    energies = []
+    for rod in rods:
+        trip = 2.0 * rod.length / rod.wave_speed
+        lags = int((end - records[0, 0]) // trip)
+        energies.append(_autocorrelation_sum(records, trip, 1, lags, nodes, weights, zero_lag) / rod.impedance)
+    return energies

@@ -124,15 +124,27 @@ def analytic_modes(rod: Rod, modes: int) -> RodModes:
     """The first ``modes`` free-free modes of a uniform rod in closed form.
 
     ``omega_nu = c pi nu / l``; end values ``sqrt(2/m)`` (left) and
-    ``(-1)^nu sqrt(2/m)`` (right), ``m = rho A l``.
+    ``(-1)^nu sqrt(2/m)`` (right), ``m = rho A l``.  Recent ones are remembered (read-only arrays:
+    a collision and its error estimate's run, and repeated collisions, build them once).
     """
     n = _check_count(modes)
+    try:
+        return _analytic_modes(rod, n)
+    except TypeError:  # a rod whose fields do not hash
+        return _analytic_modes.__wrapped__(rod, n)
+
+
+@functools.lru_cache(maxsize=32)
+def _analytic_modes(rod: Rod, n: int) -> RodModes:
     nu = np.arange(1, n + 1, dtype=float)
     omega = rod.wave_speed * math.pi * nu / rod.length
     amplitude = math.sqrt(2.0 / rod.mass)
     left = np.full(n, amplitude)
     right = amplitude * (-1.0) ** nu
-    return RodModes(rod, omega, left, right, uniform_residual_compliance(rod, n), "analytic")
+    compliance = uniform_residual_compliance(rod, n)
+    for array in (omega, left, right, compliance):
+        array.flags.writeable = False
+    return RodModes(rod, omega, left, right, compliance, "analytic")
 
 
 def fe_matrices(rod: Rod, elements: int, order: int = 1):
