@@ -86,6 +86,37 @@ def test_stepped_bar_fem_on_the_exact_lattice(z2):
     assert_matches_lattice(fem(scene, 40), reference)
 
 
+@pytest.mark.parametrize("z2", [2.0, 0.5])
+def test_stepped_bar_fem_stress_transmitted_and_reflected_with_the_impedance_ratio(z2):
+    """The FE's own stress field on the stepped bar: striker [0, 1] (Z1 = 1, V = 1) on a bar [1, 4] (Z1) +
+    [4, 7] (Z2 = z2 Z1, E and rho scaled by z2, one wave speed c = 1, unit areas).  Wave theory of impact:
+    the incident stress is -Z1 V / 2 for 2 l / c = 2; past the step (t > 3) it is 2 Z2 / (Z1 + Z2) of the
+    incident, behind the incident's tail (x < t - 1) the reflection alone is (Z2 - Z1) / (Z1 + Z2) of it,
+    ahead of the transmitted front nothing.  P1 lumped at Courant number 1: exact at sample times."""
+    bar = PiecewiseRod((Segment(length=3.0, area=1.0), Segment(length=3.0, area=1.0, youngs_modulus=z2, density=z2)))
+    scene = Scene(rods=(Rod(1.0), bar), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
+    result = fem(scene, 40, estimate_error=False, record_fields=True, field_samples=400)
+    incident = -0.5
+    transmitted, reflected = 2 * z2 / (1.0 + z2) * incident, (z2 - 1.0) / (1.0 + z2) * incident
+    fields = result.fields["rods"][1]
+    x, margin = fields["x"], 0.1
+    checked = {"transmitted": 0, "reflected": 0, "ahead": 0}
+    for k, t in enumerate(result.fields["time"]):
+        if not 3.2 < t < 4.9:  # transmitted front at 4 + (t - 3); the incident pulse ends at the step at t = 5
+            continue
+        stress = fields["stress"][k]
+        region = (x > 4.0 + margin) & (x < 4.0 + (t - 3.0) - margin)
+        np.testing.assert_allclose(stress[region], transmitted, rtol=0, atol=EXACT)
+        checked["transmitted"] += region.sum()
+        region = (x > 7.0 - t + margin) & (x < t - 1.0 - margin)  # reflected front at 4 - (t - 3), incident tail t - 1
+        np.testing.assert_allclose(stress[region], reflected, rtol=0, atol=EXACT)
+        checked["reflected"] += region.sum()
+        region = x > 4.0 + (t - 3.0) + margin
+        np.testing.assert_allclose(stress[region], 0.0, rtol=0, atol=EXACT)
+        checked["ahead"] += region.sum()
+    assert min(checked.values()) > 50, checked
+
+
 def test_stepped_bar_by_area_on_the_exact_lattice():
     """The same step made by the area (A2 = 2 A1, one material): only the impedance matters."""
     reference = chain([[(1.0, 1.0)], [(1.0, 1.0), (1.0, 2.0)]], [1.0, 0.0])
