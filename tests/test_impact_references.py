@@ -12,7 +12,7 @@ from references.central_differences import extrapolate, run
 from references.characteristics import chain
 from references.saint_venant import saint_venant
 
-from wavecontact import Hard, PiecewiseRod, RigidBody, Rod, Scene, Segment, solve
+from wavecontact import Hard, Hertz, PiecewiseRod, RigidBody, Rod, Scene, Segment, solve
 
 EXACT = 1e-9
 
@@ -71,6 +71,39 @@ def test_saint_venant_fem_against_the_method_of_steps(ratio):
         assert contact.impulse == pytest.approx(reference.impulse, abs=result.error_estimate * ratio)
     if errors[-1] > 1e-13:  # below round-off the fit means nothing
         assert observed_order(SAINT_VENANT_ELEMENTS, errors) >= 0.9
+
+
+def test_hertz_striker_on_a_long_bar_against_the_semi_infinite_rod():
+    """A rigid mass (M = 1, V = 1) with Hertz contact (F = K delta^(3/2), K = 10) on a free rod of length 4
+    (rho = E = A = 1, Z = 1): until the far end's echo returns (2 l / c = 8) the struck end moves at F / Z, so
+    M y'' = -F, u' = F / Z, F = K (y - u)^(3/2) is the whole problem (integrated here by scipy to 1e-12; contact
+    ends after 4.95, before the echo).  The FE's mass velocity within its error estimate, one contact
+    interval, the impulse the mass lost, the duration within two steps."""
+    from scipy.integrate import solve_ivp
+
+    mass, speed, stiffness, length = 1.0, 1.0, 10.0, 4.0
+
+    def rhs(t, state):
+        y, v, u = state
+        force = stiffness * max(y - u, 0.0) ** 1.5
+        return [v, -force / mass, force / 1.0]
+
+    def separated(t, state):
+        return state[0] - state[2]
+
+    separated.terminal, separated.direction = True, -1
+    ode = solve_ivp(rhs, (0.0, 50.0), [1e-12, speed, 0.0], events=separated, rtol=1e-12, atol=1e-14, method="DOP853")
+    duration, mass_velocity = ode.t_events[0][0], ode.y_events[0][0][1]
+    assert duration < 2 * length  # the echo arrives after the contact: the semi-infinite rod holds
+    scene = Scene(rods=(RigidBody(mass=mass), Rod(length)), velocities=(speed, 0.0), contact=Hertz(stiffness),
+                  gaps=(0.0,))
+    for n in (100, 200):
+        result = fem(scene, n)
+        (contact,) = result.contacts
+        assert abs(result.velocities[0] - mass_velocity) <= result.error_estimate, (n, result.velocities)
+        assert contact.intervals == 1
+        assert contact.impulse == pytest.approx(mass * (speed - result.velocities[0]), abs=1e-12)
+        assert contact.duration == pytest.approx(duration, abs=2 * result.work["dt"])
 
 
 # -- stepped bar ----------------------------------------------------------------------------------------------
