@@ -145,6 +145,26 @@ def test_mixed_scene_runs_and_round_trips_through_json(tmp_path):
     assert loaded.error_estimate == result.error_estimate
 
 
+def test_each_facing_pair_keeps_its_own_law():
+    """Two pairs on one line that never meet each other (they part after their collisions; the contact between
+    them never acts): rods 1 and 2 (one material) with hard contact, rods 1 and 1.5 with an exponential law.
+    The hard pair ends at epsilon = l1 / l2 (wave theory of impact), the soft pair at the delay solver's epsilon
+    for those rods and that law (an independent solver); every velocity within the loop's own error estimate."""
+    law = Exponential(20.0, 0.01)
+    scene = Scene(rods=(Rod(1.0), Rod(2.0), Rod(1.0), Rod(1.5)), velocities=(0.0, -1.0, 1.0, 0.0),
+                  contact=(Hard(), Hard(), law), gaps=(0.0, 0.5, None))
+    result = solve(scene, "fem", elements=100)
+
+    def after(m1, m2, u1, u2, eps):  # momentum kept, relative velocity reversed and scaled by eps
+        centre = (m1 * u1 + m2 * u2) / (m1 + m2)
+        return centre - m2 / (m1 + m2) * eps * (u1 - u2), centre + m1 / (m1 + m2) * eps * (u1 - u2)
+
+    soft = solve(Scene(rods=(Rod(1.0), Rod(1.5)), velocities=(1.0, 0.0), contact=law), "delay").restitution
+    expected = after(1.0, 2.0, 0.0, -1.0, 0.5) + after(1.0, 1.5, 1.0, 0.0, soft)
+    assert np.max(np.abs(np.asarray(result.velocities) - expected)) <= result.error_estimate
+    assert [c.intervals for c in result.contacts] == [1, 0, 1]
+
+
 def test_options_the_loop_does_not_take_are_refused():
     from wavecontact import InvalidParameterError
 

@@ -12,7 +12,7 @@ from references.central_differences import extrapolate, run
 from references.characteristics import chain
 from references.saint_venant import saint_venant
 
-from wavecontact import Hard, PiecewiseRod, RigidBody, Rod, Scene, Segment, solve
+from wavecontact import Hard, Hertz, PiecewiseRod, RigidBody, Rod, Scene, Segment, solve
 
 EXACT = 1e-9
 
@@ -73,6 +73,39 @@ def test_saint_venant_fem_against_the_method_of_steps(ratio):
         assert observed_order(SAINT_VENANT_ELEMENTS, errors) >= 0.9
 
 
+def test_hertz_striker_on_a_long_bar_against_the_semi_infinite_rod():
+    """A rigid mass (M = 1, V = 1) with Hertz contact (F = K delta^(3/2), K = 10) on a free rod of length 4
+    (rho = E = A = 1, Z = 1): until the far end's echo returns (2 l / c = 8) the struck end moves at F / Z, so
+    M y'' = -F, u' = F / Z, F = K (y - u)^(3/2) is the whole problem (integrated here by scipy to 1e-12; contact
+    ends after 4.95, before the echo).  The FE's mass velocity within its error estimate, one contact
+    interval, the impulse the mass lost, the duration within two steps."""
+    from scipy.integrate import solve_ivp
+
+    mass, speed, stiffness, length = 1.0, 1.0, 10.0, 4.0
+
+    def rhs(t, state):
+        y, v, u = state
+        force = stiffness * max(y - u, 0.0) ** 1.5
+        return [v, -force / mass, force / 1.0]
+
+    def separated(t, state):
+        return state[0] - state[2]
+
+    separated.terminal, separated.direction = True, -1
+    ode = solve_ivp(rhs, (0.0, 50.0), [1e-12, speed, 0.0], events=separated, rtol=1e-12, atol=1e-14, method="DOP853")
+    duration, mass_velocity = ode.t_events[0][0], ode.y_events[0][0][1]
+    assert duration < 2 * length  # the echo arrives after the contact: the semi-infinite rod holds
+    scene = Scene(rods=(RigidBody(mass=mass), Rod(length)), velocities=(speed, 0.0), contact=Hertz(stiffness),
+                  gaps=(0.0,))
+    for n in (100, 200):
+        result = fem(scene, n)
+        (contact,) = result.contacts
+        assert abs(result.velocities[0] - mass_velocity) <= result.error_estimate, (n, result.velocities)
+        assert contact.intervals == 1
+        assert contact.impulse == pytest.approx(mass * (speed - result.velocities[0]), abs=1e-12)
+        assert contact.duration == pytest.approx(duration, abs=2 * result.work["dt"])
+
+
 # -- stepped bar ----------------------------------------------------------------------------------------------
 
 
@@ -84,6 +117,37 @@ def test_stepped_bar_fem_on_the_exact_lattice(z2):
     bar = PiecewiseRod((Segment(length=1.0, area=1.0), Segment(length=1.0, area=1.0, youngs_modulus=z2, density=z2)))
     scene = Scene(rods=(Rod(1.0), bar), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
     assert_matches_lattice(fem(scene, 40), reference)
+
+
+@pytest.mark.parametrize("z2", [2.0, 0.5])
+def test_stepped_bar_fem_stress_transmitted_and_reflected_with_the_impedance_ratio(z2):
+    """The FE's own stress field on the stepped bar: striker [0, 1] (Z1 = 1, V = 1) on a bar [1, 4] (Z1) +
+    [4, 7] (Z2 = z2 Z1, E and rho scaled by z2, one wave speed c = 1, unit areas).  Wave theory of impact:
+    the incident stress is -Z1 V / 2 for 2 l / c = 2; past the step (t > 3) it is 2 Z2 / (Z1 + Z2) of the
+    incident, behind the incident's tail (x < t - 1) the reflection alone is (Z2 - Z1) / (Z1 + Z2) of it,
+    ahead of the transmitted front nothing.  P1 lumped at Courant number 1: exact at sample times."""
+    bar = PiecewiseRod((Segment(length=3.0, area=1.0), Segment(length=3.0, area=1.0, youngs_modulus=z2, density=z2)))
+    scene = Scene(rods=(Rod(1.0), bar), velocities=(1.0, 0.0), contact=Hard(), gaps=(0.0,))
+    result = fem(scene, 40, estimate_error=False, record_fields=True, field_samples=400)
+    incident = -0.5
+    transmitted, reflected = 2 * z2 / (1.0 + z2) * incident, (z2 - 1.0) / (1.0 + z2) * incident
+    fields = result.fields["rods"][1]
+    x, margin = fields["x"], 0.1
+    checked = {"transmitted": 0, "reflected": 0, "ahead": 0}
+    for k, t in enumerate(result.fields["time"]):
+        if not 3.2 < t < 4.9:  # transmitted front at 4 + (t - 3); the incident pulse ends at the step at t = 5
+            continue
+        stress = fields["stress"][k]
+        region = (x > 4.0 + margin) & (x < 4.0 + (t - 3.0) - margin)
+        np.testing.assert_allclose(stress[region], transmitted, rtol=0, atol=EXACT)
+        checked["transmitted"] += region.sum()
+        region = (x > 7.0 - t + margin) & (x < t - 1.0 - margin)  # reflected front at 4 - (t - 3), incident tail t - 1
+        np.testing.assert_allclose(stress[region], reflected, rtol=0, atol=EXACT)
+        checked["reflected"] += region.sum()
+        region = x > 4.0 + (t - 3.0) + margin
+        np.testing.assert_allclose(stress[region], 0.0, rtol=0, atol=EXACT)
+        checked["ahead"] += region.sum()
+    assert min(checked.values()) > 50, checked
 
 
 def test_stepped_bar_by_area_on_the_exact_lattice():
