@@ -212,6 +212,7 @@ class DelaySolver(SolverBase):
     title = "delay solver"
     cli_flags = MappingProxyType({"rtol": None, "max_steps": None})
     capabilities = frozenset({THERMAL_BATCH, HARD_CORE_THERMAL, MATERIAL_RATIOS, ENERGY_SPLIT})
+    line_scenes_taken = "two uniform rods, or a rigid body against one uniform rod (no walls), only"
     batch_defaults = MappingProxyType(BATCH_OPTIONS)
     order_case = MappingProxyType({"resolutions": (1e-4, 1e-6, 1e-8), "options": {}})
     agreement_case = ({}, 1e-9)

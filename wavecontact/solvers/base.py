@@ -453,6 +453,8 @@ class SolverBase:
     contact_names: tuple = ("exponential", "hard")
     #: names of the :data:`CAPABILITIES` the solver offers
     capabilities: frozenset = frozenset()
+    #: the scenes on a line the solver takes, for its refusal of the others (``solve_line``)
+    line_scenes_taken: str = "the paper's two uniform rods only"
     #: options a batch of many thermal samples runs with where the caller gives none (ensembles, Markov)
     batch_defaults: Mapping = MappingProxyType({})
     #: the contract tests' order case: resolutions (coarse to fine) and options held fixed
@@ -780,7 +782,7 @@ class SolverBase:
         solver takes it (:mod:`wavecontact.fem.multibody`)."""
         del options, limits
         raise UnsupportedSceneError(
-            f"solver {self.name!r} takes the paper's two uniform rods only; this scene ({len(scene.rods)} bodies: "
+            f"solver {self.name!r} takes {self.line_scenes_taken}; this scene ({len(scene.rods)} bodies: "
             "piecewise rods, rigid bodies, chains or walls) needs solver='fem'")
 
     def rough_estimate(self, scene: Scene, options) -> str:
