@@ -363,8 +363,10 @@ def table_lines(tables: dict) -> list:
             lines.append(f"| {name} | {s['solved']} | {s['coverage']:.3f} | {s['within10']:.3f} | {s['sharp_count']} "
                          f"| {s['median_ratio']:.3g} | {s['p95_ratio']:.3g} | {s['refused']} | {s['failed']} |")
         total, median, count = estimate_share(rows)
+        long_runs = (f"{median:.2f} (median) for the {count} requested runs of a second or more" if count
+                     else "no requested run took a second or more")
         lines.append(f"\n{solver}: the coarser runs of the estimate took {total:.2f} of the requested runs' time in "
-                     f"all, {median:.2f} (median) for the {count} requested runs of a second or more.")
+                     f"all, {long_runs}.")
         if solver == "fem":
             solved = [r for r in rows if r["status"] == "ok"]
             bound = [r["estimate"] + r["reference_estimate"] for r in solved]
