@@ -77,7 +77,9 @@ def test_settling_collision_counts_from_one():
     "kwargs, field",
     [({"modes": (1,)}, "modes"), ({"modes": (5, 5)}, "modes"), ({"modes": ()}, "modes"),
      ({"modes": (4.5,)}, "modes"), ({"collisions": 0}, "collisions"), ({"realisations": 2.5}, "realisations"),
-     ({"threshold": 1.0}, "threshold"), ({"threshold": math.nan}, "threshold")],
+     ({"threshold": 1.0}, "threshold"), ({"threshold": math.nan}, "threshold"),
+     ({"circumference_factors": (1.0, 0.0)}, r"circumference_factors\[1\]"),
+     ({"circumference_factors": ()}, "circumference_factors")],
 )
 def test_bad_parameters_are_refused(kwargs, field):
     with pytest.raises(InvalidParameterError, match=field):
@@ -112,3 +114,18 @@ def test_cli_refuses_bad_arguments(argv, tmp_path, capsys):
         main(base + argv)
     assert exc.value.code == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_circumference_factors_set_each_realisations_ring(study):
+    """Factors given explicitly: one realisation per factor, on that multiple of the paper's ring; the factors of
+    the default grid reproduce the default study's series bit for bit (same scenes, same runs)."""
+    base = study.circumferences[6][0]
+    factors = (1.0, 1.015, 1.03)
+    again = equipartition_by_modes(GAMMA, 4000, modes=(6,), collisions=150, circumference_factors=factors,
+                                   progress=False)
+    np.testing.assert_array_equal(again.circumferences[6], base * np.array(factors))
+    np.testing.assert_array_equal(again.entropy[6], study.entropy[6])
+    drawn = equipartition_by_modes(GAMMA, 4000, modes=(6,), collisions=20, circumference_factors=(1.0123, 1.0456),
+                                   progress=False)
+    np.testing.assert_array_equal(drawn.circumferences[6], base * np.array((1.0123, 1.0456)))
+    assert drawn.entropy[6].shape == (2, 20)

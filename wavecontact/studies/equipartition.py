@@ -9,8 +9,8 @@ realisation is the first collision after which ``eta`` lies below
 ``threshold`` times that mean.
 
 The motion is chaotic, so one realisation says little about the spread.
-Realisations here differ only in the ring's circumference (each 1.5 %
-longer than the previous one), which changes the free flights and hence
+Realisations here differ only in the ring's circumference (by default each 1.5 %
+longer than the previous one; or factors drawn from a root seed), which changes the free flights and hence
 the phases of the modes at every later impact, while the first collision
 (the cold line collision) is the same for all.
 
@@ -137,6 +137,7 @@ def equipartition_by_modes(
     threshold: float = 1.5,
     static_correction: bool = True,
     progress: bool = True,
+    circumference_factors=None,
 ) -> EquipartitionStudy:
     """Record ``eta`` over the first ``collisions`` collisions for each mode count.
 
@@ -158,6 +159,11 @@ def equipartition_by_modes(
         Passed to :class:`~wavecontact.modal.ring.RingSimulation`.
     progress : bool
         Show a tqdm progress bar on stderr.
+    circumference_factors : sequence of float, optional
+        The realisations' circumferences as multiples (> 0) of the paper's ring circumference, e.g.
+        drawn from a root seed (:func:`~wavecontact.studies.paper_figures.ring_circumference_factor`);
+        one realisation per factor, replacing ``realisations``.  Default: the fixed grid
+        ``1 + 0.015 r``, ``r = 0 .. realisations - 1``.
 
     Returns
     -------
@@ -167,7 +173,14 @@ def equipartition_by_modes(
 
     mode_counts = _mode_counts(modes)
     collisions = require_integer("collisions", collisions, 1)
-    realisations = require_integer("realisations", realisations, 1)
+    if circumference_factors is None:
+        realisations = require_integer("realisations", realisations, 1)
+        factors = [1.0 + CIRCUMFERENCE_STEP * r for r in range(realisations)]
+    else:
+        factors = [require_positive(f"circumference_factors[{i}]", f) for i, f in enumerate(circumference_factors)]
+        if not factors:
+            raise InvalidParameterError("circumference_factors must hold at least one factor")
+        realisations = len(factors)
     threshold = require_positive("threshold", threshold)
     if threshold <= 1.0:
         raise InvalidParameterError(f"threshold must exceed 1 (a multiple of the equilibrium mean), got {threshold!r}")
@@ -180,8 +193,8 @@ def equipartition_by_modes(
         for n in mode_counts:
             options = engine.options({"modes": n, "static_correction": static_correction})
             series, lengths = [], []
-            for r in range(realisations):
-                scene = two_rods_on_a_ring(gamma, kappa, base * (1.0 + CIRCUMFERENCE_STEP * r))
+            for factor in factors:
+                scene = two_rods_on_a_ring(gamma, kappa, base * factor)
                 simulation = engine.simulate(scene, options)
                 eta = np.empty(collisions)
                 for k in range(collisions):

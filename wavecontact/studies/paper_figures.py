@@ -16,8 +16,8 @@ page): stream ``key`` is ``numpy.random.SeedSequence(R, spawn_key=key)``
 (:func:`derived_seed` turns it into the integer root seed a study takes, which
 spawns its own samples or chains from it).  Ring realisations (Fig. 1-3) differ in
 the ring circumference, ``base x (1 + 0.05 u_i)`` with ``u_i`` uniform on [0, 1)
-drawn from stream ``(1, i)``; Fig. 2's settling uses the equipartition study's
-own fixed grid of circumferences (1.5 % steps, no seed).
+drawn from stream ``(1, i)``; Fig. 2's settling runs, for every ``N``, the
+circumferences ``base x (1 + 0.05 u_i)`` with ``u_i`` from stream ``(2, i)``.
 
 Verdicts are :data:`REPRODUCED`, :data:`BORDERLINE`, :data:`DIFFERS` (a measured
 value resolved away from the paper's) or :data:`NOT_REPRODUCED` (the paper's
@@ -201,8 +201,8 @@ CRITERIA = {
         'scale does not depend significantly on the number of modes."',
         '"approximately five", for every N',
         "per N: median of the first collision with eta <= 1.5 x its finite-N equilibrium mean",
-        "{settling_realisations} ring circumferences per N (the equipartition study's fixed grid, 1.5 % steps), "
-        "N = {settling_modes}, {settling_collisions} collisions",
+        "{settling_realisations} ring realisations per N (circumference x (1 + 0.05 u_i), u_i from the root "
+        "seed's stream (2, i), the same for every N), N = {settling_modes}, {settling_collisions} collisions",
         f"for every N, {_MEDIAN_CI} contains 5: reproduced; excludes 5 for some N: differs (the N that agree "
         "and the log-log slope of the medians are printed)"),
     "correlation": Criterion(
@@ -582,9 +582,10 @@ def _run_tasks(executor, function, items) -> list:
     return [f.result() for f in futures]
 
 
-def ring_circumference_factor(root: int, realisation: int) -> float:
-    """Ring realisation ``realisation``'s circumference factor ``1 + 0.05 u``, ``u`` from stream ``(1, i)``."""
-    u = np.random.default_rng(np.random.SeedSequence(int(root), spawn_key=(1, int(realisation)))).random()
+def ring_circumference_factor(root: int, realisation: int, stream: int = 1) -> float:
+    """Ring realisation ``realisation``'s circumference factor ``1 + 0.05 u``, ``u`` from stream ``(stream, i)``
+    (1: the ring runs of Fig. 1-3; 2: Fig. 2's settling study)."""
+    u = np.random.default_rng(np.random.SeedSequence(int(root), spawn_key=(int(stream), int(realisation)))).random()
     return 1.0 + RING_CIRCUMFERENCE_SPREAD * float(u)
 
 
@@ -668,8 +669,9 @@ def figure_2(ctx: Context) -> FigureReport:
     runs, stats, images, sizes = _ring(ctx)
     s = ctx.sizes
     modes, collisions, realisations = s["settling_modes"], s["settling_collisions"], s["settling_realisations"]
-    study = equipartition_by_modes(0.6173, 4000.0, modes=modes, collisions=collisions, realisations=realisations,
-                                   progress=False)
+    factors = [ring_circumference_factor(ctx.root_seed, i, stream=2) for i in range(realisations)]
+    study = equipartition_by_modes(0.6173, 4000.0, modes=modes, collisions=collisions,
+                                   circumference_factors=factors, progress=False)
     image = plot_equipartition(study, ctx.out / "fig2_equipartition_vs_modes.png")
     table = study.table()
     settling = [list(row["settling"]) for row in table]
