@@ -240,8 +240,20 @@ def _pull_triple(tree_time, tree_event, leaf):
     _pull(tree_time, tree_event, lo)
     t, e = _pull(tree_time, tree_event, hi)
     if lo != hi:
-        return _pull_nodes(tree_time, tree_event, lo, hi)
+        _pull_span(tree_time, tree_event, np.int64(lo), np.int64(hi))
+        return tree_time[1], tree_event[1]
     return _climb_from(tree_time, tree_event, lo, t, e)
+
+
+@kernel
+def _pull_span(tree_time, tree_event, lo, hi):
+    """:func:`_pull_nodes` called rather than inlined (nodes ``lo..hi`` of one level, int64), for the rarer
+    updates: events at a wall or the ring's seam, a triple straddling two grandparents.
+
+    Each inlined copy of the climb to the root made the event loop's compilation longer by about 0.7 s
+    (seven copies: 12.5 s of compile CPU for the loop and its callees, 6.7 s with these calls; on a ring
+    of 2000 rods and 2e6 collisions no slower)."""
+    _pull_nodes(tree_time, tree_event, lo, hi)
 
 
 @kernel
@@ -581,10 +593,11 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
         or for :data:`RULE_LAW` the hard-core collision law's (:meth:`CollisionLaw.kernel_arrays`:
         ``log10 x`` grid, short-rod-share grid, levels, eps^2 quantiles and short-rod gains per level,
         ``(G, X, S, P)``).
-    soft : tuple of 7 ndarray
+    soft : tuple of 7 ndarray, or None
         ``(kappa, gamma, log_x, share, probability, quantiles, gains)``: the soft (finite-kappa) collision
         law, its kappa rows, grids, levels, and its corrections to the hard-core law, arrays
-        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`; :func:`empty_soft_law` when unused).
+        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`).  None without a contact stiffness: numba
+        then compiles a specialisation without the soft law's draw (one for every hard-core rule).
     draws : tuple of 2 ndarray
         ``(uniforms, pending)``: levels in [0, 1), one per collision of the table and law rules; ``(flag,
         eps2, share)`` supplied by the caller for the external rule (shape (3,)).
@@ -675,7 +688,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             neighbour = 1 if k == 0 else n - 1  # the rod's other event (a pair, or the far wall if N = 1)
             tree_time[leaves + k] = math.inf
             tree_time[leaves + neighbour] = event_time(neighbour, t, x, v, local_time, reach, ring, box)
-            _pull_range(tree_time, tree_event, min(k, neighbour), max(k, neighbour))
+            _pull_span(tree_time, tree_event, leaves + min(k, neighbour), leaves + max(k, neighbour))
             k = tree_event[1]
             t = tree_time[1]
             continue
@@ -727,7 +740,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             below, ir, wr, i_s, ws = _law_point(log_x, short_share, table_ratio, share_grid)
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, i_s, ws,
                                   probability, uniform_levels, quantiles, share, np.bool_(True))
-            if stiffness > 0.0:
+            if soft is not None:  # None (no contact stiffness): numba prunes the soft law's branch at compile time
                 kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
                 eps2, s, softer, below_soft, floored = _soft_draw(
                     uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft)
@@ -841,14 +854,15 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
                 tree_time[leaves + before] = event_time(before, t, x, v, local_time, reach, ring, box)
             if has_after:
                 tree_time[leaves + after_k] = event_time(after_k, t, x, v, local_time, reach, ring, box)
+            # the paths to the root by calls (_pull_span), not inlined: these events are a few of the N
             if before == k - 1 and after_k == k + 1:
-                _pull_range(tree_time, tree_event, before, after_k)  # one shared path to the root
+                _pull_span(tree_time, tree_event, leaves + before, leaves + after_k)  # one shared path to the root
             else:  # the ring's seam (or fewer than three events): separate paths
-                _pull_range(tree_time, tree_event, k, k)
+                _pull_span(tree_time, tree_event, leaves + k, leaves + k)
                 if has_before:
-                    _pull_range(tree_time, tree_event, before, before)
+                    _pull_span(tree_time, tree_event, leaves + before, leaves + before)
                 if has_after:
-                    _pull_range(tree_time, tree_event, after_k, after_k)
+                    _pull_span(tree_time, tree_event, leaves + after_k, leaves + after_k)
             t_next = tree_time[1]
             k_next = tree_event[1]
         # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite time).

@@ -515,7 +515,7 @@ class GasSimulation:
         table = _read_only(rule.kernel_arrays())
         probability = table[2]
         soft_law = self.contact_stiffness is not None and rule.code == kernels.RULE_LAW
-        soft = _read_only(rule.soft_arrays() if soft_law else kernels.empty_soft_law())
+        soft = _read_only(rule.soft_arrays()) if soft_law else None
         stiffness = self.contact_stiffness if soft_law else 0.0
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
