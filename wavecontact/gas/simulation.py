@@ -542,6 +542,10 @@ class GasSimulation:
                     rods, pairs, tree, self.ring, self.gas.system_length, constants, table, soft,
                     (uniforms[self.collisions - before:], self.pending),
                     (chunk - (self.collisions - before), float(max_time)), monitor)
+                status = kernels.resolve_cluster(status, event, self.x, self.v, self.local_time, self.reach, self.ring,
+                                                 self.gas.system_length, self.collapse, self.scalars)
+                if status == kernels.STATUS_DONE and self.collisions - before < chunk:
+                    continue  # a false alarm of the collapse detector: the loop goes on
                 if status == kernels.STATUS_OFF_TABLE:
                     self.off_table = self._pair_state(event)
                 if status == kernels.STATUS_COLLAPSE and self.collapse_detected is None:
