@@ -161,6 +161,47 @@ def test_collapse_cluster_matches_an_independent_reading_of_the_gaps():
             assert largest == expected
 
 
+def test_the_event_loops_cluster_statuses_resolve_as_the_gaps_say():
+    """run_events leaves the cluster search of an accelerating run to resolve_cluster: a cluster of three bodies
+    or more is a collapse; without one the pair's lost relative velocity (STATUS_CLUSTER_FROZEN) is a frozen gas,
+    a run below its energy floor has cooled, and else the run goes on (STATUS_DONE: a false alarm).  A ring whose
+    velocities all rounded to equal (STATUS_CLUSTER_MERGED) collapsed if its largest cluster joins three rods
+    or more and their positions resolve the gap floor, else froze.  The gaps are set here, not found by the
+    kernel."""
+    floor = 1e-6
+    lengths = np.full(6, 0.5)
+    v, clock = np.zeros(6), np.zeros(6)
+    collapse = np.array([1e-3, floor, 3.0, 2.0**-50, 2.0**-48, 2.0**-50])
+    scalars = np.zeros(8)
+    scalars[kernels.KINETIC] = 1.0
+    touching = np.array([1e-9, 1e-9, 1.0, 1.0, 1.0, 1.0])  # events 0 and 1: rods 0, 1, 2 touch
+    apart = np.array([1e-9, 1.0, 1.0, 1.0, 1.0, 1.0])  # event 0 alone: two rods
+    for gaps, event, expected in ((touching, 1, kernels.STATUS_COLLAPSE), (apart, 0, kernels.STATUS_DONE),
+                                  (touching, 3, kernels.STATUS_DONE)):
+        x, reach, box = _state_with_gaps(gaps, lengths, True)
+        resolved = [kernels.resolve_cluster(status, event, x, v, clock, reach, True, box, collapse, scalars)
+                    for status in (kernels.STATUS_CLUSTER, kernels.STATUS_CLUSTER_FROZEN)]
+        assert resolved[0] == expected
+        assert resolved[1] == (kernels.STATUS_COLLAPSE if expected == kernels.STATUS_COLLAPSE else kernels.STATUS_FROZEN)
+        cooled = scalars.copy()
+        cooled[kernels.ENERGY_FLOOR] = 2.0  # the kinetic energy 1 lies below it
+        assert kernels.resolve_cluster(kernels.STATUS_CLUSTER, event, x, v, clock, reach, True, box, collapse,
+                                       cooled) == (kernels.STATUS_COLLAPSE if expected == kernels.STATUS_COLLAPSE
+                                                   else kernels.STATUS_COOLED)
+        merged = kernels.resolve_cluster(kernels.STATUS_CLUSTER_MERGED, -1, x, v, clock, reach, True, box, collapse,
+                                         scalars)
+        assert merged == (kernels.STATUS_COLLAPSE if gaps is touching else kernels.STATUS_FROZEN)
+        # the rods 1e9 further out: the touching gaps still lie below the floor (their rounding is 1.2e-7), but the
+        # positions' rounding 1e9 * 2^-48 = 3.6e-6 exceeds it: frozen, not collapsed
+        far = x + 1e9
+        if gaps is touching:
+            assert kernels.collapse_cluster(-1, 0.0, far, v, clock, reach, True, box, floor)[2] == 3
+        assert kernels.resolve_cluster(kernels.STATUS_CLUSTER_MERGED, -1, far, v, clock, reach, True, box,
+                                       collapse, scalars) == kernels.STATUS_FROZEN
+    for status in (kernels.STATUS_DONE, kernels.STATUS_NO_EVENTS, kernels.STATUS_NEED_DRAW):
+        assert kernels.resolve_cluster(status, 0, x, v, clock, reach, True, box, collapse, scalars) == status
+
+
 def test_a_detected_collapse_can_be_continued_and_says_where_it_was():
     _, stopped = _cell(0.8, 32, 0)
     assert stopped.collapsed and "at collision" in stopped.message and "cluster of" in stopped.message

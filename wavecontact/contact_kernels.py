@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ._jit import kernel
 from .contact import LAW_EXPONENTIAL, LAW_HARD, LAW_HERTZ, LAW_PENALTY
 
@@ -449,7 +451,8 @@ def overlap_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
     energy = 0.5 * w * w + m_inv * law_potential(law, alpha, strength, stiffness, r)
     if energy <= 0.0:
         return r + w * remaining, w
-    deepest = _deepest_overlap(law, alpha, strength, stiffness, energy / m_inv, True)
+    # np.bool_: a literal True (and False in overlap_gap) would compile _deepest_overlap once for each
+    deepest = _deepest_overlap(law, alpha, strength, stiffness, energy / m_inv, np.bool_(True))
     speed = math.sqrt(2.0 * energy)
     frequency = math.sqrt(m_inv * law_stiffness(law, alpha, strength, stiffness, -deepest))
     rate = max(speed / deepest, frequency) * _SUBSTEPS_PER_SCALE
@@ -497,7 +500,7 @@ def overlap_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
         r = 0.0
     deepest = -r
     if g < 0.0:
-        deepest = max(deepest, _deepest_overlap(law, alpha, strength, stiffness, -g / compliance, False))
+        deepest = max(deepest, _deepest_overlap(law, alpha, strength, stiffness, -g / compliance, np.bool_(False)))
     if deepest <= 0.0:
         return r + g * remaining
     relax = compliance * law_stiffness(law, alpha, strength, stiffness, -deepest)

@@ -52,6 +52,7 @@ __all__ = [
     "empty_soft_law",
     "event_time",
     "event_times",
+    "resolve_cluster",
     "run_events",
     "tree_size",
 ]
@@ -60,6 +61,10 @@ RULE_FIXED, RULE_TABLE, RULE_EXTERNAL, RULE_LAW = 0, 1, 2, 3
 STATUS_DONE, STATUS_TIME_LIMIT, STATUS_NEED_DRAW, STATUS_COLLAPSE, STATUS_NO_EVENTS, STATUS_COOLED = 0, 1, 2, 3, 4, 5
 STATUS_OFF_TABLE = 6  # a pair met at a temperature ratio outside the table: the run stops (never clipped)
 STATUS_FROZEN = 7  # the collisions accelerate, but only because relative velocities are lost in the rounding
+# the collisions accelerated: the caller looks for the cluster (collapse_cluster, compiled only for runs that get
+# here) and resumes on a false alarm; _FROZEN: without a cluster the pair's relative velocity is lost in the
+# rounding; _MERGED: a ring with no events left (its velocities equal), the largest cluster decides
+STATUS_CLUSTER, STATUS_CLUSTER_FROZEN, STATUS_CLUSTER_MERGED = 8, 9, 10
 # indices into the float64 ``collapse`` array of :func:`run_events` (the collapse detector's parameters)
 COLLAPSE_FACTOR, COLLAPSE_GAP, COLLAPSE_RODS, FROZEN_SPEED, FROZEN_POSITION, COLLAPSE_CLOCK = range(6)
 COLLAPSE_PARAMETERS = 6
@@ -240,8 +245,20 @@ def _pull_triple(tree_time, tree_event, leaf):
     _pull(tree_time, tree_event, lo)
     t, e = _pull(tree_time, tree_event, hi)
     if lo != hi:
-        return _pull_nodes(tree_time, tree_event, lo, hi)
+        _pull_span(tree_time, tree_event, np.int64(lo), np.int64(hi))
+        return tree_time[1], tree_event[1]
     return _climb_from(tree_time, tree_event, lo, t, e)
+
+
+@kernel
+def _pull_span(tree_time, tree_event, lo, hi):
+    """:func:`_pull_nodes` called rather than inlined (nodes ``lo..hi`` of one level, int64), for the rarer
+    updates: events at a wall or the ring's seam, a triple straddling two grandparents.
+
+    Each inlined copy of the climb to the root made the event loop's compilation longer by about 0.7 s
+    (seven copies: 12.5 s of compile CPU for the loop and its callees, 6.7 s with these calls; on a ring
+    of 2000 rods and 2e6 collisions no slower)."""
+    _pull_nodes(tree_time, tree_event, lo, hi)
 
 
 @kernel
@@ -530,6 +547,42 @@ def collapse_cluster(k, now, x, v, local_time, reach, ring, box, gap_floor):
     return best_first, best_last, (best + 1 if best > 0 else 0)
 
 
+def resolve_cluster(status, k, x, v, local_time, reach, ring, box, collapse, scalars):
+    """The status a :data:`STATUS_CLUSTER`, :data:`STATUS_CLUSTER_FROZEN` or :data:`STATUS_CLUSTER_MERGED` of
+    :func:`run_events` stands for, from the cluster of event ``k`` (:func:`collapse_cluster`, at the clock
+    ``scalars[T_NOW]``): :data:`STATUS_COLLAPSE`, :data:`STATUS_FROZEN`, :data:`STATUS_COOLED`, or
+    :data:`STATUS_DONE` for a false alarm (call :func:`run_events` again: it resumes where it returned).
+    Any other status is returned as it is.
+
+    The decisions are the ones the event loop made inline before (the same comparisons of the same numbers):
+    a cluster of at least ``collapse[COLLAPSE_RODS]`` bodies is a collapse; else the pair's relative velocity
+    lost in the rounding (``_FROZEN``) is a frozen gas; else a run below its energy floor has cooled.  On a
+    ring whose velocities all rounded to equal (``_MERGED``) the largest cluster is a collapse if its rods'
+    positions resolve the gap floor, else the gas froze.
+    """
+    if status not in (STATUS_CLUSTER, STATUS_CLUSTER_FROZEN, STATUS_CLUSTER_MERGED):
+        return status
+    now = scalars[T_NOW]
+    first, last, members = collapse_cluster(np.int64(k), now, x, v, local_time, reach, ring, box,
+                                            collapse[COLLAPSE_GAP])
+    if status == STATUS_CLUSTER_MERGED:
+        if members >= collapse[COLLAPSE_RODS]:
+            # the positions must resolve the floor (a rod far out on its unwrapped path cannot)
+            n = x.size
+            rods = np.arange(first, last + 1 if last >= first else last + 1 + n) % n
+            rounding = float(np.max(np.abs(x[rods] + v[rods] * (now - local_time[rods]))))
+            if rounding * collapse[FROZEN_POSITION] < collapse[COLLAPSE_GAP]:
+                return STATUS_COLLAPSE
+        return STATUS_FROZEN
+    if members >= collapse[COLLAPSE_RODS]:
+        return STATUS_COLLAPSE
+    if status == STATUS_CLUSTER_FROZEN:
+        return STATUS_FROZEN
+    if scalars[ENERGY_FLOOR] > 0.0 and scalars[KINETIC] - scalars[MOMENTUM_ENERGY] < scalars[ENERGY_FLOOR]:
+        return STATUS_COOLED
+    return STATUS_DONE
+
+
 @kernel
 def _accelerating(window, count, factor, clock):
     """Whether the last half of the window of collision times took less than ``factor`` times its first half
@@ -581,10 +634,11 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
         or for :data:`RULE_LAW` the hard-core collision law's (:meth:`CollisionLaw.kernel_arrays`:
         ``log10 x`` grid, short-rod-share grid, levels, eps^2 quantiles and short-rod gains per level,
         ``(G, X, S, P)``).
-    soft : tuple of 7 ndarray
+    soft : tuple of 7 ndarray, or None
         ``(kappa, gamma, log_x, share, probability, quantiles, gains)``: the soft (finite-kappa) collision
         law, its kappa rows, grids, levels, and its corrections to the hard-core law, arrays
-        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`; :func:`empty_soft_law` when unused).
+        ``(K, G, X, S, P)`` (:meth:`VibrationLaw.soft_arrays`).  None without a contact stiffness: numba
+        then compiles a specialisation without the soft law's draw (one for every hard-core rule).
     draws : tuple of 2 ndarray
         ``(uniforms, pending)``: levels in [0, 1), one per collision of the table and law rules; ``(flag,
         eps2, share)`` supplied by the caller for the external rule (shape (3,)).
@@ -600,9 +654,11 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
         diverged at the clock's rounding), the run stops as frozen if the pair's relative velocity was at
         most ``collapse[FROZEN_SPEED]`` times the larger of its two speeds, or if
         ``collapse[FROZEN_POSITION]`` times its centres' magnitude (their rounding) reaches
-        ``collapse[COLLAPSE_GAP]`` (the relative motion is lost in the rounding); else as collapsed if the
-        colliding pair's cluster (:func:`collapse_cluster`) joins at least ``collapse[COLLAPSE_RODS]``
-        bodies by gaps below ``collapse[COLLAPSE_GAP]`` (a length); else it goes on (a false alarm).
+        ``collapse[COLLAPSE_GAP]`` (the relative motion is lost in the rounding); else it returns
+        :data:`STATUS_CLUSTER` (or :data:`STATUS_CLUSTER_FROZEN`, :data:`STATUS_CLUSTER_MERGED`) and
+        :func:`resolve_cluster` decides: collapsed if the colliding pair's cluster (:func:`collapse_cluster`)
+        joins at least ``collapse[COLLAPSE_RODS]`` bodies by gaps below ``collapse[COLLAPSE_GAP]`` (a length);
+        else the run goes on (a false alarm: call again).
         ``collapse[COLLAPSE_FACTOR] = 0`` switches the detector off.  ``scalars``, ``counters``: running
         clock and energies, and counters (see the module constants).  The run stops (``STATUS_COOLED``)
         once the kinetic energy in the centre-of-mass frame falls below ``scalars[ENERGY_FLOOR]``.
@@ -610,7 +666,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
     Returns
     -------
     status : int
-        One of the ``STATUS_*`` constants.
+        One of the ``STATUS_*`` constants (``STATUS_CLUSTER*``: pass it to :func:`resolve_cluster`).
     event : int
         The event awaiting an external draw (``STATUS_NEED_DRAW``) or refused
         by the table (``STATUS_OFF_TABLE``), else -1.
@@ -649,18 +705,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             # the clock's rounding): a collapse if a cluster of touching rods is left, else the gas froze.
             count = counters[COLLISIONS]
             if ring and collapse[COLLAPSE_FACTOR] > 0.0 and _accelerating(window, count, 1.0, math.inf):
-                now = scalars[T_NOW]
-                first, last, members = collapse_cluster(np.int64(-1), now, x, v, local_time, reach, ring, box,
-                                                        collapse[COLLAPSE_GAP])
-                if members >= collapse[COLLAPSE_RODS]:
-                    # the positions must resolve the floor (a rod far out on its unwrapped path cannot)
-                    rounding = 0.0
-                    for e in range(first, last + 1 if last >= first else last + 1 + n):
-                        rod = e % n
-                        rounding = max(rounding, abs(x[rod] + v[rod] * (now - local_time[rod])))
-                    if rounding * collapse[FROZEN_POSITION] < collapse[COLLAPSE_GAP]:
-                        return STATUS_COLLAPSE, -1, done
-                return STATUS_FROZEN, -1, done
+                return STATUS_CLUSTER_MERGED, -1, done  # collapsed or frozen: the caller's cluster search decides
             return STATUS_NO_EVENTS, -1, done
         if t > time_limit:
             return STATUS_TIME_LIMIT, -1, done
@@ -675,7 +720,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             neighbour = 1 if k == 0 else n - 1  # the rod's other event (a pair, or the far wall if N = 1)
             tree_time[leaves + k] = math.inf
             tree_time[leaves + neighbour] = event_time(neighbour, t, x, v, local_time, reach, ring, box)
-            _pull_range(tree_time, tree_event, min(k, neighbour), max(k, neighbour))
+            _pull_span(tree_time, tree_event, leaves + min(k, neighbour), leaves + max(k, neighbour))
             k = tree_event[1]
             t = tree_time[1]
             continue
@@ -727,7 +772,7 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
             below, ir, wr, i_s, ws = _law_point(log_x, short_share, table_ratio, share_grid)
             eps2, s = _table_draw(uniforms[done], pair_gamma_index[k], pair_gamma_weight[k], ir, wr, i_s, ws,
                                   probability, uniform_levels, quantiles, share, np.bool_(True))
-            if stiffness > 0.0:
+            if soft is not None:  # None (no contact stiffness): numba prunes the soft law's branch at compile time
                 kappa = stiffness * approach * 2.0 * reduced  # alpha V l with l = 2 mu (rods of unit density)
                 eps2, s, softer, below_soft, floored = _soft_draw(
                     uniforms[done], pair_gamma[k], kappa, log_x, short_share, eps2, s, soft)
@@ -841,14 +886,15 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
                 tree_time[leaves + before] = event_time(before, t, x, v, local_time, reach, ring, box)
             if has_after:
                 tree_time[leaves + after_k] = event_time(after_k, t, x, v, local_time, reach, ring, box)
+            # the paths to the root by calls (_pull_span), not inlined: these events are a few of the N
             if before == k - 1 and after_k == k + 1:
-                _pull_range(tree_time, tree_event, before, after_k)  # one shared path to the root
+                _pull_span(tree_time, tree_event, leaves + before, leaves + after_k)  # one shared path to the root
             else:  # the ring's seam (or fewer than three events): separate paths
-                _pull_range(tree_time, tree_event, k, k)
+                _pull_span(tree_time, tree_event, leaves + k, leaves + k)
                 if has_before:
-                    _pull_range(tree_time, tree_event, before, before)
+                    _pull_span(tree_time, tree_event, leaves + before, leaves + before)
                 if has_after:
-                    _pull_range(tree_time, tree_event, after_k, after_k)
+                    _pull_span(tree_time, tree_event, leaves + after_k, leaves + after_k)
             t_next = tree_time[1]
             k_next = tree_event[1]
         # inelastic collapse: the collisions accelerate geometrically (infinitely many in a finite time).
@@ -880,11 +926,11 @@ def run_events(rods, pairs, tree, ring, box, rule, table, soft, draws, stop, mon
                 # speed has lost it in the rounding: frozen too.
                 if max(abs(x_i), abs(x_j)) * collapse[FROZEN_POSITION] >= collapse[COLLAPSE_GAP]:
                     return STATUS_FROZEN, k, done
-                _, _, members = collapse_cluster(np.int64(k), t, x, v, local_time, reach, ring, box, collapse[COLLAPSE_GAP])
-                if members >= collapse[COLLAPSE_RODS]:
-                    return STATUS_COLLAPSE, k, done
+                # the cluster of k is the caller's to find (resolve_cluster): collapse_cluster then compiles only
+                # for runs that get here, and the loop resumes from the same state on a false alarm
                 if abs(approach) <= collapse[FROZEN_SPEED] * max(abs(vi), abs(vj)):
-                    return STATUS_FROZEN, k, done
+                    return STATUS_CLUSTER_FROZEN, k, done
+                return STATUS_CLUSTER, k, done
             if cooled:
                 return STATUS_COOLED, k, done
         k = k_next

@@ -515,7 +515,7 @@ class GasSimulation:
         table = _read_only(rule.kernel_arrays())
         probability = table[2]
         soft_law = self.contact_stiffness is not None and rule.code == kernels.RULE_LAW
-        soft = _read_only(rule.soft_arrays() if soft_law else kernels.empty_soft_law())
+        soft = _read_only(rule.soft_arrays()) if soft_law else None
         stiffness = self.contact_stiffness if soft_law else 0.0
         uniform = bool(np.array_equal(probability, np.linspace(0.0, 1.0, probability.size)))
         restitution2 = rule.restitution**2 if rule.code == kernels.RULE_FIXED else 0.0
@@ -542,6 +542,10 @@ class GasSimulation:
                     rods, pairs, tree, self.ring, self.gas.system_length, constants, table, soft,
                     (uniforms[self.collisions - before:], self.pending),
                     (chunk - (self.collisions - before), float(max_time)), monitor)
+                status = kernels.resolve_cluster(status, event, self.x, self.v, self.local_time, self.reach, self.ring,
+                                                 self.gas.system_length, self.collapse, self.scalars)
+                if status == kernels.STATUS_DONE and self.collisions - before < chunk:
+                    continue  # a false alarm of the collapse detector: the loop goes on
                 if status == kernels.STATUS_OFF_TABLE:
                     self.off_table = self._pair_state(event)
                 if status == kernels.STATUS_COLLAPSE and self.collapse_detected is None:
