@@ -81,3 +81,14 @@ def test_a_scene_file_with_a_soft_wall_under_a_rigid_body_gives_a_result(tmp_pat
     assert "Traceback" not in captured.err
     record = json.loads(captured.out)
     assert record["velocities"][0] == pytest.approx(-1.5, abs=record["error_estimate"] * 1.5)
+
+
+def test_a_given_step_is_coarsened_in_the_estimate_of_a_rigid_soft_contact():
+    """With ``dt`` given the estimate's runs take 2 dt and 4 dt there: it still bounds the step's error."""
+    mass, speed = 2.0, 1.5
+    scene = Scene(rods=(RigidBody(mass),), velocities=(speed,), contact=(),
+                  walls=(None, Wall(gap=0.3, contact=Penalty(300.0))))
+    result = solve(scene, "fem", dt=0.005)
+    assert [n for n, _ in result.diagnostics["error_estimate_levels"]] == [800, 400, 200]
+    assert abs(result.velocities[0] + speed) <= result.error_estimate * speed
+    assert result.error_estimate > 1e-6

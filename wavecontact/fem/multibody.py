@@ -486,6 +486,8 @@ def _estimate(scene, run_options: dict, run: dict, levels: list) -> tuple:
             # a soft contact between rigid sides has no mesh: its steps are halved with the elements
             coarse_options = {**run_options, "elements": coarse, "record_fields": False,
                               "contact_steps": rigid_contact_steps(elements) / divisor}
+            if run["setup"].rigid_soft and run_options["dt"] is not None:  # a given step: coarsened with them
+                coarse_options["dt"] = run_options["dt"] * divisor
             levels.append((coarse, run_line(scene, **coarse_options)["velocities"]))
         except SolverFailure as failure:
             if len(levels) == 1:

@@ -128,6 +128,7 @@ class LineSetup:
     speed_scale: float
     hard: bool  # some contact is hard
     walls: tuple  # (left present, right present)
+    rigid_soft: bool = False  # some soft contact has no rod side (its step is not refined by the elements)
 
 
 def _piecewise_discretization(body: PiecewiseRod, vertices: np.ndarray, order: int, mass_kind: str):
@@ -385,6 +386,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
     right_wall = positions[-1] + bodies[-1].length + start_gaps[-1] if walls[1] is not None else 0.0
     # the step
     soft_limit, resolution = math.inf, math.inf
+    rigid_soft = False
     columns, rows = [], []
     hard_any = False
     for k, ((a, b, _, _, name, end_a, end_b), law) in enumerate(zip(pairs, resolved_laws)):
@@ -410,6 +412,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
             elif k_contact > 0.0:  # a law acting on overlap only switches on and off: resolve its oscillation
                 resolution = min(resolution, OVERLAP_RESOLUTION / math.sqrt(k_contact * w))
             if a.kind != SIDE_ROD and b.kind != SIDE_ROD and k_contact > 0.0:  # no mesh resolves it: its own steps
+                rigid_soft = True
                 resolution = min(resolution, math.pi / math.sqrt(k_contact * w) / contact_steps)
         row = np.zeros(CONTACT_FIELDS)
         for s, prefix in ((a, "A"), (b, "B")):
@@ -463,7 +466,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
                      positions=positions, contacts=contacts, columns=columns,
                      contact_names=tuple(p[4] for p in pairs), laws=tuple(resolved_laws), u0=u0, v0=v0, dt=float(step),
                      stable_step=limit, lattice=lattice, period=period, energy_scale=energy, speed_scale=speed_scale,
-                     hard=hard_any, walls=(walls[0] is not None, walls[1] is not None))
+                     hard=hard_any, walls=(walls[0] is not None, walls[1] is not None), rigid_soft=rigid_soft)
 
 
 def _end_element(disc: RodDiscretization, right: bool) -> float:
