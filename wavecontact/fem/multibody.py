@@ -8,7 +8,8 @@ uniform rods; :func:`run_line` is one run (also usable on a two-rod scene, to
 compare with the two-rod loop).
 
 Error estimate: Richardson on every body's final velocity from the runs at
-``elements // 2`` and ``elements // 4``, assuming first order (the plastic
+``elements // 2`` and ``elements // 4`` (and half and a quarter of the steps over
+a soft contact between rigid sides, which no mesh resolves), assuming first order (the plastic
 end-node rule of hard contact and a rigid body's contact with a rod end are
 first order in ``h``; the force scheme of soft contacts is second): three
 times the largest difference, over ``max |initial velocity|``.
@@ -31,7 +32,7 @@ from ..solvers.base import ERROR_SAFETY, Stopwatch, richardson_estimate
 from . import multibody_kernel as mk
 from .discretization import _stress_recovery
 from .interleaved_step import L_SHAPE, L_U, L_V, node_position
-from .multibody_setup import LineSetup, build_line_setup, mass_solves
+from .multibody_setup import LineSetup, build_line_setup, mass_solves, rigid_contact_steps
 
 __all__ = ["ESTIMATE_ORDER", "LINE_OPTIONS", "field_bytes", "replay_fields", "run_line", "solve_line"]
 
@@ -195,14 +196,17 @@ def _advance(setup: LineSetup, loop: dict, steps: int):
 
 def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", dt=None, courant=None,
              energy_tolerance: float = 0.05, max_time=None, record_fields: bool = False,
-             field_samples: int = 300) -> dict:
+             field_samples: int = 300, contact_steps=None) -> dict:
     """One run of the multi-body loop on a line scene; a dict of the outcome (see :func:`solve_line`).
+
+    ``contact_steps``: steps over the time scale of each soft contact between rigid sides
+    (:func:`~wavecontact.fem.multibody_setup.build_line_setup`; default from ``elements``).
 
     With ``record_fields`` the loop runs a second time from the start to the same last step, stopping at
     ``field_samples`` evenly spread steps to copy the fields (:func:`replay_fields`); the first run, and so
     every result, is the same as without.
     """
-    setup = build_line_setup(scene, elements, order, mass, dt, courant)
+    setup = build_line_setup(scene, elements, order, mass, dt, courant, contact_steps=contact_steps)
     loop = _start(scene, setup)
     dt_ = setup.dt
     ru, rv, args_rods, records, state = loop["ru"], loop["rv"], loop["args_rods"], loop["records"], loop["state"]
@@ -479,7 +483,11 @@ def _estimate(scene, run_options: dict, run: dict, levels: list) -> tuple:
         if coarse < 1:
             break
         try:
-            coarse_options = {**run_options, "elements": coarse, "record_fields": False}
+            # a soft contact between rigid sides has no mesh: its steps are halved with the elements
+            coarse_options = {**run_options, "elements": coarse, "record_fields": False,
+                              "contact_steps": rigid_contact_steps(elements) / divisor}
+            if run["setup"].rigid_soft and run_options["dt"] is not None:  # a given step: coarsened with them
+                coarse_options["dt"] = run_options["dt"] * divisor
             levels.append((coarse, run_line(scene, **coarse_options)["velocities"]))
         except SolverFailure as failure:
             if len(levels) == 1:

@@ -66,7 +66,7 @@ from .multibody_kernel import (
 from .simulation import FORCE_COURANT, FORCE_PEAK, FORCE_RESOLUTION, POTENTIAL_TOLERANCE
 from .stability import _reference_eigenvalue, check_time_step, largest_eigenvalue
 
-__all__ = ["LineSetup", "build_line_setup"]
+__all__ = ["LineSetup", "build_line_setup", "rigid_contact_steps"]
 
 # a hard impulse below this fraction of (end-node mass x velocity scale) is round-off, not a contact
 IMPULSE_ROUNDOFF = 1e-10
@@ -74,6 +74,18 @@ IMPULSE_ROUNDOFF = 1e-10
 # on a spring that switches on and off pump energy where a step spans a good part of its period (omega dt = 1.56
 # took a three-rod chain to 12 times its energy)
 OVERLAP_RESOLUTION = 0.5
+# fewest steps over the time scale pi / sqrt(k w) of a soft contact between two rigid sides (or a rigid body and a wall)
+RIGID_CONTACT_STEPS = 50.0
+
+
+def rigid_contact_steps(elements: int) -> float:
+    """Steps over the time scale ``pi / sqrt(k w)`` of a soft contact between rigid sides at ``elements``.
+
+    No rod takes part in such a contact, so ``elements`` alone would not refine it: it gets ``elements / 4``
+    steps (200 at the default 800), at least ``RIGID_CONTACT_STEPS``; the error estimate's coarser runs halve
+    this number with the elements (:func:`wavecontact.fem.multibody._estimate`), so Richardson sees the step.
+    """
+    return max(RIGID_CONTACT_STEPS, elements / 4.0)
 
 
 @dataclass
@@ -116,6 +128,7 @@ class LineSetup:
     speed_scale: float
     hard: bool  # some contact is hard
     walls: tuple  # (left present, right present)
+    rigid_soft: bool = False  # some soft contact has no rod side (its step is not refined by the elements)
 
 
 def _piecewise_discretization(body: PiecewiseRod, vertices: np.ndarray, order: int, mass_kind: str):
@@ -236,9 +249,16 @@ def _stiffness_bound(law, energy: float, force_cap: float, scale: float) -> floa
 
 
 def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lumped", dt=None, courant=None,
-                     max_time=None) -> LineSetup:
-    """Discretize every body of a line scene and choose the step (see the module docstring)."""
+                     max_time=None, contact_steps=None) -> LineSetup:
+    """Discretize every body of a line scene and choose the step (see the module docstring).
+
+    ``contact_steps``: steps over the time scale ``pi / sqrt(k w)`` (``k`` the law's largest stiffness the
+    energy allows, ``w`` the sum of the inverse masses) of each soft contact between two rigid sides
+    (default :func:`rigid_contact_steps` of ``elements``); contacts with a rod side are resolved by its mesh.
+    """
     del max_time
+    if contact_steps is None:
+        contact_steps = rigid_contact_steps(elements)
     if order not in (1, 2) or isinstance(order, bool):
         raise InvalidParameterError(f"order must be 1 or 2, got {order!r}")
     if mass not in ("lumped", "consistent"):
@@ -366,6 +386,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
     right_wall = positions[-1] + bodies[-1].length + start_gaps[-1] if walls[1] is not None else 0.0
     # the step
     soft_limit, resolution = math.inf, math.inf
+    rigid_soft = False
     columns, rows = [], []
     hard_any = False
     for k, ((a, b, _, _, name, end_a, end_b), law) in enumerate(zip(pairs, resolved_laws)):
@@ -375,7 +396,8 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
             hard_any = True
         else:
             impedances = [facing_impedance(s, e[0], e[1]) for s, e in ((a, end_a), (b, end_b)) if e is not None]
-            z_eff = 1.0 / sum(1.0 / z for z in impedances) if impedances else math.inf
+            admittance = sum(1.0 / z for z in impedances)
+            z_eff = 1.0 / admittance if admittance > 0.0 else math.inf  # rigid sides and walls: no admittance
             if len(impedances) == 1 and impedances[0] == math.inf:
                 z_eff = math.inf
             # the two-rod bound of the peak force, FORCE_PEAK Z_eff V, holds between two free rods; a wall or a
@@ -389,6 +411,9 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
                 resolution = min(resolution, FORCE_RESOLUTION / (law.range**-1 * max(speed_scale, 1e-300)))
             elif k_contact > 0.0:  # a law acting on overlap only switches on and off: resolve its oscillation
                 resolution = min(resolution, OVERLAP_RESOLUTION / math.sqrt(k_contact * w))
+            if a.kind != SIDE_ROD and b.kind != SIDE_ROD and k_contact > 0.0:  # no mesh resolves it: its own steps
+                rigid_soft = True
+                resolution = min(resolution, math.pi / math.sqrt(k_contact * w) / contact_steps)
         row = np.zeros(CONTACT_FIELDS)
         for s, prefix in ((a, "A"), (b, "B")):
             kind_col, slot_col, node_col = (C_KIND_A, C_SLOT_A, C_NODE_A) if prefix == "A" else (C_KIND_B, C_SLOT_B,
@@ -441,7 +466,7 @@ def build_line_setup(scene, elements: int = 800, order: int = 1, mass: str = "lu
                      positions=positions, contacts=contacts, columns=columns,
                      contact_names=tuple(p[4] for p in pairs), laws=tuple(resolved_laws), u0=u0, v0=v0, dt=float(step),
                      stable_step=limit, lattice=lattice, period=period, energy_scale=energy, speed_scale=speed_scale,
-                     hard=hard_any, walls=(walls[0] is not None, walls[1] is not None))
+                     hard=hard_any, walls=(walls[0] is not None, walls[1] is not None), rigid_soft=rigid_soft)
 
 
 def _end_element(disc: RodDiscretization, right: bool) -> float:
