@@ -33,6 +33,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, LimitError, require_positive
 from ..limits import Limits, check_study_cost, ring_cost
+from .cost_model import least_squares
 
 __all__ = [
     "CHECK_EVERY",
@@ -79,11 +80,10 @@ def _cost_row(kappa: float, gamma: float, modes: float) -> list:
 
 
 def _fit(rows: list, values: list) -> dict:
-    """Least squares; the margin is the largest residual (every calibration point at or below the fit)."""
-    a, y = np.array(rows), np.array(values)
-    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
-    residual = y - a @ coef
-    return {"coef": [round(float(c), 10) for c in coef], "margin": round(max(float(residual.max()), 0.0), 10),
+    """:func:`~wavecontact.solvers.cost_model.least_squares`; the margin is the largest residual (every
+    calibration point at or below the fit)."""
+    coef, residual = least_squares(rows, values)
+    return {"coef": coef, "margin": round(max(float(residual.max()), 0.0), 10),
             "rms_residual": round(float(np.sqrt(np.mean(residual**2))), 10)}
 
 

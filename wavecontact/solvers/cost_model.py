@@ -154,14 +154,20 @@ def _value(fit: dict, row: list) -> float:
 MARGIN_QUANTILE = 0.9
 
 
-def _fit(rows: list, values: list) -> dict:
-    """Least squares with the minimum-norm solution (a feature constant over the class gets no weight
-    beyond what the intercept takes), and the :data:`MARGIN_QUANTILE` of the residuals as the margin."""
+def least_squares(rows: list, values: list) -> tuple:
+    """``(coefficients, residuals)`` of the least-squares fit of ``values`` on ``rows``, the minimum-norm
+    solution (a feature constant over the rows gets no weight beyond what the intercept takes); the
+    coefficients rounded to 10 digits as the model files store them."""
     a, y = np.array(rows), np.array(values)
     coef, *_ = np.linalg.lstsq(a, y, rcond=None)
-    residual = y - a @ coef
+    return [round(float(c), 10) for c in coef], y - a @ coef
+
+
+def _fit(rows: list, values: list) -> dict:
+    """:func:`least_squares`, and the :data:`MARGIN_QUANTILE` of the residuals as the margin."""
+    coef, residual = least_squares(rows, values)
     margin = max(float(np.quantile(residual, MARGIN_QUANTILE)), 0.0)
-    return {"coef": [round(float(c), 10) for c in coef], "margin": round(margin, 10),
+    return {"coef": coef, "margin": round(margin, 10),
             "largest_residual": round(float(residual.max()), 10)}
 
 
