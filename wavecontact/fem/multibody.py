@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from .._jit import NUMBA_ENABLED, prepared_kernel_count
+from .._jit import prepared_kernel_count
 from ..bodies import PiecewiseRod, RigidBody
 from ..errors import InvalidParameterError, SolverFailure
 from ..impact_result import ContactRecord, ImpactResult
@@ -45,15 +45,61 @@ _CHUNK = 1 << 14
 _PGS_ITERATIONS = 200
 
 
-def _typed(arrays):
-    if not NUMBA_ENABLED:
-        return list(arrays)
-    from numba.typed import List
+def _aligned(size: int) -> np.ndarray:
+    """A zero float array of ``size`` entries starting on a 64-byte boundary."""
+    buffer = np.zeros(size + 8)
+    start = (-buffer.ctypes.data % 64) // 8
+    return buffer[start:start + size]
 
-    typed = List()
-    for a in arrays:
-        typed.append(a)
-    return typed
+
+def _store(setup: LineSetup, us, vs, solves) -> tuple:
+    """Every rod's arrays in one float array: ``(store, layout, flat_u, flat_v, stepped_u)``.
+
+    ``layout`` (n_rods, ``ROD_FIELDS``) holds the ``G_*`` offsets and shapes (each array starts on a
+    64-byte boundary, as the interleaved layout's tables want); ``flat_u``, ``flat_v``, ``stepped_u``
+    are lists of views of ``store``: the displacements and velocities node by node (with the values of
+    ``us``, ``vs``) and the arrays the loop steps for the displacements.
+    """
+    layout = np.zeros((len(setup.rods), mk.ROD_FIELDS), dtype=np.int64)
+    blocks = []  # (offset, array) copied in
+    size = 0
+
+    def place(array) -> int:
+        nonlocal size
+        offset = size
+        blocks.append((offset, array))
+        size += -(-array.size // 8) * 8
+        return offset
+
+    for b, (d, u, v, (kind, table)) in enumerate(zip(setup.rods, us, vs, solves)):
+        n = d.n_nodes
+        bands = np.ascontiguousarray(d.stiffness_bands)
+        row = layout[b]
+        row[mk.G_NODES] = n
+        row[mk.G_FLAT_U], row[mk.G_FLAT_V] = place(u), place(v)
+        row[mk.G_SCRATCH] = place(np.zeros(n))
+        row[mk.G_WEIGHTS] = place(d.lumped_mass)
+        row[mk.G_BANDS], row[mk.G_BAND_ROWS] = place(bands), bands.shape[0]
+        row[mk.G_TABLE] = place(table)
+        row[mk.G_TABLE_ROWS], row[mk.G_TABLE_COLS] = table.shape
+        row[mk.G_KIND] = kind
+        row[mk.G_CHUNK_ROWS] = int(table[L_SHAPE, 0])
+        if row[mk.G_CHUNK_ROWS]:
+            columns = table.shape[1]
+            row[mk.G_STEPPED_U] = row[mk.G_TABLE] + L_U * columns
+            row[mk.G_STEPPED_V] = row[mk.G_TABLE] + L_V * columns
+            row[mk.G_STEPPED_SIZE] = columns
+        else:
+            row[mk.G_STEPPED_U], row[mk.G_STEPPED_V], row[mk.G_STEPPED_SIZE] = row[mk.G_FLAT_U], row[mk.G_FLAT_V], n
+    store = _aligned(max(size, 8))
+    for offset, array in blocks:
+        store[offset:offset + array.size] = array.ravel()
+
+    def views(column, sizes):
+        return [store[row[column]:row[column] + row[sizes]] for row in layout]
+
+    return (store, layout, views(mk.G_FLAT_U, mk.G_NODES), views(mk.G_FLAT_V, mk.G_NODES),
+            views(mk.G_STEPPED_U, mk.G_STEPPED_SIZE))
 
 
 def _energies(setup: LineSetup, us, vs, ru, rv):
@@ -127,20 +173,15 @@ def _start(scene, setup: LineSetup) -> dict:
                     earlier = us[slot][node] - dt_ * vs[slot][node]
                     ends[c, previous] = earlier
                     ends[c, incoming] = 0.5 * (us[slot][node] - earlier)
-    # the loop's arrays: flat, or (consistent mass in the interleaved layout) the rows of the mass-solve table;
-    # rod nodes of the contacts and their M^-1 e_end entries as positions in them
-    stepped_u, stepped_v, kernel_contacts = [], [], setup.contacts.copy()
+    # the loop's arrays, in one store: flat, or (consistent mass in the interleaved layout) the rows of the
+    # mass-solve table; rod nodes of the contacts and their M^-1 e_end entries as positions in them
+    store, layout, us, vs, _ = _store(setup, us, vs, solves)
+    kernel_contacts = setup.contacts.copy()
     where = np.zeros(setup.columns.size, dtype=np.int64)
-    layout = []
-    for d, u, v, (_, table) in zip(setup.rods, us, vs, solves):
-        rows = int(table[L_SHAPE, 0])
-        layout.append((rows, d.order))
-        stepped_u.append(table[L_U] if rows else u)
-        stepped_v.append(table[L_V] if rows else v)
 
     def position(slot, node):
-        rows, order = layout[slot]
-        return int(node_position(node, rows, order)) if rows else int(node)
+        rows = int(layout[slot, mk.G_CHUNK_ROWS])
+        return int(node_position(node, rows, setup.rods[slot].order)) if rows else int(node)
 
     for row in kernel_contacts:
         for kind_col, slot_col, node_col, col_col, first_col, len_col in (
@@ -153,19 +194,6 @@ def _start(scene, setup: LineSetup) -> dict:
                 row[node_col] = position(slot, int(row[node_col]))
             elif int(row[kind_col]) == mk.SIDE_RIGID:
                 where[int(row[col_col])] = 0
-    n_rods = len(setup.rods)
-    placeholder = [np.zeros(2)]
-    args_rods = (
-        _typed(us if n_rods else placeholder),
-        _typed(vs if n_rods else placeholder),
-        _typed(stepped_u if n_rods else placeholder),
-        _typed(stepped_v if n_rods else placeholder),
-        _typed([np.zeros(d.n_nodes) for d in setup.rods] if n_rods else placeholder),
-        _typed([np.ascontiguousarray(d.stiffness_bands) for d in setup.rods] if n_rods else [np.zeros((2, 2))]),
-        np.array([k for k, _ in solves] if n_rods else [0], dtype=np.int64),
-        _typed([t for _, t in solves] if n_rods else [np.zeros((2, 2))]),
-        _typed([d.lumped_mass for d in setup.rods] if n_rods else placeholder),
-    )
     records = np.zeros((setup.contacts.shape[0], mk.RECORD_FIELDS))
     records[:, mk.R_FIRST] = -1.0
     values = np.zeros(setup.contacts.shape[0])
@@ -178,10 +206,9 @@ def _start(scene, setup: LineSetup) -> dict:
     control[mk.K_ITERATIONS] = _PGS_ITERATIONS
     control[mk.K_LEFT_WALL] = float(setup.walls[0])
     control[mk.K_RIGHT_WALL] = float(setup.walls[1])
-    control[mk.K_RODS] = n_rods
     state = np.zeros(mk.STATE_SIZE)
     return {"us": us, "vs": vs, "ru": ru, "rv": rv, "rinv": rinv, "start": start, "energy0": energy0,
-            "momentum0": momentum0, "args_rods": args_rods, "contacts": kernel_contacts, "where": where,
+            "momentum0": momentum0, "args_rods": (store, layout), "contacts": kernel_contacts, "where": where,
             "records": records, "values": values, "targets": targets, "ends": ends, "control": control,
             "state": state}
 
@@ -209,14 +236,14 @@ def run_line(scene, elements: int = 800, order: int = 1, mass: str = "lumped", d
     setup = build_line_setup(scene, elements, order, mass, dt, courant, contact_steps=contact_steps)
     loop = _start(scene, setup)
     dt_ = setup.dt
-    ru, rv, args_rods, records, state = loop["ru"], loop["rv"], loop["args_rods"], loop["records"], loop["state"]
+    ru, rv, records, state = loop["ru"], loop["rv"], loop["records"], loop["state"]
     start, energy0, momentum0 = loop["start"], loop["energy0"], loop["momentum0"]
     if max_time is None:
         gaps = setup.contacts[:, mk.C_OFFSET]
         max_time = 40.0 * float(np.sum(np.maximum(gaps, 0.0))) / setup.speed_scale + 100.0 * setup.period
     max_steps = math.ceil(max_time / dt_)
     status = mk.STATUS_RUNNING
-    us_t, vs_t = args_rods[0], args_rods[1]
+    us_t, vs_t = loop["us"], loop["vs"]
     worst_drift = 0.0
     loop_seconds = 0.0
     while status == mk.STATUS_RUNNING:
@@ -301,7 +328,7 @@ def replay_fields(scene, setup: LineSetup, first_run: dict, steps: int, samples:
     at = np.unique(np.linspace(0, steps, max(int(samples), 2)).round().astype(np.int64))
     loop = _start(scene, setup)
     loop["control"][mk.K_PERIOD] = math.inf  # never stop on separation: run exactly to the first run's end
-    flat_u, flat_v, ru, rv, state = loop["args_rods"][0], loop["args_rods"][1], loop["ru"], loop["rv"], loop["state"]
+    flat_u, flat_v, ru, rv, state = loop["us"], loop["vs"], loop["ru"], loop["rv"], loop["state"]
     n_rods, n_rigid = len(setup.rods), setup.rigid_masses.size
     times = np.empty(at.size)
     u_samples = [np.empty((at.size, d.n_nodes)) for d in setup.rods]
@@ -318,8 +345,7 @@ def replay_fields(scene, setup: LineSetup, first_run: dict, steps: int, samples:
             u_samples[b][k] = flat_u[b]
             v_samples[b][k] = flat_v[b]
         rigid_u[k], rigid_v[k] = ru, rv
-    final = first_run["args_rods"]
-    if not (all(np.array_equal(a, b) for a, b in zip(final[0], flat_u))
+    if not (all(np.array_equal(a, b) for a, b in zip(first_run["us"], flat_u))
             and np.array_equal(first_run["ru"], ru) and np.array_equal(first_run["rv"], rv)):
         raise SolverFailure("the replay that samples the fields did not end in the first run's state")
     rods, points = [], []

@@ -41,13 +41,13 @@ from __future__ import annotations
 
 import math
 
-from .._jit import kernel
+from .._jit import NUMBA_ENABLED, kernel
 from ..contact_kernels import law_force
 from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_flat
-from .interleaved_step import L_SHAPE, pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
+from .interleaved_step import pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
 from .kernels import _leapfrog_p1
 
-__all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "RECORD_FIELDS", "STATE_SIZE", "advance_line"]
+__all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "RECORD_FIELDS", "ROD_FIELDS", "STATE_SIZE", "advance_line"]
 
 SIDE_ROD = 0
 SIDE_RIGID = 1
@@ -78,79 +78,155 @@ RECORD_FIELDS = 6
 
 # control
 K_DT, K_PERIOD, K_CHECK_EVERY, K_SPEED_TOLERANCE, K_ITERATIONS, K_LEFT_WALL, K_RIGHT_WALL = 0, 1, 2, 3, 4, 5, 6
-K_RODS = 7  # rods in the lists (a scene of rigid bodies only passes one unused placeholder)
-CONTROL_SIZE = 8
+CONTROL_SIZE = 7
 
 # state
 S_TIME, S_STEPS, S_LAST_ACTIVE, S_MAX_ITERATIONS = 0, 1, 2, 3
 STATE_SIZE = 4
+
+# rod layout: where each rod's arrays lie in the store (offsets in doubles) and their shapes
+G_NODES = 0  # nodes n
+G_FLAT_U, G_FLAT_V, G_SCRATCH, G_WEIGHTS = 1, 2, 3, 4  # n each: displacements, velocities, scratch, lumped masses
+G_BANDS, G_BAND_ROWS = 5, 6  # stiffness bands, (rows, n)
+G_TABLE, G_TABLE_ROWS, G_TABLE_COLS = 7, 8, 9  # the mass solve's table
+G_STEPPED_U, G_STEPPED_V, G_STEPPED_SIZE = 10, 11, 12  # the arrays the loop steps (the flat ones or table rows)
+G_KIND = 13  # mass-solve kind
+G_CHUNK_ROWS = 14  # rows per chunk of the interleaved layout (0: flat layout)
+ROD_FIELDS = 15
 
 STATUS_RUNNING = 0
 STATUS_SEPARATED = 1
 STATUS_FAILED = 2
 
 
+def _store_views():
+    """:func:`_segment` and :func:`_block` for compiled kernels: views made from the store's data pointer."""
+    from numba import carray
+    from numba.core import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def address(typingctx, array, offset):
+        signature = types.CPointer(array.dtype)(array, types.int64)
+
+        def codegen(context, builder, sig, args):
+            data = context.make_array(sig.args[0])(context, builder, args[0]).data
+            return builder.gep(data, [args[1]])
+
+        return signature, codegen
+
+    @kernel(inline="always")
+    def segment(store, offset, size):
+        return carray(address(store, offset), (size,))
+
+    @kernel(inline="always")
+    def block(store, offset, rows, cols):
+        return carray(address(store, offset), (rows, cols))
+
+    return segment, block
+
+
+def _segment_python(store, offset, size):
+    return store[offset:offset + size]
+
+
+def _block_python(store, offset, rows, cols):
+    return store[offset:offset + rows * cols].reshape(rows, cols)
+
+
+if NUMBA_ENABLED:
+    _segment, _block = _store_views()
+else:
+    _segment, _block = _segment_python, _block_python
+_segment.__doc__ = """``store[offset:offset + size]`` inside a compiled kernel, without a reference count or a call.
+
+Every rod's arrays lie in one float array, the *store*, at the offsets of the rod layout (``G_*`` columns):
+a lookup in a list of arrays per rod calls a helper of numba's typed list and counts a reference (about 12 ns
+measured, some thirty lookups a step), a view made here is an address computation.  Like
+:func:`~wavecontact._jit.row_view` it holds the data pointer only: valid while ``store`` is alive, never
+returned.  Without numba it is the slice.
+"""
+_block.__doc__ = """``store[offset:offset + rows * cols].reshape(rows, cols)`` inside a compiled kernel (see :func:`_segment`)."""
+
+
+@kernel(inline="always")
+def _rod_u(store, layout, slot):
+    """Array the loop steps for the displacements of rod ``slot``."""
+    return _segment(store, layout[slot, G_STEPPED_U], layout[slot, G_STEPPED_SIZE])
+
+
+@kernel(inline="always")
+def _rod_v(store, layout, slot):
+    """Array the loop steps for the velocities of rod ``slot``."""
+    return _segment(store, layout[slot, G_STEPPED_V], layout[slot, G_STEPPED_SIZE])
+
+
+
 @kernel
-def _displacement(kind, slot, node, us, ru):
+def _displacement(kind, slot, node, rods, ru):
     if kind == SIDE_ROD:
-        return us[slot][node]
+        store, layout = rods
+        return store[layout[slot, G_STEPPED_U] + node]
     if kind == SIDE_RIGID:
         return ru[slot]
     return 0.0
 
 
 @kernel
-def _velocity(kind, slot, node, vs, rv):
+def _velocity(kind, slot, node, rods, rv):
     if kind == SIDE_ROD:
-        return vs[slot][node]
+        store, layout = rods
+        return store[layout[slot, G_STEPPED_V] + node]
     if kind == SIDE_RIGID:
         return rv[slot]
     return 0.0
 
 
 @kernel
-def _push(kind, slot, start, length, spread, stepped, rigid, kick, shift):
+def _push(kind, slot, start, length, spread, rods, rigid, kick, shift):
     """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements.
 
     ``spread``: ``(columns, where)``, the ``M^-1 e_end`` entries and their positions in the arrays the loop
-    steps, ``stepped``: those arrays ``(us, vs)``, ``rigid``: ``(ru, rv, rinv)`` (see :func:`advance_line`).
+    steps, ``rods``: ``(store, layout)``, ``rigid``: ``(ru, rv, rinv)`` (see :func:`advance_line`).
     """
     columns, where = spread
     ru, rv, rinv = rigid
     if kind == SIDE_ROD:
-        u = stepped[0][slot]
-        v = stepped[1][slot]
+        store, layout = rods
+        u = layout[slot, G_STEPPED_U]
+        v = layout[slot, G_STEPPED_V]
         for j in range(length):
             c = columns[start + j]
             k = where[start + j]
-            v[k] += kick * c
-            u[k] += shift * c
+            store[v + k] += kick * c
+            store[u + k] += shift * c
     elif kind == SIDE_RIGID:
         rv[slot] += kick * rinv[slot]
         ru[slot] += shift * rinv[slot]
 
 
 @kernel
-def _exchange(contacts, c, spread, stepped, rigid, impulse, dt):
+def _exchange(contacts, c, spread, rods, rigid, impulse, dt):
     """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes (the
     tuples of :func:`_push`)."""
     _push(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_COL_B]),
-          int(contacts[c, C_LEN_B]), spread, stepped, rigid, impulse, impulse * dt)
+          int(contacts[c, C_LEN_B]), spread, rods, rigid, impulse, impulse * dt)
     _push(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_COL_A]),
-          int(contacts[c, C_LEN_A]), spread, stepped, rigid, -impulse, -impulse * dt)
+          int(contacts[c, C_LEN_A]), spread, rods, rigid, -impulse, -impulse * dt)
 
 
 @kernel
-def _gap(contacts, c, us, ru):
+def _gap(contacts, c, rods, ru):
     return (contacts[c, C_OFFSET]
-            + _displacement(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_NODE_B]), us, ru)
-            - _displacement(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_NODE_A]), us, ru))
+            + _displacement(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_NODE_B]), rods, ru)
+            - _displacement(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_NODE_A]), rods,
+                            ru))
 
 
 @kernel
-def _closing_speed(contacts, c, vs, rv):
-    return (_velocity(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_NODE_A]), vs, rv)
-            - _velocity(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_NODE_B]), vs, rv))
+def _closing_speed(contacts, c, rods, rv):
+    return (_velocity(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_NODE_A]), rods, rv)
+            - _velocity(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_NODE_B]), rods, rv))
 
 
 @kernel
@@ -169,7 +245,7 @@ def _record(records, c, impulse, acting, time):
 
 
 @kernel
-def _apart(body_kind, body_slot, weights, vs, rv, control):
+def _apart(body_kind, body_slot, store, layout, rv, control):
     """True if no neighbours approach each other's centre of mass, nor a wall."""
     n = body_kind.size
     tolerance = control[K_SPEED_TOLERANCE]
@@ -179,8 +255,8 @@ def _apart(body_kind, body_slot, weights, vs, rv, control):
         if int(body_kind[i]) == SIDE_RIGID:
             speed = rv[slot]
         else:
-            w = weights[slot]
-            v = vs[slot]
+            w = _segment(store, layout[slot, G_WEIGHTS], layout[slot, G_NODES])
+            v = _segment(store, layout[slot, G_FLAT_V], layout[slot, G_NODES])
             momentum = 0.0
             mass = 0.0
             for j in range(v.size):
@@ -216,43 +292,79 @@ def _to_free_end(u, v, end, value, dt):
 
 
 @kernel
-def _flat(flat_u, flat_v, us, vs, tables, bands, n_rods):
+def _flat(store, layout):
     """Copy the rods that run in the interleaved layout back to their flat arrays."""
-    for b in range(n_rods):
-        rows = int(tables[b][L_SHAPE, 0])
+    for b in range(layout.shape[0]):
+        rows = layout[b, G_CHUNK_ROWS]
         if rows:
-            unpack_nodes(us[b], flat_u[b], rows, bands[b].shape[0] - 1)
-            unpack_nodes(vs[b], flat_v[b], rows, bands[b].shape[0] - 1)
+            n = layout[b, G_NODES]
+            order = layout[b, G_BAND_ROWS] - 1
+            unpack_nodes(_rod_u(store, layout, b), _segment(store, layout[b, G_FLAT_U], n), rows, order)
+            unpack_nodes(_rod_v(store, layout, b), _segment(store, layout[b, G_FLAT_V], n), rows, order)
+
+
+@kernel
+def _pack(store, layout):
+    """Copy the rods that run in the interleaved layout from their flat arrays into it."""
+    for b in range(layout.shape[0]):
+        rows = layout[b, G_CHUNK_ROWS]
+        if rows:
+            n = layout[b, G_NODES]
+            order = layout[b, G_BAND_ROWS] - 1
+            pack_nodes(_segment(store, layout[b, G_FLAT_U], n), _rod_u(store, layout, b), rows, order)
+            pack_nodes(_segment(store, layout[b, G_FLAT_V], n), _rod_v(store, layout, b), rows, order)
+
+
+@kernel
+def _step_rods(store, layout, dt):
+    """Free elastic step of every rod (the two-rod solver's per-rod steps)."""
+    for b in range(layout.shape[0]):
+        n = layout[b, G_NODES]
+        kind = layout[b, G_KIND]
+        band_rows = layout[b, G_BAND_ROWS]
+        table_rows = layout[b, G_TABLE_ROWS]
+        table_cols = layout[b, G_TABLE_COLS]
+        bands = _block(store, layout[b, G_BANDS], band_rows, n)
+        if kind == MASS_LUMPED and band_rows == 2:
+            _leapfrog_p1(_rod_u(store, layout, b), _rod_v(store, layout, b), bands,
+                         _segment(store, layout[b, G_TABLE], table_cols), dt)
+        elif layout[b, G_CHUNK_ROWS] > 0:
+            table = _block(store, layout[b, G_TABLE], table_rows, table_cols)
+            if kind == MASS_CONDENSED:
+                step_condensed(table, dt)
+            else:
+                step_tridiagonal(table, dt)
+        else:
+            step_flat(_rod_u(store, layout, b), _rod_v(store, layout, b),
+                      _segment(store, layout[b, G_SCRATCH], n), bands, kind,
+                      _block(store, layout[b, G_TABLE], table_rows, table_cols), dt)
 
 
 @kernel
 def advance_line(rods, rigid, line, links, control, state, max_steps):
     """Run up to ``max_steps`` steps; return ``(status, steps done)``.
 
-    The arrays come in four tuples: ``rods = (flat_u, flat_v, us, vs, scratch, bands, kinds, tables,
-    weights)``, ``rigid = (ru, rv, rinv)``, ``line = (body_kind, body_slot)`` and ``links = (contacts,
-    columns, where, records, values, targets, ends)``.
+    The arrays come in four tuples: ``rods = (store, layout)``, ``rigid = (ru, rv, rinv)``, ``line =
+    (body_kind, body_slot)`` and ``links = (contacts, columns, where, records, values, targets, ends)``.
 
     Parameters
     ----------
-    flat_u, flat_v : lists of arrays, one per rod
-        Displacements now (length) and velocities half a step earlier (length/time), node by node.
-    us, vs : lists of arrays, one per rod
-        The arrays the loop steps: ``flat_u, flat_v`` themselves, or for a consistent mass in the
-        interleaved layout (:mod:`~wavecontact.fem.interleaved_step`) the rows of its table, packed on
-        entry and unpacked to ``flat_u, flat_v`` for the checks and on return.
-    scratch, bands, tables, weights : lists of arrays, one per rod
-        A scratch array, the stiffness bands, the mass solve of
-        :func:`~wavecontact.fem.explicit_step.prepare_mass` and the lumped masses.
-    kinds : int array
-        Mass-solve kind of each rod.
+    store : float array
+        Every rod's arrays, one after the other (each starting on a 64-byte boundary when ``store`` does):
+        displacements now (length) and velocities half a step earlier (length/time), node by node; the
+        arrays the loop steps (those themselves, or for a consistent mass in the interleaved layout
+        (:mod:`~wavecontact.fem.interleaved_step`) the rows of its table, packed on entry and unpacked to
+        the flat arrays for the checks and on return); a scratch array, the stiffness bands, the mass solve
+        of :func:`~wavecontact.fem.explicit_step.prepare_mass` and the lumped masses.
+    layout : int array (n_rods, ROD_FIELDS)
+        Per rod, the ``G_*`` columns: where its arrays lie in ``store``, their shapes, its mass-solve kind.
     ru, rv, rinv : arrays, one entry per rigid body
         Displacement, velocity and inverse mass.
     body_kind, body_slot : arrays, one entry per body in order along the line
-        :data:`SIDE_ROD` or :data:`SIDE_RIGID` and the index in the rod or rigid lists.
+        :data:`SIDE_ROD` or :data:`SIDE_RIGID` and the index in the rod layout or the rigid arrays.
     contacts : array (n_contacts, CONTACT_FIELDS)
-        The ``C_*`` columns (rod nodes as positions in ``us``); ``columns`` holds the ``M^-1 e_end``
-        entries they point to, ``where`` their positions in ``us``.
+        The ``C_*`` columns (rod nodes as positions in the arrays the loop steps); ``columns`` holds the
+        ``M^-1 e_end`` entries they point to, ``where`` their positions in those arrays.
     records : array (n_contacts, RECORD_FIELDS)
         Accumulated ``R_*`` records.
     values, targets : arrays (n_contacts,)
@@ -260,53 +372,43 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     control, state : arrays
         ``K_*`` and ``S_*`` entries.
     """
-    flat_u, flat_v, us, vs, scratch, bands, kinds, tables, weights = rods
+    store, layout = rods
     ru, rv = rigid[0], rigid[1]
     body_kind, body_slot = line
     contacts, columns, where, records, values, targets, ends = links
-    stepped = (us, vs)
     spread = (columns, where)
     dt = control[K_DT]
     period = control[K_PERIOD]
     check_every = int(control[K_CHECK_EVERY])
     iterations = int(control[K_ITERATIONS])
     n_contacts = contacts.shape[0]
-    n_rods = int(control[K_RODS])
     n_rigid = ru.size
-    for b in range(n_rods):
-        rows = int(tables[b][L_SHAPE, 0])
-        if rows:
-            pack_nodes(flat_u[b], us[b], rows, bands[b].shape[0] - 1)
-            pack_nodes(flat_v[b], vs[b], rows, bands[b].shape[0] - 1)
+    hard_any = False
+    lattice_any = False
+    for c in range(n_contacts):
+        hard_any = hard_any or contacts[c, C_HARD] != HARD_NONE
+        lattice_any = lattice_any or contacts[c, C_LATTICE] != 0.0
+    _pack(store, layout)
     for step in range(max_steps):
         time = state[S_TIME]
         # 1. soft forces at the current gaps
         for c in range(n_contacts):
             if contacts[c, C_HARD] == HARD_NONE:
-                gap = _gap(contacts, c, us, ru)
+                gap = _gap(contacts, c, rods, ru)
                 values[c] = law_force(int(contacts[c, C_LAW]), contacts[c, C_ALPHA], contacts[c, C_STRENGTH],
                                       contacts[c, C_STIFFNESS], gap)
         # characteristic free motion of the rod ends of lattice contacts, from the state now
-        for c in range(n_contacts):
-            if contacts[c, C_LATTICE] != 0.0:
-                if int(contacts[c, C_KIND_A]) == SIDE_ROD:
-                    _free_end(us[int(contacts[c, C_SLOT_A])], int(contacts[c, C_NODE_A]),
-                              int(contacts[c, C_NEIGHBOUR_A]), ends, c, E_PREVIOUS_A, E_INCOMING_A, E_FREE_A)
-                if int(contacts[c, C_KIND_B]) == SIDE_ROD:
-                    _free_end(us[int(contacts[c, C_SLOT_B])], int(contacts[c, C_NODE_B]),
-                              int(contacts[c, C_NEIGHBOUR_B]), ends, c, E_PREVIOUS_B, E_INCOMING_B, E_FREE_B)
+        if lattice_any:
+            for c in range(n_contacts):
+                if contacts[c, C_LATTICE] != 0.0:
+                    if int(contacts[c, C_KIND_A]) == SIDE_ROD:
+                        _free_end(_rod_u(store, layout, int(contacts[c, C_SLOT_A])), int(contacts[c, C_NODE_A]),
+                                  int(contacts[c, C_NEIGHBOUR_A]), ends, c, E_PREVIOUS_A, E_INCOMING_A, E_FREE_A)
+                    if int(contacts[c, C_KIND_B]) == SIDE_ROD:
+                        _free_end(_rod_u(store, layout, int(contacts[c, C_SLOT_B])), int(contacts[c, C_NODE_B]),
+                                  int(contacts[c, C_NEIGHBOUR_B]), ends, c, E_PREVIOUS_B, E_INCOMING_B, E_FREE_B)
         # 2. free elastic step of every rod, free flight of every rigid body
-        for b in range(n_rods):
-            table = tables[b]
-            if kinds[b] == MASS_LUMPED and bands[b].shape[0] == 2:
-                _leapfrog_p1(us[b], vs[b], bands[b], table[0], dt)
-            elif table[L_SHAPE, 0] > 0.0:
-                if kinds[b] == MASS_CONDENSED:
-                    step_condensed(table, dt)
-                else:
-                    step_tridiagonal(table, dt)
-            else:
-                step_flat(us[b], vs[b], scratch[b], bands[b], kinds[b], table, dt)
+        _step_rods(store, layout, dt)
         for r in range(n_rigid):
             ru[r] += dt * rv[r]
         # 3. soft forces as kicks
@@ -315,45 +417,43 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
             if contacts[c, C_HARD] == HARD_NONE:
                 force = values[c]
                 if force != 0.0:
-                    _exchange(contacts, c, spread, stepped, rigid, force * dt, dt)
+                    _exchange(contacts, c, spread, rods, rigid, force * dt, dt)
                 acting = force > contacts[c, C_THRESHOLD]
                 acting_any = acting_any or acting
                 _record(records, c, force * dt, acting, time)
         # 4. hard contacts: impulses that leave every hard gap non-negative (projected Gauss-Seidel)
-        hard_any = False
-        for c in range(n_contacts):
-            if contacts[c, C_HARD] != HARD_NONE:
-                hard_any = True
-                values[c] = 0.0
-        # the lattice contacts' rod ends to their characteristic free motion (the last impulse continued)
-        for c in range(n_contacts):
-            continued = 0.0
-            if contacts[c, C_LATTICE] != 0.0:
-                sides = 0.0
-                if int(contacts[c, C_KIND_A]) == SIDE_ROD:
-                    slot = int(contacts[c, C_SLOT_A])
-                    node = int(contacts[c, C_NODE_A])
-                    shift = _to_free_end(us[slot], vs[slot], node, ends[c, E_FREE_A], dt)
-                    inverse = columns[int(contacts[c, C_COL_A]) + node - int(contacts[c, C_FIRST_A])]
-                    continued -= shift / (dt * inverse)
-                    sides += 1.0
-                if int(contacts[c, C_KIND_B]) == SIDE_ROD:
-                    slot = int(contacts[c, C_SLOT_B])
-                    node = int(contacts[c, C_NODE_B])
-                    shift = _to_free_end(us[slot], vs[slot], node, ends[c, E_FREE_B], dt)
-                    inverse = columns[int(contacts[c, C_COL_B]) + node - int(contacts[c, C_FIRST_B])]
-                    continued += shift / (dt * inverse)
-                    sides += 1.0
-                continued /= sides
-            targets[c] = continued  # kept here until the records below
         if hard_any:
             for c in range(n_contacts):
                 if contacts[c, C_HARD] != HARD_NONE:
-                    records[c, R_IMPULSE] += targets[c]
+                    values[c] = 0.0
+            # the lattice contacts' rod ends to their characteristic free motion (the last impulse continued)
+            for c in range(n_contacts):
+                if contacts[c, C_LATTICE] != 0.0:
+                    continued = 0.0
+                    sides = 0.0
+                    if int(contacts[c, C_KIND_A]) == SIDE_ROD:
+                        slot = int(contacts[c, C_SLOT_A])
+                        node = int(contacts[c, C_NODE_A])
+                        shift = _to_free_end(_rod_u(store, layout, slot), _rod_v(store, layout, slot), node,
+                                             ends[c, E_FREE_A], dt)
+                        inverse = columns[int(contacts[c, C_COL_A]) + node - int(contacts[c, C_FIRST_A])]
+                        continued -= shift / (dt * inverse)
+                        sides += 1.0
+                    if int(contacts[c, C_KIND_B]) == SIDE_ROD:
+                        slot = int(contacts[c, C_SLOT_B])
+                        node = int(contacts[c, C_NODE_B])
+                        shift = _to_free_end(_rod_u(store, layout, slot), _rod_v(store, layout, slot), node,
+                                             ends[c, E_FREE_B], dt)
+                        inverse = columns[int(contacts[c, C_COL_B]) + node - int(contacts[c, C_FIRST_B])]
+                        continued += shift / (dt * inverse)
+                        sides += 1.0
+                    records[c, R_IMPULSE] += continued / sides
+            for c in range(n_contacts):
+                if contacts[c, C_HARD] != HARD_NONE:
                     targets[c] = 0.0
                     if contacts[c, C_HARD] == HARD_ELASTIC:
-                        gap = _gap(contacts, c, us, ru)
-                        closing = _closing_speed(contacts, c, vs, rv)
+                        gap = _gap(contacts, c, rods, ru)
+                        closing = _closing_speed(contacts, c, rods, rv)
                         if gap < 0.0 and closing > 0.0:
                             targets[c] = gap + 2.0 * dt * closing  # leave with the reversed relative velocity
             for sweep in range(iterations):
@@ -361,12 +461,12 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
                 for c in range(n_contacts):
                     if contacts[c, C_HARD] == HARD_NONE:
                         continue
-                    gap = _gap(contacts, c, us, ru)
+                    gap = _gap(contacts, c, rods, ru)
                     wanted = values[c] + (targets[c] - gap) / (dt * contacts[c, C_W])
                     wanted = max(wanted, 0.0)
                     change = wanted - values[c]
                     if change != 0.0:
-                        _exchange(contacts, c, spread, stepped, rigid, change, dt)
+                        _exchange(contacts, c, spread, rods, rigid, change, dt)
                         values[c] = wanted
                         # converged once no impulse changes by more than round-off (1e-12 of speed / W)
                         moved = moved or abs(change) > 0.01 * contacts[c, C_THRESHOLD]
@@ -385,12 +485,12 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
             state[S_LAST_ACTIVE] = time
         if (step + 1) % check_every == 0:
             for c in range(n_contacts):
-                if not math.isfinite(_gap(contacts, c, us, ru)):
-                    _flat(flat_u, flat_v, us, vs, tables, bands, n_rods)
+                if not math.isfinite(_gap(contacts, c, rods, ru)):
+                    _flat(store, layout)
                     return STATUS_FAILED, step + 1
             if time - state[S_LAST_ACTIVE] >= period:
-                _flat(flat_u, flat_v, us, vs, tables, bands, n_rods)
-                if _apart(body_kind, body_slot, weights, flat_v, rv, control):
+                _flat(store, layout)
+                if _apart(body_kind, body_slot, store, layout, rv, control):
                     return STATUS_SEPARATED, step + 1
-    _flat(flat_u, flat_v, us, vs, tables, bands, n_rods)
+    _flat(store, layout)
     return STATUS_RUNNING, max_steps
