@@ -41,6 +41,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .._jit import NUMBA_ENABLED, kernel
 from ..contact_kernels import law_force
 from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_flat
@@ -123,7 +125,11 @@ def _store_views():
     def block(store, offset, rows, cols):
         return carray(address(store, offset), (rows, cols))
 
-    return segment, block
+    @kernel(inline="always")
+    def borrowed(array):
+        return carray(address(array, np.int64(0)), array.shape)
+
+    return segment, block, borrowed
 
 
 def _segment_python(store, offset, size):
@@ -134,10 +140,14 @@ def _block_python(store, offset, rows, cols):
     return store[offset:offset + rows * cols].reshape(rows, cols)
 
 
+def _borrowed_python(array):
+    return array
+
+
 if NUMBA_ENABLED:
-    _segment, _block = _store_views()
+    _segment, _block, _borrowed = _store_views()
 else:
-    _segment, _block = _segment_python, _block_python
+    _segment, _block, _borrowed = _segment_python, _block_python, _borrowed_python
 _segment.__doc__ = """``store[offset:offset + size]`` inside a compiled kernel, without a reference count or a call.
 
 Every rod's arrays lie in one float array, the *store*, at the offsets of the rod layout (``G_*`` columns):
@@ -147,6 +157,14 @@ measured, some thirty lookups a step), a view made here is an address computatio
 returned.  Without numba it is the slice.
 """
 _block.__doc__ = """``store[offset:offset + rows * cols].reshape(rows, cols)`` inside a compiled kernel (see :func:`_segment`)."""
+_borrowed.__doc__ = """A C-contiguous array as a view that counts no references, inside a compiled kernel (see :func:`_segment`).
+
+numba counts a reference (an atomic increment and decrement) for every array argument of a compiled call it
+does not inline, on entry and on every tuple it unpacks: the loop's helpers, called a few times per contact
+and step, took some ten such pairs each (on the 3-rod chain, about 0.15 us of its 0.55 us fixed cost per
+step).  Handed views made here, each is a test of a null pointer.  Valid while ``array`` is alive (the
+loop's arguments are, for the whole call); never returned.  Without numba it is ``array``.
+"""
 
 
 @kernel(inline="always")
@@ -304,43 +322,6 @@ def _flat(store, layout):
 
 
 @kernel
-def _pack(store, layout):
-    """Copy the rods that run in the interleaved layout from their flat arrays into it."""
-    for b in range(layout.shape[0]):
-        rows = layout[b, G_CHUNK_ROWS]
-        if rows:
-            n = layout[b, G_NODES]
-            order = layout[b, G_BAND_ROWS] - 1
-            pack_nodes(_segment(store, layout[b, G_FLAT_U], n), _rod_u(store, layout, b), rows, order)
-            pack_nodes(_segment(store, layout[b, G_FLAT_V], n), _rod_v(store, layout, b), rows, order)
-
-
-@kernel
-def _step_rods(store, layout, dt):
-    """Free elastic step of every rod (the two-rod solver's per-rod steps)."""
-    for b in range(layout.shape[0]):
-        n = layout[b, G_NODES]
-        kind = layout[b, G_KIND]
-        band_rows = layout[b, G_BAND_ROWS]
-        table_rows = layout[b, G_TABLE_ROWS]
-        table_cols = layout[b, G_TABLE_COLS]
-        bands = _block(store, layout[b, G_BANDS], band_rows, n)
-        if kind == MASS_LUMPED and band_rows == 2:
-            _leapfrog_p1(_rod_u(store, layout, b), _rod_v(store, layout, b), bands,
-                         _segment(store, layout[b, G_TABLE], table_cols), dt)
-        elif layout[b, G_CHUNK_ROWS] > 0:
-            table = _block(store, layout[b, G_TABLE], table_rows, table_cols)
-            if kind == MASS_CONDENSED:
-                step_condensed(table, dt)
-            else:
-                step_tridiagonal(table, dt)
-        else:
-            step_flat(_rod_u(store, layout, b), _rod_v(store, layout, b),
-                      _segment(store, layout[b, G_SCRATCH], n), bands, kind,
-                      _block(store, layout[b, G_TABLE], table_rows, table_cols), dt)
-
-
-@kernel
 def advance_line(rods, rigid, line, links, control, state, max_steps):
     """Run up to ``max_steps`` steps; return ``(status, steps done)``.
 
@@ -372,10 +353,17 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     control, state : arrays
         ``K_*`` and ``S_*`` entries.
     """
-    store, layout = rods
-    ru, rv = rigid[0], rigid[1]
-    body_kind, body_slot = line
-    contacts, columns, where, records, values, targets, ends = links
+    # views that count no references, for the helpers' calls (see _borrowed)
+    store = _borrowed(rods[0])
+    layout = _borrowed(rods[1])
+    rods = (store, layout)
+    ru, rv, rinv = _borrowed(rigid[0]), _borrowed(rigid[1]), _borrowed(rigid[2])
+    rigid = (ru, rv, rinv)
+    body_kind, body_slot = _borrowed(line[0]), _borrowed(line[1])
+    contacts, columns, where = _borrowed(links[0]), _borrowed(links[1]), _borrowed(links[2])
+    records, values, targets, ends = _borrowed(links[3]), _borrowed(links[4]), _borrowed(links[5]), _borrowed(links[6])
+    control = _borrowed(control)
+    state = _borrowed(state)
     spread = (columns, where)
     dt = control[K_DT]
     period = control[K_PERIOD]
@@ -388,7 +376,13 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     for c in range(n_contacts):
         hard_any = hard_any or contacts[c, C_HARD] != HARD_NONE
         lattice_any = lattice_any or contacts[c, C_LATTICE] != 0.0
-    _pack(store, layout)
+    for b in range(layout.shape[0]):
+        rows = layout[b, G_CHUNK_ROWS]
+        if rows:
+            n = layout[b, G_NODES]
+            order = layout[b, G_BAND_ROWS] - 1
+            pack_nodes(_segment(store, layout[b, G_FLAT_U], n), _rod_u(store, layout, b), rows, order)
+            pack_nodes(_segment(store, layout[b, G_FLAT_V], n), _rod_v(store, layout, b), rows, order)
     for step in range(max_steps):
         time = state[S_TIME]
         # 1. soft forces at the current gaps
@@ -408,7 +402,26 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
                         _free_end(_rod_u(store, layout, int(contacts[c, C_SLOT_B])), int(contacts[c, C_NODE_B]),
                                   int(contacts[c, C_NEIGHBOUR_B]), ends, c, E_PREVIOUS_B, E_INCOMING_B, E_FREE_B)
         # 2. free elastic step of every rod, free flight of every rigid body
-        _step_rods(store, layout, dt)
+        for b in range(layout.shape[0]):
+            n = layout[b, G_NODES]
+            kind = layout[b, G_KIND]
+            band_rows = layout[b, G_BAND_ROWS]
+            table_rows = layout[b, G_TABLE_ROWS]
+            table_cols = layout[b, G_TABLE_COLS]
+            bands = _block(store, layout[b, G_BANDS], band_rows, n)
+            if kind == MASS_LUMPED and band_rows == 2:
+                _leapfrog_p1(_rod_u(store, layout, b), _rod_v(store, layout, b), bands,
+                             _segment(store, layout[b, G_TABLE], table_cols), dt)
+            elif layout[b, G_CHUNK_ROWS] > 0:
+                table = _block(store, layout[b, G_TABLE], table_rows, table_cols)
+                if kind == MASS_CONDENSED:
+                    step_condensed(table, dt)
+                else:
+                    step_tridiagonal(table, dt)
+            else:
+                step_flat(_rod_u(store, layout, b), _rod_v(store, layout, b),
+                          _segment(store, layout[b, G_SCRATCH], n), bands, kind,
+                          _block(store, layout[b, G_TABLE], table_rows, table_cols), dt)
         for r in range(n_rigid):
             ru[r] += dt * rv[r]
         # 3. soft forces as kicks
