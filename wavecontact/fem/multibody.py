@@ -52,13 +52,13 @@ def _aligned(size: int) -> np.ndarray:
     return buffer[start:start + size]
 
 
-def _store(setup: LineSetup, us, vs, solves) -> tuple:
-    """Every rod's arrays in one float array: ``(store, layout, flat_u, flat_v, stepped_u)``.
+def _store(setup: LineSetup, us, vs, solves, ru, rv) -> tuple:
+    """Every body's arrays in one float array: ``(store, layout, rigid)``, with the values given.
 
-    ``layout`` (n_rods, ``ROD_FIELDS``) holds the ``G_*`` offsets and shapes (each array starts on a
-    64-byte boundary, as the interleaved layout's tables want); ``flat_u``, ``flat_v``, ``stepped_u``
-    are lists of views of ``store``: the displacements and velocities node by node (with the values of
-    ``us``, ``vs``) and the arrays the loop steps for the displacements.
+    ``layout`` (n_rods, ``ROD_FIELDS``) holds the ``G_*`` offsets and shapes of the rods' arrays (each
+    starts on a 64-byte boundary, as the interleaved layout's tables want); ``rigid``: the offsets of the
+    rigid bodies' displacements and velocities and of an entry that stays 0 (a wall's displacement and
+    velocity).
     """
     layout = np.zeros((len(setup.rods), mk.ROD_FIELDS), dtype=np.int64)
     blocks = []  # (offset, array) copied in
@@ -91,15 +91,11 @@ def _store(setup: LineSetup, us, vs, solves) -> tuple:
             row[mk.G_STEPPED_SIZE] = columns
         else:
             row[mk.G_STEPPED_U], row[mk.G_STEPPED_V], row[mk.G_STEPPED_SIZE] = row[mk.G_FLAT_U], row[mk.G_FLAT_V], n
-    store = _aligned(max(size, 8))
+    rigid = (place(ru), place(rv), place(np.zeros(1)))
+    store = _aligned(size)
     for offset, array in blocks:
         store[offset:offset + array.size] = array.ravel()
-
-    def views(column, sizes):
-        return [store[row[column]:row[column] + row[sizes]] for row in layout]
-
-    return (store, layout, views(mk.G_FLAT_U, mk.G_NODES), views(mk.G_FLAT_V, mk.G_NODES),
-            views(mk.G_STEPPED_U, mk.G_STEPPED_SIZE))
+    return store, layout, rigid
 
 
 def _energies(setup: LineSetup, us, vs, ru, rv):
@@ -175,25 +171,37 @@ def _start(scene, setup: LineSetup) -> dict:
                     ends[c, incoming] = 0.5 * (us[slot][node] - earlier)
     # the loop's arrays, in one store: flat, or (consistent mass in the interleaved layout) the rows of the
     # mass-solve table; rod nodes of the contacts and their M^-1 e_end entries as positions in them
-    store, layout, us, vs, _ = _store(setup, us, vs, solves)
+    store, layout, (rigid_u, rigid_v, zero) = _store(setup, us, vs, solves, ru, rv)
+    us = [store[row[mk.G_FLAT_U]:row[mk.G_FLAT_U] + row[mk.G_NODES]] for row in layout]
+    vs = [store[row[mk.G_FLAT_V]:row[mk.G_FLAT_V] + row[mk.G_NODES]] for row in layout]
+    ru, rv = store[rigid_u:rigid_u + ru.size], store[rigid_v:rigid_v + rv.size]
     kernel_contacts = setup.contacts.copy()
     where = np.zeros(setup.columns.size, dtype=np.int64)
+    # each contact side's displacement as an index in the store (a wall: the entry that stays 0) and how far
+    # its velocity lies from it (the M^-1 e_end entries: ``where`` holds their displacements' indices)
+    indices = np.zeros((setup.contacts.shape[0], mk.INDEX_FIELDS), dtype=np.int64)
+    indices[:, [mk.I_U_A, mk.I_U_B]] = zero
 
     def position(slot, node):
         rows = int(layout[slot, mk.G_CHUNK_ROWS])
         return int(node_position(node, rows, setup.rods[slot].order)) if rows else int(node)
 
-    for row in kernel_contacts:
-        for kind_col, slot_col, node_col, col_col, first_col, len_col in (
-                (mk.C_KIND_A, mk.C_SLOT_A, mk.C_NODE_A, mk.C_COL_A, mk.C_FIRST_A, mk.C_LEN_A),
-                (mk.C_KIND_B, mk.C_SLOT_B, mk.C_NODE_B, mk.C_COL_B, mk.C_FIRST_B, mk.C_LEN_B)):
+    for row, index in zip(kernel_contacts, indices):
+        for kind_col, slot_col, node_col, col_col, first_col, len_col, u_col, shift_col in (
+                (mk.C_KIND_A, mk.C_SLOT_A, mk.C_NODE_A, mk.C_COL_A, mk.C_FIRST_A, mk.C_LEN_A, mk.I_U_A, mk.I_SHIFT_A),
+                (mk.C_KIND_B, mk.C_SLOT_B, mk.C_NODE_B, mk.C_COL_B, mk.C_FIRST_B, mk.C_LEN_B, mk.I_U_B, mk.I_SHIFT_B)):
+            slot = int(row[slot_col])
             if int(row[kind_col]) == mk.SIDE_ROD:
-                slot, col_start, first = int(row[slot_col]), int(row[col_col]), int(row[first_col])
+                base = int(layout[slot, mk.G_STEPPED_U])
+                col_start, first = int(row[col_col]), int(row[first_col])
                 for j in range(int(row[len_col])):
-                    where[col_start + j] = position(slot, first + j)
+                    where[col_start + j] = base + position(slot, first + j)
                 row[node_col] = position(slot, int(row[node_col]))
+                index[u_col] = base + int(row[node_col])
+                index[shift_col] = layout[slot, mk.G_STEPPED_V] - base
             elif int(row[kind_col]) == mk.SIDE_RIGID:
-                where[int(row[col_col])] = 0
+                where[int(row[col_col])] = index[u_col] = rigid_u + slot
+                index[shift_col] = rigid_v - rigid_u
     records = np.zeros((setup.contacts.shape[0], mk.RECORD_FIELDS))
     records[:, mk.R_FIRST] = -1.0
     values = np.zeros(setup.contacts.shape[0])
@@ -209,6 +217,7 @@ def _start(scene, setup: LineSetup) -> dict:
     state = np.zeros(mk.STATE_SIZE)
     return {"us": us, "vs": vs, "ru": ru, "rv": rv, "rinv": rinv, "start": start, "energy0": energy0,
             "momentum0": momentum0, "args_rods": (store, layout), "contacts": kernel_contacts, "where": where,
+            "indices": indices,
             "records": records, "values": values, "targets": targets, "ends": ends, "control": control,
             "state": state}
 
@@ -216,8 +225,8 @@ def _start(scene, setup: LineSetup) -> dict:
 def _advance(setup: LineSetup, loop: dict, steps: int):
     """Up to ``steps`` steps of the loop; ``(status, steps done)``."""
     links = (loop["contacts"], setup.columns, loop["where"], loop["records"], loop["values"], loop["targets"],
-             loop["ends"])
-    return mk.advance_line(loop["args_rods"], (loop["ru"], loop["rv"], loop["rinv"]),
+             loop["ends"], loop["indices"])
+    return mk.advance_line(loop["args_rods"], (loop["ru"], loop["rv"]),
                            (setup.body_kind, setup.body_slot), links, loop["control"], loop["state"], steps)
 
 

@@ -49,7 +49,7 @@ from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_flat
 from .interleaved_step import pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
 from .kernels import _leapfrog_p1
 
-__all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "RECORD_FIELDS", "ROD_FIELDS", "STATE_SIZE", "advance_line"]
+__all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "INDEX_FIELDS", "RECORD_FIELDS", "ROD_FIELDS", "STATE_SIZE", "advance_line"]
 
 SIDE_ROD = 0
 SIDE_RIGID = 1
@@ -69,6 +69,11 @@ C_COL_A, C_FIRST_A, C_LEN_A, C_COL_B, C_FIRST_B, C_LEN_B = 14, 15, 16, 17, 18, 1
 C_LATTICE = 20  # 1: a hard contact of rod ends (or a rod end and a wall) on the exact lattice
 C_NEIGHBOUR_A, C_NEIGHBOUR_B = 21, 22  # the node next to each rod end
 CONTACT_FIELDS = 23
+
+# store indices of each contact's sides: the displacement of its end (a wall: an entry that stays 0) and how far
+# from a displacement its velocity lies
+I_U_A, I_SHIFT_A, I_U_B, I_SHIFT_B = 0, 1, 2, 3
+INDEX_FIELDS = 4
 
 # characteristic state of the rod ends of lattice contacts (per contact)
 E_PREVIOUS_A, E_INCOMING_A, E_PREVIOUS_B, E_INCOMING_B, E_FREE_A, E_FREE_B = 0, 1, 2, 3, 4, 5
@@ -180,74 +185,41 @@ def _rod_v(store, layout, slot):
 
 
 
-@kernel
-def _displacement(kind, slot, node, rods, ru):
-    if kind == SIDE_ROD:
-        store, layout = rods
-        return store[layout[slot, G_STEPPED_U] + node]
-    if kind == SIDE_RIGID:
-        return ru[slot]
-    return 0.0
-
-
-@kernel
-def _velocity(kind, slot, node, rods, rv):
-    if kind == SIDE_ROD:
-        store, layout = rods
-        return store[layout[slot, G_STEPPED_V] + node]
-    if kind == SIDE_RIGID:
-        return rv[slot]
-    return 0.0
-
-
-@kernel
-def _push(kind, slot, start, length, spread, rods, rigid, kick, shift):
+@kernel(inline="always")
+def _push(store, columns, where, start, length, to_velocity, kick, shift):
     """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements.
 
-    ``spread``: ``(columns, where)``, the ``M^-1 e_end`` entries and their positions in the arrays the loop
-    steps, ``rods``: ``(store, layout)``, ``rigid``: ``(ru, rv, rinv)`` (see :func:`advance_line`).
+    ``columns[start:start + length]``: the ``M^-1 e_end`` entries, ``where``: the store indices of their
+    displacements, ``to_velocity``: how far from those the velocities lie (a rigid body: one entry, its
+    inverse mass; a wall: none).
     """
-    columns, where = spread
-    ru, rv, rinv = rigid
-    if kind == SIDE_ROD:
-        store, layout = rods
-        u = layout[slot, G_STEPPED_U]
-        v = layout[slot, G_STEPPED_V]
-        for j in range(length):
-            c = columns[start + j]
-            k = where[start + j]
-            store[v + k] += kick * c
-            store[u + k] += shift * c
-    elif kind == SIDE_RIGID:
-        rv[slot] += kick * rinv[slot]
-        ru[slot] += shift * rinv[slot]
+    for j in range(length):
+        c = columns[start + j]
+        k = where[start + j]
+        store[k + to_velocity] += kick * c
+        store[k] += shift * c
 
 
-@kernel
-def _exchange(contacts, c, spread, rods, rigid, impulse, dt):
-    """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes (the
-    tuples of :func:`_push`)."""
-    _push(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_COL_B]),
-          int(contacts[c, C_LEN_B]), spread, rods, rigid, impulse, impulse * dt)
-    _push(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_COL_A]),
-          int(contacts[c, C_LEN_A]), spread, rods, rigid, -impulse, -impulse * dt)
+@kernel(inline="always")
+def _exchange(contacts, indices, c, columns, where, store, impulse, dt):
+    """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes."""
+    _push(store, columns, where, int(contacts[c, C_COL_B]), int(contacts[c, C_LEN_B]), indices[c, I_SHIFT_B],
+          impulse, impulse * dt)
+    _push(store, columns, where, int(contacts[c, C_COL_A]), int(contacts[c, C_LEN_A]), indices[c, I_SHIFT_A],
+          -impulse, -impulse * dt)
 
 
-@kernel
-def _gap(contacts, c, rods, ru):
-    return (contacts[c, C_OFFSET]
-            + _displacement(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_NODE_B]), rods, ru)
-            - _displacement(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_NODE_A]), rods,
-                            ru))
+@kernel(inline="always")
+def _gap(contacts, indices, c, store):
+    return contacts[c, C_OFFSET] + store[indices[c, I_U_B]] - store[indices[c, I_U_A]]
 
 
-@kernel
-def _closing_speed(contacts, c, rods, rv):
-    return (_velocity(int(contacts[c, C_KIND_A]), int(contacts[c, C_SLOT_A]), int(contacts[c, C_NODE_A]), rods, rv)
-            - _velocity(int(contacts[c, C_KIND_B]), int(contacts[c, C_SLOT_B]), int(contacts[c, C_NODE_B]), rods, rv))
+@kernel(inline="always")
+def _closing_speed(indices, c, store):
+    return store[indices[c, I_U_A] + indices[c, I_SHIFT_A]] - store[indices[c, I_U_B] + indices[c, I_SHIFT_B]]
 
 
-@kernel
+@kernel(inline="always")
 def _record(records, c, impulse, acting, time):
     records[c, R_IMPULSE] += impulse
     if acting:
@@ -325,8 +297,9 @@ def _flat(store, layout):
 def advance_line(rods, rigid, line, links, control, state, max_steps):
     """Run up to ``max_steps`` steps; return ``(status, steps done)``.
 
-    The arrays come in four tuples: ``rods = (store, layout)``, ``rigid = (ru, rv, rinv)``, ``line =
-    (body_kind, body_slot)`` and ``links = (contacts, columns, where, records, values, targets, ends)``.
+    The arrays come in four tuples: ``rods = (store, layout)``, ``rigid = (ru, rv)``, ``line =
+    (body_kind, body_slot)`` and ``links = (contacts, columns, where, records, values, targets, ends,
+    indices)``.
 
     Parameters
     ----------
@@ -339,8 +312,8 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
         of :func:`~wavecontact.fem.explicit_step.prepare_mass` and the lumped masses.
     layout : int array (n_rods, ROD_FIELDS)
         Per rod, the ``G_*`` columns: where its arrays lie in ``store``, their shapes, its mass-solve kind.
-    ru, rv, rinv : arrays, one entry per rigid body
-        Displacement, velocity and inverse mass.
+    ru, rv : arrays, one entry per rigid body
+        Displacement and velocity (views of ``store``).
     body_kind, body_slot : arrays, one entry per body in order along the line
         :data:`SIDE_ROD` or :data:`SIDE_RIGID` and the index in the rod layout or the rigid arrays.
     contacts : array (n_contacts, CONTACT_FIELDS)
@@ -356,15 +329,13 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     # views that count no references, for the helpers' calls (see _borrowed)
     store = _borrowed(rods[0])
     layout = _borrowed(rods[1])
-    rods = (store, layout)
-    ru, rv, rinv = _borrowed(rigid[0]), _borrowed(rigid[1]), _borrowed(rigid[2])
-    rigid = (ru, rv, rinv)
+    ru, rv = _borrowed(rigid[0]), _borrowed(rigid[1])
     body_kind, body_slot = _borrowed(line[0]), _borrowed(line[1])
     contacts, columns, where = _borrowed(links[0]), _borrowed(links[1]), _borrowed(links[2])
     records, values, targets, ends = _borrowed(links[3]), _borrowed(links[4]), _borrowed(links[5]), _borrowed(links[6])
+    indices = _borrowed(links[7])
     control = _borrowed(control)
     state = _borrowed(state)
-    spread = (columns, where)
     dt = control[K_DT]
     period = control[K_PERIOD]
     check_every = int(control[K_CHECK_EVERY])
@@ -388,7 +359,7 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
         # 1. soft forces at the current gaps
         for c in range(n_contacts):
             if contacts[c, C_HARD] == HARD_NONE:
-                gap = _gap(contacts, c, rods, ru)
+                gap = _gap(contacts, indices, c, store)
                 values[c] = law_force(int(contacts[c, C_LAW]), contacts[c, C_ALPHA], contacts[c, C_STRENGTH],
                                       contacts[c, C_STIFFNESS], gap)
         # characteristic free motion of the rod ends of lattice contacts, from the state now
@@ -430,7 +401,7 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
             if contacts[c, C_HARD] == HARD_NONE:
                 force = values[c]
                 if force != 0.0:
-                    _exchange(contacts, c, spread, rods, rigid, force * dt, dt)
+                    _exchange(contacts, indices, c, columns, where, store, force * dt, dt)
                 acting = force > contacts[c, C_THRESHOLD]
                 acting_any = acting_any or acting
                 _record(records, c, force * dt, acting, time)
@@ -465,8 +436,8 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
                 if contacts[c, C_HARD] != HARD_NONE:
                     targets[c] = 0.0
                     if contacts[c, C_HARD] == HARD_ELASTIC:
-                        gap = _gap(contacts, c, rods, ru)
-                        closing = _closing_speed(contacts, c, rods, rv)
+                        gap = _gap(contacts, indices, c, store)
+                        closing = _closing_speed(indices, c, store)
                         if gap < 0.0 and closing > 0.0:
                             targets[c] = gap + 2.0 * dt * closing  # leave with the reversed relative velocity
             for sweep in range(iterations):
@@ -474,12 +445,12 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
                 for c in range(n_contacts):
                     if contacts[c, C_HARD] == HARD_NONE:
                         continue
-                    gap = _gap(contacts, c, rods, ru)
+                    gap = _gap(contacts, indices, c, store)
                     wanted = values[c] + (targets[c] - gap) / (dt * contacts[c, C_W])
                     wanted = max(wanted, 0.0)
                     change = wanted - values[c]
                     if change != 0.0:
-                        _exchange(contacts, c, spread, rods, rigid, change, dt)
+                        _exchange(contacts, indices, c, columns, where, store, change, dt)
                         values[c] = wanted
                         # converged once no impulse changes by more than round-off (1e-12 of speed / W)
                         moved = moved or abs(change) > 0.01 * contacts[c, C_THRESHOLD]
@@ -498,7 +469,7 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
             state[S_LAST_ACTIVE] = time
         if (step + 1) % check_every == 0:
             for c in range(n_contacts):
-                if not math.isfinite(_gap(contacts, c, rods, ru)):
+                if not math.isfinite(_gap(contacts, indices, c, store)):
                     _flat(store, layout)
                     return STATUS_FAILED, step + 1
             if time - state[S_LAST_ACTIVE] >= period:
