@@ -41,8 +41,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._jit import NUMBA_ENABLED, kernel
 from ..contact_kernels import law_force
 from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_flat
@@ -107,32 +105,52 @@ STATUS_FAILED = 2
 
 
 def _store_views():
-    """:func:`_segment` and :func:`_block` for compiled kernels: views made from the store's data pointer."""
-    from numba import carray
-    from numba.core import types
+    """:func:`_segment`, :func:`_block` and :func:`_borrowed` for compiled kernels: array views built in place
+    (like ``numba.carray``) from a data pointer, with no reference to count."""
+    from numba.core import cgutils, types
     from numba.extending import intrinsic
 
+    def view(context, builder, source_type, source, result_type, offset, shape, strides=None):
+        array = context.make_array(source_type)(context, builder, source)
+        out = context.make_array(result_type)(context, builder)
+        itemsize = context.get_constant(types.intp, context.get_abi_sizeof(context.get_data_type(source_type.dtype)))
+        if strides is None:  # C order
+            strides, step = [], itemsize
+            for extent in reversed(shape):
+                strides.insert(0, step)
+                step = builder.mul(step, extent)
+        data = array.data if offset is None else builder.gep(array.data, [offset])
+        context.populate_array(out, data=data, shape=cgutils.pack_array(builder, shape),
+                               strides=cgutils.pack_array(builder, strides), itemsize=itemsize, meminfo=None)
+        return out._getvalue()
+
     @intrinsic
-    def address(typingctx, array, offset):
-        signature = types.CPointer(array.dtype)(array, types.int64)
+    def segment(typingctx, store, offset, size):
+        result = types.Array(store.dtype, 1, "C")
 
         def codegen(context, builder, sig, args):
-            data = context.make_array(sig.args[0])(context, builder, args[0]).data
-            return builder.gep(data, [args[1]])
+            return view(context, builder, sig.args[0], args[0], result, args[1], [args[2]])
 
-        return signature, codegen
+        return result(store, types.int64, types.int64), codegen
 
-    @kernel(inline="always")
-    def segment(store, offset, size):
-        return carray(address(store, offset), (size,))
+    @intrinsic
+    def block(typingctx, store, offset, rows, cols):
+        result = types.Array(store.dtype, 2, "C")
 
-    @kernel(inline="always")
-    def block(store, offset, rows, cols):
-        return carray(address(store, offset), (rows, cols))
+        def codegen(context, builder, sig, args):
+            return view(context, builder, sig.args[0], args[0], result, args[1], [args[2], args[3]])
 
-    @kernel(inline="always")
-    def borrowed(array):
-        return carray(address(array, np.int64(0)), array.shape)
+        return result(store, types.int64, types.int64, types.int64), codegen
+
+    @intrinsic
+    def borrowed(typingctx, array):
+        def codegen(context, builder, sig, args):
+            source = context.make_array(sig.args[0])(context, builder, args[0])
+            shape = cgutils.unpack_tuple(builder, source.shape, array.ndim)
+            strides = cgutils.unpack_tuple(builder, source.strides, array.ndim)
+            return view(context, builder, sig.args[0], args[0], array, None, shape, strides)
+
+        return array(array), codegen
 
     return segment, block, borrowed
 
@@ -173,40 +191,25 @@ loop's arguments are, for the whole call); never returned.  Without numba it is 
 
 
 @kernel(inline="always")
-def _rod_u(store, layout, slot):
-    """Array the loop steps for the displacements of rod ``slot``."""
-    return _segment(store, layout[slot, G_STEPPED_U], layout[slot, G_STEPPED_SIZE])
-
-
-@kernel(inline="always")
-def _rod_v(store, layout, slot):
-    """Array the loop steps for the velocities of rod ``slot``."""
-    return _segment(store, layout[slot, G_STEPPED_V], layout[slot, G_STEPPED_SIZE])
-
-
-
-@kernel(inline="always")
-def _push(store, columns, where, start, length, to_velocity, kick, shift):
-    """Add ``kick * M^-1 e_end`` to a side's velocities and ``shift * M^-1 e_end`` to its displacements.
-
-    ``columns[start:start + length]``: the ``M^-1 e_end`` entries, ``where``: the store indices of their
-    displacements, ``to_velocity``: how far from those the velocities lie (a rigid body: one entry, its
-    inverse mass; a wall: none).
-    """
-    for j in range(length):
-        c = columns[start + j]
-        k = where[start + j]
-        store[k + to_velocity] += kick * c
-        store[k] += shift * c
-
-
-@kernel(inline="always")
 def _exchange(contacts, indices, c, columns, where, store, impulse, dt):
-    """Impulse ``impulse`` (>0 pushes the sides apart) over one step: kicks and the shift it makes."""
-    _push(store, columns, where, int(contacts[c, C_COL_B]), int(contacts[c, C_LEN_B]), indices[c, I_SHIFT_B],
-          impulse, impulse * dt)
-    _push(store, columns, where, int(contacts[c, C_COL_A]), int(contacts[c, C_LEN_A]), indices[c, I_SHIFT_A],
-          -impulse, -impulse * dt)
+    """Impulse ``impulse`` (>0 pushes the sides apart) over one step: adds ``+-impulse M^-1 e_end`` to each
+    side's velocities and ``+-impulse dt M^-1 e_end`` to its displacements.
+
+    ``columns``: the ``M^-1 e_end`` entries of each side (a rigid body: one, its inverse mass; a wall: none),
+    ``where``: the store indices of their displacements, ``indices``: how far from those the velocities lie.
+    """
+    kick, shift = impulse, impulse * dt
+    start, to_velocity = int(contacts[c, C_COL_B]), indices[c, I_SHIFT_B]
+    for j in range(int(contacts[c, C_LEN_B])):
+        k = where[start + j]
+        store[k + to_velocity] += kick * columns[start + j]
+        store[k] += shift * columns[start + j]
+    kick, shift = -impulse, -impulse * dt
+    start, to_velocity = int(contacts[c, C_COL_A]), indices[c, I_SHIFT_A]
+    for j in range(int(contacts[c, C_LEN_A])):
+        k = where[start + j]
+        store[k + to_velocity] += kick * columns[start + j]
+        store[k] += shift * columns[start + j]
 
 
 @kernel(inline="always")
@@ -263,21 +266,25 @@ def _apart(body_kind, body_slot, store, layout, rv, control):
 
 
 @kernel
-def _free_end(u, end, neighbour, ends, c, previous, incoming, free):
-    """Free motion of a rod end over the coming step from its incoming characteristic (see the module docstring)."""
-    now = u[end]
-    d = (u[neighbour] - ends[c, previous]) - ends[c, incoming]
+def _free_end(store, end, neighbour, ends, c, previous, incoming, free):
+    """Free motion of a rod end over the coming step from its incoming characteristic (see the module docstring).
+
+    ``end``, ``neighbour``: store indices of the displacements of the end node and the node next to it.
+    """
+    now = store[end]
+    d = (store[neighbour] - ends[c, previous]) - ends[c, incoming]
     ends[c, previous] = now
     ends[c, incoming] = d
     ends[c, free] = now + 2.0 * d
 
 
 @kernel
-def _to_free_end(u, v, end, value, dt):
-    """Move a rod end to its characteristic free position; return the shift (length)."""
-    shift = value - u[end]
-    u[end] = value
-    v[end] += shift / dt
+def _to_free_end(store, end, to_velocity, value, dt):
+    """Move a rod end (its displacement at store index ``end``, its velocity ``to_velocity`` further) to its
+    characteristic free position; return the shift (length)."""
+    shift = value - store[end]
+    store[end] = value
+    store[end + to_velocity] += shift / dt
     return shift
 
 
@@ -289,8 +296,11 @@ def _flat(store, layout):
         if rows:
             n = layout[b, G_NODES]
             order = layout[b, G_BAND_ROWS] - 1
-            unpack_nodes(_rod_u(store, layout, b), _segment(store, layout[b, G_FLAT_U], n), rows, order)
-            unpack_nodes(_rod_v(store, layout, b), _segment(store, layout[b, G_FLAT_V], n), rows, order)
+            size = layout[b, G_STEPPED_SIZE]
+            unpack_nodes(_segment(store, layout[b, G_STEPPED_U], size), _segment(store, layout[b, G_FLAT_U], n), rows,
+                         order)
+            unpack_nodes(_segment(store, layout[b, G_STEPPED_V], size), _segment(store, layout[b, G_FLAT_V], n), rows,
+                         order)
 
 
 @kernel
@@ -326,16 +336,12 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     control, state : arrays
         ``K_*`` and ``S_*`` entries.
     """
-    # views that count no references, for the helpers' calls (see _borrowed)
-    store = _borrowed(rods[0])
-    layout = _borrowed(rods[1])
-    ru, rv = _borrowed(rigid[0]), _borrowed(rigid[1])
-    body_kind, body_slot = _borrowed(line[0]), _borrowed(line[1])
-    contacts, columns, where = _borrowed(links[0]), _borrowed(links[1]), _borrowed(links[2])
-    records, values, targets, ends = _borrowed(links[3]), _borrowed(links[4]), _borrowed(links[5]), _borrowed(links[6])
-    indices = _borrowed(links[7])
-    control = _borrowed(control)
-    state = _borrowed(state)
+    store = _borrowed(rods[0])  # a view that counts no references, for the calls of the lattice's helpers
+    layout = rods[1]
+    ru, rv = rigid
+    body_kind, body_slot = line
+    contacts, columns, where, records, values, targets, links_ends, indices = links
+    ends = _borrowed(links_ends)
     dt = control[K_DT]
     period = control[K_PERIOD]
     check_every = int(control[K_CHECK_EVERY])
@@ -352,8 +358,11 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
         if rows:
             n = layout[b, G_NODES]
             order = layout[b, G_BAND_ROWS] - 1
-            pack_nodes(_segment(store, layout[b, G_FLAT_U], n), _rod_u(store, layout, b), rows, order)
-            pack_nodes(_segment(store, layout[b, G_FLAT_V], n), _rod_v(store, layout, b), rows, order)
+            size = layout[b, G_STEPPED_SIZE]
+            pack_nodes(_segment(store, layout[b, G_FLAT_U], n), _segment(store, layout[b, G_STEPPED_U], size), rows,
+                       order)
+            pack_nodes(_segment(store, layout[b, G_FLAT_V], n), _segment(store, layout[b, G_STEPPED_V], size), rows,
+                       order)
     for step in range(max_steps):
         time = state[S_TIME]
         # 1. soft forces at the current gaps
@@ -367,21 +376,25 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
             for c in range(n_contacts):
                 if contacts[c, C_LATTICE] != 0.0:
                     if int(contacts[c, C_KIND_A]) == SIDE_ROD:
-                        _free_end(_rod_u(store, layout, int(contacts[c, C_SLOT_A])), int(contacts[c, C_NODE_A]),
-                                  int(contacts[c, C_NEIGHBOUR_A]), ends, c, E_PREVIOUS_A, E_INCOMING_A, E_FREE_A)
+                        end = indices[c, I_U_A]
+                        _free_end(store, end, end + int(contacts[c, C_NEIGHBOUR_A]) - int(contacts[c, C_NODE_A]), ends,
+                                  c, E_PREVIOUS_A, E_INCOMING_A, E_FREE_A)
                     if int(contacts[c, C_KIND_B]) == SIDE_ROD:
-                        _free_end(_rod_u(store, layout, int(contacts[c, C_SLOT_B])), int(contacts[c, C_NODE_B]),
-                                  int(contacts[c, C_NEIGHBOUR_B]), ends, c, E_PREVIOUS_B, E_INCOMING_B, E_FREE_B)
+                        end = indices[c, I_U_B]
+                        _free_end(store, end, end + int(contacts[c, C_NEIGHBOUR_B]) - int(contacts[c, C_NODE_B]), ends,
+                                  c, E_PREVIOUS_B, E_INCOMING_B, E_FREE_B)
         # 2. free elastic step of every rod, free flight of every rigid body
         for b in range(layout.shape[0]):
             n = layout[b, G_NODES]
+            u = _segment(store, layout[b, G_STEPPED_U], layout[b, G_STEPPED_SIZE])
+            v = _segment(store, layout[b, G_STEPPED_V], layout[b, G_STEPPED_SIZE])
             kind = layout[b, G_KIND]
             band_rows = layout[b, G_BAND_ROWS]
             table_rows = layout[b, G_TABLE_ROWS]
             table_cols = layout[b, G_TABLE_COLS]
             bands = _block(store, layout[b, G_BANDS], band_rows, n)
             if kind == MASS_LUMPED and band_rows == 2:
-                _leapfrog_p1(_rod_u(store, layout, b), _rod_v(store, layout, b), bands,
+                _leapfrog_p1(u, v, bands,
                              _segment(store, layout[b, G_TABLE], table_cols), dt)
             elif layout[b, G_CHUNK_ROWS] > 0:
                 table = _block(store, layout[b, G_TABLE], table_rows, table_cols)
@@ -390,7 +403,7 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
                 else:
                     step_tridiagonal(table, dt)
             else:
-                step_flat(_rod_u(store, layout, b), _rod_v(store, layout, b),
+                step_flat(u, v,
                           _segment(store, layout[b, G_SCRATCH], n), bands, kind,
                           _block(store, layout[b, G_TABLE], table_rows, table_cols), dt)
         for r in range(n_rigid):
@@ -416,18 +429,14 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
                     continued = 0.0
                     sides = 0.0
                     if int(contacts[c, C_KIND_A]) == SIDE_ROD:
-                        slot = int(contacts[c, C_SLOT_A])
                         node = int(contacts[c, C_NODE_A])
-                        shift = _to_free_end(_rod_u(store, layout, slot), _rod_v(store, layout, slot), node,
-                                             ends[c, E_FREE_A], dt)
+                        shift = _to_free_end(store, indices[c, I_U_A], indices[c, I_SHIFT_A], ends[c, E_FREE_A], dt)
                         inverse = columns[int(contacts[c, C_COL_A]) + node - int(contacts[c, C_FIRST_A])]
                         continued -= shift / (dt * inverse)
                         sides += 1.0
                     if int(contacts[c, C_KIND_B]) == SIDE_ROD:
-                        slot = int(contacts[c, C_SLOT_B])
                         node = int(contacts[c, C_NODE_B])
-                        shift = _to_free_end(_rod_u(store, layout, slot), _rod_v(store, layout, slot), node,
-                                             ends[c, E_FREE_B], dt)
+                        shift = _to_free_end(store, indices[c, I_U_B], indices[c, I_SHIFT_B], ends[c, E_FREE_B], dt)
                         inverse = columns[int(contacts[c, C_COL_B]) + node - int(contacts[c, C_FIRST_B])]
                         continued += shift / (dt * inverse)
                         sides += 1.0
