@@ -31,8 +31,9 @@ from ..result import Outcome
 from ..solvers.base import ERROR_SAFETY, Stopwatch, richardson_estimate
 from . import multibody_kernel as mk
 from .discretization import _stress_recovery
-from .interleaved_step import L_SHAPE, L_U, L_V, node_position
+from .interleaved_step import node_position
 from .multibody_setup import LineSetup, build_line_setup, mass_solves, rigid_contact_steps
+from .multibody_store import G_CHUNK_ROWS, G_FLAT_U, G_FLAT_V, G_NODES, G_STEPPED_U, G_STEPPED_V, build_store
 
 __all__ = ["ESTIMATE_ORDER", "LINE_OPTIONS", "field_bytes", "replay_fields", "run_line", "solve_line"]
 
@@ -43,59 +44,6 @@ LINE_OPTIONS = ("elements", "order", "mass", "dt", "courant", "energy_tolerance"
                 "field_samples")
 _CHUNK = 1 << 14
 _PGS_ITERATIONS = 200
-
-
-def _aligned(size: int) -> np.ndarray:
-    """A zero float array of ``size`` entries starting on a 64-byte boundary."""
-    buffer = np.zeros(size + 8)
-    start = (-buffer.ctypes.data % 64) // 8
-    return buffer[start:start + size]
-
-
-def _store(setup: LineSetup, us, vs, solves, ru, rv) -> tuple:
-    """Every body's arrays in one float array: ``(store, layout, rigid)``, with the values given.
-
-    ``layout`` (n_rods, ``ROD_FIELDS``) holds the ``G_*`` offsets and shapes of the rods' arrays (each
-    starts on a 64-byte boundary, as the interleaved layout's tables want); ``rigid``: the offsets of the
-    rigid bodies' displacements and velocities and of an entry that stays 0 (a wall's displacement and
-    velocity).
-    """
-    layout = np.zeros((len(setup.rods), mk.ROD_FIELDS), dtype=np.int64)
-    blocks = []  # (offset, array) copied in
-    size = 0
-
-    def place(array) -> int:
-        nonlocal size
-        offset = size
-        blocks.append((offset, array))
-        size += -(-array.size // 8) * 8
-        return offset
-
-    for b, (d, u, v, (kind, table)) in enumerate(zip(setup.rods, us, vs, solves)):
-        n = d.n_nodes
-        bands = np.ascontiguousarray(d.stiffness_bands)
-        row = layout[b]
-        row[mk.G_NODES] = n
-        row[mk.G_FLAT_U], row[mk.G_FLAT_V] = place(u), place(v)
-        row[mk.G_SCRATCH] = place(np.zeros(n))
-        row[mk.G_WEIGHTS] = place(d.lumped_mass)
-        row[mk.G_BANDS], row[mk.G_BAND_ROWS] = place(bands), bands.shape[0]
-        row[mk.G_TABLE] = place(table)
-        row[mk.G_TABLE_ROWS], row[mk.G_TABLE_COLS] = table.shape
-        row[mk.G_KIND] = kind
-        row[mk.G_CHUNK_ROWS] = int(table[L_SHAPE, 0])
-        if row[mk.G_CHUNK_ROWS]:
-            columns = table.shape[1]
-            row[mk.G_STEPPED_U] = row[mk.G_TABLE] + L_U * columns
-            row[mk.G_STEPPED_V] = row[mk.G_TABLE] + L_V * columns
-            row[mk.G_STEPPED_SIZE] = columns
-        else:
-            row[mk.G_STEPPED_U], row[mk.G_STEPPED_V], row[mk.G_STEPPED_SIZE] = row[mk.G_FLAT_U], row[mk.G_FLAT_V], n
-    rigid = (place(ru), place(rv), place(np.zeros(1)))
-    store = _aligned(size)
-    for offset, array in blocks:
-        store[offset:offset + array.size] = array.ravel()
-    return store, layout, rigid
 
 
 def _energies(setup: LineSetup, us, vs, ru, rv):
@@ -171,9 +119,9 @@ def _start(scene, setup: LineSetup) -> dict:
                     ends[c, incoming] = 0.5 * (us[slot][node] - earlier)
     # the loop's arrays, in one store: flat, or (consistent mass in the interleaved layout) the rows of the
     # mass-solve table; rod nodes of the contacts and their M^-1 e_end entries as positions in them
-    store, layout, (rigid_u, rigid_v, zero) = _store(setup, us, vs, solves, ru, rv)
-    us = [store[row[mk.G_FLAT_U]:row[mk.G_FLAT_U] + row[mk.G_NODES]] for row in layout]
-    vs = [store[row[mk.G_FLAT_V]:row[mk.G_FLAT_V] + row[mk.G_NODES]] for row in layout]
+    store, layout, (rigid_u, rigid_v, zero) = build_store(setup.rods, us, vs, solves, ru, rv)
+    us = [store[row[G_FLAT_U]:row[G_FLAT_U] + row[G_NODES]] for row in layout]
+    vs = [store[row[G_FLAT_V]:row[G_FLAT_V] + row[G_NODES]] for row in layout]
     ru, rv = store[rigid_u:rigid_u + ru.size], store[rigid_v:rigid_v + rv.size]
     kernel_contacts = setup.contacts.copy()
     where = np.zeros(setup.columns.size, dtype=np.int64)
@@ -183,7 +131,7 @@ def _start(scene, setup: LineSetup) -> dict:
     indices[:, [mk.I_U_A, mk.I_U_B]] = zero
 
     def position(slot, node):
-        rows = int(layout[slot, mk.G_CHUNK_ROWS])
+        rows = int(layout[slot, G_CHUNK_ROWS])
         return int(node_position(node, rows, setup.rods[slot].order)) if rows else int(node)
 
     for row, index in zip(kernel_contacts, indices):
@@ -192,13 +140,13 @@ def _start(scene, setup: LineSetup) -> dict:
                 (mk.C_KIND_B, mk.C_SLOT_B, mk.C_NODE_B, mk.C_COL_B, mk.C_FIRST_B, mk.C_LEN_B, mk.I_U_B, mk.I_SHIFT_B)):
             slot = int(row[slot_col])
             if int(row[kind_col]) == mk.SIDE_ROD:
-                base = int(layout[slot, mk.G_STEPPED_U])
+                base = int(layout[slot, G_STEPPED_U])
                 col_start, first = int(row[col_col]), int(row[first_col])
                 for j in range(int(row[len_col])):
                     where[col_start + j] = base + position(slot, first + j)
                 row[node_col] = position(slot, int(row[node_col]))
                 index[u_col] = base + int(row[node_col])
-                index[shift_col] = layout[slot, mk.G_STEPPED_V] - base
+                index[shift_col] = layout[slot, G_STEPPED_V] - base
             elif int(row[kind_col]) == mk.SIDE_RIGID:
                 where[int(row[col_col])] = index[u_col] = rigid_u + slot
                 index[shift_col] = rigid_v - rigid_u

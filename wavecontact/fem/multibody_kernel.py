@@ -30,6 +30,10 @@ end node carries the last step's contact impulse one step too long).  The
 difference, the last step's impulse continued, is counted in the contact's
 impulse.
 
+Every body's arrays lie in one float array, the store (:mod:`.multibody_store`): a contact
+side's end node, a rigid body or a wall is one index in it, a rod's arrays are views of it
+made without a call or a reference count.
+
 Facing ends are *sides*: a rod node, a rigid body or a wall.  Each contact
 keeps a record (impulse, steps in contact, first and last contact time, number
 of intervals).  The loop stops once no contact has acted for ``period`` (the
@@ -41,13 +45,33 @@ from __future__ import annotations
 
 import math
 
-from .._jit import NUMBA_ENABLED, kernel
+from .._jit import kernel
 from ..contact_kernels import law_force
 from .explicit_step import MASS_CONDENSED, MASS_LUMPED, step_flat
 from .interleaved_step import pack_nodes, step_condensed, step_tridiagonal, unpack_nodes
 from .kernels import _leapfrog_p1
+from .multibody_store import (
+    G_BAND_ROWS,
+    G_BANDS,
+    G_CHUNK_ROWS,
+    G_FLAT_U,
+    G_FLAT_V,
+    G_KIND,
+    G_NODES,
+    G_SCRATCH,
+    G_STEPPED_SIZE,
+    G_STEPPED_U,
+    G_STEPPED_V,
+    G_TABLE,
+    G_TABLE_COLS,
+    G_TABLE_ROWS,
+    G_WEIGHTS,
+    block,
+    borrowed,
+    segment,
+)
 
-__all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "INDEX_FIELDS", "RECORD_FIELDS", "ROD_FIELDS", "STATE_SIZE", "advance_line"]
+__all__ = ["CONTACT_FIELDS", "CONTROL_SIZE", "INDEX_FIELDS", "RECORD_FIELDS", "STATE_SIZE", "advance_line"]
 
 SIDE_ROD = 0
 SIDE_RIGID = 1
@@ -89,105 +113,9 @@ CONTROL_SIZE = 7
 S_TIME, S_STEPS, S_LAST_ACTIVE, S_MAX_ITERATIONS = 0, 1, 2, 3
 STATE_SIZE = 4
 
-# rod layout: where each rod's arrays lie in the store (offsets in doubles) and their shapes
-G_NODES = 0  # nodes n
-G_FLAT_U, G_FLAT_V, G_SCRATCH, G_WEIGHTS = 1, 2, 3, 4  # n each: displacements, velocities, scratch, lumped masses
-G_BANDS, G_BAND_ROWS = 5, 6  # stiffness bands, (rows, n)
-G_TABLE, G_TABLE_ROWS, G_TABLE_COLS = 7, 8, 9  # the mass solve's table
-G_STEPPED_U, G_STEPPED_V, G_STEPPED_SIZE = 10, 11, 12  # the arrays the loop steps (the flat ones or table rows)
-G_KIND = 13  # mass-solve kind
-G_CHUNK_ROWS = 14  # rows per chunk of the interleaved layout (0: flat layout)
-ROD_FIELDS = 15
-
 STATUS_RUNNING = 0
 STATUS_SEPARATED = 1
 STATUS_FAILED = 2
-
-
-def _store_views():
-    """:func:`_segment`, :func:`_block` and :func:`_borrowed` for compiled kernels: array views built in place
-    (like ``numba.carray``) from a data pointer, with no reference to count."""
-    from numba.core import cgutils, types
-    from numba.extending import intrinsic
-
-    def view(context, builder, source_type, source, result_type, offset, shape, strides=None):
-        array = context.make_array(source_type)(context, builder, source)
-        out = context.make_array(result_type)(context, builder)
-        itemsize = context.get_constant(types.intp, context.get_abi_sizeof(context.get_data_type(source_type.dtype)))
-        if strides is None:  # C order
-            strides, step = [], itemsize
-            for extent in reversed(shape):
-                strides.insert(0, step)
-                step = builder.mul(step, extent)
-        data = array.data if offset is None else builder.gep(array.data, [offset])
-        context.populate_array(out, data=data, shape=cgutils.pack_array(builder, shape),
-                               strides=cgutils.pack_array(builder, strides), itemsize=itemsize, meminfo=None)
-        return out._getvalue()
-
-    @intrinsic
-    def segment(typingctx, store, offset, size):
-        result = types.Array(store.dtype, 1, "C")
-
-        def codegen(context, builder, sig, args):
-            return view(context, builder, sig.args[0], args[0], result, args[1], [args[2]])
-
-        return result(store, types.int64, types.int64), codegen
-
-    @intrinsic
-    def block(typingctx, store, offset, rows, cols):
-        result = types.Array(store.dtype, 2, "C")
-
-        def codegen(context, builder, sig, args):
-            return view(context, builder, sig.args[0], args[0], result, args[1], [args[2], args[3]])
-
-        return result(store, types.int64, types.int64, types.int64), codegen
-
-    @intrinsic
-    def borrowed(typingctx, array):
-        def codegen(context, builder, sig, args):
-            source = context.make_array(sig.args[0])(context, builder, args[0])
-            shape = cgutils.unpack_tuple(builder, source.shape, array.ndim)
-            strides = cgutils.unpack_tuple(builder, source.strides, array.ndim)
-            return view(context, builder, sig.args[0], args[0], array, None, shape, strides)
-
-        return array(array), codegen
-
-    return segment, block, borrowed
-
-
-def _segment_python(store, offset, size):
-    return store[offset:offset + size]
-
-
-def _block_python(store, offset, rows, cols):
-    return store[offset:offset + rows * cols].reshape(rows, cols)
-
-
-def _borrowed_python(array):
-    return array
-
-
-if NUMBA_ENABLED:
-    _segment, _block, _borrowed = _store_views()
-else:
-    _segment, _block, _borrowed = _segment_python, _block_python, _borrowed_python
-_segment.__doc__ = """``store[offset:offset + size]`` inside a compiled kernel, without a reference count or a call.
-
-Every rod's arrays lie in one float array, the *store*, at the offsets of the rod layout (``G_*`` columns):
-a lookup in a list of arrays per rod calls a helper of numba's typed list and counts a reference (about 12 ns
-measured, some thirty lookups a step), a view made here is an address computation.  Like
-:func:`~wavecontact._jit.row_view` it holds the data pointer only: valid while ``store`` is alive, never
-returned.  Without numba it is the slice.
-"""
-_block.__doc__ = """``store[offset:offset + rows * cols].reshape(rows, cols)`` inside a compiled kernel (see :func:`_segment`)."""
-_borrowed.__doc__ = """A C-contiguous array as a view that counts no references, inside a compiled kernel (see :func:`_segment`).
-
-numba counts a reference (an atomic increment and decrement) for every array argument of a compiled call it
-does not inline, on entry and on every tuple it unpacks: the loop's helpers, called a few times per contact
-and step, took some ten such pairs each (on the 3-rod chain, about 0.15 us of its 0.55 us fixed cost per
-step).  Handed views made here, each is a test of a null pointer.  Valid while ``array`` is alive (the
-loop's arguments are, for the whole call); never returned.  Without numba it is ``array``.
-"""
 
 
 @kernel(inline="always")
@@ -248,8 +176,8 @@ def _apart(body_kind, body_slot, store, layout, rv, control):
         if int(body_kind[i]) == SIDE_RIGID:
             speed = rv[slot]
         else:
-            w = _segment(store, layout[slot, G_WEIGHTS], layout[slot, G_NODES])
-            v = _segment(store, layout[slot, G_FLAT_V], layout[slot, G_NODES])
+            w = segment(store, layout[slot, G_WEIGHTS], layout[slot, G_NODES])
+            v = segment(store, layout[slot, G_FLAT_V], layout[slot, G_NODES])
             momentum = 0.0
             mass = 0.0
             for j in range(v.size):
@@ -289,18 +217,22 @@ def _to_free_end(store, end, to_velocity, value, dt):
 
 
 @kernel
+def _node_arrays(store, layout, b):
+    """Rod ``b``'s flat displacements and velocities and the arrays the loop steps: views of the store."""
+    n, size = layout[b, G_NODES], layout[b, G_STEPPED_SIZE]
+    return (segment(store, layout[b, G_FLAT_U], n), segment(store, layout[b, G_FLAT_V], n),
+            segment(store, layout[b, G_STEPPED_U], size), segment(store, layout[b, G_STEPPED_V], size))
+
+
+@kernel
 def _flat(store, layout):
     """Copy the rods that run in the interleaved layout back to their flat arrays."""
     for b in range(layout.shape[0]):
         rows = layout[b, G_CHUNK_ROWS]
         if rows:
-            n = layout[b, G_NODES]
-            order = layout[b, G_BAND_ROWS] - 1
-            size = layout[b, G_STEPPED_SIZE]
-            unpack_nodes(_segment(store, layout[b, G_STEPPED_U], size), _segment(store, layout[b, G_FLAT_U], n), rows,
-                         order)
-            unpack_nodes(_segment(store, layout[b, G_STEPPED_V], size), _segment(store, layout[b, G_FLAT_V], n), rows,
-                         order)
+            flat_u, flat_v, u, v = _node_arrays(store, layout, b)
+            unpack_nodes(u, flat_u, rows, layout[b, G_BAND_ROWS] - 1)
+            unpack_nodes(v, flat_v, rows, layout[b, G_BAND_ROWS] - 1)
 
 
 @kernel
@@ -314,21 +246,27 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     Parameters
     ----------
     store : float array
-        Every rod's arrays, one after the other (each starting on a 64-byte boundary when ``store`` does):
-        displacements now (length) and velocities half a step earlier (length/time), node by node; the
-        arrays the loop steps (those themselves, or for a consistent mass in the interleaved layout
-        (:mod:`~wavecontact.fem.interleaved_step`) the rows of its table, packed on entry and unpacked to
-        the flat arrays for the checks and on return); a scratch array, the stiffness bands, the mass solve
-        of :func:`~wavecontact.fem.explicit_step.prepare_mass` and the lumped masses.
+        Every body's arrays (:func:`~wavecontact.fem.multibody_store.build_store`): per rod the
+        displacements now (length) and velocities half a step earlier (length/time), node by node, a
+        scratch array, the lumped masses, the stiffness bands and the mass solve of
+        :func:`~wavecontact.fem.explicit_step.prepare_mass`; the rigid bodies' displacements and
+        velocities; an entry that stays 0.  The loop steps the flat arrays, or for a consistent mass in the
+        interleaved layout (:mod:`~wavecontact.fem.interleaved_step`) the rows of its table (packed on
+        entry, unpacked to the flat arrays for the checks and on return).
     layout : int array (n_rods, ROD_FIELDS)
-        Per rod, the ``G_*`` columns: where its arrays lie in ``store``, their shapes, its mass-solve kind.
+        Per rod, the ``G_*`` columns of :mod:`~wavecontact.fem.multibody_store`: where its arrays lie in
+        ``store``, their shapes, its mass-solve kind.
     ru, rv : arrays, one entry per rigid body
         Displacement and velocity (views of ``store``).
     body_kind, body_slot : arrays, one entry per body in order along the line
         :data:`SIDE_ROD` or :data:`SIDE_RIGID` and the index in the rod layout or the rigid arrays.
     contacts : array (n_contacts, CONTACT_FIELDS)
         The ``C_*`` columns (rod nodes as positions in the arrays the loop steps); ``columns`` holds the
-        ``M^-1 e_end`` entries they point to, ``where`` their positions in those arrays.
+        ``M^-1 e_end`` entries they point to (a rigid body: its inverse mass), ``where`` the store indices
+        of their displacements.
+    indices : int array (n_contacts, INDEX_FIELDS)
+        The ``I_*`` columns: each side's end displacement as a store index, and how far from a
+        displacement its velocity lies.
     records : array (n_contacts, RECORD_FIELDS)
         Accumulated ``R_*`` records.
     values, targets : arrays (n_contacts,)
@@ -336,12 +274,12 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     control, state : arrays
         ``K_*`` and ``S_*`` entries.
     """
-    store = _borrowed(rods[0])  # a view that counts no references, for the calls of the lattice's helpers
+    store = borrowed(rods[0])  # a view that counts no references, for the calls of the lattice's helpers
     layout = rods[1]
     ru, rv = rigid
     body_kind, body_slot = line
     contacts, columns, where, records, values, targets, links_ends, indices = links
-    ends = _borrowed(links_ends)
+    ends = borrowed(links_ends)
     dt = control[K_DT]
     period = control[K_PERIOD]
     check_every = int(control[K_CHECK_EVERY])
@@ -356,13 +294,9 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
     for b in range(layout.shape[0]):
         rows = layout[b, G_CHUNK_ROWS]
         if rows:
-            n = layout[b, G_NODES]
-            order = layout[b, G_BAND_ROWS] - 1
-            size = layout[b, G_STEPPED_SIZE]
-            pack_nodes(_segment(store, layout[b, G_FLAT_U], n), _segment(store, layout[b, G_STEPPED_U], size), rows,
-                       order)
-            pack_nodes(_segment(store, layout[b, G_FLAT_V], n), _segment(store, layout[b, G_STEPPED_V], size), rows,
-                       order)
+            flat_u, flat_v, u, v = _node_arrays(store, layout, b)
+            pack_nodes(flat_u, u, rows, layout[b, G_BAND_ROWS] - 1)
+            pack_nodes(flat_v, v, rows, layout[b, G_BAND_ROWS] - 1)
     for step in range(max_steps):
         time = state[S_TIME]
         # 1. soft forces at the current gaps
@@ -386,26 +320,26 @@ def advance_line(rods, rigid, line, links, control, state, max_steps):
         # 2. free elastic step of every rod, free flight of every rigid body
         for b in range(layout.shape[0]):
             n = layout[b, G_NODES]
-            u = _segment(store, layout[b, G_STEPPED_U], layout[b, G_STEPPED_SIZE])
-            v = _segment(store, layout[b, G_STEPPED_V], layout[b, G_STEPPED_SIZE])
+            u = segment(store, layout[b, G_STEPPED_U], layout[b, G_STEPPED_SIZE])
+            v = segment(store, layout[b, G_STEPPED_V], layout[b, G_STEPPED_SIZE])
             kind = layout[b, G_KIND]
             band_rows = layout[b, G_BAND_ROWS]
             table_rows = layout[b, G_TABLE_ROWS]
             table_cols = layout[b, G_TABLE_COLS]
-            bands = _block(store, layout[b, G_BANDS], band_rows, n)
+            bands = block(store, layout[b, G_BANDS], band_rows, n)
             if kind == MASS_LUMPED and band_rows == 2:
                 _leapfrog_p1(u, v, bands,
-                             _segment(store, layout[b, G_TABLE], table_cols), dt)
+                             segment(store, layout[b, G_TABLE], table_cols), dt)
             elif layout[b, G_CHUNK_ROWS] > 0:
-                table = _block(store, layout[b, G_TABLE], table_rows, table_cols)
+                table = block(store, layout[b, G_TABLE], table_rows, table_cols)
                 if kind == MASS_CONDENSED:
                     step_condensed(table, dt)
                 else:
                     step_tridiagonal(table, dt)
             else:
                 step_flat(u, v,
-                          _segment(store, layout[b, G_SCRATCH], n), bands, kind,
-                          _block(store, layout[b, G_TABLE], table_rows, table_cols), dt)
+                          segment(store, layout[b, G_SCRATCH], n), bands, kind,
+                          block(store, layout[b, G_TABLE], table_rows, table_cols), dt)
         for r in range(n_rigid):
             ru[r] += dt * rv[r]
         # 3. soft forces as kicks
