@@ -83,6 +83,10 @@ CASES = {
                       "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='lumped')", 5),
     "fem-P2-consistent": ("from wavecontact import collide",
                           "collide(0.6, 20.0, solver='fem', elements=100, order=2, mass='consistent')", 5),
+    # the fem multi-body loop on a 3-rod chain (one run, no error estimate; n/a before the multi-body loop)
+    "chain-fem-once": (("from wavecontact import Exponential, Rod, Scene\nfrom wavecontact.fem.multibody import "
+                        "run_line\n_chain = Scene(rods=(Rod(1.0), Rod(1.0), Rod(1.0)), velocities=(1.0, 0.0, -1.0), "
+                        "contact=Exponential(20.0, 0.01))"), "run_line(_chain, elements=200)", 5),
     "ensemble": ("import wavecontact", "wavecontact.ensemble(0.6173, 100.0, 1.0, samples=40, seed=1)", 1),
     "gas": ("import tempfile\nfrom wavecontact.cli import main",
             ("main(['gas', '--rods', '100', '--collisions', '20000', '--rule', 'vibration', '--damping', '50', "

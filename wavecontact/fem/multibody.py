@@ -117,8 +117,8 @@ def _start(scene, setup: LineSetup) -> dict:
                     earlier = us[slot][node] - dt_ * vs[slot][node]
                     ends[c, previous] = earlier
                     ends[c, incoming] = 0.5 * (us[slot][node] - earlier)
-    # the loop's arrays, in one store: flat, or (consistent mass in the interleaved layout) the rows of the
-    # mass-solve table; rod nodes of the contacts and their M^-1 e_end entries as positions in them
+    # every body's arrays in one store (the loop steps the flat ones, or for a consistent mass in the interleaved
+    # layout the rows of the mass-solve table); us, vs, ru, rv become views of it
     store, layout, (rigid_u, rigid_v, zero) = build_store(setup.rods, us, vs, solves, ru, rv)
     us = [store[row[G_FLAT_U]:row[G_FLAT_U] + row[G_NODES]] for row in layout]
     vs = [store[row[G_FLAT_V]:row[G_FLAT_V] + row[G_NODES]] for row in layout]
@@ -144,7 +144,7 @@ def _start(scene, setup: LineSetup) -> dict:
                 col_start, first = int(row[col_col]), int(row[first_col])
                 for j in range(int(row[len_col])):
                     where[col_start + j] = base + position(slot, first + j)
-                row[node_col] = position(slot, int(row[node_col]))
+                row[node_col] = position(slot, int(row[node_col]))  # the end node's position in the stepped array
                 index[u_col] = base + int(row[node_col])
                 index[shift_col] = layout[slot, G_STEPPED_V] - base
             elif int(row[kind_col]) == mk.SIDE_RIGID:
