@@ -1,6 +1,6 @@
 """Cost per element-step of the multi-body fem loop against the two-rod loop, one command:
 
-    python benchmarks/bench_multibody.py [--repeats 5] [--elements 400] [--update-docs]
+    python benchmarks/bench_multibody.py [--repeats 5] [--elements 200 400 1600] [--update-docs]
 
 Same discretization on both sides: rods of length 1 and one material, ``elements`` elements per
 rod, the same step ``dt`` (0.9 of the stable step of P2 consistent, the smallest of the four,
@@ -63,33 +63,43 @@ def chain_loop(scene, elements, order, mass, dt):
     return work["loop_seconds"] / work["element_steps"]
 
 
-def measure(args):
+def measure_size(elements: int, repeats: int) -> float:
+    """Print one table (``elements`` per rod); return its largest ratio."""
     two, chain = scenes()
-    dt = common_step(args.elements)
-    print(f"{args.elements} elements per rod, dt = {dt:.6g}, exponential law alpha = {LAW.alpha:g}, "
-          f"B = {LAW.strength:g}; medians of {args.repeats} alternating runs (the first, compiling, discarded)\n")
+    dt = common_step(elements)
+    print(f"{elements} elements per rod, dt = {dt:.6g}:\n")
     print("| discretization | two-rod loop (ns / element-step) | 3-rod chain, multi-body loop (ns / element-step) "
           "| ratio |")
     print("|---|---|---|---|")
     worst = 0.0
     for order, mass in DISCRETIZATIONS:
-        two_rod_loop(two, args.elements, order, mass, dt)
-        chain_loop(chain, args.elements, order, mass, dt)
+        two_rod_loop(two, elements, order, mass, dt)
+        chain_loop(chain, elements, order, mass, dt)
         old, new = [], []
-        for _ in range(args.repeats):
-            old.append(two_rod_loop(two, args.elements, order, mass, dt))
-            new.append(chain_loop(chain, args.elements, order, mass, dt))
+        for _ in range(repeats):
+            old.append(two_rod_loop(two, elements, order, mass, dt))
+            new.append(chain_loop(chain, elements, order, mass, dt))
         a, b = float(np.median(old)) * 1e9, float(np.median(new)) * 1e9
         worst = max(worst, b / a)
         print(f"| P{order} {mass} | {a:.2f} | {b:.2f} | {b / a:.2f} |")
-    print(f"\nLargest ratio {worst:.2f} (target: at most {TARGET_RATIO:g}); load average {os.getloadavg()[0]:.1f} "
-          "at the end.")
+    print()
+    return worst
+
+
+def measure(args):
+    print(f"Exponential law alpha = {LAW.alpha:g}, B = {LAW.strength:g}; medians of {args.repeats} alternating runs "
+          "(the first, compiling, discarded)\n")
+    worst = {elements: measure_size(elements, args.repeats) for elements in args.elements}
+    sizes = ", ".join(f"{w:.2f} at {e}" for e, w in worst.items())
+    print(f"Largest ratio per size (elements per rod): {sizes} (target: at most {TARGET_RATIO:g}); load average "
+          f"{os.getloadavg()[0]:.1f} at the end.")
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--elements", type=int, default=400)
+    parser.add_argument("--elements", type=int, nargs="+", default=[200, 400, 1600], help="elements per rod, "
+                        "one table each")
     parser.add_argument("--update-docs", action="store_true", help="write the table into docs/performance.md")
     args = parser.parse_args(argv)
     run_and_write(lambda: measure(args), "performance.md", "multibody-loop", args.update_docs, argv)
