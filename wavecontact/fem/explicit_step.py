@@ -321,7 +321,7 @@ def _stiffness_forces(u, bands, out):
         out[i] = _pentadiagonal_force(u, bands, i, n)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _pentadiagonal_force(u, bands, i, n):
     """``-(K u)_i`` of a pentadiagonal ``K`` at any node (the guarded form, for the edges)."""
     total = 0.0
@@ -336,7 +336,7 @@ def _pentadiagonal_force(u, bands, i, n):
     return total
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
     """P2 lumped step in one sweep: ``v += dt M^-1 (-K u)``, ``u += dt v`` (at least 5 nodes).
 
@@ -386,7 +386,7 @@ def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
     u[n - 1] = last0 + dt * velocity
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _tridiagonal_solve(table, x, m):
     """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place)."""
     scale = table[T_SCALE]
@@ -395,7 +395,7 @@ def _tridiagonal_solve(table, x, m):
     _scaled_solve(table, x, m)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _scaled_solve(table, x, m):
     """``x <- T^-1 r`` from ``x = r / p`` (the right-hand side times the row ``T_SCALE``; in place).
 
@@ -488,7 +488,7 @@ def _scaled_solve(table, x, m):
         x[0] = current + b[0] * top_old + (b[0] * b_top) * top_older
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _chained_solve(table, x, m):
     """``x <- T^-1 x`` as ``CHAINS`` independent recurrences per sweep, interleaved (``m`` unknowns, in place).
 
@@ -514,7 +514,7 @@ def _link(r, f, i, previous):
     return r[i] + f[i] * previous
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _chains(r, out, f, m, burn_in):
     """``out_i = r_i + f_i out_(i-1)`` as ``CHAINS`` = 8 interleaved chains.
 
@@ -564,7 +564,7 @@ def _chains(r, out, f, m, burn_in):
         y7 = _link(r, f, i, y7)
         out[i] = y7
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _tridiagonal_solve_plain(table, x, m):
     """The twisted solve of :func:`_tridiagonal_solve` with plain (not unrolled) sweeps, for any ``m``."""
     a = table[T_FORWARD]
@@ -587,7 +587,7 @@ def _tridiagonal_solve_plain(table, x, m):
         x[i] += b[i] * x[i - 1]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def mass_acceleration(kind, table, r):
     """Overwrite the forces ``r`` with ``M^-1 r`` (the mass solve prepared by :func:`prepare_mass`)."""
     n = r.size
@@ -610,7 +610,7 @@ def mass_acceleration(kind, table, r):
     r[n - 1] = vertex[(n - 1) // 2]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _condensed_vertex_solve(table, r):
     """Vertex accelerations of the condensed P2 mass for the forces ``r`` (a row of ``table``).
 
@@ -636,7 +636,7 @@ def _condensed_vertex_solve(table, r):
     return vertex
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _scaled_tridiagonal_forces(u, near, scale, out):
     """``out = scale * (-K u)`` for a tridiagonal ``K`` with upper band ``near`` (the right-hand side of
     :func:`_scaled_solve`)."""
@@ -651,7 +651,7 @@ def _scaled_tridiagonal_forces(u, near, scale, out):
     out[n - 1] = scale[n - 1] * (-near[n - 2] * (u[n - 2] - u[n - 1]))
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _condensed_step(u, v, table, dt):
     """Consistent P2 step ``v += dt M^-1 (-K u)``, ``u += dt v`` with the midpoints condensed (``T_P_*`` rows).
 
@@ -736,7 +736,7 @@ def step_rod(u, v, a, bands, kind, table, dt):
     step_flat(u, v, a, bands, kind, table, dt)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def step_flat(u, v, a, bands, kind, table, dt):
     """:func:`step_rod` in the flat layout (the table's interleaved rows unused): the step of the time loops
     (two rods, many bodies), which run the interleaved layout themselves, so that they do not compile the

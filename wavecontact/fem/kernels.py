@@ -112,7 +112,7 @@ def rod_energies(u, v, a, bands, mass_bands, dt):
     return kinetic, strain, 0.25 * dt * dt * correction
 
 
-@kernel
+@kernel(internal=True)
 def _mean_displacement(u, weights):
     total = 0.0
     mass = 0.0
@@ -122,7 +122,7 @@ def _mean_displacement(u, weights):
     return total / mass
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _leapfrog_p1(u, v, bands, inverse_mass, dt):
     """P1 lumped fast path of one step in a single sweep: ``v += dt M^-1 (-K u)``, ``u += dt v``.
 
@@ -156,7 +156,7 @@ def _synchronize(u, v, a, sync, bands, kind, table, dt):
         sync[i] = v[i] + 0.5 * dt * a[i]
 
 
-@kernel
+@kernel(internal=True)
 def _energy_check(kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state,
                   samples, energies):
     """Record one energy sample and watch the balance (the periodic check of both time loops).
