@@ -387,15 +387,6 @@ def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
 
 
 @kernel(fastmath=False, internal=True)
-def _tridiagonal_solve(table, x, m):
-    """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place)."""
-    scale = table[T_SCALE]
-    for i in range(m):
-        x[i] *= scale[i]
-    _scaled_solve(table, x, m)
-
-
-@kernel(fastmath=False, internal=True)
 def _scaled_solve(table, x, m):
     """``x <- T^-1 r`` from ``x = r / p`` (the right-hand side times the row ``T_SCALE``; in place).
 
@@ -503,7 +494,10 @@ def _chained_solve(table, x, m):
     (on reversed views, so that every index is a counter plus a constant).
     """
     burn_in = int(table[T_CHAIN_BURN_IN, 0])
-    _chains(x, x, table[T_CHAIN_FORWARD], m, burn_in)
+    # both sweeps on views with a step (numba's layout 'A'), so that _chains compiles once, not once for the
+    # contiguous forward arrays and once more for the reversed ones
+    forward = x[::1]
+    _chains(forward, forward, table[T_CHAIN_FORWARD, ::1], m, burn_in)
     reverse = x[m - 1 :: -1]  # the table's rows are longer than m for the vertices of P2
     _chains(reverse, reverse, table[T_CHAIN_BACKWARD, m - 1 :: -1], m, burn_in)
 
@@ -566,7 +560,7 @@ def _chains(r, out, f, m, burn_in):
 
 @kernel(fastmath=False, internal=True)
 def _tridiagonal_solve_plain(table, x, m):
-    """The twisted solve of :func:`_tridiagonal_solve` with plain (not unrolled) sweeps, for any ``m``."""
+    """The twisted solve of :func:`_scaled_solve` with plain (not unrolled) sweeps, for any ``m``."""
     a = table[T_FORWARD]
     c = table[T_UPWARD]
     b = table[T_BACKWARD]
@@ -596,7 +590,10 @@ def mass_acceleration(kind, table, r):
             r[i] *= table[0, i]
         return
     if kind == MASS_TRIDIAGONAL:
-        _tridiagonal_solve(table, r, n)
+        scale = table[T_SCALE]
+        for i in range(n):
+            r[i] *= scale[i]
+        _scaled_solve(table, r, n)
         return
     # condensed P2: vertex right-hand sides lose the midpoints' share, then the midpoints follow
     vertex = _condensed_vertex_solve(table, r)
@@ -620,19 +617,20 @@ def _condensed_vertex_solve(table, r):
     """
     m = (r.size + 1) // 2
     vertex = table[T_WORK + 1]
+    scale = table[T_SCALE]  # each right-hand side scaled for the solve as soon as it is formed
     mid_inverse = table[T_MID_INVERSE]
     mid_left = table[T_MID_LEFT]
     mid_right = table[T_MID_RIGHT]
     share = r[1] * mid_inverse[0]
-    vertex[0] = r[0] - mid_left[0] * share
+    vertex[0] = (r[0] - mid_left[0] * share) * scale[0]
     carried = mid_right[0] * share  # the right-hand midpoint's share of the previous vertex's element
     for e in range(1, m - 1):
         value = r[2 * e] - carried
         share = r[2 * e + 1] * mid_inverse[e]
-        vertex[e] = value - mid_left[e] * share
+        vertex[e] = (value - mid_left[e] * share) * scale[e]
         carried = mid_right[e] * share
-    vertex[m - 1] = r[2 * m - 2] - carried
-    _tridiagonal_solve(table, vertex, m)
+    vertex[m - 1] = (r[2 * m - 2] - carried) * scale[m - 1]
+    _scaled_solve(table, vertex, m)
     return vertex
 
 

@@ -437,7 +437,7 @@ def _forward_p1(u, y, left, right, forward, constants, n):
     ``ORIGIN``) whose ghost rows are filled first; rows ``[0, lo)`` and ``[hi, n)`` with the arrays, the
     uniform rows ``[lo, hi)`` of ``constants`` with the constants, each run one vectorized loop."""
     base = ORIGIN - LANES  # the views below start one row before the first row they compute
-    _ghost_rows(u[base:], n, True)
+    _ghost_rows(u[base:], n, np.bool_(True))
     lo = base + int(constants[0]) * LANES
     hi = base + int(constants[1]) * LANES
     _p1_rows(u[base:], y[base:], left[base:], right[base:], forward[base:], lo - base)
@@ -649,8 +649,8 @@ def _forward_condensed(u, y, share, c1, c2, c3, c4, mid_left, mid_right, forward
     :func:`midpoint_origin`), the other rows indexed as the vertices."""
     base = ORIGIN - LANES  # the views below start one row before the first row they compute
     middle = midpoint_origin(n) - LANES
-    _ghost_rows(u[base:], n, True)
-    _ghost_rows(u[middle:], n, False)
+    _ghost_rows(u[base:], n, np.bool_(True))  # not literals: one specialisation for both
+    _ghost_rows(u[middle:], n, np.bool_(False))
     lo = int(constants[0]) * LANES
     hi = int(constants[1]) * LANES
     _condensed_rows(u[base:], u[middle:], y[base:], share[base:], c1[base:], c2[base:], c3[base:], c4[base:],
