@@ -154,23 +154,30 @@ def kernel(function=None, *, internal: bool = False, **options):
 
 def _internal_dispatcher(func, settings: dict):
     """numba's dispatcher of ``func`` without wrappers, whose calls from Python go to :func:`_python_twin`."""
-    from numba.core.registry import CPUDispatcher
+    options = {key: value for key, value in settings.items() if key != "cache"}
+    options.update(no_cpython_wrapper=True, no_cfunc_wrapper=True)
+    dispatcher = _InternalDispatcher(py_func=func, locals={}, targetoptions=options)
+    dispatcher.twin_settings = settings
+    if settings.get("cache"):
+        dispatcher.enable_caching()
+    return dispatcher
 
-    class InternalDispatcher(CPUDispatcher):
-        """A kernel compiled for calls from compiled code only (no entry point from Python)."""
+
+if NUMBA_ENABLED:
+    from numba.core.registry import CPUDispatcher as _CPUDispatcher
+
+    class _InternalDispatcher(_CPUDispatcher):
+        """A kernel compiled for calls from compiled code only (numba gives it no entry point from Python)."""
 
         def __call__(self, *args, **kwargs):
             twin = self.__dict__.get("python_twin")
             if twin is None:
+                settings = self.__dict__.get("twin_settings")
+                if settings is None:  # rebuilt from a pickle: the options less the two wrapper flags
+                    settings = {key: value for key, value in self.targetoptions.items()
+                                if key not in ("no_cpython_wrapper", "no_cfunc_wrapper")}
                 twin = self.python_twin = _python_twin(self.py_func, settings)
             return twin(*args, **kwargs)
-
-    options = {key: value for key, value in settings.items() if key != "cache"}
-    options.update(no_cpython_wrapper=True, no_cfunc_wrapper=True)
-    dispatcher = InternalDispatcher(py_func=func, locals={}, targetoptions=options)
-    if settings.get("cache"):
-        dispatcher.enable_caching()
-    return dispatcher
 
 
 def _python_twin(func, settings: dict):
