@@ -60,3 +60,31 @@ def test_row_view_reads_and_writes_the_row_it_names_in_compiled_and_plain_kernel
         expected[2] *= 3.0
         assert function(table, 2, 3.0) == expected[2, 0] + expected[2, -1]
         np.testing.assert_array_equal(table, expected)  # only row 2 changed
+
+
+def test_an_internal_kernel_gives_the_same_result_from_a_kernel_and_from_python():
+    """``kernel(internal=True)`` builds no wrappers; a call from Python goes to a twin compiled with them."""
+    import numpy as np
+
+    from wavecontact._jit import NUMBA_ENABLED, kernel
+
+    def doubled_sum(x):
+        total = 0.0
+        for value in x:
+            total += value
+        return 2.0 * total
+
+    inner = kernel(doubled_sum, internal=True, cache=False)
+
+    def plus_one(x):
+        return inner(x) + 1.0
+
+    outer = kernel(plus_one, cache=False)
+    x = np.array([0.1, 0.2, 0.3])
+    expected = 2.0 * (0.1 + 0.2 + 0.3)
+    assert outer(x) == expected + 1.0
+    assert inner(x) == expected  # from Python: the twin with wrappers
+    if NUMBA_ENABLED:
+        assert inner.targetoptions["no_cpython_wrapper"] and inner.targetoptions["no_cfunc_wrapper"]
+        assert inner.python_twin.py_func.__qualname__.endswith("__from_python")  # its own cache entry
+        assert not inner.python_twin.targetoptions.get("no_cpython_wrapper", False)

@@ -51,7 +51,7 @@ _LN2 = math.log(2.0)
 #: whose sub-step error no solver's estimate includes yet (the modal splitting refuses those laws).
 CLOSED_FORM_CODES = (LAW_EXPONENTIAL, LAW_PENALTY, LAW_HARD)
 
-@kernel
+@kernel(internal=True)
 def law_force(code, alpha, strength, stiffness, gap):
     """Repulsive force (>= 0) at end-to-end gap ``gap`` (force units; ``inf`` for a hard overlap)."""
     if code == LAW_EXPONENTIAL:
@@ -67,7 +67,7 @@ def law_force(code, alpha, strength, stiffness, gap):
     return math.nan
 
 
-@kernel
+@kernel(internal=True)
 def law_potential(code, alpha, strength, stiffness, gap):
     """Interaction energy at gap ``gap`` (energy units), zero far apart (``inf`` for a hard overlap)."""
     if code == LAW_EXPONENTIAL:
@@ -83,7 +83,7 @@ def law_potential(code, alpha, strength, stiffness, gap):
     return math.nan
 
 
-@kernel
+@kernel(internal=True)
 def law_stiffness(code, alpha, strength, stiffness, gap):
     """``-dF/dgap`` (force/length, >= 0) at gap ``gap``; ``inf`` inside a hard overlap."""
     if code == LAW_EXPONENTIAL:
@@ -202,7 +202,7 @@ def series_response(gap, law, alpha, strength, stiffness, compliance):
 # --- the two-body flow r'' = m_inv F(r) over a step (FE impulse splitting) --------------------------
 
 
-@kernel
+@kernel(internal=True)
 def exponential_flow(r, w, dt, m_inv, alpha, strength):
     """Exact flow of ``r'' = m_inv alpha B exp(-alpha r)`` over ``dt``.
 
@@ -227,7 +227,7 @@ def exponential_flow(r, w, dt, m_inv, alpha, strength):
     return r + (2.0 / alpha) * change, speed * math.tanh(s1)
 
 
-@kernel
+@kernel(internal=True)
 def penalty_flow(r, w, dt, m_inv, stiffness):
     """Exact flow of ``r'' = -m_inv k min(r, 0)``: drift, half a harmonic swing, drift."""
     omega = math.sqrt(m_inv * stiffness)
@@ -256,7 +256,7 @@ def penalty_flow(r, w, dt, m_inv, stiffness):
     return r + w * remaining, w
 
 
-@kernel
+@kernel(internal=True)
 def hard_elastic_flow(r, w, dt):
     """Exact flow of two point masses with a hard core: drift, mirror at ``r = 0``."""
     r1 = r + w * dt
@@ -265,7 +265,7 @@ def hard_elastic_flow(r, w, dt):
     return r1, w
 
 
-@kernel
+@kernel(internal=True)
 def hard_plastic_update(r, w, dt):
     """Forward-increment constraint: if the drift would overlap, end the step at ``r = 0``.
 
@@ -290,7 +290,7 @@ def hard_plastic_update(r, w, dt):
 # time T for each law, from which the impulse of the contact follows.
 
 
-@kernel
+@kernel(internal=True)
 def _log_expm1_over(z):
     """``log(expm1(z) / z)`` without overflow or cancellation."""
     if abs(z) < 1e-8:
@@ -300,7 +300,7 @@ def _log_expm1_over(z):
     return math.log(-math.expm1(z)) - math.log(-z)
 
 
-@kernel
+@kernel(internal=True)
 def exponential_gap(r, g, duration, compliance, alpha, strength):
     """Solve ``r' = g + compliance * alpha B exp(-alpha r)`` exactly over ``duration``.
 
@@ -315,7 +315,7 @@ def exponential_gap(r, g, duration, compliance, alpha, strength):
     return (top + math.log(math.exp(first - top) + math.exp(second - top))) / alpha
 
 
-@kernel
+@kernel(internal=True)
 def penalty_gap(r, g, duration, compliance, stiffness):
     """Solve ``r' = g - compliance k min(r, 0)`` exactly over ``duration``."""
     rate = compliance * stiffness
@@ -340,7 +340,7 @@ def penalty_gap(r, g, duration, compliance, stiffness):
     return r + g * remaining
 
 
-@kernel
+@kernel(internal=True)
 def hard_gap(r, g, duration):
     """Hard contact of massless ends: the gap closes at rate ``g`` and stays at 0."""
     return max(r + g * duration, 0.0)
@@ -356,7 +356,7 @@ _MAX_SUBSTEPS = 1_000_000
 _EXIT_SPLIT = 64.0
 
 
-@kernel
+@kernel(internal=True)
 def _deepest_overlap(law, alpha, strength, stiffness, level, potential):
     """Overlap ``x > 0`` at which ``V(-x)`` (``potential``) or ``F(-x)`` reaches ``level`` (bisection)."""
     hi = 1.0
@@ -384,7 +384,7 @@ def _deepest_overlap(law, alpha, strength, stiffness, level, potential):
     return hi
 
 
-@kernel
+@kernel(internal=True)
 def _hermite(theta, p0, p1, m0, m1):
     """Cubic Hermite interpolant on [0, 1] with values ``p0, p1`` and slopes ``m0, m1`` (per unit theta)."""
     t2 = theta * theta
@@ -392,7 +392,7 @@ def _hermite(theta, p0, p1, m0, m1):
     return (2.0 * t3 - 3.0 * t2 + 1.0) * p0 + (t3 - 2.0 * t2 + theta) * m0 + (-2.0 * t3 + 3.0 * t2) * p1 + (t3 - t2) * m1
 
 
-@kernel
+@kernel(internal=True)
 def _hermite_root(p0, p1, m0, m1):
     """A root in (0, 1] of :func:`_hermite` with ``p0 <= 0 < p1`` (bisection)."""
     lo = 0.0
@@ -406,7 +406,7 @@ def _hermite_root(p0, p1, m0, m1):
     return hi
 
 
-@kernel
+@kernel(internal=True)
 def _flow_step(law, r, w, h, m_inv, alpha, strength, stiffness):
     """One classical Runge-Kutta step of ``r'' = m_inv F(r)``: ``(r1, w1, a0)`` (``a0``: the start's ``r''``)."""
     k1r = w
@@ -420,7 +420,7 @@ def _flow_step(law, r, w, h, m_inv, alpha, strength, stiffness):
     return r + h / 6.0 * (k1r + 2.0 * k2r + 2.0 * k3r + k4r), w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w), k1w
 
 
-@kernel
+@kernel(internal=True)
 def _gap_step(law, r, g, h, compliance, alpha, strength, stiffness):
     """One classical Runge-Kutta step of ``r' = g + compliance F(r)``: ``(r1, r'(0))``."""
     k1 = g + compliance * law_force(law, alpha, strength, stiffness, r)
@@ -430,7 +430,7 @@ def _gap_step(law, r, g, h, compliance, alpha, strength, stiffness):
     return r + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4), k1
 
 
-@kernel
+@kernel(internal=True)
 def overlap_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
     """Flow of ``r'' = m_inv F(r)`` over ``dt`` for a law acting on overlap only.
 
@@ -481,7 +481,7 @@ def overlap_flow(law, r, w, dt, m_inv, alpha, strength, stiffness):
     return r, w
 
 
-@kernel
+@kernel(internal=True)
 def overlap_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     """Solve ``r' = g + compliance F(r)`` over ``duration`` for a law acting on overlap only.
 
@@ -529,7 +529,7 @@ def overlap_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
 # --- the dispatch the kernels call --------------------------------------------------------------------
 
 
-@kernel
+@kernel(internal=True)
 def law_flow(law, plastic, r, w, dt, m_inv, alpha, strength, stiffness):
     """Two-body flow of the gap over ``dt``: ``(r1, w1)``; a hard law is an elastic mirror or, with
     ``plastic``, the perfectly plastic node impact (:func:`hard_plastic_update`)."""
@@ -544,7 +544,7 @@ def law_flow(law, plastic, r, w, dt, m_inv, alpha, strength, stiffness):
     return overlap_flow(law, r, w, dt, m_inv, alpha, strength, stiffness)
 
 
-@kernel
+@kernel(internal=True)
 def law_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     """The massless-end gap after ``duration`` (``r' = g + compliance F(r)``)."""
     if law == LAW_EXPONENTIAL:

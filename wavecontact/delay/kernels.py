@@ -99,7 +99,7 @@ _LINEAR_THRESHOLD = 1e-9
 SLOW_SEPARATION = 1e-3
 
 
-@kernel
+@kernel(internal=True)
 def locate(t, last, s):
     """Index ``j`` of the stored step ``[t[j], t[j + 1]]`` that holds ``s`` (binary search)."""
     lo = 0
@@ -175,7 +175,7 @@ def hermite5_on(t, w, d1, d2, lo, s):
     return value, slope, curvature
 
 
-@kernel
+@kernel(internal=True)
 def table_value(s, period, values, slopes):
     """Value and slope at ``s`` of a periodic table (cubic Hermite between its nodes).
 
@@ -204,7 +204,7 @@ def table_value(s, period, values, slopes):
     return value, slope
 
 
-@kernel
+@kernel(internal=True)
 def _cell_upper(values, slopes, j, h):
     """Upper bound of the cubic Hermite interpolant on cell ``j`` (``|H10|, |H11| <= 4/27``)."""
     j1 = j + 1
@@ -213,7 +213,7 @@ def _cell_upper(values, slopes, j, h):
     return max(values[j], values[j1]) + (4.0 / 27.0) * h * (abs(slopes[j]) + abs(slopes[j1]))
 
 
-@kernel
+@kernel(internal=True)
 def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
     """An upper bound of the tabulated noise (the sum of the rows) on ``[t0, t1]``.
 
@@ -251,7 +251,7 @@ def noise_upper_bound(t0, t1, periods, tables, table_slopes, block_max):
     return total
 
 
-@kernel
+@kernel(internal=True)
 def noise_curvature_bound(t0, t1, periods, tables, curvature_blocks):
     """An upper bound of ``|Q''|`` of the tabulated noise (the sum of the rows) on ``[t0, t1]``.
 
@@ -283,7 +283,7 @@ def noise_curvature_bound(t0, t1, periods, tables, curvature_blocks):
     return total
 
 
-@kernel
+@kernel(internal=True)
 def no_later_contact(t0, w_final, kappa, a0, history, last, delays, weights, noise_tables, negligible):
     """True if, with ``W`` held at ``w_final`` from ``t0`` on, ``W'`` stays below ``e^negligible`` for good.
 
@@ -335,7 +335,7 @@ def no_later_contact(t0, w_final, kappa, a0, history, last, delays, weights, noi
     return bound < negligible
 
 
-@kernel
+@kernel(internal=True)
 def span_is_free(t0, span, distance, rate, periods, tables, table_slopes, block_max, q0):
     """True if the force stays negligible on ``[t0, t0 + span]`` (tabulated noise).
 
@@ -416,7 +416,7 @@ def memory_sum(t, w, d1, d2, last, s, delays, weights, t_significant, comb, dire
     return total, slope, curvature
 
 
-@kernel
+@kernel(internal=True)
 def _comb_sum(t, comb, row, last, s):
     """``C_i(s)`` and its two derivatives from the comb sums' rows ``row, row + 1, row + 2`` (:func:`hermite5`).
 
@@ -426,7 +426,7 @@ def _comb_sum(t, comb, row, last, s):
     return hermite5(t, comb[row], comb[row + 1], comb[row + 2], last, s)
 
 
-@kernel
+@kernel(internal=True)
 def comb_values(t, w, d1, d2, last, s, gamma_i, comb, row):
     """``C_i(s) = W(s - Gamma_i) + C_i(s - Gamma_i)`` with its two derivatives."""
     u = s - gamma_i
@@ -446,7 +446,7 @@ def _series_curvature(s, series):
     return ddq
 
 
-@kernel
+@kernel(internal=True)
 def _exponent(point, t, w, d1, d2, last, delays, weights, series, noise_tables, comb, direct_copies):
     """``g(s)``, ``g'(s)`` and (without tables, else NaN) ``g''(s)``; ``point`` is ``(s, kappa, a0,
     t_significant)``, the other arguments those of :func:`integrate_delay_equation`.

@@ -67,13 +67,13 @@ __all__ = [
 _EXPONENT_LIMIT = 700.0
 
 
-@kernel
+@kernel(internal=True)
 def contact_flow(law, plastic, r, w, dt, m_inv, alpha, strength, stiffness):
     """The splitting scheme's flow of the end-node pair: :func:`~wavecontact.contact_kernels.law_flow`."""
     return law_flow(law, plastic, r, w, dt, m_inv, alpha, strength, stiffness)
 
 
-@kernel
+@kernel(internal=True)
 def contact_force(law, r, alpha, strength, stiffness):
     """Contact force at gap ``r`` (force, pushing the ends apart); zero for hard contact."""
     if law == LAW_HARD:
@@ -93,13 +93,13 @@ def contact_potential(law, r, alpha, strength, stiffness):
     return law_potential(law, alpha, strength, stiffness, r)
 
 
-@kernel
+@kernel(internal=True)
 def interface_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     """The massless-end gap after ``duration``: :func:`~wavecontact.contact_kernels.law_gap`."""
     return law_gap(law, r, g, duration, compliance, alpha, strength, stiffness)
 
 
-@kernel
+@kernel(internal=True)
 def exponential_gap_linear(r, rate, slope, duration, compliance, alpha, strength, substeps):
     """``r' = rate + slope (t - duration/2) + compliance alpha B exp(-alpha r)`` over ``duration``.
 
@@ -123,7 +123,7 @@ def exponential_gap_linear(r, rate, slope, duration, compliance, alpha, strength
 _GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(16)
 
 
-@kernel
+@kernel(internal=True)
 def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, substeps):
     """Gap equation with the closing rate reconstructed from five consecutive step means.
 
@@ -183,7 +183,7 @@ def exponential_gap_quartic(r, rates, duration, compliance, alpha, strength, sub
     return (alpha * duration * _antiderivative(c0, c1, c2, c3, c4, 0.5) + log_y) / alpha
 
 
-@kernel
+@kernel(internal=True)
 def _quartic_substeps_linear(r, c0, c1, c2, c3, c4, duration, coefficient, alpha, substeps):
     """The sub-steps of :func:`exponential_gap_quartic` on ``Y = exp(alpha (r - r_0))``.
 
@@ -215,7 +215,7 @@ def _quartic_substeps_linear(r, c0, c1, c2, c3, c4, duration, coefficient, alpha
     return r + math.log(y) / alpha
 
 
-@kernel
+@kernel(internal=True)
 def _antiderivative(c0, c1, c2, c3, c4, x):
     """``int_{-1/2}^{x} sum_k c_k s^k ds`` (Horner: no powers)."""
     a = -0.5

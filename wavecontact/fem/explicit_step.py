@@ -321,7 +321,7 @@ def _stiffness_forces(u, bands, out):
         out[i] = _pentadiagonal_force(u, bands, i, n)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _pentadiagonal_force(u, bands, i, n):
     """``-(K u)_i`` of a pentadiagonal ``K`` at any node (the guarded form, for the edges)."""
     total = 0.0
@@ -336,7 +336,7 @@ def _pentadiagonal_force(u, bands, i, n):
     return total
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
     """P2 lumped step in one sweep: ``v += dt M^-1 (-K u)``, ``u += dt v`` (at least 5 nodes).
 
@@ -386,16 +386,7 @@ def _leapfrog_pentadiagonal(u, v, bands, inverse, dt):
     u[n - 1] = last0 + dt * velocity
 
 
-@kernel(fastmath=False)
-def _tridiagonal_solve(table, x, m):
-    """``x <- T^-1 x`` for the tridiagonal ``T`` of ``table`` (``m`` unknowns, in place)."""
-    scale = table[T_SCALE]
-    for i in range(m):
-        x[i] *= scale[i]
-    _scaled_solve(table, x, m)
-
-
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _scaled_solve(table, x, m):
     """``x <- T^-1 r`` from ``x = r / p`` (the right-hand side times the row ``T_SCALE``; in place).
 
@@ -488,7 +479,7 @@ def _scaled_solve(table, x, m):
         x[0] = current + b[0] * top_old + (b[0] * b_top) * top_older
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _chained_solve(table, x, m):
     """``x <- T^-1 x`` as ``CHAINS`` independent recurrences per sweep, interleaved (``m`` unknowns, in place).
 
@@ -503,7 +494,10 @@ def _chained_solve(table, x, m):
     (on reversed views, so that every index is a counter plus a constant).
     """
     burn_in = int(table[T_CHAIN_BURN_IN, 0])
-    _chains(x, x, table[T_CHAIN_FORWARD], m, burn_in)
+    # both sweeps on views with a step (numba's layout 'A'), so that _chains compiles once, not once for the
+    # contiguous forward arrays and once more for the reversed ones
+    forward = x[::1]
+    _chains(forward, forward, table[T_CHAIN_FORWARD, ::1], m, burn_in)
     reverse = x[m - 1 :: -1]  # the table's rows are longer than m for the vertices of P2
     _chains(reverse, reverse, table[T_CHAIN_BACKWARD, m - 1 :: -1], m, burn_in)
 
@@ -514,7 +508,7 @@ def _link(r, f, i, previous):
     return r[i] + f[i] * previous
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _chains(r, out, f, m, burn_in):
     """``out_i = r_i + f_i out_(i-1)`` as ``CHAINS`` = 8 interleaved chains.
 
@@ -564,9 +558,9 @@ def _chains(r, out, f, m, burn_in):
         y7 = _link(r, f, i, y7)
         out[i] = y7
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _tridiagonal_solve_plain(table, x, m):
-    """The twisted solve of :func:`_tridiagonal_solve` with plain (not unrolled) sweeps, for any ``m``."""
+    """The twisted solve of :func:`_scaled_solve` with plain (not unrolled) sweeps, for any ``m``."""
     a = table[T_FORWARD]
     c = table[T_UPWARD]
     b = table[T_BACKWARD]
@@ -587,7 +581,7 @@ def _tridiagonal_solve_plain(table, x, m):
         x[i] += b[i] * x[i - 1]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def mass_acceleration(kind, table, r):
     """Overwrite the forces ``r`` with ``M^-1 r`` (the mass solve prepared by :func:`prepare_mass`)."""
     n = r.size
@@ -596,7 +590,10 @@ def mass_acceleration(kind, table, r):
             r[i] *= table[0, i]
         return
     if kind == MASS_TRIDIAGONAL:
-        _tridiagonal_solve(table, r, n)
+        scale = table[T_SCALE]
+        for i in range(n):
+            r[i] *= scale[i]
+        _scaled_solve(table, r, n)
         return
     # condensed P2: vertex right-hand sides lose the midpoints' share, then the midpoints follow
     vertex = _condensed_vertex_solve(table, r)
@@ -610,7 +607,7 @@ def mass_acceleration(kind, table, r):
     r[n - 1] = vertex[(n - 1) // 2]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _condensed_vertex_solve(table, r):
     """Vertex accelerations of the condensed P2 mass for the forces ``r`` (a row of ``table``).
 
@@ -620,23 +617,24 @@ def _condensed_vertex_solve(table, r):
     """
     m = (r.size + 1) // 2
     vertex = table[T_WORK + 1]
+    scale = table[T_SCALE]  # each right-hand side scaled for the solve as soon as it is formed
     mid_inverse = table[T_MID_INVERSE]
     mid_left = table[T_MID_LEFT]
     mid_right = table[T_MID_RIGHT]
     share = r[1] * mid_inverse[0]
-    vertex[0] = r[0] - mid_left[0] * share
+    vertex[0] = (r[0] - mid_left[0] * share) * scale[0]
     carried = mid_right[0] * share  # the right-hand midpoint's share of the previous vertex's element
     for e in range(1, m - 1):
         value = r[2 * e] - carried
         share = r[2 * e + 1] * mid_inverse[e]
-        vertex[e] = value - mid_left[e] * share
+        vertex[e] = (value - mid_left[e] * share) * scale[e]
         carried = mid_right[e] * share
-    vertex[m - 1] = r[2 * m - 2] - carried
-    _tridiagonal_solve(table, vertex, m)
+    vertex[m - 1] = (r[2 * m - 2] - carried) * scale[m - 1]
+    _scaled_solve(table, vertex, m)
     return vertex
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _scaled_tridiagonal_forces(u, near, scale, out):
     """``out = scale * (-K u)`` for a tridiagonal ``K`` with upper band ``near`` (the right-hand side of
     :func:`_scaled_solve`)."""
@@ -651,7 +649,7 @@ def _scaled_tridiagonal_forces(u, near, scale, out):
     out[n - 1] = scale[n - 1] * (-near[n - 2] * (u[n - 2] - u[n - 1]))
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _condensed_step(u, v, table, dt):
     """Consistent P2 step ``v += dt M^-1 (-K u)``, ``u += dt v`` with the midpoints condensed (``T_P_*`` rows).
 
@@ -736,7 +734,7 @@ def step_rod(u, v, a, bands, kind, table, dt):
     step_flat(u, v, a, bands, kind, table, dt)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def step_flat(u, v, a, bands, kind, table, dt):
     """:func:`step_rod` in the flat layout (the table's interleaved rows unused): the step of the time loops
     (two rods, many bodies), which run the interleaved layout themselves, so that they do not compile the

@@ -135,7 +135,7 @@ def lanes_width(unknowns: int) -> int:
     return ORIGIN + (candidate_rows(unknowns)[-1] + 1) * LANES
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def midpoint_origin(n):
     """Index of the P2 midpoints' row 0 in the displacement and velocity rows (``n`` rows per chunk): after the
     vertices' rows and their ghost row after, and the midpoints' own ghost row before."""
@@ -365,7 +365,7 @@ def condensed_lane_rows(coefficients: dict, scale: np.ndarray, forward: np.ndarr
     _fill_rows(table, per_unknown, P2_UNIFORM_ROWS, m)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def pack(x, first, stride, packed, start, n):
     """``packed[start + i LANES + c] = y[c n + i]`` for the unknowns ``y = x[first::stride]`` (the padding
     untouched; indices, not a strided view, so that one compilation serves every stride)."""
@@ -377,7 +377,7 @@ def pack(x, first, stride, packed, start, n):
                 packed[start + i * LANES + c] = x[first + stride * k]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def unpack(packed, start, x, first, stride, n):
     """The inverse of :func:`pack`."""
     count = (x.size - first + stride - 1) // stride
@@ -388,13 +388,13 @@ def unpack(packed, start, x, first, stride, n):
                 x[first + stride * k] = packed[start + i * LANES + c]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def position(k, n):
     """Index of unknown ``k`` in the interleaved layout with ``n`` rows."""
     return (k % n) * LANES + k // n
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _p1_rows(u, y, left, right, forward, count):
     """Stencil and local forward sweep of the rows after the first of the views (``count`` entries)."""
     for j in range(count):
@@ -403,7 +403,7 @@ def _p1_rows(u, y, left, right, forward, count):
         y[j + LANES] = force + forward[j + LANES] * y[j]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _p1_rows_uniform(u, y, constants, count):
     """:func:`_p1_rows` with the coefficients the constants of ``L_UNIFORM`` (same operations, same order)."""
     left = constants[2]
@@ -415,7 +415,7 @@ def _p1_rows_uniform(u, y, constants, count):
         y[j + LANES] = force + forward * y[j]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _ghost_rows(x, n, after):
     """Fill the ghost rows of the displacements ``x`` (a view whose row 0 starts at ``LANES``, ``n`` rows):
     before row 0, lane ``c >= 1`` gets the last row of chunk ``c - 1``; with ``after``, after row ``n - 1``
@@ -430,14 +430,14 @@ def _ghost_rows(x, n, after):
             x[following + c] = x[LANES + c + 1]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _forward_p1(u, y, left, right, forward, constants, n):
     """Stencil and local forward sweep of every chunk, fused: ``y_i = r_i + f_i y_(i-1)`` from the work row's
     ghost row (zero, or the load on the rod's first unknown) above each chunk, on table rows (row 0 at
     ``ORIGIN``) whose ghost rows are filled first; rows ``[0, lo)`` and ``[hi, n)`` with the arrays, the
     uniform rows ``[lo, hi)`` of ``constants`` with the constants, each run one vectorized loop."""
     base = ORIGIN - LANES  # the views below start one row before the first row they compute
-    _ghost_rows(u[base:], n, True)
+    _ghost_rows(u[base:], n, np.bool_(True))
     lo = base + int(constants[0]) * LANES
     hi = base + int(constants[1]) * LANES
     _p1_rows(u[base:], y[base:], left[base:], right[base:], forward[base:], lo - base)
@@ -445,7 +445,7 @@ def _forward_p1(u, y, left, right, forward, constants, n):
     _p1_rows(u[hi:], y[hi:], left[hi:], right[hi:], forward[hi:], base + n * LANES - hi)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, rows, chained, chained_starts):
     """Couple the chunks' local forward sweeps ``y`` and prepare the backward sweep's exact starts.
 
@@ -502,7 +502,7 @@ def _couple_chunks(y, forward, weight, end, start, carry, correction, burn, n, r
             y[below + c - 1] = burn[sums + c]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _couple_table(table, n):
     """:func:`_couple_chunks` on the rows of ``table`` (``n`` rows per chunk), after the forward sweep: its
     corrected rows and its sequential passes as :func:`_chunk_couplings` set them up."""
@@ -513,7 +513,7 @@ def _couple_table(table, n):
                    table[L_SHAPE, 3] != 0.0, table[L_SHAPE, 4] != 0.0)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _sweep_up_update(u, v, y, backward, count, dt):
     """The backward sweep over ``j = count - 1 .. 0`` with the leapfrog update of those unknowns."""
     for j in range(count - 1, -1, -1):
@@ -524,7 +524,7 @@ def _sweep_up_update(u, v, y, backward, count, dt):
         u[j] += dt * velocity
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _sweep_up_update_uniform(u, v, y, constants, count, dt):
     """:func:`_sweep_up_update` with ``g`` the constant of ``L_UNIFORM``."""
     backward = constants[5]
@@ -536,7 +536,7 @@ def _sweep_up_update_uniform(u, v, y, constants, count, dt):
         u[j] += dt * velocity
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _backward_update(u, v, y, backward, constants, n, dt):
     """Backward sweep of every chunk from its exact start (row ``n`` of ``y``) with the leapfrog update, on the
     true forward result ``y`` (overwritten with the accelerations): rows ``[hi, n)`` and ``[0, lo)`` with the
@@ -548,14 +548,14 @@ def _backward_update(u, v, y, backward, constants, n, dt):
     _sweep_up_update(u, v, y, backward, lo, dt)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def step_tridiagonal(table, dt):
     """One leapfrog step ``v += dt M^-1 (-K u)``, ``u += dt v`` of a P1 consistent rod held in the rows
     ``L_U``, ``L_V`` of its table (interleaved layout)."""
     step_tridiagonal_loaded(table, dt, np.int64(-1), 0.0)  # not a literal -1: no specialisation of its own
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def step_tridiagonal_loaded(table, dt, where, load):
     """:func:`step_tridiagonal` with a force on the rod's first or last unknown: ``v += dt M^-1 (-K u + F
     e_k)``, ``load = F / D_k`` (``D_k`` the pivot of ``L D L^T`` at unknown ``k``), ``where`` its position in
@@ -580,7 +580,7 @@ def step_tridiagonal_loaded(table, dt, where, load):
                      constants, n, dt)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def pack_nodes(x, packed, n, order):
     """:func:`pack` of a rod's nodes into a table row from ``ORIGIN`` (P1: all; P2: the vertices, even nodes),
     P2's midpoints from :func:`midpoint_origin` (the ghost rows untouched)."""
@@ -590,7 +590,7 @@ def pack_nodes(x, packed, n, order):
         pack(x, np.int64(1), order, packed, midpoint_origin(n), n)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def unpack_nodes(packed, x, n, order):
     """The inverse of :func:`pack_nodes`."""
     unpack(packed, np.int64(ORIGIN), x, np.int64(0), order, n)
@@ -608,7 +608,7 @@ def node_position(node, n, order):
     return midpoint_origin(n) + position(node // 2, n)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _condensed_rows(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, count):
     """Shares, right-hand sides and local forward sweep of the rows after the first of the views (``count``
     entries, rows inside a chunk)."""
@@ -622,7 +622,7 @@ def _condensed_rows(uv, um, y, share, c1, c2, c3, c4, mid_left, mid_right, forwa
         y[j + LANES] = force + forward[j + LANES] * y[j]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _condensed_rows_uniform(uv, um, y, share, constants, count):
     """:func:`_condensed_rows` with the coefficients the constants of ``L_UNIFORM`` (same operations, same order)."""
     c1 = constants[2]
@@ -642,15 +642,15 @@ def _condensed_rows_uniform(uv, um, y, share, constants, count):
         y[j + LANES] = force + forward * y[j]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _forward_condensed(u, y, share, c1, c2, c3, c4, mid_left, mid_right, forward, constants, n):
     """Midpoint shares, condensed right-hand sides and the local forward sweep of every chunk, fused, as
     :func:`_forward_p1`: ``u`` the displacement row (vertices from ``ORIGIN``, midpoints from
     :func:`midpoint_origin`), the other rows indexed as the vertices."""
     base = ORIGIN - LANES  # the views below start one row before the first row they compute
     middle = midpoint_origin(n) - LANES
-    _ghost_rows(u[base:], n, True)
-    _ghost_rows(u[middle:], n, False)
+    _ghost_rows(u[base:], n, np.bool_(True))  # not literals: one specialisation for both
+    _ghost_rows(u[middle:], n, np.bool_(False))
     lo = int(constants[0]) * LANES
     hi = int(constants[1]) * LANES
     _condensed_rows(u[base:], u[middle:], y[base:], share[base:], c1[base:], c2[base:], c3[base:], c4[base:],
@@ -661,7 +661,7 @@ def _forward_condensed(u, y, share, c1, c2, c3, c4, mid_left, mid_right, forward
                     mid_right[at:], forward[at:], n * LANES - hi)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, back_right, count, dt):
     """Backward sweep over ``j = count - 1 .. 0`` with the update of the vertices and midpoints."""
     for j in range(count - 1, -1, -1):
@@ -677,7 +677,7 @@ def _sweep_up_update_condensed(uv, vv, um, vm, y, share, backward, back_left, ba
         um[j] += dt * velocity
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, count, dt):
     """:func:`_sweep_up_update_condensed` with the coefficients the constants of ``L_UNIFORM``."""
     backward = constants[9]
@@ -696,14 +696,14 @@ def _sweep_up_update_condensed_uniform(uv, vv, um, vm, y, share, constants, coun
         um[j] += dt * velocity
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def step_condensed(table, dt):
     """One leapfrog step of a P2 consistent rod held in the rows ``L_U``, ``L_V`` of its table (interleaved
     layout, :func:`pack_nodes`): midpoints condensed, the vertex system solved in chunks."""
     step_condensed_loaded(table, dt, np.int64(-1), 0.0)  # not a literal -1: no specialisation of its own
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def step_condensed_loaded(table, dt, where, load):
     """:func:`step_condensed` with a force ``F`` on the rod's first or last vertex (an end node): ``load = F /
     D_k`` (``D_k`` the pivot of the condensed vertex mass's ``L D L^T`` at that vertex), ``where`` its

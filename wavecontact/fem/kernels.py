@@ -112,7 +112,7 @@ def rod_energies(u, v, a, bands, mass_bands, dt):
     return kinetic, strain, 0.25 * dt * dt * correction
 
 
-@kernel
+@kernel(internal=True)
 def _mean_displacement(u, weights):
     total = 0.0
     mass = 0.0
@@ -122,7 +122,7 @@ def _mean_displacement(u, weights):
     return total / mass
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _leapfrog_p1(u, v, bands, inverse_mass, dt):
     """P1 lumped fast path of one step in a single sweep: ``v += dt M^-1 (-K u)``, ``u += dt v``.
 
@@ -156,7 +156,7 @@ def _synchronize(u, v, a, sync, bands, kind, table, dt):
         sync[i] = v[i] + 0.5 * dt * a[i]
 
 
-@kernel
+@kernel(internal=True)
 def _energy_check(kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2, time, energy_tolerance, state,
                   samples, energies):
     """Record one energy sample and watch the balance (the periodic check of both time loops).
@@ -275,6 +275,8 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     loaded2 = rows2 > 0 and scheme == SCHEME_FORCE
     scale1 = table1[T_CHAIN_INVERSE, last // order1] if loaded1 else 0.0
     scale2 = table2[T_CHAIN_INVERSE, 0] if loaded2 else 0.0
+    status = STATUS_RUNNING
+    done = max_steps
     for step in range(max_steps):
         r_now = offset + U2[start2] - U1[end1]
         force = contact_force(law, r_now, alpha, strength, stiffness) if scheme == SCHEME_FORCE else 0.0
@@ -326,8 +328,9 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             state[S_LAST_IN_RANGE] = time
         if not (math.isfinite(gap) and math.isfinite(vrel)):
             state[S_FAILED_ENERGY] = math.nan
-            _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
-            return STATUS_FAILED, step + 1, samples
+            status = STATUS_FAILED
+            done = step + 1
+            break
 
         if (step + 1) % check_every == 0:
             _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
@@ -341,18 +344,25 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
                 energies,
             )
             if not within:
-                return STATUS_FAILED, step + 1, samples
+                status = STATUS_FAILED
+                done = step + 1
+                break
             if vrel > 0.0 and gap > r_stop:
                 if time - state[S_LAST_IN_RANGE] >= period:
-                    return STATUS_SEPARATED, step + 1, samples
+                    status = STATUS_SEPARATED
+                    done = step + 1
+                    break
                 spread = control[K_BOUND1] * math.sqrt(max(internal1, 0.0)) + control[K_BOUND2] * math.sqrt(
                     max(internal2, 0.0)
                 )
                 centre_gap = offset + _mean_displacement(u2, weights2) - _mean_displacement(u1, weights1)
                 if centre_gap - spread > r_stop:
-                    return STATUS_SEPARATED, step + 1, samples
+                    status = STATUS_SEPARATED
+                    done = step + 1
+                    break
+    # one exit: the flat arrays refreshed once (after a check they already are; copying again changes nothing)
     _to_flat(u1, v1, table1, rows1, order1, u2, v2, table2, rows2, order2)
-    return STATUS_RUNNING, max_steps, samples
+    return status, done, samples
 
 
 @kernel(inline="always")

@@ -94,7 +94,7 @@ def buffer_mask(n_nodes: int) -> int:
     return size - 1
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def far_end_weights(theta):
     """``(shift, weight)`` of the interpolation ``x -> (1 - weight) B[k + shift] + weight B[k + shift + 1]``.
 
@@ -147,12 +147,12 @@ def split_rod(current, previous, f, g, mask):
         g[k & mask] = 2.0 * g[(k - 1) & mask] - g[(k - 2) & mask]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _node(f, g, mask, n, i):
     return f[(i + n) & mask] + g[(i - n) & mask]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _rebuild(f, g, mask, n, contact, contact_node, current, previous):
     """Both time levels ``n`` and ``n - 1`` of one rod from its waves (O(N)).
 
@@ -166,7 +166,7 @@ def _rebuild(f, g, mask, n, contact, contact_node, current, previous):
     previous[contact_node] = contact[1]
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _eno(left, a, b, right, weight):
     """Value at ``weight`` in ``[0, 1]`` between samples ``a`` and ``b`` (neighbours ``left``, ``right``).
 
@@ -181,7 +181,7 @@ def _eno(left, a, b, right, weight):
     return a + weight * (b - a) + 0.5 * weight * (weight - 1.0) * curvature
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _reflect_at_last(f, g, mask, n, last, shift, weight):
     """New entry ``F[N + n + 1]`` of a free end ``theta`` beyond node ``N`` (``shift``, ``weight``: see above)."""
     base = last - n + shift
@@ -195,7 +195,7 @@ def _reflect_at_last(f, g, mask, n, last, shift, weight):
     f[(last + n + 1) & mask] = f[(last + n) & mask] + arriving - before
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _reflect_at_first(f, g, mask, n, shift, weight):
     """New entry ``G[-(n + 1)]`` of a free end ``theta`` before node 0 (mirror image of the above)."""
     base = n - shift - 2  # f(n + 1 - 2 theta) lies between F[base + 2] and F[base + 1], weight from the former
@@ -232,13 +232,13 @@ def remainder_momentum(f, g, mask, n, theta, last, impedance):
                                            f[(base - 1) & mask], weight))
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _contact_end_value(contact, neighbour, coefficient):
     """General central difference of a contact end node: ``2 u - u_old - coefficient (u_nb - u)``."""
     return 2.0 * contact[0] - contact[1] - coefficient * (neighbour - contact[0])
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _one_jump_gap(law, r, rates, dt, compliance, alpha, strength, stiffness):
     """Gap after a step whose incoming rate jumps once, or NaN if the step means do not show one jump.
 
@@ -264,7 +264,7 @@ def _one_jump_gap(law, r, rates, dt, compliance, alpha, strength, stiffness):
     return interface_gap(law, middle, after, (1.0 - fraction) * dt, compliance, alpha, strength, stiffness)
 
 
-@kernel(fastmath=False)
+@kernel(fastmath=False, internal=True)
 def _later_rate(f1, g1, mask1, last1, f2, g2, mask2, n, j, dt):
     """Mean incoming closing rate over ``[t + (j - 2) dt, t + j dt]`` read at node ``j`` from the contact."""
     later2 = (f2[(j + n) & mask2] + g2[(j - n) & mask2]) - (f2[(j - 1 + n - 1) & mask2] + g2[(j - 1 - n + 1) & mask2])
@@ -454,7 +454,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
     return status, done, samples
 
 
-@kernel
+@kernel(internal=True)
 def _staggered_energies(current, previous, bands, masses, dt):
     """Kinetic energy of ``(current - previous)/dt`` and strain ``u_prev K u_cur / 2`` (P1).
 
