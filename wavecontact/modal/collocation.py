@@ -459,7 +459,6 @@ def _echo_force(t, ends, records, count):
     return force
 
 
-@kernel(error_model="numpy")
 def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
 
@@ -533,6 +532,33 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         Exponential law: the step changes ``alpha_eff * gap`` by at most ``exponent_step`` once the force
         is within this many e-folds of ``force_scale`` (30: the single collisions), by that much more below.
     """
+    # which parts of the kernel this call runs: each one it does not is passed as None, and numba compiles
+    # the kernel without it (a flag passed as True keeps both sides of its test, hence two flags for exact ends)
+    ends, free_q, free_v, _ = exact_ends
+    law, _, _, stiffness, compliance = contact_law
+    exact = ends[0] > 0.0
+    exponential = law == LAW_EXPONENTIAL
+    hard = not exponential and stiffness == math.inf and compliance <= 0.0
+    warm = bool(np.any(free_q) or np.any(free_v))  # a kept mode not at rest (the test `!= 0.0` on each)
+    return _run_collision((modes, rigid), (contact_law, control), tables, exact_ends, output,
+                          True if exact else None, None if exact else True, True if warm else None,
+                          True if hard else None, None if exponential or hard else True,
+                          True if tables[-1] > 0 and exponential and not exact else None)
+
+
+@kernel(error_model="numpy")
+def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncated, warm, hard, generic, free_steps):
+    """:func:`run_collision` with the parts a call does not run passed as None, so that numba compiles it without them.
+
+    ``bodies = (modes, rigid)``, ``settings = (contact_law, control)``, the other tuples as in
+    :func:`run_collision`.  Flags, True or None: ``exact`` with exact ends (``ends[0] > 0``), ``truncated``
+    without; ``warm``: a kept mode does not start at rest (``free_q``, ``free_v`` not all zero); ``hard``: a
+    hard contact without compliance (:func:`_solve_hard`), ``generic``: a law solved by :func:`_newton_forces`
+    (both None: the exponential law, :func:`_newton_log_force`); ``free_steps``: steps above the sampling step
+    where the force provably stays negligible (``free_rungs > 0``, exponential law, no exact ends).
+    """
+    modes, rigid = bodies
+    contact_law, control = settings
     q, v, omega, coupling = modes
     X, U, mass, half = rigid
     law, alpha, strength, stiffness, compliance = contact_law
@@ -547,18 +573,16 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     log_ratio = math.log(ladder_ratio)
     # the largest step that samples the gap finely enough; longer ones need _free_fall's proof
     h_sample = h_top * math.exp(-free_rungs * log_ratio)
-    free_steps = free_rungs > 0 and law == LAW_EXPONENTIAL and ends[0] <= 0.0
-    free_work = np.empty(n_modes if free_steps else 0)
+    free_work = np.empty(n_modes if free_steps is not None else 0)
     amplitudes_now = False  # free_work holds the amplitudes of the modes' shares of the gap now
     forces_seen = 0.0  # largest node force since free_work was filled
     # the kept modes' gap at which the force (a compliance in series only lowers it) is exp(-30 + exponent_step)
     # of force_scale: a step over which the gap provably stays above it cannot miss a touch between its nodes
-    free_gap_lowest = (30.0 - exponent_step + math.log(alpha * strength / force_scale)) / alpha if free_steps else 0.0
+    free_gap_lowest = ((30.0 - exponent_step + math.log(alpha * strength / force_scale)) / alpha
+                       if free_steps is not None else 0.0)
     inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
     recording = history.shape[0] > 0
     zeta = ends[0]
-    exact = zeta > 0.0
-    hard = law != LAW_EXPONENTIAL and stiffness == math.inf and compliance <= 0.0
 
     free_gap = np.empty(s)
     forces = np.empty(s)
@@ -585,15 +609,11 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             for k in range(s):
                 integral[i, m] += vinv[k, m] * power / (k + 1)
                 power *= nodes[i]
-    warm = False
-    for j in range(n_modes):
-        if free_q[j] != 0.0 or free_v[j] != 0.0:
-            warm = True
     # modes that start warm (a bath, initial fields) move the gap between the nodes faster than any
     # rate seen at a step boundary: the bound on their acceleration limits the step (_warm_step_limit)
-    warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm else 0.0
+    warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm is not None else 0.0
     # the gap's round-off: a hard contact's active set cannot settle below it (V T_long, see _solve_hard)
-    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact else 0.0
+    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact is not None else 0.0
 
     # state at the start (or where the last call stopped)
     sq = 0.0
@@ -604,7 +624,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     rigid_gap = X[1] - half[1] - X[0] - half[0]
     rigid_rate = U[1] - U[0]
     impulse_total = 0.0
-    if exact:
+    if exact is not None:
         n_rec = counters[5]
         if n_rec > 0:
             impulse_total, _ = _history_at(records[n_rec - 1, 0] + records[n_rec - 1, 1], records, n_rec)
@@ -612,35 +632,35 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             ends[10] = rigid_gap + sq  # no force yet: the kept modes' gap is the true one
         sq = ends[10] - rigid_gap
         sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, n_rec) - rigid_rate
-    if exact and counters[5] > 0:
+    if exact is not None and counters[5] > 0:
         _, force_now = _history_at(clock[0], records, counters[5])
         k_now = 0.0
-    elif hard:
+    elif hard is not None:
         force_now = 0.0  # the first step's solve finds it (a start at zero gap may round to -1e-16)
         k_now = 0.0
     else:
         force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
     if not math.isfinite(force_now):
         return STATUS_NOT_FINITE
-    if exact:
+    if exact is not None:
         sv += zeta * force_now
     have_previous = False
     h_previous = 1.0
-    travel = (zeta * force_scale if exact else abs(rigid_rate)) * h_top  # the top step's length scale
+    travel = (zeta * force_scale if exact is not None else abs(rigid_rate)) * h_top  # the top step's length
     # first step from the contact's rate
     # (alpha is a rate per length for the exponential law only; the other laws carry a placeholder)
     approach = alpha * abs(rigid_rate + sv) if law == LAW_EXPONENTIAL else 0.0
-    if exact:
+    if exact is not None:
         rate = approach + (zeta * k_now if math.isfinite(k_now) else 0.0)
     else:
         rate = approach + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
     h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
-    if warm:
+    if warm is not None:
         h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
-                                                  ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
-                                                  force_now, warm_accel, travel))
+                                                  ends[10] if exact is not None else rigid_gap + sq,
+                                                  rigid_rate + sv, force_now, warm_accel, travel))
     h_wanted = min(h_wanted, h_sample)
-    if free_steps:
+    if free_steps is not None:
         # the force provably negligible over a longer step: no need to feel the way in from the contact's rate
         _free_amplitudes(q, v, omega, coupling, free_work)
         amplitudes_now = True
@@ -662,7 +682,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             return STATUS_RUNNING
         if recording and counters[2] + s > history.shape[0]:
             return STATUS_BUFFER_FULL
-        if exact and counters[5] >= records.shape[0]:
+        if exact is not None and counters[5] >= records.shape[0]:
             return STATUS_RECORDS_FULL
         if level >= n_levels:
             return STATUS_STEP_UNDERFLOW
@@ -671,10 +691,10 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables)
             counters[3] += 1
         # free gap at the nodes (no force over the step) and its response to the node forces
-        if exact:
+        if exact is not None:
             # increments from the gap now (small terms only, see _impulse_increment)
             kept_now = 0.0
-            if warm:
+            if warm is not None:
                 for j in range(n_modes):
                     kept_now += coupling[j] * free_q[j]
             for i in range(s):
@@ -685,14 +705,14 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                     step_response[i, m] = zeta * h * integral[i, m]
             mode_q = free_q
             mode_v = free_v
-        else:
+        elif truncated is not None:
             for i in range(s):
                 free_gap[i] = rigid_gap + rigid_rate * nodes[i] * h
                 for m in range(s):
                     step_response[i, m] = response[level, i, m]
             mode_q = q
             mode_v = v
-        if (warm or not exact) and s == 6:
+        if (warm is not None or truncated is not None) and s == 6:
             # the six stages (the default) in one pass over the modes: six independent sums, each node's in its
             # order (the same arithmetic as the passes below)
             c0, c1, c2, c3, c4, c5 = (node_cos[level, 0], node_cos[level, 1], node_cos[level, 2], node_cos[level, 3],
@@ -715,7 +735,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             free_gap[3] += total3
             free_gap[4] += total4
             free_gap[5] += total5
-        elif warm or not exact:
+        elif warm is not None or truncated is not None:
             for j in range(n_modes):
                 cq[j] = coupling[j] * mode_q[j]
                 cv[j] = coupling[j] * mode_v[j]
@@ -756,11 +776,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 predicted[i] = force_now
             forces[i] = max(predicted[i], 0.0)
         # the s node forces
-        if law == LAW_EXPONENTIAL:
-            converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
-                                          force_scale, forces, (residual, delta, matrix, rhs), counters,
-                                          quick_newton)
-        elif hard:
+        if hard is not None:
             converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
                                     active, matrix, delta, counters)
             if not converged and gap_floor > 1e-10 * zeta * h * force_scale:
@@ -768,9 +784,13 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 # relative to the step alone (V h) lies below it: the active set then cycles on noise
                 converged = _solve_hard(free_gap, step_response, predicted, gap_floor, forces, active, matrix,
                                         delta, counters)
-        else:
+        elif generic is not None:
             converged = _newton_forces(free_gap, step_response, contact_law, force_scale, forces,
                                        (residual, stiff, delta, matrix), counters)
+        else:  # the exponential law
+            converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
+                                          force_scale, forces, (residual, delta, matrix, rhs), counters,
+                                          quick_newton)
         if not converged:
             level += 4
             continue
@@ -784,7 +804,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         if error > 1.0 and level < n_levels - 1:
             shrink = math.log(1.1 * error ** (1.0 / s)) / log_ratio
             level += max(1, int(math.ceil(shrink)))  # noqa: RUF046
-            if hard:
+            if hard is not None:
                 # a jump of the hard contact's force never passes the test: take it at the smallest step
                 level = min(level, n_levels - 1)
             counters[1] += 1
@@ -839,7 +859,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             v[j] = vn
             sq += coupling[j] * qn
             sv += coupling[j] * vn
-        if exact and warm:
+        if exact is not None and warm is not None:
             for j in range(n_modes):
                 c = e_cos[j]
                 qj = free_q[j]
@@ -850,7 +870,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         for k in range(s):
             impulse += coefficients[k] * h / (k + 1)
             moment += coefficients[k] * h * h / ((k + 1) * (k + 2))
-        if exact:
+        if exact is not None:
             n_rec = counters[5]
             records[n_rec, 0] = clock[0]
             records[n_rec, 1] = h
@@ -883,14 +903,14 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         h_previous = h
         have_previous = True
         force_now = forces[s - 1]
-        if free_steps:
+        if free_steps is not None:
             for i in range(s):
                 forces_seen = max(forces_seen, forces[i])
         counters[0] += 1
         steps_here += 1
         rigid_gap = X[1] - half[1] - X[0] - half[0]
         rigid_rate = U[1] - U[0]
-        if exact:
+        if exact is not None:
             # the true end motion (all modes) instead of the kept ones
             gap_end = free_gap[s - 1]
             for m in range(s):
@@ -907,7 +927,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 reach += abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
                 if rigid_gap - reach <= contact_range:
                     break  # the sum of non-negative terms only grows: the test below fails either way
-            if exact:
+            if exact is not None:
                 reach += _omitted_reach(q, v, omega, U, mass, ends)
             if rigid_gap - reach > contact_range:
                 return STATUS_SEPARATED
@@ -922,11 +942,11 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             room = exponent_step + max(0.0, -math.log(force_now / force_scale) - onset_efolds)
             if rate * h_wanted > room:
                 h_wanted = room / rate
-        if warm:
+        if warm is not None:
             h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
-                                                      ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
-                                                      force_now, warm_accel, travel))
-        if free_steps and (h_wanted > h_sample or error <= 1e-12):
+                                                      ends[10] if exact is not None else rigid_gap + sq,
+                                                      rigid_rate + sv, force_now, warm_accel, travel))
+        if free_steps is not None and (h_wanted > h_sample or error <= 1e-12):
             # longer than the sampling step only where the force provably stays negligible: try twice this
             # step (the error estimate has nothing to say about a force of zero) and two rungs below it
             if forces_seen > 1e-30 * force_scale:
@@ -955,7 +975,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         elif h_wanted > h_sample:
             h_wanted = h_sample
         level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
-        if hard:
+        if hard is not None:
             level = min(level, n_levels - 1)
 
 
@@ -1034,9 +1054,10 @@ def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate
 
 @kernel(error_model="numpy")
 def _exact_rate(t, ends, coupling, free_v, warm, records, count):
-    """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``."""
+    """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``
+    (``warm``: True with warm kept modes, else None)."""
     rate = ends[7] + _echo_force(t, ends, records, count)
-    if warm:
+    if warm is not None:
         for j in range(free_v.size):
             rate += coupling[j] * free_v[j]
     return rate
