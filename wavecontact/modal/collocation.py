@@ -101,13 +101,15 @@ def _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables):
     s = nodes.size
     re = np.empty(s + 1)
     im = np.empty(s + 1)
-    factorials = np.ones(s)
+    factorials = np.empty(s)
+    factorials[0] = 1.0
     for k in range(1, s):
         factorials[k] = factorials[k - 1] * k
-    inverse_factorial = np.ones(s + _TAYLOR_TERMS + 1)
+    inverse_factorial = np.empty(s + _TAYLOR_TERMS + 1)
+    inverse_factorial[0] = 1.0
     for n in range(1, inverse_factorial.size):
         inverse_factorial[n] = inverse_factorial[n - 1] / n
-    g = np.zeros((s, s))  # gap at node i per monomial coefficient k of the force
+    g = np.empty((s, s))  # gap at node i per monomial coefficient k of the force (every entry set below)
     for i in range(s):
         for k in range(s):
             g[i, k] = inverse_mass_rigid * h * h * nodes[i] ** (k + 2) / ((k + 1) * (k + 2))
@@ -539,7 +541,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     exact = ends[0] > 0.0
     exponential = law == LAW_EXPONENTIAL
     hard = not exponential and stiffness == math.inf and compliance <= 0.0
-    warm = bool(np.any(free_q) or np.any(free_v))  # a kept mode not at rest (the test `!= 0.0` on each)
+    warm = np.count_nonzero(free_q) > 0 or np.count_nonzero(free_v) > 0  # a kept mode not at rest (`!= 0.0`)
     return _run_collision((modes, rigid), (contact_law, control), tables, exact_ends, output,
                           True if exact else None, None if exact else True, True if warm else None,
                           True if hard else None, None if exponential or hard else True,
@@ -587,28 +589,32 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     free_gap = np.empty(s)
     forces = np.empty(s)
     predicted = np.empty(s)
-    stiff = np.empty(s)
     residual = np.empty(s)
     delta = np.empty(s)
     rhs = np.empty(s)
     matrix = np.empty((s, s))
     coefficients = np.empty(s)
-    previous = np.zeros(s)
+    previous = np.empty(s)  # read only once a step was accepted (have_previous)
     cq = np.empty(n_modes)
     cv = np.empty(n_modes)
     load_q = np.empty(n_modes)
     load_v = np.empty(n_modes)
-    active = np.zeros(s, dtype=np.bool_)
     step_response = np.empty((s, s))
     # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
     # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
-    integral = np.zeros((s, s))
+    integral = np.empty((s, s))
     for i in range(s):
         for m in range(s):
             power = nodes[i]
+            total = 0.0
             for k in range(s):
-                integral[i, m] += vinv[k, m] * power / (k + 1)
+                total += vinv[k, m] * power / (k + 1)
                 power *= nodes[i]
+            integral[i, m] = total
+    if hard is not None:
+        active = np.empty(s, dtype=np.bool_)  # every entry set by _solve_hard before it is read
+    if generic is not None:
+        stiff = np.empty(s)
     # modes that start warm (a bath, initial fields) move the gap between the nodes faster than any
     # rate seen at a step boundary: the bound on their acceleration limits the step (_warm_step_limit)
     warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm is not None else 0.0
