@@ -461,7 +461,7 @@ def _echo_force(t, ends, records, count):
     return force
 
 
-def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output):
+def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output, both_ends=False):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
 
     The arguments are tuples: ``modes = (q, v, omega, coupling)``, ``rigid = (X, U, mass, half)``,
@@ -533,6 +533,9 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     onset_efolds : float
         Exponential law: the step changes ``alpha_eff * gap`` by at most ``exponent_step`` once the force
         is within this many e-folds of ``force_scale`` (30: the single collisions), by that much more below.
+    both_ends : bool
+        Compile one kernel for calls with and without exact ends (for a caller that makes both, such as the
+        modal solver's corrections); False compiles the kernel for this call's kind alone.
     """
     # which parts of the kernel this call runs: each one it does not is passed as None, and numba compiles
     # the kernel without it (a flag passed as True keeps both sides of its test, hence two flags for exact ends)
@@ -543,7 +546,8 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     hard = not exponential and stiffness == math.inf and compliance <= 0.0
     warm = np.count_nonzero(free_q) > 0 or np.count_nonzero(free_v) > 0  # a kept mode not at rest (`!= 0.0`)
     return _run_collision((modes, rigid), (contact_law, control), tables, exact_ends, output,
-                          True if exact else None, None if exact else True, True if warm else None,
+                          True if exact or both_ends else None, None if exact and not both_ends else True,
+                          True if warm else None,
                           True if hard else None, None if exponential or hard else True,
                           True if tables[-1] > 0 and exponential and not exact else None)
 
@@ -553,8 +557,8 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     """:func:`run_collision` with the parts a call does not run passed as None, so that numba compiles it without them.
 
     ``bodies = (modes, rigid)``, ``settings = (contact_law, control)``, the other tuples as in
-    :func:`run_collision`.  Flags, True or None: ``exact`` with exact ends (``ends[0] > 0``), ``truncated``
-    without; ``warm``: a kept mode does not start at rest (``free_q``, ``free_v`` not all zero); ``hard``: a
+    :func:`run_collision`.  Flags, True or None: ``exact`` where the call may have exact ends (``ends[0] > 0``),
+    ``truncated`` where it may have none (both True: one kernel for both, decided by ``ends[0]``); ``warm``: a kept mode does not start at rest (``free_q``, ``free_v`` not all zero); ``hard``: a
     hard contact without compliance (:func:`_solve_hard`), ``generic``: a law solved by :func:`_newton_forces`
     (both None: the exponential law, :func:`_newton_log_force`); ``free_steps``: steps above the sampling step
     where the force provably stays negligible (``free_rungs > 0``, exponential law, no exact ends).
@@ -585,6 +589,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
     recording = history.shape[0] > 0
     zeta = ends[0]
+    exact_now = zeta > 0.0  # exact ends in this call (both flags True: decided here)
 
     free_gap = np.empty(s)
     forces = np.empty(s)
@@ -619,7 +624,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     # rate seen at a step boundary: the bound on their acceleration limits the step (_warm_step_limit)
     warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm is not None else 0.0
     # the gap's round-off: a hard contact's active set cannot settle below it (V T_long, see _solve_hard)
-    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact is not None else 0.0
+    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact is not None and exact_now else 0.0
 
     # state at the start (or where the last call stopped)
     sq = 0.0
@@ -630,7 +635,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     rigid_gap = X[1] - half[1] - X[0] - half[0]
     rigid_rate = U[1] - U[0]
     impulse_total = 0.0
-    if exact is not None:
+    if exact is not None and exact_now:
         n_rec = counters[5]
         if n_rec > 0:
             impulse_total, _ = _history_at(records[n_rec - 1, 0] + records[n_rec - 1, 1], records, n_rec)
@@ -638,7 +643,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             ends[10] = rigid_gap + sq  # no force yet: the kept modes' gap is the true one
         sq = ends[10] - rigid_gap
         sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, n_rec) - rigid_rate
-    if exact is not None and counters[5] > 0:
+    if exact is not None and exact_now and counters[5] > 0:
         _, force_now = _history_at(clock[0], records, counters[5])
         k_now = 0.0
     elif hard is not None:
@@ -648,22 +653,22 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
         force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
     if not math.isfinite(force_now):
         return STATUS_NOT_FINITE
-    if exact is not None:
+    if exact is not None and exact_now:
         sv += zeta * force_now
     have_previous = False
     h_previous = 1.0
-    travel = (zeta * force_scale if exact is not None else abs(rigid_rate)) * h_top  # the top step's length
+    travel = (zeta * force_scale if exact is not None and exact_now else abs(rigid_rate)) * h_top  # the top step's length
     # first step from the contact's rate
     # (alpha is a rate per length for the exponential law only; the other laws carry a placeholder)
     approach = alpha * abs(rigid_rate + sv) if law == LAW_EXPONENTIAL else 0.0
-    if exact is not None:
+    if exact is not None and exact_now:
         rate = approach + (zeta * k_now if math.isfinite(k_now) else 0.0)
     else:
         rate = approach + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
     h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
     if warm is not None:
         h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
-                                                  ends[10] if exact is not None else rigid_gap + sq,
+                                                  ends[10] if exact is not None and exact_now else rigid_gap + sq,
                                                   rigid_rate + sv, force_now, warm_accel, travel))
     h_wanted = min(h_wanted, h_sample)
     if free_steps is not None:
@@ -688,7 +693,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             return STATUS_RUNNING
         if recording and counters[2] + s > history.shape[0]:
             return STATUS_BUFFER_FULL
-        if exact is not None and counters[5] >= records.shape[0]:
+        if exact is not None and exact_now and counters[5] >= records.shape[0]:
             return STATUS_RECORDS_FULL
         if level >= n_levels:
             return STATUS_STEP_UNDERFLOW
@@ -697,7 +702,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables)
             counters[3] += 1
         # free gap at the nodes (no force over the step) and its response to the node forces
-        if exact is not None:
+        if exact is not None and exact_now:
             # increments from the gap now (small terms only, see _impulse_increment)
             kept_now = 0.0
             if warm is not None:
@@ -711,14 +716,14 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
                     step_response[i, m] = zeta * h * integral[i, m]
             mode_q = free_q
             mode_v = free_v
-        elif truncated is not None:
+        elif truncated is not None and not exact_now:
             for i in range(s):
                 free_gap[i] = rigid_gap + rigid_rate * nodes[i] * h
                 for m in range(s):
                     step_response[i, m] = response[level, i, m]
             mode_q = q
             mode_v = v
-        if (warm is not None or truncated is not None) and s == 6:
+        if (warm is not None or truncated is not None and not exact_now) and s == 6:
             # the six stages (the default) in one pass over the modes: six independent sums, each node's in its
             # order (the same arithmetic as the passes below)
             c0, c1, c2, c3, c4, c5 = (node_cos[level, 0], node_cos[level, 1], node_cos[level, 2], node_cos[level, 3],
@@ -741,7 +746,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             free_gap[3] += total3
             free_gap[4] += total4
             free_gap[5] += total5
-        elif warm is not None or truncated is not None:
+        elif warm is not None or truncated is not None and not exact_now:
             for j in range(n_modes):
                 cq[j] = coupling[j] * mode_q[j]
                 cv[j] = coupling[j] * mode_v[j]
@@ -865,7 +870,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             v[j] = vn
             sq += coupling[j] * qn
             sv += coupling[j] * vn
-        if exact is not None and warm is not None:
+        if exact is not None and exact_now and warm is not None:
             for j in range(n_modes):
                 c = e_cos[j]
                 qj = free_q[j]
@@ -876,7 +881,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
         for k in range(s):
             impulse += coefficients[k] * h / (k + 1)
             moment += coefficients[k] * h * h / ((k + 1) * (k + 2))
-        if exact is not None:
+        if exact is not None and exact_now:
             n_rec = counters[5]
             records[n_rec, 0] = clock[0]
             records[n_rec, 1] = h
@@ -916,7 +921,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
         steps_here += 1
         rigid_gap = X[1] - half[1] - X[0] - half[0]
         rigid_rate = U[1] - U[0]
-        if exact is not None:
+        if exact is not None and exact_now:
             # the true end motion (all modes) instead of the kept ones
             gap_end = free_gap[s - 1]
             for m in range(s):
@@ -933,7 +938,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
                 reach += abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
                 if rigid_gap - reach <= contact_range:
                     break  # the sum of non-negative terms only grows: the test below fails either way
-            if exact is not None:
+            if exact is not None and exact_now:
                 reach += _omitted_reach(q, v, omega, U, mass, ends)
             if rigid_gap - reach > contact_range:
                 return STATUS_SEPARATED
@@ -950,7 +955,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
                 h_wanted = room / rate
         if warm is not None:
             h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
-                                                      ends[10] if exact is not None else rigid_gap + sq,
+                                                      ends[10] if exact is not None and exact_now else rigid_gap + sq,
                                                       rigid_rate + sv, force_now, warm_accel, travel))
         if free_steps is not None and (h_wanted > h_sample or error <= 1e-12):
             # longer than the sampling step only where the force provably stays negligible: try twice this
