@@ -101,13 +101,15 @@ def _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables):
     s = nodes.size
     re = np.empty(s + 1)
     im = np.empty(s + 1)
-    factorials = np.ones(s)
+    factorials = np.empty(s)
+    factorials[0] = 1.0
     for k in range(1, s):
         factorials[k] = factorials[k - 1] * k
-    inverse_factorial = np.ones(s + _TAYLOR_TERMS + 1)
+    inverse_factorial = np.empty(s + _TAYLOR_TERMS + 1)
+    inverse_factorial[0] = 1.0
     for n in range(1, inverse_factorial.size):
         inverse_factorial[n] = inverse_factorial[n - 1] / n
-    g = np.zeros((s, s))  # gap at node i per monomial coefficient k of the force
+    g = np.empty((s, s))  # gap at node i per monomial coefficient k of the force (every entry set below)
     for i in range(s):
         for k in range(s):
             g[i, k] = inverse_mass_rigid * h * h * nodes[i] ** (k + 2) / ((k + 1) * (k + 2))
@@ -459,8 +461,7 @@ def _echo_force(t, ends, records, count):
     return force
 
 
-@kernel(error_model="numpy")
-def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output):
+def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output, both_ends=False):
     """Integrate one collision of rod 0 (left) and rod 1 (right) until they separate for good.
 
     The arguments are tuples: ``modes = (q, v, omega, coupling)``, ``rigid = (X, U, mass, half)``,
@@ -532,7 +533,38 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     onset_efolds : float
         Exponential law: the step changes ``alpha_eff * gap`` by at most ``exponent_step`` once the force
         is within this many e-folds of ``force_scale`` (30: the single collisions), by that much more below.
+    both_ends : bool
+        Compile one kernel for calls with and without exact ends (for a caller that makes both, such as the
+        modal solver's corrections); False compiles the kernel for this call's kind alone.
     """
+    # which parts of the kernel this call runs: each one it does not is passed as None, and numba compiles
+    # the kernel without it (a flag passed as True keeps both sides of its test, hence two flags for exact ends)
+    ends, free_q, free_v, _ = exact_ends
+    law, _, _, stiffness, compliance = contact_law
+    exact = ends[0] > 0.0
+    exponential = law == LAW_EXPONENTIAL
+    hard = not exponential and stiffness == math.inf and compliance <= 0.0
+    warm = np.count_nonzero(free_q) > 0 or np.count_nonzero(free_v) > 0  # a kept mode not at rest (`!= 0.0`)
+    return _run_collision((modes, rigid), (contact_law, control), tables, exact_ends, output,
+                          True if exact or both_ends else None, None if exact and not both_ends else True,
+                          True if warm else None,
+                          True if hard else None, None if exponential or hard else True,
+                          True if tables[-1] > 0 and exponential and not exact else None)
+
+
+@kernel(error_model="numpy")
+def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncated, warm, hard, generic, free_steps):
+    """:func:`run_collision` with the parts a call does not run passed as None, so that numba compiles it without them.
+
+    ``bodies = (modes, rigid)``, ``settings = (contact_law, control)``, the other tuples as in
+    :func:`run_collision`.  Flags, True or None: ``exact`` where the call may have exact ends (``ends[0] > 0``),
+    ``truncated`` where it may have none (both True: one kernel for both, decided by ``ends[0]``); ``warm``: a kept mode does not start at rest (``free_q``, ``free_v`` not all zero); ``hard``: a
+    hard contact without compliance (:func:`_solve_hard`), ``generic``: a law solved by :func:`_newton_forces`
+    (both None: the exponential law, :func:`_newton_log_force`); ``free_steps``: steps above the sampling step
+    where the force provably stays negligible (``free_rungs > 0``, exponential law, no exact ends).
+    """
+    modes, rigid = bodies
+    contact_law, control = settings
     q, v, omega, coupling = modes
     X, U, mass, half = rigid
     law, alpha, strength, stiffness, compliance = contact_law
@@ -547,53 +579,52 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     log_ratio = math.log(ladder_ratio)
     # the largest step that samples the gap finely enough; longer ones need _free_fall's proof
     h_sample = h_top * math.exp(-free_rungs * log_ratio)
-    free_steps = free_rungs > 0 and law == LAW_EXPONENTIAL and ends[0] <= 0.0
-    free_work = np.empty(n_modes if free_steps else 0)
+    free_work = np.empty(n_modes if free_steps is not None else 0)
     amplitudes_now = False  # free_work holds the amplitudes of the modes' shares of the gap now
     forces_seen = 0.0  # largest node force since free_work was filled
     # the kept modes' gap at which the force (a compliance in series only lowers it) is exp(-30 + exponent_step)
     # of force_scale: a step over which the gap provably stays above it cannot miss a touch between its nodes
-    free_gap_lowest = (30.0 - exponent_step + math.log(alpha * strength / force_scale)) / alpha if free_steps else 0.0
+    free_gap_lowest = ((30.0 - exponent_step + math.log(alpha * strength / force_scale)) / alpha
+                       if free_steps is not None else 0.0)
     inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
     recording = history.shape[0] > 0
     zeta = ends[0]
-    exact = zeta > 0.0
-    hard = law != LAW_EXPONENTIAL and stiffness == math.inf and compliance <= 0.0
+    exact_now = zeta > 0.0  # exact ends in this call (both flags True: decided here)
 
     free_gap = np.empty(s)
     forces = np.empty(s)
     predicted = np.empty(s)
-    stiff = np.empty(s)
     residual = np.empty(s)
     delta = np.empty(s)
     rhs = np.empty(s)
     matrix = np.empty((s, s))
     coefficients = np.empty(s)
-    previous = np.zeros(s)
+    previous = np.empty(s)  # read only once a step was accepted (have_previous)
     cq = np.empty(n_modes)
     cv = np.empty(n_modes)
     load_q = np.empty(n_modes)
     load_v = np.empty(n_modes)
-    active = np.zeros(s, dtype=np.bool_)
     step_response = np.empty((s, s))
     # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
     # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
-    integral = np.zeros((s, s))
+    integral = np.empty((s, s))
     for i in range(s):
         for m in range(s):
             power = nodes[i]
+            total = 0.0
             for k in range(s):
-                integral[i, m] += vinv[k, m] * power / (k + 1)
+                total += vinv[k, m] * power / (k + 1)
                 power *= nodes[i]
-    warm = False
-    for j in range(n_modes):
-        if free_q[j] != 0.0 or free_v[j] != 0.0:
-            warm = True
+            integral[i, m] = total
+    if hard is not None:
+        active = np.empty(s, dtype=np.bool_)  # every entry set by _solve_hard before it is read
+    if generic is not None:
+        stiff = np.empty(s)
     # modes that start warm (a bath, initial fields) move the gap between the nodes faster than any
     # rate seen at a step boundary: the bound on their acceleration limits the step (_warm_step_limit)
-    warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm else 0.0
+    warm_accel = _free_acceleration_bound(coupling, omega, free_q, free_v) if warm is not None else 0.0
     # the gap's round-off: a hard contact's active set cannot settle below it (V T_long, see _solve_hard)
-    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact else 0.0
+    gap_floor = 1e-12 * zeta * force_scale * max(ends[3], ends[4]) if exact is not None and exact_now else 0.0
 
     # state at the start (or where the last call stopped)
     sq = 0.0
@@ -604,7 +635,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     rigid_gap = X[1] - half[1] - X[0] - half[0]
     rigid_rate = U[1] - U[0]
     impulse_total = 0.0
-    if exact:
+    if exact is not None and exact_now:
         n_rec = counters[5]
         if n_rec > 0:
             impulse_total, _ = _history_at(records[n_rec - 1, 0] + records[n_rec - 1, 1], records, n_rec)
@@ -612,35 +643,35 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             ends[10] = rigid_gap + sq  # no force yet: the kept modes' gap is the true one
         sq = ends[10] - rigid_gap
         sv = _exact_rate(clock[0], ends, coupling, free_v, warm, records, n_rec) - rigid_rate
-    if exact and counters[5] > 0:
+    if exact is not None and exact_now and counters[5] > 0:
         _, force_now = _history_at(clock[0], records, counters[5])
         k_now = 0.0
-    elif hard:
+    elif hard is not None:
         force_now = 0.0  # the first step's solve finds it (a start at zero gap may round to -1e-16)
         k_now = 0.0
     else:
         force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
     if not math.isfinite(force_now):
         return STATUS_NOT_FINITE
-    if exact:
+    if exact is not None and exact_now:
         sv += zeta * force_now
     have_previous = False
     h_previous = 1.0
-    travel = (zeta * force_scale if exact else abs(rigid_rate)) * h_top  # the top step's length scale
+    travel = (zeta * force_scale if exact is not None and exact_now else abs(rigid_rate)) * h_top  # the top step's length
     # first step from the contact's rate
     # (alpha is a rate per length for the exponential law only; the other laws carry a placeholder)
     approach = alpha * abs(rigid_rate + sv) if law == LAW_EXPONENTIAL else 0.0
-    if exact:
+    if exact is not None and exact_now:
         rate = approach + (zeta * k_now if math.isfinite(k_now) else 0.0)
     else:
         rate = approach + math.sqrt(max(k_now, 0.0) * inverse_mass_rigid)
     h_wanted = h_top if rate * h_top <= 0.1 else 0.1 / rate
-    if warm:
+    if warm is not None:
         h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
-                                                  ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
-                                                  force_now, warm_accel, travel))
+                                                  ends[10] if exact is not None and exact_now else rigid_gap + sq,
+                                                  rigid_rate + sv, force_now, warm_accel, travel))
     h_wanted = min(h_wanted, h_sample)
-    if free_steps:
+    if free_steps is not None:
         # the force provably negligible over a longer step: no need to feel the way in from the contact's rate
         _free_amplitudes(q, v, omega, coupling, free_work)
         amplitudes_now = True
@@ -662,7 +693,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             return STATUS_RUNNING
         if recording and counters[2] + s > history.shape[0]:
             return STATUS_BUFFER_FULL
-        if exact and counters[5] >= records.shape[0]:
+        if exact is not None and exact_now and counters[5] >= records.shape[0]:
             return STATUS_RECORDS_FULL
         if level >= n_levels:
             return STATUS_STEP_UNDERFLOW
@@ -671,10 +702,10 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables)
             counters[3] += 1
         # free gap at the nodes (no force over the step) and its response to the node forces
-        if exact:
+        if exact is not None and exact_now:
             # increments from the gap now (small terms only, see _impulse_increment)
             kept_now = 0.0
-            if warm:
+            if warm is not None:
                 for j in range(n_modes):
                     kept_now += coupling[j] * free_q[j]
             for i in range(s):
@@ -685,14 +716,14 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                     step_response[i, m] = zeta * h * integral[i, m]
             mode_q = free_q
             mode_v = free_v
-        else:
+        elif truncated is not None and not exact_now:
             for i in range(s):
                 free_gap[i] = rigid_gap + rigid_rate * nodes[i] * h
                 for m in range(s):
                     step_response[i, m] = response[level, i, m]
             mode_q = q
             mode_v = v
-        if (warm or not exact) and s == 6:
+        if (warm is not None or truncated is not None and not exact_now) and s == 6:
             # the six stages (the default) in one pass over the modes: six independent sums, each node's in its
             # order (the same arithmetic as the passes below)
             c0, c1, c2, c3, c4, c5 = (node_cos[level, 0], node_cos[level, 1], node_cos[level, 2], node_cos[level, 3],
@@ -715,7 +746,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             free_gap[3] += total3
             free_gap[4] += total4
             free_gap[5] += total5
-        elif warm or not exact:
+        elif warm is not None or truncated is not None and not exact_now:
             for j in range(n_modes):
                 cq[j] = coupling[j] * mode_q[j]
                 cv[j] = coupling[j] * mode_v[j]
@@ -756,11 +787,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 predicted[i] = force_now
             forces[i] = max(predicted[i], 0.0)
         # the s node forces
-        if law == LAW_EXPONENTIAL:
-            converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
-                                          force_scale, forces, (residual, delta, matrix, rhs), counters,
-                                          quick_newton)
-        elif hard:
+        if hard is not None:
             converged = _solve_hard(free_gap, step_response, predicted, 1e-10 * zeta * h * force_scale, forces,
                                     active, matrix, delta, counters)
             if not converged and gap_floor > 1e-10 * zeta * h * force_scale:
@@ -768,9 +795,13 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 # relative to the step alone (V h) lies below it: the active set then cycles on noise
                 converged = _solve_hard(free_gap, step_response, predicted, gap_floor, forces, active, matrix,
                                         delta, counters)
-        else:
+        elif generic is not None:
             converged = _newton_forces(free_gap, step_response, contact_law, force_scale, forces,
                                        (residual, stiff, delta, matrix), counters)
+        else:  # the exponential law
+            converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
+                                          force_scale, forces, (residual, delta, matrix, rhs), counters,
+                                          quick_newton)
         if not converged:
             level += 4
             continue
@@ -784,7 +815,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         if error > 1.0 and level < n_levels - 1:
             shrink = math.log(1.1 * error ** (1.0 / s)) / log_ratio
             level += max(1, int(math.ceil(shrink)))  # noqa: RUF046
-            if hard:
+            if hard is not None:
                 # a jump of the hard contact's force never passes the test: take it at the smallest step
                 level = min(level, n_levels - 1)
             counters[1] += 1
@@ -839,7 +870,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             v[j] = vn
             sq += coupling[j] * qn
             sv += coupling[j] * vn
-        if exact and warm:
+        if exact is not None and exact_now and warm is not None:
             for j in range(n_modes):
                 c = e_cos[j]
                 qj = free_q[j]
@@ -850,7 +881,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         for k in range(s):
             impulse += coefficients[k] * h / (k + 1)
             moment += coefficients[k] * h * h / ((k + 1) * (k + 2))
-        if exact:
+        if exact is not None and exact_now:
             n_rec = counters[5]
             records[n_rec, 0] = clock[0]
             records[n_rec, 1] = h
@@ -883,14 +914,14 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         h_previous = h
         have_previous = True
         force_now = forces[s - 1]
-        if free_steps:
+        if free_steps is not None:
             for i in range(s):
                 forces_seen = max(forces_seen, forces[i])
         counters[0] += 1
         steps_here += 1
         rigid_gap = X[1] - half[1] - X[0] - half[0]
         rigid_rate = U[1] - U[0]
-        if exact:
+        if exact is not None and exact_now:
             # the true end motion (all modes) instead of the kept ones
             gap_end = free_gap[s - 1]
             for m in range(s):
@@ -907,7 +938,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
                 reach += abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
                 if rigid_gap - reach <= contact_range:
                     break  # the sum of non-negative terms only grows: the test below fails either way
-            if exact:
+            if exact is not None and exact_now:
                 reach += _omitted_reach(q, v, omega, U, mass, ends)
             if rigid_gap - reach > contact_range:
                 return STATUS_SEPARATED
@@ -922,11 +953,11 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
             room = exponent_step + max(0.0, -math.log(force_now / force_scale) - onset_efolds)
             if rate * h_wanted > room:
                 h_wanted = room / rate
-        if warm:
+        if warm is not None:
             h_wanted = min(h_wanted, _warm_step_limit(law, alpha, strength, force_scale, exponent_step,
-                                                      ends[10] if exact else rigid_gap + sq, rigid_rate + sv,
-                                                      force_now, warm_accel, travel))
-        if free_steps and (h_wanted > h_sample or error <= 1e-12):
+                                                      ends[10] if exact is not None and exact_now else rigid_gap + sq,
+                                                      rigid_rate + sv, force_now, warm_accel, travel))
+        if free_steps is not None and (h_wanted > h_sample or error <= 1e-12):
             # longer than the sampling step only where the force provably stays negligible: try twice this
             # step (the error estimate has nothing to say about a force of zero) and two rungs below it
             if forces_seen > 1e-30 * force_scale:
@@ -955,7 +986,7 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         elif h_wanted > h_sample:
             h_wanted = h_sample
         level = max(0, int(math.ceil(math.log(h_top / h_wanted) / log_ratio - 1e-9)))  # noqa: RUF046
-        if hard:
+        if hard is not None:
             level = min(level, n_levels - 1)
 
 
@@ -1034,9 +1065,10 @@ def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate
 
 @kernel(error_model="numpy")
 def _exact_rate(t, ends, coupling, free_v, warm, records, count):
-    """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``."""
+    """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``
+    (``warm``: True with warm kept modes, else None)."""
     rate = ends[7] + _echo_force(t, ends, records, count)
-    if warm:
+    if warm is not None:
         for j in range(free_v.size):
             rate += coupling[j] * free_v[j]
     return rate

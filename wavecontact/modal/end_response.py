@@ -83,7 +83,7 @@ def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
     task_start = np.empty(128, dtype=np.int64)
     task_count = np.empty(128, dtype=np.int64)  # -1: add the two sums on top of the value stack
     sums = np.empty(64)
-    steps = np.zeros(2, dtype=np.int64)
+    steps = np.empty(2, dtype=np.int64)
     forces = np.empty(2)
     for n in range(first_lag, lags + 1):
         shift = n * trip
@@ -111,7 +111,9 @@ def _autocorrelation_sum(records, trip, first_lag, lags, nodes, weights, total):
         if size < 2:
             continue
         used = 0
-        steps[:] = 0  # last step that begins at or before t and t + shift (numpy's searchsorted, right, - 1)
+        # last step that begins at or before t and t + shift (numpy's searchsorted, right, - 1)
+        steps[0] = 0
+        steps[1] = 0
         for piece in range(size - 1):
             left = edges[piece]
             half = (edges[piece + 1] - left) * 0.5

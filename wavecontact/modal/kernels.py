@@ -221,7 +221,7 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
 
 
 @kernel(error_model="numpy")
-def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_steps):
+def run_episode(modes, bodies, pairs, contact_law, control, tables, output, history, max_steps):
     """Integrate until the current collision (episode) is over.
 
     All arrays are modified in place where they hold state.  The arguments are tuples:
@@ -229,7 +229,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
     ``pairs = (pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass)``,
     ``contact_law = (law, alpha, strength, stiffness, contact_range)``, ``control = (step_accuracy,
     step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight)``, ``tables = (cos_table,
-    sin_table, omega_sin_table)``, ``output = (clock, episode, counters, history)``; their entries are:
+    sin_table, omega_sin_table)``, ``output = (clock, episode, counters)``; their entries are:
 
     Parameters
     ----------
@@ -267,9 +267,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
         Pair of the collision under way, -1 before it starts.
     counters : int array (4,)
         Steps, free-flight skips, history length, history capacity use flag.
-    history : float array (H, 3)
-        Records ``(time, rigid gap rate, force)`` of the episode's pair; H = 0
-        records nothing.
+    history : float array (H, 3) or None
+        Records ``(time, rigid gap rate, force)`` of the episode's pair; None (or H = 0)
+        records nothing (None: numba compiles the kernel without the recording).
     max_steps : int
         Return after this many steps (status 0).
 
@@ -284,11 +284,13 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
     law, alpha, strength, stiffness, contact_range = contact_law
     step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight = control
     cos_table, sin_table, omega_sin_table = tables
-    clock, episode, counters, history = output
+    clock, episode, counters = output
     n_rods = X.size
     n_pairs = pair_a.size
     n_levels = cos_table.shape[1]
-    inverse_omega = 1.0 / omega
+    inverse_omega = np.empty(omega.size)
+    for j in range(omega.size):
+        inverse_omega[j] = 1.0 / omega[j]
     # farthest a composed step strays from its start, in units of the step (1.35 for the triple jump):
     # the rigorous free-flight and toe limits must hold for every substep's end point
     excursion = 0.0
@@ -305,7 +307,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
     gap = np.empty(n_pairs)
     gap_rate = np.empty(n_pairs)
     force = np.empty(n_pairs)
-    aeff = np.full(n_pairs, alpha)
+    aeff = np.empty(n_pairs)
+    for k in range(n_pairs):
+        aeff[k] = alpha
     keff = np.empty(n_pairs)
     rigid_gap = np.empty(n_pairs)
     rigid_rate = np.empty(n_pairs)
@@ -314,7 +318,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
     accel_bound = np.empty(n_pairs)
     bounds = (rigid_gap, rigid_rate, reach, speed_bound, accel_bound)
     log_ratio = math.log(ladder_ratio)
-    recording = history.shape[0] > 0
+    recording = False
+    if history is not None:
+        recording = history.shape[0] > 0
     steps_here = 0
     skip_tolerance = 1e-6 * contact_range + 1e-12 * half[0]
     # alpha * gap at which alpha B exp(-alpha gap) = force_scale (accuracy / reach)^2
@@ -322,13 +328,21 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
     if law == LAW_EXPONENTIAL:
         significant_exponent = math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy) + TOE_MARGIN
 
-    pending = np.zeros((n_rods, 2))
-    rod_products = np.zeros((n_rods, 3))
+    pending = np.empty((n_rods, 2))
+    rod_products = np.empty((n_rods, 3))
     for i in range(n_rods):
+        pending[i, 0] = 0.0
+        pending[i, 1] = 0.0
+        left_left = 0.0
+        left_right = 0.0
+        right_right = 0.0
         for j in range(rod_first[i], rod_first[i + 1]):
-            rod_products[i, 0] += left[j] * left[j]
-            rod_products[i, 1] += left[j] * right[j]
-            rod_products[i, 2] += right[j] * right[j]
+            left_left += left[j] * left[j]
+            left_right += left[j] * right[j]
+            right_right += right[j] * right[j]
+        rod_products[i, 0] = left_left
+        rod_products[i, 1] = left_right
+        rod_products[i, 2] = right_right
 
     end_sums(q, v, left, right, rod_first, sums)
     _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
@@ -373,7 +387,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
                 end_sums(q, v, left, right, rod_first, sums)
                 _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
                 _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff)
-                if recording and episode[0] >= 0:
+                if history is not None and recording and episode[0] >= 0:
                     n = counters[2]
                     if n < history.shape[0]:
                         history[n, 0] = clock[0]
@@ -403,7 +417,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
         if steps_here >= max_steps:
             _flush(v, left, right, rod_first, pending)
             return STATUS_RUNNING
-        if recording and counters[2] >= history.shape[0]:
+        if history is not None and recording and counters[2] >= history.shape[0]:
             _flush(v, left, right, rod_first, pending)
             return STATUS_BUFFER_FULL
 
@@ -472,7 +486,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, max_
             _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
         counters[0] += 1
         steps_here += 1
-        if recording and episode[0] >= 0:  # only the episode's own pair is recorded
+        if history is not None and recording and episode[0] >= 0:  # only the episode's own pair is recorded
             n = counters[2]
             ep = episode[0]
             history[n, 0] = clock[0]

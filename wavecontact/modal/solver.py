@@ -376,6 +376,7 @@ def _run_collocation(system, stages, tolerance, buffer, chunks, exponent_step=_E
             (float(system.contact_range), float(system.force_scale), float(tolerance), float(exponent_step),
              100_000_000, False, 30.0),
             tables.arrays(), (ends, free_q, free_v, records), (system.clock, counters, buffer),
+            both_ends=True,  # one compilation for every correction (compare runs the end-response and static ones)
         )
         system.check_status(status)
         if status == kernels.STATUS_BUFFER_FULL:

@@ -186,8 +186,8 @@ class ModalSystem:
         if self.exact_ends:
             raise UnsupportedSceneError("exact ends are integrated by collocation only (two rods); "
                                         "use correction='static' with the splitting")
-        if history is None:
-            history = np.empty((0, 3))
+        if history is not None and history.shape[0] == 0:
+            history = None  # records nothing: the kernel compiled without the recording
         return kernels.run_episode(
             (self.q, self.v, self.omega, self.left, self.right, self.rod_first), (self.X, self.U, self.mass, self.half),
             (self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance, self.pair_inverse_mass),
@@ -195,7 +195,7 @@ class ModalSystem:
              float(self.contact_range)),
             (float(self.control.accuracy), float(self.control.reach), float(self.force_scale), float(self.dt_top),
              float(self.control.ladder_ratio), self.sub_index, self.sub_weight),
-            self.rotation_tables(), (self.clock, self.episode, self.counters, history), int(max_steps),
+            self.rotation_tables(), (self.clock, self.episode, self.counters), history, int(max_steps),
         )
 
     @staticmethod
