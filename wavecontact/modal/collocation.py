@@ -61,7 +61,7 @@ FLOOR = 1e-2
 _TAYLOR_TERMS = 22  # |x| < 1: the series of phi_s(i x) to x^21 reaches round-off for every s >= 1
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _phi(x, count, inverse_factorial, re, im):
     """``phi_0 .. phi_count`` at the imaginary point ``z = i x`` (real and imaginary parts).
 
@@ -91,7 +91,7 @@ def _phi(x, count, inverse_factorial, re, im):
             im[k + 1] = -(re[k] - inverse_factorial[k]) / x
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables):
     """Tables of one ladder step ``h``: node rotations, exact polynomial-force integrals, gap response.
 
@@ -143,7 +143,7 @@ def _fill_level(level, h, omega, coupling, inverse_mass_rigid, tables):
     filled[level] = 1
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _solve_small(matrix, rhs, out):
     """Gaussian elimination with partial pivoting (matrix and rhs are overwritten)."""
     n = rhs.size
@@ -174,7 +174,7 @@ def _solve_small(matrix, rhs, out):
         out[row] = total / matrix[row, row]
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
     """Force and stiffness (-dF/dgap) at the modal gap; ``guess_force`` seeds the Lambert-W solve."""
     guess = math.nan
@@ -186,7 +186,7 @@ def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
     return f, k
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, counters):
     """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged.
 
@@ -224,7 +224,7 @@ def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, c
     return False
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance, force_scale, forces,
                       work, counters, quick_newton):
     """Newton for the exponential law, possibly in series with a compliance ``C >= 0``, in ``v_i = log F_i``.
@@ -313,7 +313,7 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
     return False
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _solve_hard(free_gap, response, predicted, tolerance, forces, active, matrix, rhs, counters):
     """Hard contact at the nodes: ``F_i >= 0``, ``r_i >= 0``, ``F_i r_i = 0`` (active-set iteration).
 
@@ -355,7 +355,7 @@ def _solve_hard(free_gap, response, predicted, tolerance, forces, active, matrix
     return False
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _history_at(t, records, count):
     """Impulse ``I(t) = int F`` and force ``F(t)`` at a past time ``t`` from the accepted steps.
 
@@ -383,7 +383,7 @@ def _history_at(t, records, count):
     return records[low, 2] + h * x * impulse, force
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _impulse_increment(a, span, records, count):
     """``I(a + span) - I(a)`` from the recorded step polynomials, summed from small pieces.
 
@@ -429,7 +429,7 @@ def _impulse_increment(a, span, records, count):
         x = 0.0
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _echo_increment(t0, offset, ends, records, count):
     """Change of the echo part of the end response over ``[t0, t0 + offset]``.
 
@@ -448,7 +448,7 @@ def _echo_increment(t0, offset, ends, records, count):
     return total
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _echo_force(t, ends, records, count):
     """Echo part of the end velocity response at ``t``: ``sum_rods w sum_{n>=1} F(t - n T)``."""
     force = 0.0
@@ -990,7 +990,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             level = min(level, n_levels - 1)
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _free_acceleration_bound(coupling, omega, free_q, free_v):
     """Bound on ``|d^2/dt^2 sum_j c_j q_j(t)|`` of freely oscillating modes (their amplitudes are constant)."""
     bound = 0.0
@@ -1000,7 +1000,7 @@ def _free_acceleration_bound(coupling, omega, free_q, free_v):
     return bound
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _free_amplitudes(q, v, omega, coupling, amplitude):
     """``amplitude[j] = |c_j| A_j``, the amplitude of mode ``j``'s share ``c_j q_j`` of the gap (for :func:`_free_fall`)."""
     for j in range(q.size):
@@ -1008,7 +1008,7 @@ def _free_amplitudes(q, v, omega, coupling, amplitude):
         amplitude[j] = abs(coupling[j]) * math.sqrt(q[j] * q[j] + v[j] * v[j] / (w * w))
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _free_fall(h, q, v, omega, coupling, amplitude, cos_h, sin_h, rigid_rate, allowed):
     """Bound on how far the gap falls within ``[0, h]`` while the modes move freely (no force).
 
@@ -1039,7 +1039,7 @@ def _free_fall(h, q, v, omega, coupling, amplitude, cos_h, sin_h, rigid_rate, al
     return fall
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate, force, accel, travel):
     """Largest step over which warm modes cannot bring an unseen contact between the collocation nodes.
 
@@ -1063,7 +1063,7 @@ def _warm_step_limit(law, alpha, strength, force_scale, exponent_step, gap, rate
     return 2.0 * room / (speed + math.sqrt(speed * speed + 2.0 * accel * room))
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _exact_rate(t, ends, coupling, free_v, warm, records, count):
     """True gap rate at the step boundary ``t`` with exact ends, less the step's own ``zeta F(t)``
     (``warm``: True with warm kept modes, else None)."""
@@ -1074,7 +1074,7 @@ def _exact_rate(t, ends, coupling, free_v, warm, records, count):
     return rate
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _omitted_reach(q, v, omega, U, mass, ends):
     """Bound on the omitted modes' end excursion: ``sqrt(2 C E_omitted)`` (Cauchy-Schwarz).
 

@@ -42,7 +42,7 @@ STATUS_RECORDS_FULL = 4  # step records (collocation with exact ends) full: grow
 STATUS_STEP_UNDERFLOW = -1
 STATUS_NOT_FINITE = -2
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def free_flight(q, v, omega, X, U, duration):
     """Advance the force-free motion exactly by ``duration`` (in place)."""
     for j in range(q.size):
@@ -76,7 +76,7 @@ def end_sums(q, v, left, right, rod_first, sums):
         sums[i, 2] = vl
         sums[i, 3] = vr
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending):
     """Kick by the pair forces over ``h`` without touching the mode velocities.
 
@@ -101,7 +101,7 @@ def _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pendin
             sums[b, 3] += rod_products[b, 1] * f
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _flush(v, left, right, rod_first, pending):
     """Apply the pending end impulses to the mode velocities."""
     for i in range(rod_first.size - 1):
@@ -115,7 +115,7 @@ def _flush(v, left, right, rod_first, pending):
             v[j] += left[j] * pl + right[j] * pr
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
     """Modal gap and gap rate of every pair from the centres of mass and the end sums."""
     for k in range(pair_a.size):
@@ -125,7 +125,7 @@ def _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate):
         gap_rate[k] = (U[b] + sums[b, 2]) - (U[a] + sums[a, 3])
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _bounds(modes, inverse_omega, bodies, pairs, bounds, amp_left, amp_right):
     """Rigorous bounds on the modal end motion under free flight.
 
@@ -170,7 +170,7 @@ def _bounds(modes, inverse_omega, bodies, pairs, bounds, amp_left, amp_right):
         speed_bound[k] = abs(rigid_rate[k]) + amp_right[a, 1] + amp_left[b, 1]
         accel_bound[k] = amp_right[a, 2] + amp_left[b, 2]
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin_row, sums, pending):
     """Apply the pending end impulses to the mode velocities, rotate every oscillator exactly over
     one ladder step, and recompute the end sums (one pass over the modes)."""
@@ -201,7 +201,7 @@ def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin
         sums[i, 3] = vr
 
 
-@kernel(error_model="numpy")
+@kernel(internal=True, error_model="numpy")
 def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
     """Force, stiffness and softened alpha of every pair; False if a force is not finite."""
     finite = True
