@@ -21,7 +21,8 @@ from wavecontact.studies.ring import CHECKPOINT_NAME, RingRun
 
 ARGS = ["-m", "wavecontact", "ring", "--gamma", "0.6173", "--kappa", "4000", "--modes", "12",
         "--collisions", "300", "--checkpoint-every", "100", "--no-progress"]
-pytestmark = pytest.mark.skipif(not NUMBA_ENABLED, reason="numba not installed: nothing is cached")
+pytestmark = [pytest.mark.skipif(not NUMBA_ENABLED, reason="numba not installed: nothing is cached"),
+              pytest.mark.own_cache]
 
 
 def _env(cache):
