@@ -127,7 +127,6 @@ print(json.dumps({"noise_kernels": {k.py_func.__name__: len(k.signatures) for k 
 
 
 @pytest.mark.skipif(not NUMBA_ENABLED, reason="kernels run as plain Python")
-@pytest.mark.own_cache
 def test_a_cold_solve_compiles_none_of_the_noise_or_comb_code(tmp_path):
     """Compile time (docs/performance.md): on an empty numba cache a cold collision compiles the integrator's
     cold specialisation only, neither the noise tables' kernels nor the comb sums (seconds each)."""

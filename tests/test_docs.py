@@ -84,8 +84,8 @@ def test_cheap_blocks_are_what_their_commands_print(name):
         f"{BLOCKS[name].page} is out of date: python docs/generate.py {name}")
 
 
-# The expensive blocks that CI's second pass re-runs whole (.ci/run: ``-m "(not slow and not own_cache) or docs_ci"``, kernels cached
-# by the first pass): together about SECOND_PASS_SECONDS s on 2 cores; the cheap blocks run in every pass
+# The expensive blocks that CI re-runs whole after the default run (.ci/run: ``-m docs_ci``, kernels cached
+# by the run before): together about SECOND_PASS_SECONDS s on 2 cores; the cheap blocks run in every pass
 # (test above) and ``python -m pytest -m slow -k expensive_blocks`` (or ``python docs/generate.py --check``,
 # the same comparison) runs every block.
 SECOND_PASS = ("convergence-kappa-20", "convergence-kappa-inf", "fem-two-materials", "fem-remainder-orders",

@@ -21,8 +21,7 @@ from wavecontact.studies.ring import CHECKPOINT_NAME, RingRun
 
 ARGS = ["-m", "wavecontact", "ring", "--gamma", "0.6173", "--kappa", "4000", "--modes", "12",
         "--collisions", "300", "--checkpoint-every", "100", "--no-progress"]
-pytestmark = [pytest.mark.skipif(not NUMBA_ENABLED, reason="numba not installed: nothing is cached"),
-              pytest.mark.own_cache]
+pytestmark = pytest.mark.skipif(not NUMBA_ENABLED, reason="numba not installed: nothing is cached")
 
 
 def _env(cache):
