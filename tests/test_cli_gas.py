@@ -1,6 +1,7 @@
 """``wavecontact gas``: JSON summary, outputs, resume, collapse message, refusals."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -134,6 +135,26 @@ class _nothing:
 _BASE = ["gas", "--rods", "100", "--rule", "fixed", "--restitution", "0.97", "--seed", "5", "--json", "--no-progress"]
 
 
+@pytest.fixture(scope="module")
+def _written_run(tmp_path_factory):
+    """One ``_BASE`` run of 300 collisions written by the CLI (outputs, figure and checkpoint) and its summary;
+    the tests that resume or tamper with it take a copy (:func:`_copy_of_run`), so the figure is drawn once."""
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("gas300") / "run"
+    with contextlib.redirect_stdout(io.StringIO()) as printed, contextlib.redirect_stderr(io.StringIO()):
+        assert main([*_BASE, "--collisions", "300", "--out", str(out)]) == 0
+    return out, json.loads(printed.getvalue())
+
+
+def _copy_of_run(written, tmp_path):
+    """A copy of the module's written run in ``tmp_path/run`` (what the CLI would have written there)."""
+    import shutil
+
+    return Path(shutil.copytree(written[0], tmp_path / "run"))
+
+
 def _state(out):
     from wavecontact.gas import GasSimulation
 
@@ -189,9 +210,8 @@ def test_an_interrupted_resume_is_finished_by_the_same_command(tmp_path, capsys,
     (["--damping", "3"], "--damping"), (["--lengths", "0.5", "1.0"], "--lengths"), (["--packing", "0.3"], "--packing"),
     (["--restitution", "0.9"], "fixed"),
 ])
-def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys, change, option):
-    out = tmp_path / "run"
-    _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out)])
+def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys, change, option, _written_run):
+    out = _copy_of_run(_written_run, tmp_path)
     before = (out / "gas_checkpoint.npz").read_bytes()
     argv = [*_BASE, "--collisions", "300", "--out", str(out), "--resume"]
     if change[0] in argv:  # another value of an option the run was given
@@ -204,9 +224,9 @@ def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys,
     assert (out / "gas_checkpoint.npz").read_bytes() == before
 
 
-def test_a_folder_with_a_checkpoint_needs_resume_or_overwrite(tmp_path, capsys):
-    out = tmp_path / "run"
-    first = _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out)])
+def test_a_folder_with_a_checkpoint_needs_resume_or_overwrite(tmp_path, capsys, _written_run):
+    out = _copy_of_run(_written_run, tmp_path)
+    first = _written_run[1]
     assert main([*_BASE, "--collisions", "300", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "--resume" in err and "--overwrite" in err
@@ -229,11 +249,10 @@ _GAS_TAMPERING = {
 
 
 @pytest.mark.parametrize("change", list(_GAS_TAMPERING), ids=list(_GAS_TAMPERING))
-def test_a_crafted_gas_checkpoint_is_refused_in_one_line(tmp_path, capsys, change):
+def test_a_crafted_gas_checkpoint_is_refused_in_one_line(tmp_path, capsys, change, _written_run):
     from test_io_run_controller import tamper
 
-    out = tmp_path / "run"
-    _json(capsys, [*_BASE, "--collisions", "300", "--out", str(out)])
+    out = _copy_of_run(_written_run, tmp_path)
     tamper(out / "gas_checkpoint.npz", _GAS_TAMPERING[change])
     assert main([*_BASE, "--collisions", "300", "--out", str(out), "--resume"]) == 2
     err = capsys.readouterr().err.strip()
