@@ -1,5 +1,6 @@
 """Step control of the exponential collocation: the proof behind its long steps where the force is negligible."""
 
+import functools
 import math
 
 import numpy as np
@@ -10,9 +11,18 @@ from wavecontact.modal.collocation import _free_amplitudes, _free_fall
 def _true_fall(h, q, v, omega, coupling, rigid_rate, samples=20001):
     """Largest fall of ``rigid_rate t + sum_j c_j (q_j cos w_j t + v_j sin(w_j t) / w_j)`` below its start on
     ``[0, h]``, by dense sampling (independent of the bound)."""
-    t = np.linspace(0.0, h, samples)[:, None]
-    gap = rigid_rate * t[:, 0] + (coupling * (q * np.cos(omega * t) + v * np.sin(omega * t) / omega)).sum(axis=1)
+    t, cosines, sines = _sampled_phases(h, tuple(omega), samples)
+    gap = rigid_rate * t[:, 0] + (coupling * (q * cosines + v * sines / omega)).sum(axis=1)
     return gap[0] - gap.min()
+
+
+@functools.lru_cache(maxsize=4)
+def _sampled_phases(h, omega, samples):
+    """``t`` (a column) and ``cos(w t)``, ``sin(w t)`` on it: the samples' trigonometry, shared by the many states
+    a test samples for one step length and one set of frequencies (the same numbers as computed per state)."""
+    t = np.linspace(0.0, h, samples)[:, None]
+    omega = np.asarray(omega)
+    return t, np.cos(omega * t), np.sin(omega * t)
 
 
 def _bound(h, q, v, omega, coupling, rigid_rate):
