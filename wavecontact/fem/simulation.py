@@ -493,6 +493,7 @@ class _Run:
              right.lumped_mass),
             (self.mass_solves[0][1], self.mass_solves[1][1]), (self.column1, self.column2),
             self.contact, self.control, self.state, hist, energies,
+            None if s.scheme == kernels.SCHEME_FORCE else np.int64(s.scheme),
         )
         return status, [h[:done] for h in hist], [e[:samples] for e in energies]
 
