@@ -98,7 +98,7 @@ class ReferenceLattice:
             r_after = exponential_gap_linear(r_now, incoming, slope, dt, compliance, s.alpha, s.strength,
                                              s.gap_substeps)
         elif s.centered:
-            r_after = lattice._one_jump_gap(s.law, r_now, rates, dt, compliance, s.alpha, s.strength, s.stiffness)
+            r_after = lattice._one_jump_gap(np.int64(s.law), r_now, rates, dt, compliance, s.alpha, s.strength, s.stiffness)
         if math.isnan(r_after):
             r_after = interface_gap(s.law, r_now, incoming, dt, compliance, s.alpha, s.strength, s.stiffness)
         shift = (r_after - r_free) / self.m_inv
@@ -255,7 +255,7 @@ def test_pure_python_kernel_gives_the_compiled_results():
             (run.u[0], run.w[0], left.lumped_mass, left.stiffness_bands),
             (run.u[1], run.w[1], right.lumped_mass, right.stiffness_bands),
             run.rod_parameters[0], run.rod_parameters[1], run.waves[0], run.waves[1],
-            run.contact, run.control, run.state, hist, energies,
+            run.contact, run.control, run.state, hist, energies, None,  # None: the exponential law
         )
         results.append((done, samples, hist[1][:done], run.u[0].copy(), run.w[1].copy()))
     (done_a, samples_a, force_a, u_a, w_a), (done_b, samples_b, force_b, u_b, w_b) = results

@@ -51,7 +51,6 @@ from .layout import (
     K_KIND1,
     K_KIND2,
     K_PLASTIC,
-    K_SCHEME,
     S_ENERGY0,
     S_ENERGY_SCALE,
     S_FAILED_ENERGY,
@@ -192,7 +191,7 @@ def _energy_check(kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2,
 
 
 @kernel
-def advance(rod1, rod2, tables, columns, contact, control, state, history, energies):
+def advance(rod1, rod2, tables, columns, contact, control, state, history, energies, end_scheme):
     """Run up to ``history[0].size`` steps of central differences with the contact; return ``(status, steps, samples)``.
 
     Parameters
@@ -224,6 +223,12 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     energies : tuple of 6 arrays
         Per check (every ``check_every`` steps): time, kinetic, strain and
         contact energy, internal energy of each rod.
+    end_scheme : None or np.int64
+        The contact scheme: None for the force scheme (``SCHEME_FORCE``), else
+        ``SCHEME_SPLITTING`` or ``SCHEME_INTERFACE`` (the end nodes moved to the
+        gap of the contact's exact solution).  numba prunes the branches of a
+        None argument before typing, so a force-scheme run compiles neither
+        scheme's flows and gaps (the README's FE commands run no other scheme).
 
     The run stops (status 1) once the rods are apart and provably stay apart:
     the end gap is bounded below by the centre-of-mass gap minus ``bound *
@@ -237,7 +242,6 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     hist_time, hist_force, hist_vrel, hist_gap = history
     law, alpha, strength, stiffness, offset, r_stop, m_inv = read_contact(contact)
     dt, period, check_every, energy_tolerance = read_run_control(control)
-    scheme = int(control[K_SCHEME])
     plastic = control[K_PLASTIC] != 0.0
     kind1 = int(control[K_KIND1])
     kind2 = int(control[K_KIND2])
@@ -271,15 +275,17 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
     fast = kind1 == MASS_LUMPED and kind2 == MASS_LUMPED and bands1.shape[0] == 2 and bands2.shape[0] == 2
     # the force scheme's contact force on a rod in the interleaved layout enters its mass solve's right-hand side
     # (scaled by the end's inverse pivot), which spreads it as M^-1 e_end: no column added over the end's nodes
-    loaded1 = rows1 > 0 and scheme == SCHEME_FORCE
-    loaded2 = rows2 > 0 and scheme == SCHEME_FORCE
+    loaded1 = rows1 > 0 and end_scheme is None
+    loaded2 = rows2 > 0 and end_scheme is None
     scale1 = table1[T_CHAIN_INVERSE, last // order1] if loaded1 else 0.0
     scale2 = table2[T_CHAIN_INVERSE, 0] if loaded2 else 0.0
     status = STATUS_RUNNING
     done = max_steps
     for step in range(max_steps):
         r_now = offset + U2[start2] - U1[end1]
-        force = contact_force(law, r_now, alpha, strength, stiffness) if scheme == SCHEME_FORCE else 0.0
+        force = 0.0
+        if end_scheme is None:
+            force = contact_force(law, r_now, alpha, strength, stiffness)
         # 1. kick with the elastic forces (and the force scheme's contact force on loaded rods) and drift
         if fast:
             _leapfrog_p1(u1, v1, bands1, table1[0], dt)
@@ -289,11 +295,11 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             _step(u2, v2, a2, bands2, kind2, table2, rows2, dt, start2 if loaded2 else -1, force * scale2)
         # 2. contact, spread along M^-1 e_end
         r_free = offset + U2[start2] - U1[end1]
-        if scheme == SCHEME_FORCE:
-            # plain central differences: the force at the start of the step, as a kick
+        if end_scheme is None:
+            # plain central differences (the force scheme): the force at the start of the step, as a kick
             impulse = force * dt
             shift = impulse * dt
-        elif scheme == SCHEME_SPLITTING:
+        elif end_scheme == SCHEME_SPLITTING:
             w0 = V2[start2] - V1[end1]
             r1, w1 = contact_flow(law, plastic, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv

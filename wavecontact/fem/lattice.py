@@ -38,6 +38,7 @@ from .._jit import kernel
 from .contact_flows import (
     LAW_EXPONENTIAL,
     contact_potential,
+    exponential_gap,
     exponential_gap_linear,
     exponential_gap_quartic,
     interface_gap,
@@ -239,7 +240,17 @@ def _contact_end_value(contact, neighbour, coefficient):
 
 
 @kernel(fastmath=False, internal=True)
-def _one_jump_gap(law, r, rates, dt, compliance, alpha, strength, stiffness):
+def _gap(general_law, r, g, duration, compliance, alpha, strength, stiffness):
+    """The massless-end gap after ``duration``: the exponential law's solution when ``general_law`` is None
+    (numba then prunes the other laws' and compiles none of them), else
+    :func:`~wavecontact.fem.contact_flows.interface_gap` of the law ``general_law``."""
+    if general_law is None:
+        return exponential_gap(r, g, duration, compliance, alpha, strength)
+    return interface_gap(general_law, r, g, duration, compliance, alpha, strength, stiffness)
+
+
+@kernel(fastmath=False, internal=True)
+def _one_jump_gap(general_law, r, rates, dt, compliance, alpha, strength, stiffness):
     """Gap after a step whose incoming rate jumps once, or NaN if the step means do not show one jump.
 
     A front that reaches the contact between lattice times (an echo from a
@@ -248,7 +259,7 @@ def _one_jump_gap(law, r, rates, dt, compliance, alpha, strength, stiffness):
     the two after share ``q_a``, and this step's mean lies strictly between,
     the rate is ``q_b`` for the fraction ``(mean - q_a)/(q_b - q_a)`` of the
     step and ``q_a`` after; the gap equation is solved exactly on each part
-    (a release inside the step then gives the exact impulse).
+    (a release inside the step then gives the exact impulse).  ``general_law``: as in :func:`_gap`.
     """
     before = rates[1]
     after = rates[3]
@@ -260,8 +271,8 @@ def _one_jump_gap(law, r, rates, dt, compliance, alpha, strength, stiffness):
     fraction = (mean - after) / (before - after)
     if not (1e-12 < fraction < 1.0 - 1e-12):
         return math.nan
-    middle = interface_gap(law, r, before, fraction * dt, compliance, alpha, strength, stiffness)
-    return interface_gap(law, middle, after, (1.0 - fraction) * dt, compliance, alpha, strength, stiffness)
+    middle = _gap(general_law, r, before, fraction * dt, compliance, alpha, strength, stiffness)
+    return _gap(general_law, middle, after, (1.0 - fraction) * dt, compliance, alpha, strength, stiffness)
 
 
 @kernel(fastmath=False, internal=True)
@@ -275,7 +286,8 @@ def _later_rate(f1, g1, mask1, last1, f2, g2, mask2, n, j, dt):
 
 
 @kernel
-def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contact, control, state, history, energies):
+def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contact, control, state, history, energies,
+                    general_law):
     """Run up to ``history[0].size`` steps of the characteristic scheme on the exact lattice.
 
     Parameters
@@ -299,6 +311,10 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
         of the centres of mass, gap.  Their size is the number of steps asked.
     energies : tuple of 6 arrays
         Per check: time, kinetic, strain, contact energy, internal energy of each rod.
+    general_law : None or np.int64
+        None for the exponential law (the law of ``contact``; its gap equation is then solved
+        directly and numba compiles no other law's), else the law's code (the gap equation of
+        :func:`~wavecontact.fem.contact_flows.interface_gap`).
 
     Returns
     -------
@@ -377,9 +393,9 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
                 slope = (incoming - rates[1]) / dt
                 r_after = exponential_gap_linear(r_now, incoming, slope, dt, compliance, alpha, strength, substeps)
         elif centered:
-            r_after = _one_jump_gap(law, r_now, rates, dt, compliance, alpha, strength, stiffness)
+            r_after = _one_jump_gap(general_law, r_now, rates, dt, compliance, alpha, strength, stiffness)
         if math.isnan(r_after):
-            r_after = interface_gap(law, r_now, incoming, dt, compliance, alpha, strength, stiffness)
+            r_after = _gap(general_law, r_now, incoming, dt, compliance, alpha, strength, stiffness)
         shift = (r_after - r_free) / m_inv
         impulse = shift / dt
         if shift != 0.0:

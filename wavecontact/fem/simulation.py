@@ -482,6 +482,7 @@ class _Run:
                 (self.u[1], self.w[1], right.lumped_mass, right.stiffness_bands),
                 self.rod_parameters[0], self.rod_parameters[1], self.waves[0], self.waves[1],
                 self.contact, self.control, self.state, hist, energies,
+                None if s.law == LAW_EXPONENTIAL else np.int64(s.law),
             )
             for v, u, w in zip(self.v, self.u, self.w):
                 v[:] = (u - w) / s.dt
@@ -493,6 +494,7 @@ class _Run:
              right.lumped_mass),
             (self.mass_solves[0][1], self.mass_solves[1][1]), (self.column1, self.column2),
             self.contact, self.control, self.state, hist, energies,
+            None if s.scheme == kernels.SCHEME_FORCE else np.int64(s.scheme),
         )
         return status, [h[:done] for h in hist], [e[:samples] for e in energies]
 
