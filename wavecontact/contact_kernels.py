@@ -109,7 +109,7 @@ def contact_response(gap, law, alpha, strength, stiffness, compliance):
 
 
 @kernel(error_model="numpy")
-def law_response(gap, law, alpha, strength, stiffness, compliance, guess):
+def law_response(gap, law, alpha, strength, stiffness, compliance, guess, generic=True):
     """Force, interaction energy and stiffness of one pair at the modal gap ``gap``.
 
     With ``compliance > 0`` the contact acts through a massless spring of that
@@ -118,7 +118,8 @@ def law_response(gap, law, alpha, strength, stiffness, compliance, guess):
     includes the spring's, and the stiffness is ``dF/dgap``.
 
     ``guess`` (``nan``: none) starts the inner Newton solve for
-    ``log(alpha (r - gap))``.
+    ``log(alpha (r - gap))``.  ``generic`` None promises a law of :data:`CLOSED_FORM_CODES`, and numba
+    compiles the function without the generic solve (:func:`series_response`); True: any law.
 
     Returns
     -------
@@ -157,7 +158,7 @@ def law_response(gap, law, alpha, strength, stiffness, compliance, guess):
         force = y * scale
         energy = (y + 0.5 * y * y) * scale / alpha
         return force, energy, alpha * force / (1.0 + y), 1.0 + y
-    if law != LAW_PENALTY and law != LAW_HARD:
+    if generic is not None and law != LAW_PENALTY and law != LAW_HARD:
         return series_response(gap, law, alpha, strength, stiffness, compliance)
     # linear spring on overlap (penalty; hard = infinite stiffness, then only the compliance)
     if gap >= 0.0:

@@ -202,8 +202,9 @@ def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin
 
 
 @kernel(internal=True, error_model="numpy")
-def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
-    """Force, stiffness and softened alpha of every pair; False if a force is not finite."""
+def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law):
+    """Force, stiffness and softened alpha of every pair; False if a force is not finite (``generic_law``:
+    ``generic`` of :func:`~wavecontact.contact_kernels.law_response`)."""
     finite = True
     for k in range(gap.size):
         guess = math.nan
@@ -211,7 +212,8 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
             previous = alpha / aeff[k] - 1.0  # aeff = alpha / (1 + y): last step's y
             if previous > 1e-6:
                 guess = math.log(previous)
-        f, _, kk, soft = contact_response_from(gap[k], law, alpha, strength, stiffness, pair_compliance[k], guess)
+        f, _, kk, soft = contact_response_from(gap[k], law, alpha, strength, stiffness, pair_compliance[k], guess,
+                                               generic_law)
         if not math.isfinite(f):
             finite = False
         force[k] = f
@@ -221,7 +223,7 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
 
 
 @kernel(error_model="numpy")
-def run_episode(modes, bodies, pairs, contact_law, control, tables, output, history, max_steps):
+def run_episode(modes, bodies, pairs, contact_law, control, tables, output, history, max_steps, generic_law):
     """Integrate until the current collision (episode) is over.
 
     All arrays are modified in place where they hold state.  The arguments are tuples:
@@ -260,7 +262,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
         (``[0], [1.0]`` for order 2; the triple jump for order 4).
     cos_table, sin_table, omega_sin_table : float arrays (F, J, M)
         ``cos(omega f dt_j)``, ``sin(omega f dt_j) / omega``, ``omega sin(omega f dt_j)``
-        for each distinct substep fraction ``f``.
+        for each distinct substep fraction ``f``; ``tables`` None: no step is taken (the free flight to
+        where a pair may be in range, then status 0, as with ``max_steps = 0``), and numba compiles the
+        kernel without the stepping.
     clock : float array (2,)
         Current time; time at which the current episode began.
     episode : int array (1,)
@@ -272,6 +276,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
         records nothing (None: numba compiles the kernel without the recording).
     max_steps : int
         Return after this many steps (status 0).
+    generic_law : True or None
+        None for a law of ``CLOSED_FORM_CODES`` (numba compiles without the generic solve, see
+        :func:`~wavecontact.contact_kernels.law_response`), True for any law.
 
     Returns
     -------
@@ -283,11 +290,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
     pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass = pairs
     law, alpha, strength, stiffness, contact_range = contact_law
     step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight = control
-    cos_table, sin_table, omega_sin_table = tables
     clock, episode, counters = output
     n_rods = X.size
     n_pairs = pair_a.size
-    n_levels = cos_table.shape[1]
     inverse_omega = np.empty(omega.size)
     for j in range(omega.size):
         inverse_omega[j] = 1.0 / omega[j]
@@ -346,7 +351,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
 
     end_sums(q, v, left, right, rod_first, sums)
     _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-    if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+    if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law):
         return STATUS_NOT_FINITE
 
     while True:
@@ -386,7 +391,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                 counters[1] += 1
                 end_sums(q, v, left, right, rod_first, sums)
                 _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-                _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff)
+                _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law)
                 if history is not None and recording and episode[0] >= 0:
                     n = counters[2]
                     if n < history.shape[0]:
@@ -414,9 +419,11 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
             if best >= 0:
                 episode[0] = best
                 clock[1] = clock[0]
-        if steps_here >= max_steps:
+        if tables is None or steps_here >= max_steps:
             _flush(v, left, right, rod_first, pending)
             return STATUS_RUNNING
+        cos_table, sin_table, omega_sin_table = tables
+        n_levels = cos_table.shape[1]
         if history is not None and recording and counters[2] >= history.shape[0]:
             _flush(v, left, right, rod_first, pending)
             return STATUS_BUFFER_FULL
@@ -479,7 +486,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                 X[i] += U[i] * dt_sub
             clock[0] += dt_sub
             _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-            if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+            if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law):
                 _flush(v, left, right, rod_first, pending)
                 return STATUS_NOT_FINITE
             _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)
