@@ -34,6 +34,7 @@ from .kernels import (
     STATUS_SEPARATED,
     STATUS_STEP_UNDERFLOW,
     contact_response_from,
+    exponential_response,
 )
 
 __all__ = ["CollocationTables", "radau_nodes", "run_collision"]
@@ -175,24 +176,22 @@ def _solve_small(matrix, rhs, out):
 
 
 @kernel(internal=True, error_model="numpy")
-def _force(gap, law, alpha, strength, stiffness, compliance, guess_force, generic_law):
-    """Force and stiffness (-dF/dgap) at the modal gap; ``guess_force`` seeds the Lambert-W solve (``generic_law``:
-    ``generic`` of :func:`~wavecontact.contact_kernels.law_response`)."""
+def _force(gap, law, alpha, strength, stiffness, compliance, guess_force):
+    """Force and stiffness (-dF/dgap) at the modal gap; ``guess_force`` seeds the Lambert-W solve."""
     guess = math.nan
     if law == LAW_EXPONENTIAL and compliance > 0.0 and guess_force > 0.0:
         y = guess_force * alpha * compliance
         if y > 1e-6:
             guess = math.log(y)
-    f, _, k, _ = contact_response_from(gap, law, alpha, strength, stiffness, compliance, guess, generic_law)
+    f, _, k, _ = contact_response_from(gap, law, alpha, strength, stiffness, compliance, guess)
     return f, k
 
 
 @kernel(internal=True, error_model="numpy")
-def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, counters, generic_law):
+def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, counters):
     """Newton on ``F_i = F(r_free,i + sum_m R_im F_m)`` in the forces (any law); True if converged.
 
-    ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``work = (residual, stiff, delta, matrix)``,
-    ``generic_law`` as in :func:`_force`.
+    ``contact_law = (law, alpha, strength, stiffness, compliance)``, ``work = (residual, stiff, delta, matrix)``.
     """
     law, alpha, strength, stiffness, compliance = contact_law
     residual, stiff, delta, matrix = work
@@ -204,7 +203,7 @@ def _newton_forces(free_gap, response, contact_law, force_scale, forces, work, c
             gap_i = free_gap[i]
             for m in range(s):
                 gap_i += response[i, m] * forces[m]
-            f_i, k_i = _force(gap_i, law, alpha, strength, stiffness, compliance, forces[i], generic_law)
+            f_i, k_i = _force(gap_i, law, alpha, strength, stiffness, compliance, forces[i])
             if not (math.isfinite(f_i) and math.isfinite(k_i)):
                 return False
             residual[i] = f_i - forces[i]
@@ -568,8 +567,7 @@ def _run_collision(problem, exact_ends, output, history, exact, truncated, warm,
     (both True: one kernel for both, decided by ``ends[0]``); ``warm``: a kept mode does not start at rest
     (``free_q``, ``free_v`` not all zero); ``hard``: a hard contact without compliance (:func:`_solve_hard`),
     ``generic``: a law solved by :func:`_newton_forces` (both None: the exponential law,
-    :func:`_newton_log_force`; None also tells :func:`~wavecontact.contact_kernels.law_response` that the law
-    has a closed form); ``free_steps``: steps above the sampling step where the force provably stays
+    :func:`_newton_log_force`); ``free_steps``: steps above the sampling step where the force provably stays
     negligible (``free_rungs > 0``, exponential law, no exact ends); ``other_stages``: None for six
     collocation stages (their passes over the modes written out), True for any other number; ``quick``: True
     for ``quick_newton``, None without it.
@@ -612,22 +610,24 @@ def _run_collision(problem, exact_ends, output, history, exact, truncated, warm,
     matrix = np.empty((s, s))
     coefficients = np.empty(s)
     previous = np.empty(s)  # read only once a step was accepted (have_previous)
-    cq = np.empty(n_modes)
-    cv = np.empty(n_modes)
+    if other_stages is not None:
+        cq = np.empty(n_modes)
+        cv = np.empty(n_modes)
     load_q = np.empty(n_modes)
     load_v = np.empty(n_modes)
     step_response = np.empty((s, s))
-    # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
-    # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
-    integral = np.empty((s, s))
-    for i in range(s):
-        for m in range(s):
-            power = nodes[i]
-            total = 0.0
-            for k in range(s):
-                total += vinv[k, m] * power / (k + 1)
-                power *= nodes[i]
-            integral[i, m] = total
+    if exact is not None:
+        # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
+        # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
+        integral = np.empty((s, s))
+        for i in range(s):
+            for m in range(s):
+                power = nodes[i]
+                total = 0.0
+                for k in range(s):
+                    total += vinv[k, m] * power / (k + 1)
+                    power *= nodes[i]
+                integral[i, m] = total
     if hard is not None:
         active = np.empty(s, dtype=np.bool_)  # every entry set by _solve_hard before it is read
     if generic is not None:
@@ -661,8 +661,10 @@ def _run_collision(problem, exact_ends, output, history, exact, truncated, warm,
     elif hard is not None:
         force_now = 0.0  # the first step's solve finds it (a start at zero gap may round to -1e-16)
         k_now = 0.0
+    elif generic is None:  # the exponential law (hard contact: above), its response alone compiled
+        force_now, _, k_now, _ = exponential_response(rigid_gap + sq, alpha, strength, compliance, math.nan)
     else:
-        force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0, generic)
+        force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
     if not math.isfinite(force_now):
         return STATUS_NOT_FINITE
     if exact is not None and exact_now:
@@ -809,7 +811,7 @@ def _run_collision(problem, exact_ends, output, history, exact, truncated, warm,
                                         delta, counters)
         elif generic is not None:
             converged = _newton_forces(free_gap, step_response, contact_law, force_scale, forces,
-                                       (residual, stiff, delta, matrix), counters, generic)
+                                       (residual, stiff, delta, matrix), counters)
         else:  # the exponential law
             converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
                                           force_scale, forces, (residual, delta, matrix, rhs), counters,
@@ -860,13 +862,14 @@ def _run_collision(problem, exact_ends, output, history, exact, truncated, warm,
             for j in range(n_modes):
                 load_q[j] = 0.0
                 load_v[j] = 0.0
-            for k in range(0 if negligible else s):
-                a_k = coefficients[k]
-                row_s = end_s[level, k]
-                row_c = end_c[level, k]
-                for j in range(n_modes):
-                    load_q[j] += a_k * row_s[j]
-                    load_v[j] += a_k * row_c[j]
+            if other_stages is not None:  # (six stages come here for negligible forces only: no load)
+                for k in range(0 if negligible else s):
+                    a_k = coefficients[k]
+                    row_s = end_s[level, k]
+                    row_c = end_c[level, k]
+                    for j in range(n_modes):
+                        load_q[j] += a_k * row_s[j]
+                        load_v[j] += a_k * row_c[j]
         sq = 0.0
         sv = 0.0
         e_cos = end_cos[level]

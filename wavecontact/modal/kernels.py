@@ -27,7 +27,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..contact import LAW_EXPONENTIAL, LAW_PENALTY
-from ..contact_kernels import contact_response  # noqa: F401 (the modal kernels' name for it)
+from ..contact_kernels import contact_response, exponential_response  # noqa: F401 (the modal kernels' names)
 from ..contact_kernels import law_response as contact_response_from
 
 TOE_MARGIN = 5.0
@@ -264,7 +264,8 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
         ``cos(omega f dt_j)``, ``sin(omega f dt_j) / omega``, ``omega sin(omega f dt_j)``
         for each distinct substep fraction ``f``; ``tables`` None: no step is taken (the free flight to
         where a pair may be in range, then status 0, as with ``max_steps = 0``), and numba compiles the
-        kernel without the stepping.
+        kernel without the stepping (and, with ``history`` None, without the contact law: the start's
+        force is then not checked, the first step's kernel does).
     clock : float array (2,)
         Current time; time at which the current episode began.
     episode : int array (1,)
@@ -296,16 +297,6 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
     inverse_omega = np.empty(omega.size)
     for j in range(omega.size):
         inverse_omega[j] = 1.0 / omega[j]
-    # farthest a composed step strays from its start, in units of the step (1.35 for the triple jump):
-    # the rigorous free-flight and toe limits must hold for every substep's end point
-    excursion = 0.0
-    partial = 0.0
-    for sub in range(sub_weight.size):
-        partial += sub_weight[sub]
-        excursion = max(excursion, abs(partial))
-    omega_max = 0.0
-    for j in range(omega.size):
-        omega_max = max(omega_max, omega[j])
     sums = np.empty((n_rods, 4))
     amp_left = np.empty((n_rods, 3))
     amp_right = np.empty((n_rods, 3))
@@ -322,36 +313,52 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
     speed_bound = np.empty(n_pairs)
     accel_bound = np.empty(n_pairs)
     bounds = (rigid_gap, rigid_rate, reach, speed_bound, accel_bound)
-    log_ratio = math.log(ladder_ratio)
     recording = False
     if history is not None:
         recording = history.shape[0] > 0
     steps_here = 0
     skip_tolerance = 1e-6 * contact_range + 1e-12 * half[0]
-    # alpha * gap at which alpha B exp(-alpha gap) = force_scale (accuracy / reach)^2
-    significant_exponent = 0.0
-    if law == LAW_EXPONENTIAL:
-        significant_exponent = math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy) + TOE_MARGIN
-
     pending = np.empty((n_rods, 2))
-    rod_products = np.empty((n_rods, 3))
     for i in range(n_rods):
         pending[i, 0] = 0.0
         pending[i, 1] = 0.0
-        left_left = 0.0
-        left_right = 0.0
-        right_right = 0.0
-        for j in range(rod_first[i], rod_first[i + 1]):
-            left_left += left[j] * left[j]
-            left_right += left[j] * right[j]
-            right_right += right[j] * right[j]
-        rod_products[i, 0] = left_left
-        rod_products[i, 1] = left_right
-        rod_products[i, 2] = right_right
+    if tables is not None:  # the stepping's constants (a free flight alone needs none)
+        # farthest a composed step strays from its start, in units of the step (1.35 for the triple jump):
+        # the rigorous free-flight and toe limits must hold for every substep's end point
+        excursion = 0.0
+        partial = 0.0
+        for sub in range(sub_weight.size):
+            partial += sub_weight[sub]
+            excursion = max(excursion, abs(partial))
+        omega_max = 0.0
+        for j in range(omega.size):
+            omega_max = max(omega_max, omega[j])
+        log_ratio = math.log(ladder_ratio)
+        # alpha * gap at which alpha B exp(-alpha gap) = force_scale (accuracy / reach)^2
+        significant_exponent = 0.0
+        if law == LAW_EXPONENTIAL:
+            significant_exponent = (math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy)
+                                    + TOE_MARGIN)
+        rod_products = np.empty((n_rods, 3))
+        for i in range(n_rods):
+            left_left = 0.0
+            left_right = 0.0
+            right_right = 0.0
+            for j in range(rod_first[i], rod_first[i + 1]):
+                left_left += left[j] * left[j]
+                left_right += left[j] * right[j]
+                right_right += right[j] * right[j]
+            rod_products[i, 0] = left_left
+            rod_products[i, 1] = left_right
+            rod_products[i, 2] = right_right
 
     end_sums(q, v, left, right, rod_first, sums)
     _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-    if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law):
+    # the forces are read by the steps and the history alone: a free flight without them (tables and history
+    # None) compiles without the contact law (nor checks that the force at the start is finite)
+    if (tables is not None or history is not None) and not _update_forces(gap, law, alpha, strength, stiffness,
+                                                                          pair_compliance, force, keff, aeff,
+                                                                          generic_law):
         return STATUS_NOT_FINITE
 
     while True:
@@ -391,7 +398,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                 counters[1] += 1
                 end_sums(q, v, left, right, rod_first, sums)
                 _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-                _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law)
+                if tables is not None or history is not None:
+                    _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff,
+                                   generic_law)
                 if history is not None and recording and episode[0] >= 0:
                     n = counters[2]
                     if n < history.shape[0]:
@@ -400,9 +409,10 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                         history[n, 2] = force[episode[0]]
                         counters[2] = n + 1
                 continue
-            dt_free = math.inf
-            for k in range(n_pairs):
-                dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
+            if tables is not None:
+                dt_free = math.inf
+                for k in range(n_pairs):
+                    dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
         if episode[0] < 0:
             # the collision begins with the closest pair whose centres of mass close in and that
             # cannot be proven free (out of range) or is within reach of the force; a pair that is

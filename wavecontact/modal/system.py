@@ -227,11 +227,15 @@ class ModalSystem:
     def contact_energy(self) -> float:
         total = 0.0
         for k, g in enumerate(self.gaps()):
-            # the compiled kernels' own law_response (no kernel of its own to compile for this call)
-            _, energy, _, _ = kernels.contact_response_from(
-                float(g), int(self.law_code), float(self.alpha), float(self.strength), float(self.stiffness),
-                float(self.pair_compliance[k]), math.nan, self.generic_law,
-            )
+            # the response the compiled kernels use (no kernel of its own to compile for this call)
+            if self.law_code == kernels.LAW_EXPONENTIAL:
+                _, energy, _, _ = kernels.exponential_response(float(g), float(self.alpha), float(self.strength),
+                                                               float(self.pair_compliance[k]), math.nan)
+            else:
+                _, energy, _, _ = kernels.contact_response_from(
+                    float(g), int(self.law_code), float(self.alpha), float(self.strength), float(self.stiffness),
+                    float(self.pair_compliance[k]), math.nan, self.generic_law,
+                )
             total += energy
         return total
 
