@@ -33,6 +33,7 @@ from ._jit import kernel
 from .contact import LAW_EXPONENTIAL, LAW_HARD, LAW_HERTZ, LAW_PENALTY
 
 __all__ = [
+    "exponential_response",
     "law_flow",
     "law_force",
     "law_gap",
@@ -109,7 +110,44 @@ def contact_response(gap, law, alpha, strength, stiffness, compliance):
 
 
 @kernel(error_model="numpy")
-def law_response(gap, law, alpha, strength, stiffness, compliance, guess):
+def exponential_response(gap, alpha, strength, compliance, guess):
+    """:func:`law_response` of the exponential law ``F = alpha B exp(-alpha r)``, on its own (a caller that
+    knows its law compiles only this branch).  ``guess`` as there."""
+    x = alpha * gap
+    if compliance <= 0.0:
+        if x < -700.0:
+            return math.inf, math.inf, math.inf, 1.0
+        energy = strength * math.exp(-x)
+        return alpha * energy, energy, alpha * alpha * energy, 1.0
+    # r - C alpha B exp(-alpha r) = gap  <=>  y exp(y) = beta exp(-x), y = alpha (r - gap)
+    log_z = math.log(alpha * alpha * strength * compliance) - x
+    if log_z < -30.0:
+        z = math.exp(log_z)
+        y = z * (1.0 - z)
+    else:
+        # Newton on u + exp(u) = log_z (u = log y): convex, increasing, started right of the root
+        if math.isnan(guess):
+            u = log_z if log_z < 0.0 else math.log1p(log_z)
+        else:
+            u = guess  # the previous step's root: Newton then needs two or three iterations
+        for _ in range(60):
+            eu = math.exp(u)
+            du = (u + eu - log_z) / (1.0 + eu)
+            u -= du
+            if abs(du) < 1e-8 * (1.0 + abs(u)):
+                # quadratic convergence: one more step reaches round-off
+                eu = math.exp(u)
+                u -= (u + eu - log_z) / (1.0 + eu)
+                break
+        y = math.exp(u)
+    scale = 1.0 / (alpha * compliance)
+    force = y * scale
+    energy = (y + 0.5 * y * y) * scale / alpha
+    return force, energy, alpha * force / (1.0 + y), 1.0 + y
+
+
+@kernel(error_model="numpy")
+def law_response(gap, law, alpha, strength, stiffness, compliance, guess, generic=True):
     """Force, interaction energy and stiffness of one pair at the modal gap ``gap``.
 
     With ``compliance > 0`` the contact acts through a massless spring of that
@@ -118,7 +156,8 @@ def law_response(gap, law, alpha, strength, stiffness, compliance, guess):
     includes the spring's, and the stiffness is ``dF/dgap``.
 
     ``guess`` (``nan``: none) starts the inner Newton solve for
-    ``log(alpha (r - gap))``.
+    ``log(alpha (r - gap))``.  ``generic`` None promises a law of :data:`CLOSED_FORM_CODES`, and numba
+    compiles the function without the generic solve (:func:`series_response`); True: any law.
 
     Returns
     -------
@@ -126,38 +165,8 @@ def law_response(gap, law, alpha, strength, stiffness, compliance, guess):
         ``softening = 1 + compliance * dF/dr`` (1 without compliance).
     """
     if law == LAW_EXPONENTIAL:
-        x = alpha * gap
-        if compliance <= 0.0:
-            if x < -700.0:
-                return math.inf, math.inf, math.inf, 1.0
-            energy = strength * math.exp(-x)
-            return alpha * energy, energy, alpha * alpha * energy, 1.0
-        # r - C alpha B exp(-alpha r) = gap  <=>  y exp(y) = beta exp(-x), y = alpha (r - gap)
-        log_z = math.log(alpha * alpha * strength * compliance) - x
-        if log_z < -30.0:
-            z = math.exp(log_z)
-            y = z * (1.0 - z)
-        else:
-            # Newton on u + exp(u) = log_z (u = log y): convex, increasing, started right of the root
-            if math.isnan(guess):
-                u = log_z if log_z < 0.0 else math.log1p(log_z)
-            else:
-                u = guess  # the previous step's root: Newton then needs two or three iterations
-            for _ in range(60):
-                eu = math.exp(u)
-                du = (u + eu - log_z) / (1.0 + eu)
-                u -= du
-                if abs(du) < 1e-8 * (1.0 + abs(u)):
-                    # quadratic convergence: one more step reaches round-off
-                    eu = math.exp(u)
-                    u -= (u + eu - log_z) / (1.0 + eu)
-                    break
-            y = math.exp(u)
-        scale = 1.0 / (alpha * compliance)
-        force = y * scale
-        energy = (y + 0.5 * y * y) * scale / alpha
-        return force, energy, alpha * force / (1.0 + y), 1.0 + y
-    if law != LAW_PENALTY and law != LAW_HARD:
+        return exponential_response(gap, alpha, strength, compliance, guess)
+    if generic is not None and law != LAW_PENALTY and law != LAW_HARD:
         return series_response(gap, law, alpha, strength, stiffness, compliance)
     # linear spring on overlap (penalty; hard = infinite stiffness, then only the compliance)
     if gap >= 0.0:

@@ -34,6 +34,7 @@ from .kernels import (
     STATUS_SEPARATED,
     STATUS_STEP_UNDERFLOW,
     contact_response_from,
+    exponential_response,
 )
 
 __all__ = ["CollocationTables", "radau_nodes", "run_collision"]
@@ -235,8 +236,8 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
     ``C = 0`` the logarithm keeps a stiff exponential from overflowing).
     ``work = (residual, delta, matrix, rhs)``.  ``quick_newton``: start from the force-free solution where the
     forces barely move the gaps, and stop after the update that leaves, by Newton's quadratic convergence,
-    a change below the tolerance for the next one (saves the confirming iteration); otherwise start from
-    ``predicted`` and stop after an update itself below the tolerance.
+    a change below the tolerance for the next one (saves the confirming iteration); None: start from
+    ``predicted`` and stop after an update itself below the tolerance (numba compiles without the quick rules).
     """
     residual, delta, matrix, rhs = work
     s = forces.size
@@ -252,7 +253,7 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             x = log_alpha_b + math.log(alpha * k_ii) - alpha * free_gap[i]
             u = x if x < 0.0 else math.log1p(x)
             v[i] = u - math.log(alpha * k_ii)
-    if quick_newton:
+    if quick_newton is not None:
         # where the forces barely move the gaps, the force-free solution v_i = log(alpha B) - alpha r_free,i is
         # within `weak` of the solution (an extrapolated light touch can be many e-folds off, and the capped
         # climb from below takes an iteration per two e-folds)
@@ -295,7 +296,7 @@ def _newton_log_force(free_gap, response, predicted, alpha, strength, compliance
             update = max(update, abs(step))
         if not math.isfinite(change):
             return False
-        if quick_newton and 0.0 < last_update < math.inf and update <= 10.0 * last_update * last_update:
+        if quick_newton is not None and 0.0 < last_update < math.inf and update <= 10.0 * last_update * last_update:
             # quadratic convergence seen (|dv_k| <= K |dv_{k-1}|^2 with K <= 10): the update just made leaves
             # an error of about the next one, K |dv_k|^2 of the forces
             remaining = update / (last_update * last_update) * update * update * biggest
@@ -520,8 +521,9 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
         Time; (unused second slot kept for symmetry with the splitting kernel).
     counters : int array (6,)
         Accepted steps, rejected steps, history length, filled levels, Newton iterations, records.
-    history : float array (H, 3)
-        ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing.
+    history : float array (H, 3) or None
+        ``(time, U1 - U0, force)`` at every collocation node of every step; H = 0 records nothing (None: nor
+        does numba compile the recording).
     max_steps : int
         Return (status 0) after this many accepted steps.
     quick_newton : bool
@@ -545,34 +547,40 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     exponential = law == LAW_EXPONENTIAL
     hard = not exponential and stiffness == math.inf and compliance <= 0.0
     warm = np.count_nonzero(free_q) > 0 or np.count_nonzero(free_v) > 0  # a kept mode not at rest (`!= 0.0`)
-    return _run_collision((modes, rigid), (contact_law, control), tables, exact_ends, output,
+    clock, counters, history = output
+    return _run_collision((modes, rigid, contact_law, control, tables), exact_ends, (clock, counters), history,
                           True if exact or both_ends else None, None if exact and not both_ends else True,
                           True if warm else None,
                           True if hard else None, None if exponential or hard else True,
-                          True if tables[-1] > 0 and exponential and not exact else None)
+                          True if tables[-1] > 0 and exponential and not exact else None,
+                          None if tables[2].size == 6 else True, True if control[5] else None)
 
 
 @kernel(error_model="numpy")
-def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncated, warm, hard, generic, free_steps):
+def _run_collision(problem, exact_ends, output, history, exact, truncated, warm, hard, generic, free_steps,
+                   other_stages, quick):
     """:func:`run_collision` with the parts a call does not run passed as None, so that numba compiles it without them.
 
-    ``bodies = (modes, rigid)``, ``settings = (contact_law, control)``, the other tuples as in
-    :func:`run_collision`.  Flags, True or None: ``exact`` where the call may have exact ends (``ends[0] > 0``),
-    ``truncated`` where it may have none (both True: one kernel for both, decided by ``ends[0]``); ``warm``: a kept mode does not start at rest (``free_q``, ``free_v`` not all zero); ``hard``: a
-    hard contact without compliance (:func:`_solve_hard`), ``generic``: a law solved by :func:`_newton_forces`
-    (both None: the exponential law, :func:`_newton_log_force`); ``free_steps``: steps above the sampling step
-    where the force provably stays negligible (``free_rungs > 0``, exponential law, no exact ends).
+    ``problem = (modes, rigid, contact_law, control, tables)``, ``output = (clock, counters)``, the other tuples
+    and ``history`` as in :func:`run_collision` (history None: nothing recorded, nor compiled).  Flags, True or
+    None: ``exact`` where the call may have exact ends (``ends[0] > 0``), ``truncated`` where it may have none
+    (both True: one kernel for both, decided by ``ends[0]``); ``warm``: a kept mode does not start at rest
+    (``free_q``, ``free_v`` not all zero); ``hard``: a hard contact without compliance (:func:`_solve_hard`),
+    ``generic``: a law solved by :func:`_newton_forces` (both None: the exponential law,
+    :func:`_newton_log_force`); ``free_steps``: steps above the sampling step where the force provably stays
+    negligible (``free_rungs > 0``, exponential law, no exact ends); ``other_stages``: None for six
+    collocation stages (their passes over the modes written out), True for any other number; ``quick``: True
+    for ``quick_newton``, None without it.
     """
-    modes, rigid = bodies
-    contact_law, control = settings
+    modes, rigid, contact_law, control, tables = problem
     q, v, omega, coupling = modes
     X, U, mass, half = rigid
     law, alpha, strength, stiffness, compliance = contact_law
-    contact_range, force_scale, tolerance, exponent_step, max_steps, quick_newton, onset_efolds = control
+    contact_range, force_scale, tolerance, exponent_step, max_steps, _, onset_efolds = control
     h_top, ladder_ratio, nodes, vinv, node_cos, node_sin, end_cos, end_sin, end_wsin, end_s, end_c, response, \
         filled, free_rungs = tables
     ends, free_q, free_v, records = exact_ends
-    clock, counters, history = output
+    clock, counters = output
     s = nodes.size
     n_levels = filled.size
     n_modes = q.size
@@ -587,7 +595,9 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     free_gap_lowest = ((30.0 - exponent_step + math.log(alpha * strength / force_scale)) / alpha
                        if free_steps is not None else 0.0)
     inverse_mass_rigid = 1.0 / mass[0] + 1.0 / mass[1]
-    recording = history.shape[0] > 0
+    recording = False
+    if history is not None:
+        recording = history.shape[0] > 0
     zeta = ends[0]
     exact_now = zeta > 0.0  # exact ends in this call (both flags True: decided here)
 
@@ -600,22 +610,24 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     matrix = np.empty((s, s))
     coefficients = np.empty(s)
     previous = np.empty(s)  # read only once a step was accepted (have_previous)
-    cq = np.empty(n_modes)
-    cv = np.empty(n_modes)
+    if other_stages is not None:
+        cq = np.empty(n_modes)
+        cv = np.empty(n_modes)
     load_q = np.empty(n_modes)
     load_v = np.empty(n_modes)
     step_response = np.empty((s, s))
-    # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
-    # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
-    integral = np.empty((s, s))
-    for i in range(s):
-        for m in range(s):
-            power = nodes[i]
-            total = 0.0
-            for k in range(s):
-                total += vinv[k, m] * power / (k + 1)
-                power *= nodes[i]
-            integral[i, m] = total
+    if exact is not None:
+        # exact ends: the gap responds to the step's force through the dashpot zeta alone (the echoes of
+        # a step come back after it); integral of the node polynomial L_m from 0 to theta_i
+        integral = np.empty((s, s))
+        for i in range(s):
+            for m in range(s):
+                power = nodes[i]
+                total = 0.0
+                for k in range(s):
+                    total += vinv[k, m] * power / (k + 1)
+                    power *= nodes[i]
+                integral[i, m] = total
     if hard is not None:
         active = np.empty(s, dtype=np.bool_)  # every entry set by _solve_hard before it is read
     if generic is not None:
@@ -649,6 +661,8 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     elif hard is not None:
         force_now = 0.0  # the first step's solve finds it (a start at zero gap may round to -1e-16)
         k_now = 0.0
+    elif generic is None:  # the exponential law (hard contact: above), its response alone compiled
+        force_now, _, k_now, _ = exponential_response(rigid_gap + sq, alpha, strength, compliance, math.nan)
     else:
         force_now, k_now = _force(rigid_gap + sq, law, alpha, strength, stiffness, compliance, 0.0)
     if not math.isfinite(force_now):
@@ -691,7 +705,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
     while True:
         if steps_here >= max_steps:
             return STATUS_RUNNING
-        if recording and counters[2] + s > history.shape[0]:
+        if history is not None and recording and counters[2] + s > history.shape[0]:
             return STATUS_BUFFER_FULL
         if exact is not None and exact_now and counters[5] >= records.shape[0]:
             return STATUS_RECORDS_FULL
@@ -723,7 +737,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
                     step_response[i, m] = response[level, i, m]
             mode_q = q
             mode_v = v
-        if (warm is not None or truncated is not None and not exact_now) and s == 6:
+        if other_stages is None and (warm is not None or truncated is not None and not exact_now):
             # the six stages (the default) in one pass over the modes: six independent sums, each node's in its
             # order (the same arithmetic as the passes below)
             c0, c1, c2, c3, c4, c5 = (node_cos[level, 0], node_cos[level, 1], node_cos[level, 2], node_cos[level, 3],
@@ -746,7 +760,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             free_gap[3] += total3
             free_gap[4] += total4
             free_gap[5] += total5
-        elif warm is not None or truncated is not None and not exact_now:
+        elif other_stages is not None and (warm is not None or truncated is not None and not exact_now):
             for j in range(n_modes):
                 cq[j] = coupling[j] * mode_q[j]
                 cv[j] = coupling[j] * mode_v[j]
@@ -801,7 +815,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
         else:  # the exponential law
             converged = _newton_log_force(free_gap, step_response, predicted, alpha, strength, compliance,
                                           force_scale, forces, (residual, delta, matrix, rhs), counters,
-                                          quick_newton)
+                                          quick)
         if not converged:
             level += 4
             continue
@@ -826,11 +840,11 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             for m in range(s):
                 total += vinv[k, m] * forces[m]
             coefficients[k] = total
-        negligible = quick_newton
+        negligible = quick is not None
         for k in range(s):
             negligible = negligible and abs(forces[k]) <= 1e-30 * force_scale
         # (quick rules) node forces below 1e-30 of the force scale move no mode by more than round-off: no load
-        if s == 6 and not negligible:
+        if other_stages is None and not negligible:
             # the six stages (the default) in one pass over the modes: the same sum for each mode, term by term
             # in the same order as the loop below, without reading and writing the loads six times
             a0, a1, a2, a3, a4, a5 = (coefficients[0], coefficients[1], coefficients[2], coefficients[3],
@@ -848,13 +862,14 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
             for j in range(n_modes):
                 load_q[j] = 0.0
                 load_v[j] = 0.0
-            for k in range(0 if negligible else s):
-                a_k = coefficients[k]
-                row_s = end_s[level, k]
-                row_c = end_c[level, k]
-                for j in range(n_modes):
-                    load_q[j] += a_k * row_s[j]
-                    load_v[j] += a_k * row_c[j]
+            if other_stages is not None:  # (six stages come here for negligible forces only: no load)
+                for k in range(0 if negligible else s):
+                    a_k = coefficients[k]
+                    row_s = end_s[level, k]
+                    row_c = end_c[level, k]
+                    for j in range(n_modes):
+                        load_q[j] += a_k * row_s[j]
+                        load_v[j] += a_k * row_c[j]
         sq = 0.0
         sv = 0.0
         e_cos = end_cos[level]
@@ -890,7 +905,7 @@ def _run_collision(bodies, settings, tables, exact_ends, output, exact, truncate
                 records[n_rec, 3 + k] = coefficients[k]
             counters[5] = n_rec + 1
             impulse_total += impulse
-        if recording:
+        if history is not None and recording:
             # every node of the step: time, relative velocity of the centres of mass, force
             relative = U[1] - U[0]
             for i in range(s):

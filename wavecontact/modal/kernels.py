@@ -27,7 +27,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..contact import LAW_EXPONENTIAL, LAW_PENALTY
-from ..contact_kernels import contact_response  # noqa: F401 (the modal kernels' name for it)
+from ..contact_kernels import contact_response, exponential_response  # noqa: F401 (the modal kernels' names)
 from ..contact_kernels import law_response as contact_response_from
 
 TOE_MARGIN = 5.0
@@ -202,8 +202,9 @@ def _rotate(q, v, left, right, rod_first, cos_row, sin_over_omega_row, omega_sin
 
 
 @kernel(internal=True, error_model="numpy")
-def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
-    """Force, stiffness and softened alpha of every pair; False if a force is not finite."""
+def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law):
+    """Force, stiffness and softened alpha of every pair; False if a force is not finite (``generic_law``:
+    ``generic`` of :func:`~wavecontact.contact_kernels.law_response`)."""
     finite = True
     for k in range(gap.size):
         guess = math.nan
@@ -211,7 +212,8 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
             previous = alpha / aeff[k] - 1.0  # aeff = alpha / (1 + y): last step's y
             if previous > 1e-6:
                 guess = math.log(previous)
-        f, _, kk, soft = contact_response_from(gap[k], law, alpha, strength, stiffness, pair_compliance[k], guess)
+        f, _, kk, soft = contact_response_from(gap[k], law, alpha, strength, stiffness, pair_compliance[k], guess,
+                                               generic_law)
         if not math.isfinite(f):
             finite = False
         force[k] = f
@@ -221,7 +223,7 @@ def _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force,
 
 
 @kernel(error_model="numpy")
-def run_episode(modes, bodies, pairs, contact_law, control, tables, output, history, max_steps):
+def run_episode(modes, bodies, pairs, contact_law, control, tables, output, history, max_steps, generic_law):
     """Integrate until the current collision (episode) is over.
 
     All arrays are modified in place where they hold state.  The arguments are tuples:
@@ -260,7 +262,10 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
         (``[0], [1.0]`` for order 2; the triple jump for order 4).
     cos_table, sin_table, omega_sin_table : float arrays (F, J, M)
         ``cos(omega f dt_j)``, ``sin(omega f dt_j) / omega``, ``omega sin(omega f dt_j)``
-        for each distinct substep fraction ``f``.
+        for each distinct substep fraction ``f``; ``tables`` None: no step is taken (the free flight to
+        where a pair may be in range, then status 0, as with ``max_steps = 0``), and numba compiles the
+        kernel without the stepping (and, with ``history`` None, without the contact law: the start's
+        force is then not checked, the first step's kernel does).
     clock : float array (2,)
         Current time; time at which the current episode began.
     episode : int array (1,)
@@ -272,6 +277,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
         records nothing (None: numba compiles the kernel without the recording).
     max_steps : int
         Return after this many steps (status 0).
+    generic_law : True or None
+        None for a law of ``CLOSED_FORM_CODES`` (numba compiles without the generic solve, see
+        :func:`~wavecontact.contact_kernels.law_response`), True for any law.
 
     Returns
     -------
@@ -283,24 +291,12 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
     pair_a, pair_b, pair_offset, pair_compliance, pair_inverse_mass = pairs
     law, alpha, strength, stiffness, contact_range = contact_law
     step_accuracy, step_reach, force_scale, dt_top, ladder_ratio, sub_index, sub_weight = control
-    cos_table, sin_table, omega_sin_table = tables
     clock, episode, counters = output
     n_rods = X.size
     n_pairs = pair_a.size
-    n_levels = cos_table.shape[1]
     inverse_omega = np.empty(omega.size)
     for j in range(omega.size):
         inverse_omega[j] = 1.0 / omega[j]
-    # farthest a composed step strays from its start, in units of the step (1.35 for the triple jump):
-    # the rigorous free-flight and toe limits must hold for every substep's end point
-    excursion = 0.0
-    partial = 0.0
-    for sub in range(sub_weight.size):
-        partial += sub_weight[sub]
-        excursion = max(excursion, abs(partial))
-    omega_max = 0.0
-    for j in range(omega.size):
-        omega_max = max(omega_max, omega[j])
     sums = np.empty((n_rods, 4))
     amp_left = np.empty((n_rods, 3))
     amp_right = np.empty((n_rods, 3))
@@ -317,36 +313,52 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
     speed_bound = np.empty(n_pairs)
     accel_bound = np.empty(n_pairs)
     bounds = (rigid_gap, rigid_rate, reach, speed_bound, accel_bound)
-    log_ratio = math.log(ladder_ratio)
     recording = False
     if history is not None:
         recording = history.shape[0] > 0
     steps_here = 0
     skip_tolerance = 1e-6 * contact_range + 1e-12 * half[0]
-    # alpha * gap at which alpha B exp(-alpha gap) = force_scale (accuracy / reach)^2
-    significant_exponent = 0.0
-    if law == LAW_EXPONENTIAL:
-        significant_exponent = math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy) + TOE_MARGIN
-
     pending = np.empty((n_rods, 2))
-    rod_products = np.empty((n_rods, 3))
     for i in range(n_rods):
         pending[i, 0] = 0.0
         pending[i, 1] = 0.0
-        left_left = 0.0
-        left_right = 0.0
-        right_right = 0.0
-        for j in range(rod_first[i], rod_first[i + 1]):
-            left_left += left[j] * left[j]
-            left_right += left[j] * right[j]
-            right_right += right[j] * right[j]
-        rod_products[i, 0] = left_left
-        rod_products[i, 1] = left_right
-        rod_products[i, 2] = right_right
+    if tables is not None:  # the stepping's constants (a free flight alone needs none)
+        # farthest a composed step strays from its start, in units of the step (1.35 for the triple jump):
+        # the rigorous free-flight and toe limits must hold for every substep's end point
+        excursion = 0.0
+        partial = 0.0
+        for sub in range(sub_weight.size):
+            partial += sub_weight[sub]
+            excursion = max(excursion, abs(partial))
+        omega_max = 0.0
+        for j in range(omega.size):
+            omega_max = max(omega_max, omega[j])
+        log_ratio = math.log(ladder_ratio)
+        # alpha * gap at which alpha B exp(-alpha gap) = force_scale (accuracy / reach)^2
+        significant_exponent = 0.0
+        if law == LAW_EXPONENTIAL:
+            significant_exponent = (math.log(alpha * strength / force_scale) + 2.0 * math.log(step_reach / step_accuracy)
+                                    + TOE_MARGIN)
+        rod_products = np.empty((n_rods, 3))
+        for i in range(n_rods):
+            left_left = 0.0
+            left_right = 0.0
+            right_right = 0.0
+            for j in range(rod_first[i], rod_first[i + 1]):
+                left_left += left[j] * left[j]
+                left_right += left[j] * right[j]
+                right_right += right[j] * right[j]
+            rod_products[i, 0] = left_left
+            rod_products[i, 1] = left_right
+            rod_products[i, 2] = right_right
 
     end_sums(q, v, left, right, rod_first, sums)
     _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-    if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+    # the forces are read by the steps and the history alone: a free flight without them (tables and history
+    # None) compiles without the contact law (nor checks that the force at the start is finite)
+    if (tables is not None or history is not None) and not _update_forces(gap, law, alpha, strength, stiffness,
+                                                                          pair_compliance, force, keff, aeff,
+                                                                          generic_law):
         return STATUS_NOT_FINITE
 
     while True:
@@ -386,7 +398,9 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                 counters[1] += 1
                 end_sums(q, v, left, right, rod_first, sums)
                 _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-                _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff)
+                if tables is not None or history is not None:
+                    _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff,
+                                   generic_law)
                 if history is not None and recording and episode[0] >= 0:
                     n = counters[2]
                     if n < history.shape[0]:
@@ -395,9 +409,10 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                         history[n, 2] = force[episode[0]]
                         counters[2] = n + 1
                 continue
-            dt_free = math.inf
-            for k in range(n_pairs):
-                dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
+            if tables is not None:
+                dt_free = math.inf
+                for k in range(n_pairs):
+                    dt_free = min(dt_free, (gap[k] - contact_range) / speed_bound[k])
         if episode[0] < 0:
             # the collision begins with the closest pair whose centres of mass close in and that
             # cannot be proven free (out of range) or is within reach of the force; a pair that is
@@ -414,9 +429,11 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
             if best >= 0:
                 episode[0] = best
                 clock[1] = clock[0]
-        if steps_here >= max_steps:
+        if tables is None or steps_here >= max_steps:
             _flush(v, left, right, rod_first, pending)
             return STATUS_RUNNING
+        cos_table, sin_table, omega_sin_table = tables
+        n_levels = cos_table.shape[1]
         if history is not None and recording and counters[2] >= history.shape[0]:
             _flush(v, left, right, rod_first, pending)
             return STATUS_BUFFER_FULL
@@ -479,7 +496,7 @@ def run_episode(modes, bodies, pairs, contact_law, control, tables, output, hist
                 X[i] += U[i] * dt_sub
             clock[0] += dt_sub
             _pair_state(X, U, half, sums, pair_a, pair_b, pair_offset, gap, gap_rate)
-            if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff):
+            if not _update_forces(gap, law, alpha, strength, stiffness, pair_compliance, force, keff, aeff, generic_law):
                 _flush(v, left, right, rod_first, pending)
                 return STATUS_NOT_FINITE
             _kick_deferred(U, mass, pair_a, pair_b, force, h, rod_products, sums, pending)

@@ -272,7 +272,6 @@ class _CollocationPair:
         self.ends = np.zeros(end_response.ENDS_SIZE)  # no exact ends: the static correction is the compliance
         self.free = np.zeros(system.omega.size)  # free-running copy of the modes (exact ends only)
         self.records = np.empty((0, 3 + stages))
-        self.history = np.empty((0, 3))
         self.counters = np.zeros(6, dtype=np.int64)
 
     def collide(self, tolerance):
@@ -291,7 +290,7 @@ class _CollocationPair:
             (float(system.contact_range), float(force_scale), float(tolerance), float(EXPONENT_STEP), 1 << 62,
              bool(QUICK_NEWTON), float(ONSET_EFOLDS)),
             self.tables.arrays(), (self.ends, self.free, self.free, self.records),
-            (system.clock, self.counters, self.history),
+            (system.clock, self.counters, None),  # no history: the kernel compiled without the recording
         )
         system.check_status(status)
         if status != kernels.STATUS_SEPARATED:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..contact import ContactLaw
+from ..contact_kernels import CLOSED_FORM_CODES
 from ..errors import InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..result import Outcome
 from . import kernels
@@ -163,6 +164,8 @@ class ModalSystem:
         self.force_scale = float(force_scale)
         (self.law_code, self.alpha, self.strength, self.stiffness,
          self.contact_range) = contact_parameters(law, self.force_scale, self.static_correction or self.exact_ends)
+        # the kernels' flag for a law without closed forms (None: compiled without the generic solve)
+        self.generic_law = None if self.law_code in CLOSED_FORM_CODES else True
         self.dt_top = 0.05 * min(r.length / r.wave_speed for r in self.rods)
         if self.law_code == kernels.LAW_EXPONENTIAL:
             self.dt_top = max(self.dt_top, 0.05 / (self.alpha * max(1e-300, np.max(np.abs(self.U)))))
@@ -188,6 +191,8 @@ class ModalSystem:
                                         "use correction='static' with the splitting")
         if history is not None and history.shape[0] == 0:
             history = None  # records nothing: the kernel compiled without the recording
+        # max_steps 0 (the ring's free flights): no step, and the kernel compiled without the stepping
+        tables = self.rotation_tables() if max_steps > 0 else None
         return kernels.run_episode(
             (self.q, self.v, self.omega, self.left, self.right, self.rod_first), (self.X, self.U, self.mass, self.half),
             (self.pair_a, self.pair_b, self.pair_offset, self.pair_compliance, self.pair_inverse_mass),
@@ -195,7 +200,7 @@ class ModalSystem:
              float(self.contact_range)),
             (float(self.control.accuracy), float(self.control.reach), float(self.force_scale), float(self.dt_top),
              float(self.control.ladder_ratio), self.sub_index, self.sub_weight),
-            self.rotation_tables(), (self.clock, self.episode, self.counters), history, int(max_steps),
+            tables, (self.clock, self.episode, self.counters), history, int(max_steps), self.generic_law,
         )
 
     @staticmethod
@@ -222,9 +227,15 @@ class ModalSystem:
     def contact_energy(self) -> float:
         total = 0.0
         for k, g in enumerate(self.gaps()):
-            _, energy, _, _ = kernels.contact_response(
-                float(g), self.law_code, self.alpha, self.strength, self.stiffness, float(self.pair_compliance[k])
-            )
+            # the response the compiled kernels use (no kernel of its own to compile for this call)
+            if self.law_code == kernels.LAW_EXPONENTIAL:
+                _, energy, _, _ = kernels.exponential_response(float(g), float(self.alpha), float(self.strength),
+                                                               float(self.pair_compliance[k]), math.nan)
+            else:
+                _, energy, _, _ = kernels.contact_response_from(
+                    float(g), int(self.law_code), float(self.alpha), float(self.strength), float(self.stiffness),
+                    float(self.pair_compliance[k]), math.nan, self.generic_law,
+                )
             total += energy
         return total
 
