@@ -69,3 +69,13 @@ def test_fresh_compile_and_cache_load_give_the_same_ring_and_resume_matches(tmp_
     straight = _ring(tmp_path / "straight", cache)
     assert straight.returncode == 0, straight.stderr
     _same(RingRun.load_npz(tmp_path / "straight" / "ring.npz"), RingRun.load_npz(stopped / "ring.npz"))
+    # The three processes filled the cache with every kernel the ring command compiles (one index file per
+    # kernel, named module.function-line): its free flights compile the splitting kernel without its stepping,
+    # rotation tables and contact law, and the exponential collision no general law (docs/performance.md,
+    # compile time of a first run); any of these in the cache means a ring run compiles them again.
+    compiled = {path.name.split("-")[0] for path in cache.rglob("*.nbi")}
+    assert "kernels.run_episode" in compiled and "contact_kernels.exponential_response" in compiled
+    not_needed = {"kernels.rotation_tables", "kernels._update_forces", "kernels._rotate", "kernels._kick_deferred",
+                  "contact_kernels.law_response", "contact_kernels.series_response", "contact_kernels.contact_response",
+                  "contact_kernels.law_force", "collocation._force"}
+    assert not compiled & not_needed, f"the ring command compiled {sorted(compiled & not_needed)}"
