@@ -115,12 +115,22 @@ def written_paths(command: str) -> list:
     return paths
 
 
+def prepare_scratch(command: str, scratch) -> None:
+    """Make the directories of the checkout that ``command`` names (as arguments) in the empty directory ``scratch``."""
+    for word in shlex.split(command)[1:]:
+        if not word.startswith("-") and (ROOT / word).is_dir() and not Path(word).is_absolute():
+            (Path(scratch) / word).mkdir(parents=True, exist_ok=True)
+
+
+def missing_outputs(command: str, scratch) -> list:
+    """The output paths of ``command`` (:func:`written_paths`) that are not in ``scratch`` after it ran."""
+    return [p for p in written_paths(command) if not (Path(scratch) / p).exists()]
+
+
 def run(command: str, timeout: float = 3600.0) -> tuple:
     """Run one command in an empty directory; ``(ok, seconds, message)``."""
     with tempfile.TemporaryDirectory() as scratch:
-        for word in shlex.split(command)[1:]:  # directories of the checkout that the command names exist there too
-            if not word.startswith("-") and (ROOT / word).is_dir() and not Path(word).is_absolute():
-                (Path(scratch) / word).mkdir(parents=True, exist_ok=True)
+        prepare_scratch(command, scratch)
         environment = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg", "COLUMNS": "100"}
         start = time.perf_counter()
         try:
@@ -131,7 +141,7 @@ def run(command: str, timeout: float = 3600.0) -> tuple:
         seconds = time.perf_counter() - start
         if done.returncode != 0:
             return False, seconds, f"exit status {done.returncode}: {done.stderr.strip()[-1500:]}"
-        missing = [p for p in written_paths(command) if not (Path(scratch) / p).exists()]
+        missing = missing_outputs(command, scratch)
         if missing:
             return False, seconds, f"did not write {', '.join(missing)}"
         return True, seconds, ""

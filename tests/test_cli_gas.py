@@ -154,7 +154,6 @@ _BASE = ["gas", "--rods", "100", "--rule", "fixed", "--restitution", "0.97", "--
 def _written_run(tmp_path_factory):
     """One ``_BASE`` run of 300 collisions written by the CLI (outputs, figure and checkpoint) and its summary;
     the tests that resume or tamper with it take a copy (:func:`_copy_of_run`), so the figure is drawn once."""
-    import contextlib
     import io
 
     out = tmp_path_factory.mktemp("gas300") / "run"

@@ -280,9 +280,7 @@ def test_cheap_command_shown_in_the_docs_runs(command, tmp_path, monkeypatch, ca
 
     words = shlex.split(command)
     assert words[0] == "wavecontact", command
-    for word in words[1:]:
-        if not word.startswith("-") and (ROOT / word).is_dir() and not Path(word).is_absolute():
-            (tmp_path / word).mkdir(parents=True, exist_ok=True)
+    commands.prepare_scratch(command, tmp_path)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("COLUMNS", "100")
     try:
@@ -291,7 +289,7 @@ def test_cheap_command_shown_in_the_docs_runs(command, tmp_path, monkeypatch, ca
         status = ended.code
     err = capsys.readouterr().err
     assert status in (0, None), f"{command}: exit status {status}: {err.strip()[-1500:]}"
-    missing = [p for p in commands.written_paths(command) if not (tmp_path / p).exists()]
+    missing = commands.missing_outputs(command, tmp_path)
     assert not missing, f"{command}: did not write {', '.join(missing)}"
 
 
