@@ -547,13 +547,15 @@ def run_collision(modes, rigid, contact_law, control, tables, exact_ends, output
     exponential = law == LAW_EXPONENTIAL
     hard = not exponential and stiffness == math.inf and compliance <= 0.0
     warm = np.count_nonzero(free_q) > 0 or np.count_nonzero(free_v) > 0  # a kept mode not at rest (`!= 0.0`)
+    six_stages = tables[2].size == 6  # the collocation nodes
+    quick_newton = control[5]
     clock, counters, history = output
     return _run_collision((modes, rigid, contact_law, control, tables), exact_ends, (clock, counters), history,
                           True if exact or both_ends else None, None if exact and not both_ends else True,
                           True if warm else None,
                           True if hard else None, None if exponential or hard else True,
                           True if tables[-1] > 0 and exponential and not exact else None,
-                          None if tables[2].size == 6 else True, True if control[5] else None)
+                          None if six_stages else True, True if quick_newton else None)
 
 
 @kernel(error_model="numpy")
