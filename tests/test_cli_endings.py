@@ -55,6 +55,34 @@ def test_failures_under_the_work_end_with_one_line(monkeypatch, capsys, failure,
     assert "Traceback" not in captured.err
 
 
+def test_a_reader_that_closes_the_pipe_first_ends_the_command_quietly_with_status_141():
+    """``wavecontact ... | head``: the reader is gone before the answer is printed; no traceback, no error line."""
+    command = [sys.executable, "-m", "wavecontact", "collide", "--gamma", "0.6", "--kappa", "inf"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process.stdout.close()  # before the child has even imported the package
+    try:
+        _out, err = process.communicate(timeout=240)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 141, err
+    assert "Traceback" not in err and "Broken pipe" not in err and "Exception ignored" not in err, err
+
+
+def test_a_broken_pipe_elsewhere_than_standard_output_is_an_error_in_one_line(monkeypatch, capsys):
+    from wavecontact import cli
+    from wavecontact.studies import compare
+
+    def fail(*args, **kwargs):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(compare, "compare_solvers", fail)
+    monkeypatch.setattr(cli, "_stdout_closed", lambda: False)  # pytest's capture has no pipe to poll
+    assert main(list(ARGV)) == 2
+    err = capsys.readouterr().err
+    assert err == "wavecontact: error: [Errno 32] Broken pipe\n"
+
+
 def test_a_watchdog_that_finds_the_cluster_lost_stops_the_run_with_its_reason(monkeypatch, capsys):
     """The watchdog interrupts the main thread; main reports the reason, not 'interrupted'."""
     from wavecontact.studies import compare

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from ..errors import WavecontactError
@@ -67,6 +68,33 @@ def _stopped() -> int:
     return 130
 
 
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe whose reader has gone (poll reports an error on its end)."""
+    try:
+        import select
+
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(events & select.POLLERR for _, events in poller.poll(0))
+    except (AttributeError, OSError, ValueError):  # no poll (Windows) or no descriptor: trust the exception
+        return True
+
+
+def _reader_gone() -> int:
+    """The reader of standard output closed it (``| head``): stop quietly, as a command killed by SIGPIPE.
+
+    Standard output is pointed at the null device so that the interpreter's flush at exit does not
+    raise again; the status is 141, the shell's for a command ended by SIGPIPE.
+    """
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # no file descriptor behind sys.stdout (an embedding application)
+        pass
+    return 141
+
+
 def _cancelled(exc: BaseException) -> bool:
     """A Dask future cancelled or a connection closed: the scheduler or the workers went away."""
     import asyncio
@@ -80,7 +108,8 @@ def _cancelled(exc: BaseException) -> bool:
 def main(argv=None) -> int:
     """Run one command; every failure ends with one line on stderr and a non-zero status.
 
-    Exit status 0 success, 2 refused or failed (the line says why), 130 interrupted (Ctrl-C).
+    Exit status 0 success, 2 refused or failed (the line says why), 130 interrupted (Ctrl-C), 141 when
+    the reader of its standard output went away first (``wavecontact ... | head``; nothing is printed).
     """
     from concurrent.futures.process import BrokenProcessPool
 
@@ -90,7 +119,14 @@ def main(argv=None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
         with announce_compilation():  # a first run on an empty numba cache says why it is silent
-            return int(args.run(args) or 0)
+            status = int(args.run(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's own flush at exit
+        return status
+    except BrokenPipeError as exc:
+        if _stdout_closed():
+            return _reader_gone()
+        _say(f"error: {exc}")  # another pipe (a worker's): a failure like any other
+        return 2
     except KeyboardInterrupt:
         return _stopped()
     except MemoryError:
