@@ -61,6 +61,8 @@ __all__ = [
     "interface_gap",
     "penalty_flow",
     "penalty_gap",
+    "pruned_flow",
+    "pruned_gap",
 ]
 
 # the exponential force and energy count as infinite beyond this exponent (a massive overlap)
@@ -97,6 +99,25 @@ def contact_potential(law, r, alpha, strength, stiffness):
 def interface_gap(law, r, g, duration, compliance, alpha, strength, stiffness):
     """The massless-end gap after ``duration``: :func:`~wavecontact.contact_kernels.law_gap`."""
     return law_gap(law, r, g, duration, compliance, alpha, strength, stiffness)
+
+
+@kernel(internal=True)
+def pruned_flow(general_law, plastic, r, w, dt, m_inv, alpha, strength, stiffness):
+    """The splitting scheme's flow: the exponential law's when ``general_law`` is None (numba then prunes
+    the other laws and compiles none of them), else :func:`contact_flow` of the law ``general_law``."""
+    if general_law is None:
+        return exponential_flow(r, w, dt, m_inv, alpha, strength)
+    return contact_flow(general_law, plastic, r, w, dt, m_inv, alpha, strength, stiffness)
+
+
+@kernel(internal=True)
+def pruned_gap(general_law, r, g, duration, compliance, alpha, strength, stiffness):
+    """The massless-end gap after ``duration``: the exponential law's solution when ``general_law`` is None
+    (numba then prunes the other laws and compiles none of them), else :func:`interface_gap` of the law
+    ``general_law``."""
+    if general_law is None:
+        return exponential_gap(r, g, duration, compliance, alpha, strength)
+    return interface_gap(general_law, r, g, duration, compliance, alpha, strength, stiffness)
 
 
 @kernel(internal=True)

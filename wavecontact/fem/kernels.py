@@ -29,10 +29,10 @@ import numpy as np
 
 from .._jit import kernel
 from .contact_flows import (
-    contact_flow,
     contact_force,
     contact_potential,
-    interface_gap,
+    pruned_flow,
+    pruned_gap,
 )
 from .explicit_step import MASS_CONDENSED, MASS_LUMPED, T_CHAIN_INVERSE, elastic_acceleration, step_flat
 from .interleaved_step import (
@@ -191,7 +191,7 @@ def _energy_check(kinetic1, strain1, kinetic2, strain2, potential, mass1, mass2,
 
 
 @kernel
-def advance(rod1, rod2, tables, columns, contact, control, state, history, energies, end_scheme):
+def advance(rod1, rod2, tables, columns, contact, control, state, history, energies, end_scheme, general_law):
     """Run up to ``history[0].size`` steps of central differences with the contact; return ``(status, steps, samples)``.
 
     Parameters
@@ -229,6 +229,12 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
         gap of the contact's exact solution).  numba prunes the branches of a
         None argument before typing, so a force-scheme run compiles neither
         scheme's flows and gaps (the README's FE commands run no other scheme).
+    general_law : None or np.int64
+        For the two other schemes: None for the exponential law (the law of
+        ``contact``; its flow and gap are then called directly and numba
+        compiles no other law's), else the law's code.  None under the force
+        scheme, which reads the law from ``contact`` (one specialisation for
+        every law).
 
     The run stops (status 1) once the rods are apart and provably stay apart:
     the end gap is bounded below by the centre-of-mass gap minus ``bound *
@@ -301,13 +307,13 @@ def advance(rod1, rod2, tables, columns, contact, control, state, history, energ
             shift = impulse * dt
         elif end_scheme == SCHEME_SPLITTING:
             w0 = V2[start2] - V1[end1]
-            r1, w1 = contact_flow(law, plastic, r_now, w0, dt, m_inv, alpha, strength, stiffness)
+            r1, w1 = pruned_flow(general_law, plastic, r_now, w0, dt, m_inv, alpha, strength, stiffness)
             impulse = (w1 - w0) / m_inv
             shift = (r1 - r_free) / m_inv
         else:
             # massless-end interface: the ends close at their current relative velocity
             w0 = V2[start2] - V1[end1]
-            r_after = interface_gap(law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
+            r_after = pruned_gap(general_law, r_now, w0, dt, m_inv * dt, alpha, strength, stiffness)
             shift = (r_after - r_free) / m_inv
             impulse = shift / dt
         if (impulse != 0.0 or shift != 0.0) and not loaded1:

@@ -38,10 +38,9 @@ from .._jit import kernel
 from .contact_flows import (
     LAW_EXPONENTIAL,
     contact_potential,
-    exponential_gap,
     exponential_gap_linear,
     exponential_gap_quartic,
-    interface_gap,
+    pruned_gap,
 )
 from .kernels import (
     STATUS_FAILED,
@@ -240,16 +239,6 @@ def _contact_end_value(contact, neighbour, coefficient):
 
 
 @kernel(fastmath=False, internal=True)
-def _gap(general_law, r, g, duration, compliance, alpha, strength, stiffness):
-    """The massless-end gap after ``duration``: the exponential law's solution when ``general_law`` is None
-    (numba then prunes the other laws' and compiles none of them), else
-    :func:`~wavecontact.fem.contact_flows.interface_gap` of the law ``general_law``."""
-    if general_law is None:
-        return exponential_gap(r, g, duration, compliance, alpha, strength)
-    return interface_gap(general_law, r, g, duration, compliance, alpha, strength, stiffness)
-
-
-@kernel(fastmath=False, internal=True)
 def _one_jump_gap(general_law, r, rates, dt, compliance, alpha, strength, stiffness):
     """Gap after a step whose incoming rate jumps once, or NaN if the step means do not show one jump.
 
@@ -259,7 +248,8 @@ def _one_jump_gap(general_law, r, rates, dt, compliance, alpha, strength, stiffn
     the two after share ``q_a``, and this step's mean lies strictly between,
     the rate is ``q_b`` for the fraction ``(mean - q_a)/(q_b - q_a)`` of the
     step and ``q_a`` after; the gap equation is solved exactly on each part
-    (a release inside the step then gives the exact impulse).  ``general_law``: as in :func:`_gap`.
+    (a release inside the step then gives the exact impulse).  ``general_law``: as in
+    :func:`~wavecontact.fem.contact_flows.pruned_gap`.
     """
     before = rates[1]
     after = rates[3]
@@ -271,8 +261,8 @@ def _one_jump_gap(general_law, r, rates, dt, compliance, alpha, strength, stiffn
     fraction = (mean - after) / (before - after)
     if not (1e-12 < fraction < 1.0 - 1e-12):
         return math.nan
-    middle = _gap(general_law, r, before, fraction * dt, compliance, alpha, strength, stiffness)
-    return _gap(general_law, middle, after, (1.0 - fraction) * dt, compliance, alpha, strength, stiffness)
+    middle = pruned_gap(general_law, r, before, fraction * dt, compliance, alpha, strength, stiffness)
+    return pruned_gap(general_law, middle, after, (1.0 - fraction) * dt, compliance, alpha, strength, stiffness)
 
 
 @kernel(fastmath=False, internal=True)
@@ -395,7 +385,7 @@ def advance_lattice(rod1, rod2, parameters1, parameters2, waves1, waves2, contac
         elif centered:
             r_after = _one_jump_gap(general_law, r_now, rates, dt, compliance, alpha, strength, stiffness)
         if math.isnan(r_after):
-            r_after = _gap(general_law, r_now, incoming, dt, compliance, alpha, strength, stiffness)
+            r_after = pruned_gap(general_law, r_now, incoming, dt, compliance, alpha, strength, stiffness)
         shift = (r_after - r_free) / m_inv
         impulse = shift / dt
         if shift != 0.0:

@@ -495,6 +495,7 @@ class _Run:
             (self.mass_solves[0][1], self.mass_solves[1][1]), (self.column1, self.column2),
             self.contact, self.control, self.state, hist, energies,
             None if s.scheme == kernels.SCHEME_FORCE else np.int64(s.scheme),
+            None if s.scheme == kernels.SCHEME_FORCE or s.law == LAW_EXPONENTIAL else np.int64(s.law),
         )
         return status, [h[:done] for h in hist], [e[:samples] for e in energies]
 
