@@ -184,7 +184,9 @@ def modal_hard_static_table() -> str:
 
 BLOCKS = [
     Block("usage-solver-options", "docs/usage.md", (), cheap=True, python="solver_options_tables"),
-    Block("readme-collide", "README.md", (("collide", "--gamma", "0.6", "--kappa", "100"),), cheap=True),
+    # a newcomer's first run: an empty numba cache, so the answer comes from the interpreted kernels
+    Block("readme-collide", "README.md", (("collide", "--gamma", "0.6", "--kappa", "100"),), cheap=True,
+          env={"NUMBA_CACHE_DIR": "{tmp}/numba-cache"}),
     Block("usage-help", "docs/usage.md",
           tuple(("--help",) if c is None else (c, "--help")
                 for c in (None, "collide", "converge", "compare", "ring", "equipartition", "map", "gas", "ensemble",
@@ -263,14 +265,16 @@ def _help_text(argv) -> str:
 def run_command(argv, scratch: str, env: dict | None = None, figures: str = FIGURES) -> str:
     """Run one command from this checkout and return its standard output.
 
-    ``{tmp}`` in a command is ``scratch``; ``{figures}`` is ``figures`` (docs/figures when pages are
-    regenerated, a scratch directory when they are only checked), shown as docs/figures in the output.
+    ``{tmp}`` in a command or an ``env`` value is ``scratch``; ``{figures}`` is ``figures`` (docs/figures
+    when pages are regenerated, a scratch directory when they are only checked), shown as docs/figures in
+    the output.
     """
     if argv[-1] == "--help" and argv[0] != "python":
         return _help_text(argv)  # no output files, nothing to time: a subprocess per page would be slow
     words = [w.replace("{tmp}", scratch).replace("{figures}", figures) for w in argv]
     command = [sys.executable, *words[1:]] if words[0] == "python" else [sys.executable, "-m", "wavecontact", *words]
-    environment = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100", "MPLBACKEND": "Agg", **(env or {})}
+    extra = {name: value.replace("{tmp}", scratch) for name, value in (env or {}).items()}
+    environment = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100", "MPLBACKEND": "Agg", **extra}
     done = subprocess.run(command, cwd=ROOT, env=environment, capture_output=True, text=True, timeout=3600,
                           check=False)
     if done.returncode != 0:

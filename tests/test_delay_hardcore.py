@@ -101,3 +101,23 @@ def test_the_kinks_are_sorted_as_numpy_sorts_them(compiled):
             assert np.array_equal(sort(values, count), np.sort(values[:count]))
             assert smallest(values[:count]) == values[:count].min()
     assert sort(np.empty(3), 0).size == 0
+
+
+def test_the_interpreted_recursion_gives_the_compiled_bits_on_every_pair_of_materials(monkeypatch):
+    """A short recursion runs as plain Python while numba has no compiled kernel for it (a first answer
+    without compiling); the kinks must be the compiled kernel's to the bit, for every pair of the grid."""
+    from wavecontact import _jit
+    from wavecontact.delay import hardcore
+    from wavecontact.delay.hardcore_kernels import max_plus_history
+
+    histories = {}
+    for mode in ("interpreted", "compiled"):
+        if mode == "interpreted":
+            monkeypatch.setattr(hardcore, "prefer_interpreted", lambda kernel, args, small: _jit.interpreted(kernel))
+        else:
+            monkeypatch.setattr(hardcore, "prefer_interpreted", lambda kernel, args, small: kernel)
+        histories[mode] = [hard_core_history(*echoes_from_ratios(z, t)) for z, t in GRID]
+    assert _jit.interpreted(max_plus_history) is not max_plus_history.py_func  # a clone calling clones
+    for (z, t), interpreted, compiled in zip(GRID, histories["interpreted"], histories["compiled"]):
+        for a, b in zip(interpreted, compiled):
+            assert a.dtype == b.dtype and np.array_equal(a, b), (z, t)

@@ -7,6 +7,7 @@ equal the same quadrature written here with a fresh bisection for every point.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import subprocess
@@ -115,6 +116,7 @@ def test_lobatto_rule_converges_to_the_gauss_kronrod_reference(gamma, kappa):
 
 
 _COLD_COMPILE = """
+import functools
 import json
 from wavecontact.delay import kernels
 from wavecontact.delay.solver import solve_delay_equation
@@ -148,3 +150,30 @@ def test_a_history_that_outgrows_its_buffers_resumes_bit_for_bit(monkeypatch):
     for before, after in zip(reference[:4], resumed[:4]):
         np.testing.assert_array_equal(before, after)
     assert reference[4:] == resumed[4:]  # error estimate, work counts, gap
+
+
+def test_a_first_answer_interpreted_gives_the_compiled_bits(monkeypatch):
+    """The CLI's first answer runs the method of steps and the energy split as plain Python while numba has
+    no compiled kernel for them (wavecontact._jit.answer_first): history, error estimate and energy split
+    must be the compiled kernels' to the bit, over the softness, accuracy and length ratios it takes."""
+    import wavecontact
+    from wavecontact import _jit
+    from wavecontact.delay import energy_split
+    from wavecontact.delay import kernels as delay_kernels
+
+    def collide_all(mode):
+        def force(kernel, args, small, compile_later=False):
+            return functools.partial(_jit._run_interpreted, kernel) if mode else kernel
+
+        monkeypatch.setattr(delay_kernels, "prefer_interpreted", force)
+        monkeypatch.setattr(energy_split, "prefer_interpreted", force)
+        return [wavecontact.collide(gamma, kappa, "delay", rtol=rtol)
+                for gamma in (1.0, 0.6, 0.25) for kappa in (5.0, 37.0, 100.0, 2500.0) for rtol in (1e-6, 1e-9)]
+
+    interpreted, compiled = collide_all(True), collide_all(False)
+    for a, b in zip(interpreted, compiled):
+        case = (a.gamma, a.kappa, a.options["rtol"])
+        assert a.restitution == b.restitution and a.error_estimate == b.error_estimate, case
+        for name in ("time", "relative_velocity", "contact_force"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), (case, name)
+        assert np.array_equal(a.extra["vibration_energy_gain"], b.extra["vibration_energy_gain"]), case

@@ -142,7 +142,7 @@ def test_results_mean_the_same_for_every_solver(name):
     assert other.gamma == pytest.approx(0.6) and other.kappa == pytest.approx(20.0)
     # the same keys with the same meaning
     assert set(result.diagnostics) == {"energy_drift", "momentum_drift", "includes_kernel_preparation",
-                                       "error_estimate_method", "error_estimate_seconds",
+                                       "interpreted_kernels", "error_estimate_method", "error_estimate_seconds",
                                        "error_estimate_levels", "error_estimate_rough"}
     for key in ("energy_drift", "momentum_drift"):
         value = result.diagnostics[key]

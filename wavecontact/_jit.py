@@ -10,11 +10,17 @@ against helpers it inlines from other modules, so an edit to such a helper
 alone would leave the old compiled code in use.  On import, the cached
 kernels of the whole package are therefore dropped whenever any of its
 sources changed (:func:`refresh_kernel_cache`).
+
+A short call need not wait for numba at all: :func:`prefer_interpreted` runs a kernel as plain Python
+(the same bits) when its caller bounds the call to milliseconds and numba has no compiled code for it in
+memory or on disk; :func:`answer_first` lets a command answer that way and compile afterwards
+(:func:`compile_deferred`) for its next runs.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import os
 import sys
@@ -24,8 +30,9 @@ import types
 from itertools import chain
 from pathlib import Path
 
-__all__ = ["NUMBA_ENABLED", "CompileClock", "announce_compilation", "kernel", "kernel_digest", "prepared_kernel_count",
-           "refresh_kernel_cache", "row_view"]
+__all__ = ["NUMBA_ENABLED", "CompileClock", "announce_compilation", "answer_first", "compile_deferred", "compiled_only",
+           "deferred_count", "interpreted", "interpreted_call_count", "kernel", "kernel_digest", "prefer_interpreted",
+           "prepared_kernel_count", "refresh_kernel_cache", "row_view"]
 
 _STAMP_NAME = "wavecontact-sources.sha1"
 
@@ -193,6 +200,169 @@ def _python_twin(func, settings: dict):
     return twin
 
 
+# --- small calls run interpreted instead of compiling -------------------------------------------------
+
+TIER_UP_SECONDS = 0.5
+"""Interpreted seconds per kernel and process after which :func:`prefer_interpreted` compiles it."""
+
+_INTERPRETED = {}  # original function -> its interpreted clone
+_PYTHON_EQUIVALENTS = {}  # kernels whose source is not plain Python (an intrinsic) -> their Python version
+_UNCACHED = set()  # (kernel, argument types) known to have no compiled code on disk
+_INTERPRETED_SECONDS = {}  # kernel -> seconds spent running it interpreted in this process
+_INTERPRETED_CALLS = [0]
+_SMALL_CALLS_INTERPRETED = [True]
+_ANSWER_FIRST = [False]  # inside answer_first(): calls that are small for a first answer run interpreted too
+_DEFERRED = {}  # (kernel, argument types) run interpreted, to compile after the answer
+
+
+def interpreted(compiled):
+    """``compiled`` (a kernel) as plain Python, the kernels it calls interpreted too.
+
+    The kernel's function is cloned with a copy of its module's globals in which every kernel is replaced
+    by its own interpreted clone (built once, recursively), so that nothing in the call tree compiles.
+    Plain Python and numba (no fastmath) do the same IEEE double operations in the same order, so the
+    results are the same bits (tests/test_jit_interpreted.py, tests/test_delay_kernels.py,
+    tests/test_delay_hardcore.py).
+    """
+    func = getattr(compiled, "py_func", compiled)
+    if compiled in _PYTHON_EQUIVALENTS:
+        return _PYTHON_EQUIVALENTS[compiled]
+    clone = _INTERPRETED.get(func)
+    if clone is not None:
+        return clone
+    names = dict(func.__globals__)
+    clone = types.FunctionType(func.__code__, names, func.__name__, func.__defaults__, func.__closure__)
+    clone.__qualname__ = func.__qualname__
+    clone.__doc__ = func.__doc__
+    _INTERPRETED[func] = clone  # before the callees: a kernel may call itself through its module
+    kernels = _kernel_set()
+    for name, value in func.__globals__.items():
+        if _hashable(value) and value in kernels:
+            names[name] = interpreted(value)
+    return clone
+
+
+def _hashable(value) -> bool:
+    try:
+        hash(value)
+    except TypeError:
+        return False
+    return True
+
+
+def _kernel_set() -> set:
+    return set(_KERNELS) | set(_PYTHON_EQUIVALENTS)
+
+
+def _compiled_without_compiling(compiled, args) -> bool:
+    """Whether ``compiled(*args)`` runs compiled code without compiling: a specialisation for these
+    argument types in memory, or in numba's disk cache (which the call then loads)."""
+    try:
+        signature = tuple(compiled.typeof_pyval(value) for value in args)
+    except (ValueError, TypeError):  # an argument numba cannot type: let the call itself say so
+        return True
+    if signature in compiled.overloads:
+        return True
+    key = (compiled, signature)
+    if key in _UNCACHED:
+        return False
+    cache = getattr(compiled, "_cache", None)
+    try:
+        found = cache is not None and cache.load_overload(signature, compiled.targetctx) is not None
+    except (OSError, EOFError, ValueError):  # an unreadable cache entry: numba's own call recompiles it
+        found = False
+    if not found:
+        _UNCACHED.add(key)
+    return found
+
+
+def prefer_interpreted(compiled, args, small: bool, compile_later: bool = False):
+    """The callable to run ``compiled(*args)`` with: the kernel itself, or its interpreted version.
+
+    A first answer should not wait seconds for numba to compile a kernel that runs for milliseconds.  A
+    call its caller declares ``small`` (milliseconds of plain Python, bounded before the call) whose
+    compiled code is neither in memory nor in numba's disk cache runs interpreted (:func:`interpreted`,
+    the same bits); once a kernel has run interpreted for :data:`TIER_UP_SECONDS` in this process
+    (outside :func:`answer_first`, which compiles afterwards anyway), or inside :func:`compiled_only`, it
+    compiles as usual.  Without numba: the kernel (plain Python anyway).
+
+    Parameters
+    ----------
+    compiled : numba dispatcher
+        A kernel of this package.
+    args : tuple
+        The call's arguments (their numba types pick the specialisation looked for).
+    small : bool
+        The caller's bound: this call takes at most about a second as plain Python.
+
+    ``compile_later=True`` (a kernel interpreted only for a first answer, hundreds of milliseconds, where
+    compiled code is far faster): the call runs interpreted only inside :func:`answer_first`, which
+    records it and compiles it afterwards (:func:`compile_deferred`), so that the next run loads it.
+    """
+    if (not NUMBA_ENABLED or not small or not _SMALL_CALLS_INTERPRETED[0]
+            or (compile_later and not _ANSWER_FIRST[0])
+            or (_INTERPRETED_SECONDS.get(compiled, 0.0) >= TIER_UP_SECONDS and not _ANSWER_FIRST[0])
+            or _compiled_without_compiling(compiled, args)):
+        return compiled
+    if compile_later:
+        _DEFERRED[(compiled, tuple(compiled.typeof_pyval(value) for value in args))] = None
+    return functools.partial(_run_interpreted, compiled)
+
+
+@contextlib.contextmanager
+def answer_first():
+    """Inside: small calls that :func:`prefer_interpreted` would compile afterwards run interpreted (a
+    command's first answer); call :func:`compile_deferred` once the answer is out."""
+    before = _ANSWER_FIRST[0]
+    _ANSWER_FIRST[0] = True
+    try:
+        yield
+    finally:
+        _ANSWER_FIRST[0] = before
+
+
+def deferred_count() -> int:
+    """How many kernel specialisations ran interpreted for a first answer and wait to be compiled."""
+    return len(_DEFERRED)
+
+
+def compile_deferred() -> int:
+    """Compile (and cache on disk) every specialisation that ran interpreted for a first answer; their count."""
+    pending = list(_DEFERRED)
+    _DEFERRED.clear()
+    for compiled, signature in pending:
+        compiled.compile(signature)
+    return len(pending)
+
+
+def _run_interpreted(compiled, *args):
+    import numpy as np
+
+    started = time.perf_counter()
+    try:
+        with np.errstate(all="ignore"):  # compiled code raises no floating-point warnings (an overflow to inf)
+            return interpreted(compiled)(*args)
+    finally:
+        _INTERPRETED_SECONDS[compiled] = _INTERPRETED_SECONDS.get(compiled, 0.0) + time.perf_counter() - started
+        _INTERPRETED_CALLS[0] += 1
+
+
+def interpreted_call_count() -> int:
+    """How many kernel calls :func:`prefer_interpreted` has run interpreted in this process."""
+    return _INTERPRETED_CALLS[0]
+
+
+@contextlib.contextmanager
+def compiled_only():
+    """Inside: every kernel runs compiled (compiling if needed), small calls too (benchmarks, checks)."""
+    before = _SMALL_CALLS_INTERPRETED[0]
+    _SMALL_CALLS_INTERPRETED[0] = False
+    try:
+        yield
+    finally:
+        _SMALL_CALLS_INTERPRETED[0] = before
+
+
 if NUMBA_ENABLED:
     from numba.core.event import Listener as _Listener
 else:  # pragma: no cover
@@ -311,6 +481,7 @@ def _row_view_python(table, row):
 
 if NUMBA_ENABLED:
     row_view = _row_view_compiled()
+    _PYTHON_EQUIVALENTS[row_view] = _row_view_python
 else:
     row_view = _row_view_python
 row_view.__doc__ = """Row ``row`` of the C-contiguous 2-D array ``table`` as a 1-D view, inside a compiled kernel without

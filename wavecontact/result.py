@@ -139,7 +139,9 @@ class CollisionResult:
         ``energy_drift`` and ``momentum_drift`` (relative to the initial
         energy in the centre-of-mass frame and to ``mu V``, the reduced mass
         times the approach speed; NaN where the solver does not track them), ``includes_kernel_preparation`` (numba compiled or loaded
-        kernels during the call, so ``wall_time_s`` is not the solver's cost), ``error_estimate_method``
+        kernels during the call, so ``wall_time_s`` is not the solver's cost), ``interpreted_kernels`` (a
+        short call ran a kernel as plain Python because numba had none compiled for it yet: the same bits,
+        a slower solve, no compilation; :func:`wavecontact._jit.prefer_interpreted`), ``error_estimate_method``
         (how ``error_estimate`` was obtained), ``error_estimate_seconds`` (its share of ``wall_time_s``)
         and ``error_estimate_levels`` (``(resolution, restitution)`` of the requested run and of the
         coarser runs a Richardson estimate used; empty otherwise) and ``error_estimate_rough`` (why the

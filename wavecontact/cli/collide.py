@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
+from .._jit import answer_first, compile_deferred, deferred_count
 from ..solvers import get_solver, solver_names
 from .common import (
     CONTACT_HELP,
@@ -134,7 +136,8 @@ def _check_outputs(args) -> None:
 
 
 def timed_collide(gamma, kappa, solver, contact, options, warmup=True):
-    """Solve; if numba prepared kernels during the call, solve again to time the solve alone.
+    """Solve; if numba prepared kernels during the call (or a kernel ran interpreted, whose first call also
+    pays the solver's one-time imports), solve again to time the solve alone.
 
     Returns
     -------
@@ -142,15 +145,19 @@ def timed_collide(gamma, kappa, solver, contact, options, warmup=True):
         The (second, when repeated) result; ``wall_time_s`` is then the solve alone.
     preparation_s : float or None
         Kernel preparation time in seconds (first call minus second), None if
-        there was none or it was not measured (``warmup=False``).
+        there was none (also when the kernels ran interpreted) or it was not
+        measured (``warmup=False``).
     """
     from ..api import collide
 
     result = collide(gamma, kappa, solver=solver, contact=contact, **options)
-    if not (warmup and result.diagnostics.get("includes_kernel_preparation")):
+    first_call = result.diagnostics.get("includes_kernel_preparation") or result.diagnostics.get("interpreted_kernels")
+    if not (warmup and first_call):
         return result, None
     first = result.wall_time_s
     result = collide(gamma, kappa, solver=solver, contact=contact, **options)
+    if result.diagnostics.get("interpreted_kernels"):
+        return result, None  # no numba preparation: the first call's extra time was the solver's imports
     return result, max(first - result.wall_time_s, 0.0)
 
 
@@ -168,7 +175,17 @@ def run(args) -> int:
     if args.solver != "auto" and contact not in get_solver(args.solver).contact_names:
         accepting = [name for name in solver_names() if contact in get_solver(name).contact_names]
         raise ValueError(f"--contact {contact} needs --solver {' or '.join(accepting)}")
-    result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
+    with answer_first():  # a short solve numba has no compiled kernel for runs interpreted; compiled after the answer
+        result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
+    try:
+        return _report(args, result, preparation, contact)
+    finally:
+        sys.stdout.flush()
+        compile_deferred()  # for the next runs, which then load the kernels from numba's cache
+
+
+def _report(args, result, preparation, contact) -> int:
+    """Write the files asked for and print the answer (a line, or JSON with ``--json``)."""
     written = []
     if args.fields:
         from ..io.fields import write_fields
@@ -200,7 +217,10 @@ def run(args) -> int:
     if result.error_estimate is not None:
         line += f", error estimate {result.error_estimate:.1e}"
     line += f"; solve {duration_text(result.wall_time_s)}"
-    if preparation is not None:
+    if result.diagnostics.get("interpreted_kernels"):
+        line += ", interpreted (numba had no compiled kernel for this short run: faster than compiling first"
+        line += "; compiled after this answer for the next runs)" if deferred_count() else ")"
+    elif preparation is not None:
         line += f", numba kernel preparation {duration_text(preparation)} (once per process)"
     elif result.diagnostics.get("includes_kernel_preparation"):
         line += " including numba's kernel preparation (--no-warmup)"

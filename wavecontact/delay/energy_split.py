@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import kernel
-from .kernels import hermite5_on, locate_from, table_value
+from .._jit import kernel, prefer_interpreted
+from .kernels import INTERPRETED_KAPPA_MIN, hermite5_on, locate_from, table_value
 
 __all__ = ["vibration_energy_gain"]
 
@@ -64,7 +64,10 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
     copies = int((t[-1] - t[0]) / min(delays[0], delays[1])) + 2
     hints = np.zeros((2, copies), dtype=np.int64)
     gain = np.zeros(2)
-    _energy_gain(kappa, (t, w, d1, d2), delays, noise, (nodes, weights), subdivide, gain, hints)
+    arguments = (kappa, (t, w, d1, d2), delays, noise, (nodes, weights), subdivide, gain, hints)
+    # as the history it walks (kernels.integrate_delay_equation): interpreted for a first answer
+    small = noise is None and kappa >= INTERPRETED_KAPPA_MIN and t.shape[0] <= 20_000
+    prefer_interpreted(_energy_gain, arguments, small, compile_later=True)(*arguments)
     return gain
 
 

@@ -30,6 +30,7 @@ import itertools
 
 import numpy as np
 
+from .._jit import prefer_interpreted
 from ..errors import InvalidParameterError, SolverFailure
 from .hardcore_kernels import STATUS_OK, max_plus_history
 
@@ -37,6 +38,10 @@ __all__ = ["hard_core_history"]
 
 _MERGE = 1e-12  # relative distance below which two kinks are one
 _ROUNDOFF = 1e-14  # relative rise of w below which it is round-off of the memory sums
+INTERPRETED_WINDOWS = 400.0
+"""Recursions of at most this many windows run interpreted while numba has no compiled kernel for them
+(:func:`wavecontact._jit.prefer_interpreted`): one material down to gamma = 0.005, about 200 windows, takes
+3 ms of plain Python, against seconds to compile the kernel."""
 
 
 def _rod_memory(points, knots_t, knots_w, gamma_i):
@@ -163,8 +168,10 @@ def hard_core_history(delays, weights=(1.0, 1.0), tau_free: float = 0.0, max_win
             f"the hard-core recursion would need about {needed:.3g} windows (limit max_windows = {max_windows}); "
             "the impedance and transit-time ratios are too extreme: use solver='fem'"
         )
-    knots_t, knots_w, count, status = max_plus_history(delays, weights, float(tau_free), int(max_windows), _MERGE,
-                                                       _ROUNDOFF)
+    arguments = (delays, weights, float(tau_free), int(max_windows), _MERGE, _ROUNDOFF)
+    # a few windows take milliseconds of plain Python, less than numba's compilation (seconds) or cache load
+    run = prefer_interpreted(max_plus_history, arguments, small=needed <= INTERPRETED_WINDOWS)
+    knots_t, knots_w, count, status = run(*arguments)
     if status != STATUS_OK:
         raise SolverFailure("hard-core recursion did not settle; raise max_windows")
     return knots_t[:count].copy(), knots_w[:count].copy()

@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import kernel, prefer_interpreted
 
 # Gauss-Kronrod (3, 7) on [0, 1]: Kronrod nodes; the Gauss nodes are 1, 3, 5.
 _KRONROD_X = np.array(
@@ -87,6 +87,12 @@ STATUS_TIME_LIMIT = 4
 # internal: the history's buffers are full (integrate_delay_equation doubles them and resumes)
 _STATUS_FULL = -1
 _FIRST_CAPACITY = 1024  # the history's first buffers (steps)
+INTERPRETED_KAPPA_MIN = 5.0
+"""A cold collision at ``kappa`` at least this and ``rtol`` at least :data:`INTERPRETED_RTOL_MIN` takes at most about
+a second of plain Python (gamma = 0.6, kappa = 5, rtol = 1e-6: 0.6 s; kappa = 100: 0.2 s): a command's first
+answer runs it interpreted while numba has no compiled kernel for it, and compiles it afterwards
+(:func:`wavecontact._jit.prefer_interpreted`, ``compile_later``)."""
+INTERPRETED_RTOL_MIN = 1e-9
 # the integrator's state between two calls (an index into its ``state`` array each); a negative
 # last index means a fresh start
 _LAST, _STEP, _G_NOW, _T_SIGNIFICANT, _T_ACTIVE, _ERROR_SUM, _REJECTED, _EVALUATIONS = range(8)
@@ -807,8 +813,12 @@ def integrate_delay_equation(kappa, a0, delays, weights, rtol, series, noise_tab
                np.empty((3 * delays.shape[0], capacity)))
     state = np.full(_EVALUATIONS + 1, -1.0)
     rule = (*rule, np.empty(rule[0].shape[0]))
+    small = (series is None and noise_tables is None and kappa >= INTERPRETED_KAPPA_MIN
+             and rtol >= INTERPRETED_RTOL_MIN and delays.shape[0] == 2 and min(delays) >= 0.1 * max(delays))
+    arguments = (kappa, a0, delays, weights, rtol, series, noise_tables, stop, rule, direct_copies, history, state)
+    method_of_steps = prefer_interpreted(_method_of_steps, arguments, small, compile_later=True)
     while True:
-        status, error, rejected, evaluations, last = _method_of_steps(
+        status, error, rejected, evaluations, last = method_of_steps(
             kappa, a0, delays, weights, rtol, series, noise_tables, stop, rule, direct_copies, history, state)
         if status != _STATUS_FULL:
             break

@@ -51,7 +51,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from .._jit import prepared_kernel_count
+from .._jit import interpreted_call_count, prepared_kernel_count
 from ..errors import AccuracyError, InvalidParameterError, SolverFailure, UnsupportedSceneError
 from ..limits import Cost, Limits, check_cost, check_kappa
 from ..result import CONTACT_FORCE_FRACTION, CollisionResult, contact_window
@@ -646,6 +646,7 @@ class SolverBase:
             check_kappa(kappa)
         check_cost(self.name, self.total_cost(scene, options, estimate_error or tolerance is not None), limits)
         prepared = prepared_kernel_count()
+        interpreted = interpreted_call_count()
         with Stopwatch() as watch:
             fields = self._collide(scene, options)
             _remember_run(self.name, scene, options, fields)
@@ -678,6 +679,7 @@ class SolverBase:
                 "energy_drift": float(fields.energy_drift),
                 "momentum_drift": float(fields.momentum_drift),
                 "includes_kernel_preparation": prepared_kernel_count() > prepared,
+                "interpreted_kernels": interpreted_call_count() > interpreted,
                 "error_estimate_method": method,
                 "error_estimate_seconds": estimating.seconds,
                 "error_estimate_levels": levels,
