@@ -177,11 +177,10 @@ def run(args) -> int:
         raise ValueError(f"--contact {contact} needs --solver {' or '.join(accepting)}")
     with answer_first():  # a short solve numba has no compiled kernel for runs interpreted; compiled after the answer
         result, preparation = timed_collide(args.gamma, args.kappa, args.solver, contact, options, args.warmup)
-    try:
-        return _report(args, result, preparation, contact)
-    finally:
-        sys.stdout.flush()
-        compile_deferred()  # for the next runs, which then load the kernels from numba's cache
+    status = _report(args, result, preparation, contact)
+    sys.stdout.flush()  # the answer first
+    compile_deferred()  # then the kernels that ran interpreted, for the next runs to load from numba's cache
+    return status
 
 
 def _report(args, result, preparation, contact) -> int:

@@ -65,8 +65,9 @@ def vibration_energy_gain(kappa, t, w, d1, d2, delays, periods, tables, table_sl
     hints = np.zeros((2, copies), dtype=np.int64)
     gain = np.zeros(2)
     arguments = (kappa, (t, w, d1, d2), delays, noise, (nodes, weights), subdivide, gain, hints)
-    # as the history it walks (kernels.integrate_delay_equation): interpreted for a first answer
-    small = noise is None and kappa >= INTERPRETED_KAPPA_MIN and t.shape[0] <= 20_000
+    # interpreted for a first answer, as the history it walks (kernels.integrate_delay_equation), up to a
+    # thousand steps of that history (about a second of plain Python)
+    small = noise is None and kappa >= INTERPRETED_KAPPA_MIN and t.shape[0] <= 1000
     prefer_interpreted(_energy_gain, arguments, small, compile_later=True)(*arguments)
     return gain
 

@@ -88,11 +88,12 @@ STATUS_TIME_LIMIT = 4
 _STATUS_FULL = -1
 _FIRST_CAPACITY = 1024  # the history's first buffers (steps)
 INTERPRETED_KAPPA_MIN = 5.0
-"""A cold collision at ``kappa`` at least this and ``rtol`` at least :data:`INTERPRETED_RTOL_MIN` takes at most about
-a second of plain Python (gamma = 0.6, kappa = 5, rtol = 1e-6: 0.6 s; kappa = 100: 0.2 s): a command's first
-answer runs it interpreted while numba has no compiled kernel for it, and compiles it afterwards
+"""A cold collision of one material with ``gamma >= 0.1``, ``kappa`` at least this and ``rtol`` at least
+:data:`INTERPRETED_RTOL_MIN` takes at most about a second of plain Python (the slowest corner, gamma = 0.1 and
+kappa = 5; the README's ``kappa = 100`` tens of milliseconds): a command's first answer runs it interpreted
+while numba has no compiled kernel for it, and compiles it afterwards
 (:func:`wavecontact._jit.prefer_interpreted`, ``compile_later``)."""
-INTERPRETED_RTOL_MIN = 1e-9
+INTERPRETED_RTOL_MIN = 1e-7
 # the integrator's state between two calls (an index into its ``state`` array each); a negative
 # last index means a fresh start
 _LAST, _STEP, _G_NOW, _T_SIGNIFICANT, _T_ACTIVE, _ERROR_SUM, _REJECTED, _EVALUATIONS = range(8)
