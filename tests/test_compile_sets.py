@@ -4,9 +4,10 @@ schemes and laws it never calls (docs/performance.md, compile time of a first ru
 The FE loop ``advance`` takes the contact scheme as an argument, None for the force scheme, and both it and
 the lattice ``advance_lattice`` take ``general_law``, None for the exponential law; numba prunes the branches
 of a None argument before typing, so a force-scheme run compiles neither the splitting and interface flows
-nor any law's solutions, and an exponential-law run of the other schemes only the exponential law's.  Each compiled kernel leaves one index file in the cache, named
-``module.function-line...nbi``, so the cache lists what the command compiled.  (The ring command's set is
-checked in tests/test_reproducibility.py, on the runs that test makes anyway.)
+nor any law's flow or gap solutions, and an exponential-law run of the other schemes only the exponential
+law's.  Each compiled kernel leaves one index file in the cache, named ``module.function-line...nbi``, so the
+cache lists what the command compiled.  (The ring command's set is checked in tests/test_reproducibility.py,
+on the runs that test makes anyway.)
 """
 
 from __future__ import annotations
