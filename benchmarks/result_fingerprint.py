@@ -98,21 +98,13 @@ CASES = {
 
 
 def fingerprints(names=None) -> dict:
-    """Compute the fingerprint of each case (all of them by default); a failing case gives its error.
-
-    Every kernel runs compiled (:func:`wavecontact._jit.compiled_only`: a short hard-core recursion would
-    otherwise run interpreted on an empty cache), so that CI compares freshly compiled with cache-loaded
-    code; tests/test_delay_hardcore.py compares the interpreted runs with the compiled ones.
-    """
-    from wavecontact._jit import compiled_only
-
+    """Compute the fingerprint of each case (all of them by default); a failing case gives its error."""
     out = {}
     for name, case in CASES.items():
         if names and name not in names:
             continue
         try:
-            with compiled_only():
-                out[name] = case()
+            out[name] = case()
         except Exception as error:  # noqa: BLE001 - a case that cannot run is reported, not fatal
             out[name] = f"error: {type(error).__name__}: {error}"
         print(f"{name:36s} {out[name]}", file=sys.stderr)

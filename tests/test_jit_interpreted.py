@@ -1,6 +1,6 @@
-"""wavecontact._jit.prefer_interpreted: a short call runs as plain Python while numba has no compiled code for
-it, instead of compiling for seconds; compiled code in memory or on disk, a long call, enough interpreted time,
-or ``compiled_only`` run the kernel compiled."""
+"""wavecontact._jit.prefer_interpreted: inside answer_first (the CLI's collide), a short call runs as plain
+Python while numba has no compiled code for it, instead of compiling for seconds; compiled code in memory or
+on disk, a long call, or any call outside answer_first runs the kernel compiled."""
 
 from __future__ import annotations
 
@@ -27,23 +27,22 @@ def _uncached_kernel():
     return scaled_sum
 
 
-def test_a_small_uncached_call_runs_interpreted_and_gives_the_compiled_bits(monkeypatch):
+def test_a_small_uncached_call_runs_interpreted_for_a_first_answer_only_and_gives_the_compiled_bits():
     kernel = _uncached_kernel()
     arguments = (np.linspace(0.1, 1.7, 13), 0.3)
+    assert _jit.prefer_interpreted(kernel, arguments, small=True) is kernel  # outside answer_first: compiled
     before = _jit.interpreted_call_count()
-    run = _jit.prefer_interpreted(kernel, arguments, small=True)
-    assert run is not kernel
-    interpreted = run(*arguments)
-    assert _jit.interpreted_call_count() == before + 1 and not kernel.overloads  # nothing compiled
-    assert _jit.prefer_interpreted(kernel, arguments, small=False) is kernel  # a long call compiles
-    with _jit.compiled_only():
-        assert _jit.prefer_interpreted(kernel, arguments, small=True) is kernel
-    monkeypatch.setitem(_jit._INTERPRETED_SECONDS, kernel, _jit.TIER_UP_SECONDS)  # interpreted long enough
-    assert _jit.prefer_interpreted(kernel, arguments, small=True) is kernel
-    monkeypatch.delitem(_jit._INTERPRETED_SECONDS, kernel)
-    compiled = kernel(*arguments)  # compiles
-    assert compiled == interpreted  # the same bits
-    assert _jit.prefer_interpreted(kernel, arguments, small=True) is kernel  # compiled code in memory now
+    with _jit.answer_first():
+        run = _jit.prefer_interpreted(kernel, arguments, small=True, compile_later=True)
+        assert run is not kernel
+        interpreted = run(*arguments)
+        assert _jit.interpreted_call_count() == before + 1 and not kernel.overloads  # nothing compiled
+        assert _jit.deferred_count() == 1
+        assert _jit.prefer_interpreted(kernel, arguments, small=False) is kernel  # a long call compiles
+    assert _jit.compile_deferred() == 1 and kernel.overloads  # compiled after the answer
+    assert kernel(*arguments) == interpreted  # the same bits
+    with _jit.answer_first():
+        assert _jit.prefer_interpreted(kernel, arguments, small=True) is kernel  # compiled code in memory now
 
 
 def test_interpreted_kernels_call_interpreted_kernels_and_compile_nothing():
@@ -66,8 +65,7 @@ def test_the_hard_core_command_answers_without_compiling_on_an_empty_cache_and_l
     first = subprocess.run(command, env=_env(tmp_path), capture_output=True, text=True, timeout=300, check=True)
     assert "interpreted" in first.stdout and "compiling" not in first.stderr, first.stdout + first.stderr
     assert not list(tmp_path.rglob("*.nbi"))
-    compile_it = ("import math, wavecontact; from wavecontact._jit import compiled_only\n"
-                  "with compiled_only(): wavecontact.collide(0.6, math.inf)")
+    compile_it = "import math, wavecontact; wavecontact.collide(0.6, math.inf)"  # the Python API compiles
     subprocess.run([sys.executable, "-c", compile_it], env=_env(tmp_path), timeout=300, check=True)
     assert any(path.name.startswith("hardcore_kernels.max_plus_history") for path in tmp_path.rglob("*.nbi"))
     again = subprocess.run(command, env=_env(tmp_path), capture_output=True, text=True, timeout=300, check=True)

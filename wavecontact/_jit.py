@@ -11,10 +11,10 @@ alone would leave the old compiled code in use.  On import, the cached
 kernels of the whole package are therefore dropped whenever any of its
 sources changed (:func:`refresh_kernel_cache`).
 
-A short call need not wait for numba at all: :func:`prefer_interpreted` runs a kernel as plain Python
-(the same bits) when its caller bounds the call to milliseconds and numba has no compiled code for it in
-memory or on disk; :func:`answer_first` lets a command answer that way and compile afterwards
-(:func:`compile_deferred`) for its next runs.
+A command's first answer need not wait for numba: inside :func:`answer_first`, :func:`prefer_interpreted`
+runs a kernel as plain Python (the same bits) when its caller bounds the call to about a second and numba
+has no compiled code for it in memory or on disk; :func:`compile_deferred` then compiles it for the next
+runs.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ import types
 from itertools import chain
 from pathlib import Path
 
-__all__ = ["NUMBA_ENABLED", "CompileClock", "announce_compilation", "answer_first", "compile_deferred", "compiled_only",
-           "deferred_count", "interpreted", "interpreted_call_count", "kernel", "kernel_digest", "prefer_interpreted",
+__all__ = ["NUMBA_ENABLED", "CompileClock", "announce_compilation", "answer_first", "compile_deferred", "deferred_count",
+           "interpreted", "interpreted_call_count", "kernel", "kernel_digest", "prefer_interpreted",
            "prepared_kernel_count", "refresh_kernel_cache", "row_view"]
 
 _STAMP_NAME = "wavecontact-sources.sha1"
@@ -202,16 +202,11 @@ def _python_twin(func, settings: dict):
 
 # --- small calls run interpreted instead of compiling -------------------------------------------------
 
-TIER_UP_SECONDS = 0.5
-"""Interpreted seconds per kernel and process after which :func:`prefer_interpreted` compiles it."""
-
 _INTERPRETED = {}  # original function -> its interpreted clone
 _PYTHON_EQUIVALENTS = {}  # kernels whose source is not plain Python (an intrinsic) -> their Python version
 _UNCACHED = set()  # (kernel, argument types) known to have no compiled code on disk
-_INTERPRETED_SECONDS = {}  # kernel -> seconds spent running it interpreted in this process
 _INTERPRETED_CALLS = [0]
-_SMALL_CALLS_INTERPRETED = [True]
-_ANSWER_FIRST = [False]  # inside answer_first(): calls that are small for a first answer run interpreted too
+_ANSWER_FIRST = [False]  # inside answer_first(): small calls without compiled code run interpreted
 _DEFERRED = {}  # (kernel, argument types) run interpreted, to compile after the answer
 
 
@@ -279,12 +274,12 @@ def _compiled_without_compiling(compiled, args) -> bool:
 def prefer_interpreted(compiled, args, small: bool, compile_later: bool = False):
     """The callable to run ``compiled(*args)`` with: the kernel itself, or its interpreted version.
 
-    A first answer should not wait seconds for numba to compile a kernel that runs for milliseconds.  A
-    call its caller declares ``small`` (milliseconds of plain Python, bounded before the call) whose
-    compiled code is neither in memory nor in numba's disk cache runs interpreted (:func:`interpreted`,
-    the same bits); once a kernel has run interpreted for :data:`TIER_UP_SECONDS` in this process
-    (outside :func:`answer_first`, which compiles afterwards anyway), or inside :func:`compiled_only`, it
-    compiles as usual.  Without numba: the kernel (plain Python anyway).
+    A command's first answer should not wait seconds for numba to compile a kernel that runs for
+    milliseconds.  Inside :func:`answer_first` (the CLI's ``collide``), a call its caller declares ``small``
+    (at most about a second of plain Python, bounded before the call) whose compiled code is neither in
+    memory nor in numba's disk cache runs interpreted (:func:`interpreted`, the same bits).  Everywhere
+    else (the Python API, studies, benchmarks) and without numba, the call runs the kernel itself,
+    compiling it if needed, as it always did.
 
     Parameters
     ----------
@@ -294,14 +289,12 @@ def prefer_interpreted(compiled, args, small: bool, compile_later: bool = False)
         The call's arguments (their numba types pick the specialisation looked for).
     small : bool
         The caller's bound: this call takes at most about a second as plain Python.
-
-    ``compile_later=True`` (a kernel interpreted only for a first answer, hundreds of milliseconds, where
-    compiled code is far faster): the call runs interpreted only inside :func:`answer_first`, which
-    records it and compiles it afterwards (:func:`compile_deferred`), so that the next run loads it.
+    compile_later : bool
+        Record the specialisation for :func:`compile_deferred` (compiled code is much faster: the next
+        runs load it); False where the interpreted call is about as fast as loading compiled code.
     """
-    if (not NUMBA_ENABLED or not small or not _SMALL_CALLS_INTERPRETED[0]
-            or (compile_later and not _ANSWER_FIRST[0])
-            or (_INTERPRETED_SECONDS.get(compiled, 0.0) >= TIER_UP_SECONDS and not _ANSWER_FIRST[0])
+    if (not NUMBA_ENABLED or not small or not _ANSWER_FIRST[0]
+            or compiled.overloads  # compiled already in this process: one dict's length, no typing
             or _compiled_without_compiling(compiled, args)):
         return compiled
     if compile_later:
@@ -311,8 +304,8 @@ def prefer_interpreted(compiled, args, small: bool, compile_later: bool = False)
 
 @contextlib.contextmanager
 def answer_first():
-    """Inside: small calls that :func:`prefer_interpreted` would compile afterwards run interpreted (a
-    command's first answer); call :func:`compile_deferred` once the answer is out."""
+    """Inside: small calls without compiled code run interpreted (:func:`prefer_interpreted`), for a
+    command's first answer; call :func:`compile_deferred` once the answer is out."""
     before = _ANSWER_FIRST[0]
     _ANSWER_FIRST[0] = True
     try:
@@ -338,29 +331,14 @@ def compile_deferred() -> int:
 def _run_interpreted(compiled, *args):
     import numpy as np
 
-    started = time.perf_counter()
-    try:
-        with np.errstate(all="ignore"):  # compiled code raises no floating-point warnings (an overflow to inf)
-            return interpreted(compiled)(*args)
-    finally:
-        _INTERPRETED_SECONDS[compiled] = _INTERPRETED_SECONDS.get(compiled, 0.0) + time.perf_counter() - started
-        _INTERPRETED_CALLS[0] += 1
+    _INTERPRETED_CALLS[0] += 1
+    with np.errstate(all="ignore"):  # compiled code raises no floating-point warnings (an overflow to inf)
+        return interpreted(compiled)(*args)
 
 
 def interpreted_call_count() -> int:
     """How many kernel calls :func:`prefer_interpreted` has run interpreted in this process."""
     return _INTERPRETED_CALLS[0]
-
-
-@contextlib.contextmanager
-def compiled_only():
-    """Inside: every kernel runs compiled (compiling if needed), small calls too (benchmarks, checks)."""
-    before = _SMALL_CALLS_INTERPRETED[0]
-    _SMALL_CALLS_INTERPRETED[0] = False
-    try:
-        yield
-    finally:
-        _SMALL_CALLS_INTERPRETED[0] = before
 
 
 if NUMBA_ENABLED:

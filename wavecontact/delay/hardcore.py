@@ -39,9 +39,9 @@ __all__ = ["hard_core_history"]
 _MERGE = 1e-12  # relative distance below which two kinks are one
 _ROUNDOFF = 1e-14  # relative rise of w below which it is round-off of the memory sums
 INTERPRETED_WINDOWS = 400.0
-"""Recursions of at most this many windows run interpreted while numba has no compiled kernel for them
-(:func:`wavecontact._jit.prefer_interpreted`): one material down to gamma = 0.005, about 200 windows, takes
-3 ms of plain Python, against seconds to compile the kernel."""
+"""For a command's first answer, recursions of at most this many windows run interpreted while numba has no
+compiled kernel for them (:func:`wavecontact._jit.prefer_interpreted`): one material down to gamma = 0.005,
+about 200 windows, takes a few milliseconds of plain Python, against seconds to compile the kernel."""
 
 
 def _rod_memory(points, knots_t, knots_w, gamma_i):

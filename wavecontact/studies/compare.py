@@ -16,7 +16,6 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .._jit import compiled_only
 from ..api import collide
 from ..errors import WavecontactError, require_integer
 from ..progress import Progress
@@ -165,8 +164,7 @@ def compare_solvers(gamma: float, kappa: float, methods=None, *, repeats: int = 
         try:
             while len(times) < int(repeats):
                 started = time.perf_counter()
-                with compiled_only():  # the methods' cost compiled (a short first call would run interpreted)
-                    result = collide(gamma, kappa, method.solver, contact=contact, **method.options)
+                result = collide(gamma, kappa, method.solver, contact=contact, **method.options)
                 elapsed = time.perf_counter() - started
                 # numba compiled or loaded a kernel during this call (the first one of a solver,
                 # or a discretization with kernels of its own): not the method's cost, run again
